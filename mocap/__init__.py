@@ -1,0 +1,1 @@
+"""mocap: one person, one fixed camera, a 3D animation out."""

@@ -1,0 +1,191 @@
+"""The 10-cylinder body model of the silhouette paper (section 3.1, Table 1).
+
+Names follow CONTRACT.md. Lengths and widths are in model units of a 175-unit body
+height; Table 1's "radii" are read as widths (diameters), which is what fits a body.
+
+2D conventions used by the fit: pixel coordinates (x right, y down); a segment's
+*angle* is the image direction from its proximal to its distal joint in degrees,
+counter-clockwise with y pointing up (90 = straight up, 270 = straight down), the
+convention of Table 1's joint limits. During 2D fitting "left" means the image left
+side (paper, section 3.3); anatomical sides are decided when lifting to 3D.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+JOINTS: tuple[str, ...] = (
+    "head_top", "neck", "chest", "pelvis",
+    "shoulder_l", "elbow_l", "wrist_l", "shoulder_r", "elbow_r", "wrist_r",
+    "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r",
+)
+JOINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(JOINTS)}
+
+# segment -> (proximal joint, distal joint), in the contract's order
+SEGMENTS: dict[str, tuple[str, str]] = {
+    "torso": ("pelvis", "neck"),
+    "head": ("neck", "head_top"),
+    "upper_arm_l": ("shoulder_l", "elbow_l"),
+    "lower_arm_l": ("elbow_l", "wrist_l"),
+    "upper_arm_r": ("shoulder_r", "elbow_r"),
+    "lower_arm_r": ("elbow_r", "wrist_r"),
+    "upper_leg_l": ("hip_l", "knee_l"),
+    "lower_leg_l": ("knee_l", "ankle_l"),
+    "upper_leg_r": ("hip_r", "knee_r"),
+    "lower_leg_r": ("knee_r", "ankle_r"),
+}
+SEGMENT_NAMES: tuple[str, ...] = tuple(SEGMENTS)
+SEGMENT_INDEX: dict[str, int] = {name: i for i, name in enumerate(SEGMENT_NAMES)}
+
+BODY_HEIGHT = 175.0
+BODY_HEIGHT_M = 1.75
+
+_KIND_LENGTH = {"head": 25.0, "torso": 52.0, "upper_arm": 25.0, "lower_arm": 35.0,
+                "upper_leg": 46.0, "lower_leg": 52.0}
+_KIND_WIDTH = {"head": 20.0, "torso": 40.0, "upper_arm": 10.0, "lower_arm": 10.0,
+               "upper_leg": 20.0, "lower_leg": 20.0}
+
+
+def segment_kind(segment: str) -> str:
+    """'upper_arm_l' -> 'upper_arm'; 'torso' -> 'torso'."""
+    return segment[:-2] if segment.endswith(("_l", "_r")) else segment
+
+
+LENGTH = np.array([_KIND_LENGTH[segment_kind(s)] for s in SEGMENT_NAMES])
+WIDTH = np.array([_KIND_WIDTH[segment_kind(s)] for s in SEGMENT_NAMES])
+
+# Where the limbs attach, in model units from the torso axis (not in Table 1):
+# arms hang beside the 40-wide torso, legs side by side under it.
+SHOULDER_HALF_SPAN = 20.0
+HIP_HALF_SPAN = 10.0
+# chest: the point on the pelvis->neck axis at this fraction (apex of the key triangle)
+CHEST_FRACTION = 0.6
+
+# Table 1 (c): joint limits as absolute image angles in degrees.
+ANGLE_LIMITS: dict[str, tuple[float, float]] = {
+    "torso": (45.0, 135.0),   # waist
+    "head": (45.0, 135.0),    # neck
+    "upper_leg_l": (240.0, 300.0),
+    "upper_leg_r": (240.0, 300.0),
+}
+
+# Anatomical pairs swapped when mirroring left and right.
+LEFT_RIGHT_PAIRS: tuple[tuple[str, str], ...] = tuple(
+    (f"{j}_l", f"{j}_r") for j in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle"))
+MIRROR_JOINTS = np.arange(len(JOINTS))
+for _l, _r in LEFT_RIGHT_PAIRS:
+    MIRROR_JOINTS[JOINT_INDEX[_l]], MIRROR_JOINTS[JOINT_INDEX[_r]] = JOINT_INDEX[_r], JOINT_INDEX[_l]
+
+
+def direction(angle_deg):
+    """Unit image vector(s) (x right, y down) for angle(s) measured with y up."""
+    a = np.radians(angle_deg)
+    return np.stack([np.cos(a), -np.sin(a)], axis=-1)
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """The 2D model: where the pelvis is, how big the body is, how each segment lies.
+
+    ``angle`` and ``ratio`` are indexed like SEGMENT_NAMES. ``ratio`` is the
+    foreshortening ratio of Algorithm 6 (projected length / model length).
+    ``spread`` in [0, 1] is how much of the shoulder and hip span is seen: 1 facing
+    the camera, 0 in profile.
+    """
+
+    pelvis: np.ndarray                     # (2,) pixels
+    scale: float                           # pixels per model unit
+    angle: np.ndarray = field(default_factory=lambda: default_angles())
+    ratio: np.ndarray = field(default_factory=lambda: np.ones(len(SEGMENT_NAMES)))
+    spread: float = 1.0
+
+    def with_segment(self, segment: str, *, angle: float | None = None,
+                     ratio: float | None = None) -> "Pose2D":
+        """A copy with one segment's angle and/or foreshortening ratio changed."""
+        i = SEGMENT_INDEX[segment]
+        angles, ratios = self.angle.copy(), self.ratio.copy()
+        if angle is not None:
+            angles[i] = angle
+        if ratio is not None:
+            ratios[i] = ratio
+        return replace(self, angle=angles, ratio=ratios)
+
+
+def default_angles() -> np.ndarray:
+    """Standing upright, arms and legs hanging straight down."""
+    return np.array([90.0 if s in ("torso", "head") else 270.0 for s in SEGMENT_NAMES])
+
+
+def forward_kinematics_2d(pose: Pose2D) -> np.ndarray:
+    """Joint positions (16, 2) in pixels from a 2D pose (image-side left/right)."""
+    return forward_kinematics_2d_batch(np.asarray(pose.pelvis, float)[None], pose.scale,
+                                       pose.angle[None], pose.ratio[None],
+                                       np.array([pose.spread]))[0]
+
+
+def _kinematic_matrix() -> np.ndarray:
+    """(16, 12) weights giving each joint from [pelvis, 10 segment vectors, span]."""
+    m = np.zeros((len(JOINTS), 12))
+    m[JOINT_INDEX["pelvis"], 0] = 1.0
+    m[JOINT_INDEX["neck"]] = m[JOINT_INDEX["pelvis"]]
+    m[JOINT_INDEX["neck"], 1 + SEGMENT_INDEX["torso"]] = 1.0
+    m[JOINT_INDEX["chest"]] = m[JOINT_INDEX["pelvis"]]
+    m[JOINT_INDEX["chest"], 1 + SEGMENT_INDEX["torso"]] = CHEST_FRACTION
+    m[JOINT_INDEX["head_top"]] = m[JOINT_INDEX["neck"]]
+    m[JOINT_INDEX["head_top"], 1 + SEGMENT_INDEX["head"]] = 1.0
+    for side, sign in (("l", 1.0), ("r", -1.0)):
+        m[JOINT_INDEX[f"shoulder_{side}"]] = m[JOINT_INDEX["neck"]]
+        m[JOINT_INDEX[f"shoulder_{side}"], 11] = sign * SHOULDER_HALF_SPAN
+        m[JOINT_INDEX[f"hip_{side}"]] = m[JOINT_INDEX["pelvis"]]
+        m[JOINT_INDEX[f"hip_{side}"], 11] = sign * HIP_HALF_SPAN
+    for seg, (a, b) in list(SEGMENTS.items())[2:]:
+        m[JOINT_INDEX[b]] = m[JOINT_INDEX[a]]
+        m[JOINT_INDEX[b], 1 + SEGMENT_INDEX[seg]] = 1.0
+    return m
+
+
+KINEMATIC_MATRIX = _kinematic_matrix()
+
+
+def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndarray,
+                                ratio: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """Joints (B, 16, 2) for B poses given as arrays (B,2), (B,10), (B,10), (B,).
+
+    Every joint is a fixed linear combination of the pelvis, the segment vectors and
+    the image-left unit vector scaled by the seen span (KINEMATIC_MATRIX).
+    """
+    a = np.radians(angle)
+    length = LENGTH * ratio * scale
+    basis = np.empty((len(pelvis), 12, 2))
+    basis[:, 0] = pelvis
+    basis[:, 1:11, 0] = np.cos(a) * length
+    basis[:, 1:11, 1] = -np.sin(a) * length
+    t = a[:, SEGMENT_INDEX["torso"]]
+    # image-left normal of the torso axis: (-sin t, -cos t) points left for t in (0, 180)
+    flip = np.where(np.sin(t) >= 0, 1.0, -1.0) * spread * scale
+    basis[:, 11, 0] = -np.abs(np.sin(t)) * spread * scale
+    basis[:, 11, 1] = -np.cos(t) * flip
+    return KINEMATIC_MATRIX @ basis
+
+
+SEGMENT_JOINTS = np.array([[JOINT_INDEX[a], JOINT_INDEX[b]] for a, b in SEGMENTS.values()])
+
+
+def segment_endpoints(joints: np.ndarray) -> np.ndarray:
+    """(..., 10, 2, D) proximal and distal joint of every segment."""
+    return joints[..., SEGMENT_JOINTS, :]
+
+
+def body_height(joints3d_rest: np.ndarray) -> float:
+    """Standing height of a skeleton: head + torso + upper leg + lower leg lengths.
+
+    Uses the mean of the two legs; this is the height that the 2D error is
+    measured against and that the model's 175 units correspond to.
+    """
+    seg = segment_endpoints(np.asarray(joints3d_rest, dtype=float))
+    lengths = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=-1)
+    by = dict(zip(SEGMENT_NAMES, lengths))
+    legs = (by["upper_leg_l"] + by["lower_leg_l"] + by["upper_leg_r"] + by["lower_leg_r"]) / 2
+    return float(by["head"] + by["torso"] + legs)

@@ -1,0 +1,274 @@
+"""Fitting the 2D cylinder model to a silhouette: the paper's Algorithms 1-6.
+
+All functions work on a silhouette already normalised so that the body is a known
+number of pixels tall (``pose.scale`` pixels per model unit); ``session`` does the
+cropping and scaling. Left and right are image sides here (section 3.3).
+
+Order of the fit (section 3.3): torso with head (Algorithm 1) and its position,
+lower-leg angles by contour analysis (Algorithm 2) with the knee-crossing test
+(Algorithm 5), upper legs by Algorithm 1 with the lower legs attached, arms by
+contour analysis with elbow detection (Algorithms 2-4), and every segment's
+foreshortening ratio (Algorithm 6). Beyond the paper: each search may be centred on
+the previous frame's pose (temporal coherence, the paper's future work), contour
+estimates are refined by Algorithm 1 on the similarity, and both ways of joining
+lower to upper legs are scored so that a wrong crossing verdict is undone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from mocap.body import (BODY_HEIGHT, LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d,
+                        forward_kinematics_2d_batch)
+from mocap.contour import arm_curve, find_angle, find_elbow_corner, lower_leg_curves, lower_legs_cross
+from mocap.raster import Canvas, joint_quads, pose_quads
+
+TORSO_HEAD = ("torso", "head")
+LEG = {"l": ("upper_leg_l", "lower_leg_l"), "r": ("upper_leg_r", "lower_leg_r")}
+ARM = {"l": ("upper_arm_l", "lower_arm_l"), "r": ("upper_arm_r", "lower_arm_r")}
+WAIST_RANGE = (45.0, 135.0)      # Table 1
+NECK_RANGE = (45.0, 135.0)       # Table 1
+# Wider than Table 1's walking limits (240-300) so that runs and crouches can be
+# fitted; frames outside Table 1 are flagged for review instead of forced inside.
+THIGH_RANGE = (200.0, 340.0)
+RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs differ from Table 1
+TRACK_HALF_RANGE = 25.0          # degrees searched around a previous estimate
+ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
+FIT_BODY_PX = 128.0              # body height of the normalised silhouette the fit works on
+FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
+
+
+@dataclass(frozen=True)
+class Fit2D:
+    """A fitted 2D pose, its joints (pixels of the fitted silhouette) and its S."""
+
+    pose: Pose2D
+    joints: np.ndarray
+    score: float
+    legs_crossed: bool
+
+
+@dataclass(frozen=True)
+class Knob:
+    """One pose parameter a search turns: 'angle' or 'ratio' of some segments,
+    the pelvis's 'x', or the shoulder/hip 'spread'."""
+
+    field: str
+    segments: tuple[str, ...] = ()
+
+    def apply(self, pose: Pose2D, value: float) -> Pose2D:
+        return self._pose_of(self.batch(pose, np.array([value])), pose.scale)
+
+    def batch(self, pose: Pose2D, values: np.ndarray):
+        """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""
+        n = len(values)
+        pelvis = np.repeat(np.asarray(pose.pelvis, float)[None], n, 0)
+        angle, ratio = np.repeat(pose.angle[None], n, 0), np.repeat(pose.ratio[None], n, 0)
+        spread = np.full(n, pose.spread)
+        idx = [SEGMENT_INDEX[s] for s in self.segments]
+        if self.field == "angle":
+            angle[:, idx] = values[:, None]
+        elif self.field == "ratio":
+            ratio[:, idx] = values[:, None]
+        elif self.field == "x":
+            pelvis[:, 0] += values
+        else:
+            spread = values.astype(float)
+        return pelvis, angle, ratio, spread
+
+    @staticmethod
+    def _pose_of(arrays, scale: float) -> Pose2D:
+        pelvis, angle, ratio, spread = arrays
+        return Pose2D(pelvis=pelvis[0], scale=scale, angle=angle[0], ratio=ratio[0],
+                      spread=float(spread[0]))
+
+
+def coarse_to_fine(score, lo: float, hi: float, divisions: int, min_interval: float,
+                   center: float | None = None) -> tuple[float, float]:
+    """The shared search of Algorithms 1 and 6: sample, keep the best, narrow, repeat.
+
+    Each round scores ``divisions + 1`` values across the interval around the best
+    so far (clipped to [lo, hi]); the interval then shrinks to two divisions.
+    ``score`` takes an array of values. The incumbent starts at ``center`` with its
+    own score, so a flat score keeps it (the paper starts from S = 0, which lets a
+    flat score drift to the range's start).
+    """
+    best = (lo + hi) / 2 if center is None else float(np.clip(center, lo, hi))
+    best_s = float(score(np.array([best]))[0])
+    interval = hi - lo
+    while interval > min_interval:
+        values = np.linspace(max(lo, best - interval / 2), min(hi, best + interval / 2), divisions + 1)
+        scores = score(values)
+        k = int(np.argmax(scores))
+        if scores[k] > best_s:
+            best, best_s = float(values[k]), float(scores[k])
+        interval = 2 * interval / divisions
+    return best, best_s
+
+
+def search(canvas: Canvas, pose: Pose2D, knob: Knob, drawn, lo: float, hi: float,
+           center: float, divisions: int, min_interval: float, sweep_step: float) -> Pose2D:
+    """Turn one knob to maximise S of the drawn segments on their partial silhouette
+    (the region the range [lo, hi] sweeps, outlined every ``sweep_step``)."""
+    drawn_idx = [SEGMENT_INDEX[s] for s in drawn]
+
+    def quads(values):
+        pelvis, angle, ratio, spread = knob.batch(pose, values)
+        joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+        return joint_quads(joints, pose.scale, drawn_idx)
+    sweep = np.linspace(lo, hi, max(3, int(np.ceil((hi - lo) / sweep_step)) + 1))
+    region = canvas.region_scorer(quads(sweep))
+    best, _ = coarse_to_fine(lambda v: region(quads(v)), lo, hi, divisions, min_interval, center)
+    return knob.apply(pose, best)
+
+
+def search_angle(canvas, pose, segments, drawn, lo, hi, center) -> Pose2D:
+    """Algorithm 1: rotate segment(s) about the image normal to maximise S (to 1 degree)."""
+    return search(canvas, pose, Knob("angle", tuple(segments)), drawn, lo, hi, center,
+                  8, 1.0, ANGLE_SWEEP_STEP)
+
+
+def search_ratio(canvas, pose, segment, drawn) -> Pose2D:
+    """Algorithm 6: the foreshortening ratio maximising S (to one pixel of length)."""
+    i = SEGMENT_INDEX[segment]
+    return search(canvas, pose, Knob("ratio", (segment,)), drawn, *RATIO_RANGE, pose.ratio[i],
+                  5, 1.0 / max(LENGTH[i] * pose.scale, 1.0), 0.25)
+
+
+def _around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: float):
+    """(lo, hi, centre): near the previous frame's angle, else the whole range."""
+    if prev is None:
+        return lo, hi, default
+    c = float(np.clip(prev.angle[SEGMENT_INDEX[segment]], lo, hi))
+    return max(lo, c - TRACK_HALF_RANGE), min(hi, c + TRACK_HALF_RANGE), c
+
+
+def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
+    """Torso angle by Algorithm 1 with the head drawn along it (Fig. 3a), the torso's
+    horizontal position, the head angle, then both ratios (Algorithm 6)."""
+    lo, hi, c = _around(prev, "torso", *WAIST_RANGE, 90.0)
+    pose = search_angle(canvas, pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
+    pose = fit_pelvis_x(canvas, pose)
+    lo, hi, c = _around(prev, "head", *NECK_RANGE, pose.angle[SEGMENT_INDEX["torso"]])
+    pose = search_angle(canvas, pose, ("head",), TORSO_HEAD, lo, hi, c)
+    pose = search_ratio(canvas, pose, "torso", TORSO_HEAD)
+    return search_ratio(canvas, pose, "head", ("head",))
+
+
+def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
+    """The torso's horizontal position by the same search (the paper takes the
+    silhouette's middle, which arms and a swinging leg pull off the torso)."""
+    r = reach * pose.scale
+    return search(canvas, pose, Knob("x"), TORSO_HEAD, -r, r, 0.0, 6, 0.5, 2.0)
+
+
+def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D, bool]:
+    """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5),
+    upper legs by Algorithm 1 with the lower legs attached, each lower leg refined
+    by Algorithm 1, then ratios (Algorithm 6)."""
+    curves, runs = lower_leg_curves(canvas.sil, forward_kinematics_2d(pose), pose.scale)
+    crossed = lower_legs_cross(runs)
+    for side, other in (("l", "r"), ("r", "l")):
+        default = (prev or pose).angle[SEGMENT_INDEX[LEG[side][1]]]
+        pose = Knob("angle", (LEG[side][1],)).apply(
+            pose, find_angle(curves[other if crossed else side], default))
+    pose = _best_leg_pairing(canvas, _fit_thighs(canvas, pose, prev))
+    for side in ("l", "r"):
+        upper, lower = LEG[side]
+        c = pose.angle[SEGMENT_INDEX[lower]]
+        pose = search_angle(canvas, pose, (lower,), (lower,), c - TRACK_HALF_RANGE,
+                            c + TRACK_HALF_RANGE, c)
+        pose = search_ratio(canvas, pose, upper, LEG[side])
+        pose = search_ratio(canvas, pose, lower, (lower,))
+    return pose, crossed
+
+
+def _fit_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
+    """Algorithm 1 for both upper legs with their lower legs attached (Fig. 3b-c)."""
+    for side in ("l", "r"):
+        lo, hi, c = _around(prev, LEG[side][0], *THIGH_RANGE, 270.0)
+        pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side], lo, hi, c)
+    return pose
+
+
+def _swap_lower_legs(pose: Pose2D) -> Pose2D:
+    i, j = SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]
+    angle, ratio = pose.angle.copy(), pose.ratio.copy()
+    angle[[i, j]], ratio[[i, j]] = angle[[j, i]], ratio[[j, i]]
+    return replace(pose, angle=angle, ratio=ratio)
+
+
+def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
+    """Score both ways of joining the lower legs to the thighs; keep the better
+    (a check on Algorithm 5's verdict, which scan lines alone can get wrong)."""
+    legs = LEG["l"] + LEG["r"]
+    swapped = _fit_thighs(canvas, _swap_lower_legs(pose), pose)
+    a, b = pose_quads(pose, legs), pose_quads(swapped, legs)
+    scores = canvas.region_scorer(np.concatenate([a, b]))(np.stack([a, b]))
+    return swapped if scores[1] > scores[0] else pose
+
+
+def fit_spread(canvas: Canvas, pose: Pose2D, drawn) -> Pose2D:
+    """How much of the shoulder/hip span is seen (0 profile .. 1 frontal), by
+    Algorithm 6's search with the given limbs attached."""
+    return search(canvas, pose, Knob("spread"), drawn, 0.0, 1.0, pose.spread, 5, 0.05, 0.25)
+
+
+def _arm_guess(canvas: Canvas, pose: Pose2D, side: str, ref: Pose2D) -> tuple[float, float]:
+    """Upper and lower arm angles from the arm curve (Algorithms 2-4)."""
+    upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
+    guess = (ref.angle[upper], ref.angle[lower])
+    points = arm_curve(canvas, forward_kinematics_2d(pose), side, pose.scale)
+    if len(points) < 3:
+        return guess
+    corner = find_elbow_corner(points)
+    if corner < 0:
+        a = find_angle(points, guess[0])
+        return a, a
+    return find_angle(points[: corner + 1], guess[0]), find_angle(points[corner:], guess[1])
+
+
+def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
+    """One arm: contour analysis for a first guess, refined by Algorithm 1 (upper arm
+    with the lower arm attached, then the lower arm) and Algorithm 6."""
+    upper, lower = ARM[side]
+    gu, gl = _arm_guess(canvas, pose, side, prev or pose)
+    pose = Knob("angle", (lower,)).apply(pose, gl)
+    h = TRACK_HALF_RANGE
+    pose = search_angle(canvas, pose, (upper,), ARM[side], gu - h, gu + h, gu)
+    pose = search_angle(canvas, pose, (lower,), (lower,), gl - h, gl + h, gl)
+    pose = search_ratio(canvas, pose, upper, ARM[side])
+    return search_ratio(canvas, pose, lower, (lower,))
+
+
+def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
+    """Torso location from Table 1 ratios: the head at the silhouette's top, the pelvis
+    head+torso lengths below, x at the horizontal middle of the silhouette there."""
+    ys, xs = np.nonzero(silhouette)
+    top = ys.min()
+    head = LENGTH[SEGMENT_INDEX["head"]] * scale
+    pelvis_y = top + head + LENGTH[SEGMENT_INDEX["torso"]] * scale
+    band = (ys >= top + head) & (ys <= pelvis_y)
+    x = float(np.median(xs[band])) if band.any() else float(np.median(xs))
+    return Pose2D(pelvis=np.array([x, min(pelvis_y, ys.max())]), scale=scale)
+
+
+def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None) -> Fit2D:
+    """Fit the 10-cylinder model to one normalised silhouette (section 3.3)."""
+    canvas = Canvas(silhouette)
+    pose = initial_pose(canvas.sil, scale)
+    if prev is not None:
+        pose = replace(prev, pelvis=pose.pelvis, scale=scale)
+    pose = fit_torso_head(canvas, pose, prev)
+    canvas.commit(pose_quads(pose, TORSO_HEAD))
+    pose, crossed = fit_legs(canvas, pose, prev)
+    legs = LEG["l"] + LEG["r"]
+    pose = fit_spread(canvas, pose, legs)
+    canvas.commit(pose_quads(pose, legs))
+    for side in ("l", "r"):
+        pose = fit_arm(canvas, pose, side, prev)
+        canvas.commit(pose_quads(pose, ARM[side]))
+    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=canvas.score_model(),
+                 legs_crossed=crossed)

@@ -1,0 +1,138 @@
+"""Drawing the 2D model as a mask, and the similarity S of the paper (Eq. 1-3).
+
+Segments are drawn as filled rectangles as wide as their cylinder and as long as
+their projection, with OpenCV's sub-pixel polygon fill. The search algorithms score
+candidates against a :class:`Canvas` that keeps the silhouette and the part of the
+model already fitted, so each candidate costs one small polygon fill and two counts.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from mocap.body import (SEGMENT_INDEX, SEGMENT_NAMES, WIDTH, Pose2D, forward_kinematics_2d,
+                        segment_endpoints)
+
+_SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
+_ONE = 1 << _SHIFT
+
+
+def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """Corners (..., 4, 2) of rectangles of the given widths from starts to ends."""
+    d = ends - starts
+    n = np.linalg.norm(d, axis=-1, keepdims=True)
+    normal = np.where(n > 1e-9, np.stack([-d[..., 1], d[..., 0]], axis=-1) / np.maximum(n, 1e-9),
+                      np.array([1.0, 0.0]))
+    h = normal * (widths[..., None] / 2)
+    return np.stack([starts + h, ends + h, ends - h, starts - h], axis=-2)
+
+
+def joint_quads(joints: np.ndarray, scale: float, segments: np.ndarray | None = None) -> np.ndarray:
+    """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2)."""
+    idx = np.arange(len(SEGMENT_NAMES)) if segments is None else np.asarray(segments)
+    ends = segment_endpoints(joints)[..., idx, :, :]
+    return segment_quads(ends[..., 0, :], ends[..., 1, :], WIDTH[idx] * scale)
+
+
+def pose_quads(pose: Pose2D, segments=SEGMENT_NAMES) -> np.ndarray:
+    """The rectangles (k, 4, 2) of the named segments of a 2D pose."""
+    return joint_quads(forward_kinematics_2d(pose), pose.scale, [SEGMENT_INDEX[s] for s in segments])
+
+
+def fill_quads(mask: np.ndarray, quads: np.ndarray, offset=(0, 0)) -> np.ndarray:
+    """Fill polygons (k, 4, 2) (canvas coordinates) into mask, shifted by -offset; value 1."""
+    pts = np.round((np.asarray(quads, float).reshape(-1, 4, 2) - np.asarray(offset, float)) * _ONE)
+    for quad in pts.astype(np.int32):
+        cv2.fillConvexPoly(mask, quad, 1, lineType=cv2.LINE_8, shift=_SHIFT)
+    return mask
+
+
+def draw_model(pose: Pose2D, shape: tuple[int, int], segments=SEGMENT_NAMES) -> np.ndarray:
+    """The model (or some of its segments) as a 0/1 uint8 mask of the given shape."""
+    return fill_quads(np.zeros(shape, np.uint8), pose_quads(pose, segments))
+
+
+def similarity_from_counts(sil_area, model_area, overlap) -> np.ndarray:
+    """S = exp(-p - n)(1 - p) of Eq. 3, with p and n of Eq. 1-2 from pixel counts.
+
+    p: silhouette pixels not covered by the model / union; n: model pixels outside
+    the silhouette / union. Works elementwise on arrays of candidates.
+    """
+    sil_area = np.asarray(sil_area, dtype=float)
+    union = np.maximum(sil_area + model_area - overlap, 1.0)
+    p = (sil_area - overlap) / union
+    n = (model_area - overlap) / union
+    return np.exp(-p - n) * (1.0 - p)
+
+
+def similarity(silhouette: np.ndarray, model: np.ndarray) -> float:
+    """S(I1, I2) of Eq. 1-3 between two masks (nonzero = inside)."""
+    sil, mod = silhouette > 0, model > 0
+    return float(similarity_from_counts(np.count_nonzero(sil), np.count_nonzero(mod),
+                                        np.count_nonzero(sil & mod)))
+
+
+def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
+    """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
+    pts = np.asarray(quads, float).reshape(-1, 2)
+    h, w = shape
+    x0 = int(np.clip(np.floor(pts[:, 0].min() - pad), 0, w))
+    y0 = int(np.clip(np.floor(pts[:, 1].min() - pad), 0, h))
+    x1 = int(np.clip(np.ceil(pts[:, 0].max() + pad) + 1, x0, w))
+    y1 = int(np.clip(np.ceil(pts[:, 1].max() + pad) + 1, y0, h))
+    return x0, y0, x1, y1
+
+
+class Canvas:
+    """A silhouette and the part of the model fitted so far.
+
+    A search scores candidates on the *partial silhouette* of its segments (the
+    paper's Algorithms 1 and 6): the silhouette pixels inside the area the
+    candidates can sweep that the fitted part does not already explain. Scoring
+    against the whole silhouette, or a box around the segment, would reward a part
+    for spilling outside the silhouette while other parts are still unexplained
+    (Eq. 1 divides by the union, so unexplained pixels elsewhere lower p).
+    """
+
+    def __init__(self, silhouette: np.ndarray):
+        self.sil = (silhouette > 0).astype(np.uint8)
+        self.fixed = np.zeros_like(self.sil)
+
+    def region_scorer(self, reach: np.ndarray):
+        """A function candidates (B, k, 4, 2) -> S (B,) of Eq. 1-3 on the partial silhouette.
+
+        ``reach`` holds the polygons the searched segments can occupy; the partial
+        silhouette is the silhouette inside them that the fitted part does not
+        already explain. Each candidate costs one fill and two OpenCV reductions:
+        the weights are 1 on free pixels plus ``base`` (more than the window's
+        pixel count) on partial-silhouette pixels, so one sum tells both counts.
+        """
+        x0, y0, x1, y1 = bounding_window(reach, self.sil.shape)
+        free = self.fixed[y0:y1, x0:x1] == 0
+        reachable = fill_quads(np.zeros((y1 - y0, x1 - x0), np.uint8), reach, (x0, y0)) > 0
+        target = free & reachable & (self.sil[y0:y1, x0:x1] > 0)
+        sil_area = int(np.count_nonzero(target))
+        base = float(free.size + 1)
+        weights = (free + base * target).astype(np.float32)
+        buf = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        offset = np.array([x0, y0], float)
+
+        def score(candidates: np.ndarray) -> np.ndarray:
+            pts = np.round((np.asarray(candidates, float) - offset) * _ONE).astype(np.int32)
+            totals = np.empty(len(pts))
+            for i, quads in enumerate(pts):
+                buf.fill(0)
+                cv2.fillPoly(buf, list(quads), 1, cv2.LINE_8, _SHIFT)
+                totals[i] = cv2.sumElems(cv2.multiply(weights, buf, dtype=cv2.CV_32F))[0]
+            overlap = np.floor(totals / base)
+            return similarity_from_counts(sil_area, totals - base * overlap, overlap)
+        return score
+
+    def commit(self, quads) -> None:
+        """Make quads part of the fitted model."""
+        fill_quads(self.fixed, quads)
+
+    def score_model(self) -> float:
+        """S of Eq. 3 between the whole silhouette and the fitted model."""
+        return similarity(self.sil, self.fixed)
