@@ -56,6 +56,11 @@ def segment_kind(segment: str) -> str:
 LENGTH = np.array([_KIND_LENGTH[segment_kind(s)] for s in SEGMENT_NAMES])
 WIDTH = np.array([_KIND_WIDTH[segment_kind(s)] for s in SEGMENT_NAMES])
 
+# The torso's depth (front to back): its cross-section is an ellipse 40 wide and this
+# deep, so its width in the image tells how far the body is turned (section 3.4's
+# "horizontal foreshortening of the torso"); the other segments are round.
+TORSO_DEPTH = 22.0
+
 # Where the limbs attach, in model units from the torso axis (not in Table 1):
 # arms hang beside the 40-wide torso, legs side by side under it.
 SHOULDER_HALF_SPAN = 20.0
@@ -77,6 +82,20 @@ LEFT_RIGHT_PAIRS: tuple[tuple[str, str], ...] = tuple(
 MIRROR_JOINTS = np.arange(len(JOINTS))
 for _l, _r in LEFT_RIGHT_PAIRS:
     MIRROR_JOINTS[JOINT_INDEX[_l]], MIRROR_JOINTS[JOINT_INDEX[_r]] = JOINT_INDEX[_r], JOINT_INDEX[_l]
+
+
+def torso_width(spread):
+    """Seen width of the torso (model units) for a seen shoulder/hip span fraction:
+    the ellipse's extent across the line of sight, W when frontal, TORSO_DEPTH in profile."""
+    w = WIDTH[SEGMENT_NAMES.index("torso")]
+    return np.sqrt(TORSO_DEPTH ** 2 + (w ** 2 - TORSO_DEPTH ** 2) * np.asarray(spread) ** 2)
+
+
+def semi_axes(body_height: float) -> np.ndarray:
+    """(10, 2) lateral and front-to-back radii of every segment for a body this tall."""
+    radii = np.repeat(WIDTH[:, None] / 2, 2, axis=1)
+    radii[SEGMENT_NAMES.index("torso"), 1] = TORSO_DEPTH / 2
+    return radii * body_height / BODY_HEIGHT
 
 
 def direction(angle_deg):

@@ -11,7 +11,6 @@ from mocap.errors import MocapError
 def _add_fit(sub) -> None:
     p = sub.add_parser("fit", help="fit the body model to every frame of a video")
     p.add_argument("video", help="input video (any container/codec OpenCV reads)")
-    p.add_argument("--annotations", help="annotations JSON (mocap-annotations)")
     p.add_argument("--out", default=None, help="motion JSON to write (default: VIDEO.motion.json)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(run=_run_fit)
@@ -19,8 +18,7 @@ def _add_fit(sub) -> None:
 
 def _run_fit(args) -> None:
     from mocap.session import fit_video_to_file
-    out = fit_video_to_file(args.video, args.out, annotations=args.annotations,
-                            progress=None if args.quiet else _progress)
+    out = fit_video_to_file(args.video, args.out, progress=None if args.quiet else _progress)
     print(f"wrote {out}")
 
 
@@ -31,11 +29,19 @@ def _add_synth(sub) -> None:
 
 
 def _progress(done: int, total: int) -> None:
+    """A terminal progress bar, redrawn at each whole percent (a line per 10% when
+    stderr is not a terminal)."""
+    step = 1 if sys.stderr.isatty() else 10
+    percent = 100 * done // max(total, 1)
+    if percent // step == 100 * (done - 1) // max(total, 1) // step and done < total:
+        return
     width = 30
-    filled = int(width * done / max(total, 1))
-    end = "\n" if done >= total else ""
-    print(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} frames", end=end,
-          file=sys.stderr, flush=True)
+    filled = width * done // max(total, 1)
+    bar = f"[{'#' * filled}{'.' * (width - filled)}] {percent:3d}% ({done}/{total} steps)"
+    if sys.stderr.isatty():
+        print(f"\r{bar}", end="\n" if done >= total else "", file=sys.stderr, flush=True)
+    else:
+        print(bar, file=sys.stderr, flush=True)
 
 
 def build_parser() -> argparse.ArgumentParser:

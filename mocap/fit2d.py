@@ -20,8 +20,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d,
-                        forward_kinematics_2d_batch)
+from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
+                        forward_kinematics_2d, forward_kinematics_2d_batch)
 from mocap.contour import arm_curve, find_angle, find_elbow_corner, lower_leg_curves, lower_legs_cross
 from mocap.raster import Canvas, joint_quads, pose_quads
 
@@ -35,6 +35,7 @@ NECK_RANGE = (45.0, 135.0)       # Table 1
 THIGH_RANGE = (200.0, 340.0)
 RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs differ from Table 1
 TRACK_HALF_RANGE = 25.0          # degrees searched around a previous estimate
+ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
 ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
 FIT_BODY_PX = 128.0              # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
@@ -110,17 +111,28 @@ def coarse_to_fine(score, lo: float, hi: float, divisions: int, min_interval: fl
 
 def search(canvas: Canvas, pose: Pose2D, knob: Knob, drawn, lo: float, hi: float,
            center: float, divisions: int, min_interval: float, sweep_step: float) -> Pose2D:
-    """Turn one knob to maximise S of the drawn segments on their partial silhouette
-    (the region the range [lo, hi] sweeps, outlined every ``sweep_step``)."""
+    """Turn one knob to maximise S of the drawn segments on their partial silhouette.
+
+    The range is first swept every ``sweep_step``: those poses outline the partial
+    silhouette (the region the range reaches) and are scored as the first, coarsest
+    round, so a narrow optimum between the paper's wide first divisions is not
+    missed; the coarse-to-fine search then narrows around the best of them.
+    """
     drawn_idx = [SEGMENT_INDEX[s] for s in drawn]
 
     def quads(values):
         pelvis, angle, ratio, spread = knob.batch(pose, values)
         joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-        return joint_quads(joints, pose.scale, drawn_idx)
+        return joint_quads(joints, pose.scale, drawn_idx, spread)
     sweep = np.linspace(lo, hi, max(3, int(np.ceil((hi - lo) / sweep_step)) + 1))
-    region = canvas.region_scorer(quads(sweep))
-    best, _ = coarse_to_fine(lambda v: region(quads(v)), lo, hi, divisions, min_interval, center)
+    sweep_quads = quads(sweep)
+    region = canvas.region_scorer(sweep_quads)
+    scores = region(sweep_quads)
+    k = int(np.argmax(scores))
+    step = sweep[1] - sweep[0]
+    start = sweep[k] if scores[k] > region(quads(np.array([center])))[0] else center
+    best, _ = coarse_to_fine(lambda v: region(quads(v)), max(lo, start - step),
+                             min(hi, start + step), divisions, min_interval, start)
     return knob.apply(pose, best)
 
 
@@ -145,16 +157,34 @@ def _around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: fl
     return max(lo, c - TRACK_HALF_RANGE), min(hi, c + TRACK_HALF_RANGE), c
 
 
-def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
+def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
+                   spread: float | None = None) -> Pose2D:
     """Torso angle by Algorithm 1 with the head drawn along it (Fig. 3a), the torso's
-    horizontal position, the head angle, then both ratios (Algorithm 6)."""
-    lo, hi, c = _around(prev, "torso", *WAIST_RANGE, 90.0)
-    pose = search_angle(canvas, pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
-    pose = fit_pelvis_x(canvas, pose)
+    horizontal position and foreshortening (unless ``spread`` is given), the head
+    angle, then both lengthwise ratios (Algorithm 6)."""
+    pose = place_torso(canvas, pose, prev)
+    pose = fit_spread(canvas, pose) if spread is None else replace(pose, spread=spread)
     lo, hi, c = _around(prev, "head", *NECK_RANGE, pose.angle[SEGMENT_INDEX["torso"]])
     pose = search_angle(canvas, pose, ("head",), TORSO_HEAD, lo, hi, c)
     pose = search_ratio(canvas, pose, "torso", TORSO_HEAD)
     return search_ratio(canvas, pose, "head", ("head",))
+
+
+def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
+    """The torso's angle (Algorithm 1, head drawn along it) and horizontal position."""
+    lo, hi, c = _around(prev, "torso", *WAIST_RANGE, 90.0)
+    pose = search_angle(canvas, pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
+    return fit_pelvis_x(canvas, pose)
+
+
+def torso_spread(silhouette: np.ndarray, scale: float) -> float:
+    """The torso's horizontal foreshortening on one frame, before any limb is fitted.
+
+    Arms in front of or behind the torso widen it on some frames, so callers take
+    a low percentile over neighbouring frames (the body turns slowly, arms swing).
+    """
+    canvas = Canvas(silhouette)
+    return fit_spread(canvas, place_torso(canvas, initial_pose(canvas.sil, scale), None)).spread
 
 
 def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
@@ -188,8 +218,8 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D,
 def _fit_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     """Algorithm 1 for both upper legs with their lower legs attached (Fig. 3b-c)."""
     for side in ("l", "r"):
-        lo, hi, c = _around(prev, LEG[side][0], *THIGH_RANGE, 270.0)
-        pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side], lo, hi, c)
+        c = (prev or pose).angle[SEGMENT_INDEX[LEG[side][0]]]
+        pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side], *THIGH_RANGE, c)
     return pose
 
 
@@ -210,33 +240,68 @@ def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
     return swapped if scores[1] > scores[0] else pose
 
 
-def fit_spread(canvas: Canvas, pose: Pose2D, drawn) -> Pose2D:
-    """How much of the shoulder/hip span is seen (0 profile .. 1 frontal), by
-    Algorithm 6's search with the given limbs attached."""
-    return search(canvas, pose, Knob("spread"), drawn, 0.0, 1.0, pose.spread, 5, 0.05, 0.25)
+def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
+    """The torso's horizontal foreshortening (section 3.4): how much of the shoulder
+    and hip span is seen, 0 in profile .. 1 frontal, from the torso's seen width,
+    by Algorithm 6's search."""
+    return search(canvas, pose, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 5, 0.05, 0.25)
 
 
-def _arm_guess(canvas: Canvas, pose: Pose2D, side: str, ref: Pose2D) -> tuple[float, float]:
-    """Upper and lower arm angles from the arm curve (Algorithms 2-4)."""
-    upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
-    guess = (ref.angle[upper], ref.angle[lower])
-    points = arm_curve(canvas, forward_kinematics_2d(pose), side, pose.scale)
-    if len(points) < 3:
-        return guess
+def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
+    """Upper and lower arm angles from the arm curve (Algorithms 3-4)."""
     corner = find_elbow_corner(points)
     if corner < 0:
-        a = find_angle(points, guess[0])
+        a = find_angle(points, default[0])
         return a, a
-    return find_angle(points[: corner + 1], guess[0]), find_angle(points[corner:], guess[1])
+    return find_angle(points[: corner + 1], default[0]), find_angle(points[corner:], default[1])
+
+
+def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) -> list[tuple[float, float]]:
+    """Angles of a two-segment limb from start whose tip reaches end (both elbow
+    bends); a straight limb pointing at end when it is out of reach."""
+    d = end - start
+    dist = float(np.hypot(*d))
+    toward = float(np.degrees(np.arctan2(-d[1], d[0])))
+    if dist >= l1 + l2 or dist < 1e-6:
+        return [(toward, toward)]
+    alpha = float(np.degrees(np.arccos(np.clip((l1 ** 2 + dist ** 2 - l2 ** 2) / (2 * l1 * dist), -1, 1))))
+    out = []
+    for upper in (toward + alpha, toward - alpha):
+        elbow = start + l1 * np.array([np.cos(np.radians(upper)), -np.sin(np.radians(upper))])
+        e = end - elbow
+        out.append((upper, float(np.degrees(np.arctan2(-e[1], e[0])))))
+    return out
+
+
+def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
+    """First guesses for one arm's (upper, lower) angles: contour analysis
+    (Algorithms 2-4), the arm reaching the curve's farthest point, hanging down,
+    and the previous frame's arm."""
+    upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
+    guesses = [(270.0, 270.0)]
+    if prev is not None:
+        guesses.append((prev.angle[upper], prev.angle[lower]))
+    joints = forward_kinematics_2d(pose)
+    points = arm_curve(canvas, joints, side, pose.scale)
+    if len(points) >= 3:
+        guesses.append(_contour_guess(points, guesses[-1]))
+        shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
+        tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
+        guesses += two_link_angles(shoulder, tip, LENGTH[upper] * pose.scale, LENGTH[lower] * pose.scale)
+    return guesses
 
 
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
-    """One arm: contour analysis for a first guess, refined by Algorithm 1 (upper arm
-    with the lower arm attached, then the lower arm) and Algorithm 6."""
+    """One arm: the best-scoring first guess, refined by Algorithm 1 (upper arm with
+    the lower arm attached, then the lower arm) and Algorithm 6."""
     upper, lower = ARM[side]
-    gu, gl = _arm_guess(canvas, pose, side, prev or pose)
-    pose = Knob("angle", (lower,)).apply(pose, gl)
-    h = TRACK_HALF_RANGE
+    poses = [Knob("angle", (lower,)).apply(Knob("angle", (upper,)).apply(pose, gu), gl)
+             for gu, gl in arm_candidates(canvas, pose, side, prev)]
+    quads = np.stack([pose_quads(p, ARM[side]) for p in poses])
+    scores = canvas.region_scorer(quads.reshape(-1, 4, 2))(quads)
+    pose = poses[int(np.argmax(scores))]
+    h = ARM_REFINE_HALF_RANGE
+    gu, gl = pose.angle[SEGMENT_INDEX[upper]], pose.angle[SEGMENT_INDEX[lower]]
     pose = search_angle(canvas, pose, (upper,), ARM[side], gu - h, gu + h, gu)
     pose = search_angle(canvas, pose, (lower,), (lower,), gl - h, gl + h, gl)
     pose = search_ratio(canvas, pose, upper, ARM[side])
@@ -255,20 +320,22 @@ def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
     return Pose2D(pelvis=np.array([x, min(pelvis_y, ys.max())]), scale=scale)
 
 
-def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None) -> Fit2D:
-    """Fit the 10-cylinder model to one normalised silhouette (section 3.3)."""
+def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
+              spread: float | None = None) -> Fit2D:
+    """Fit the 10-cylinder model to one normalised silhouette (section 3.3); with
+    ``spread`` the torso's horizontal foreshortening is taken as given."""
     canvas = Canvas(silhouette)
     pose = initial_pose(canvas.sil, scale)
     if prev is not None:
         pose = replace(prev, pelvis=pose.pelvis, scale=scale)
-    pose = fit_torso_head(canvas, pose, prev)
+    pose = fit_torso_head(canvas, pose, prev, spread)
     canvas.commit(pose_quads(pose, TORSO_HEAD))
     pose, crossed = fit_legs(canvas, pose, prev)
-    legs = LEG["l"] + LEG["r"]
-    pose = fit_spread(canvas, pose, legs)
-    canvas.commit(pose_quads(pose, legs))
+    canvas.commit(pose_quads(pose, LEG["l"] + LEG["r"]))
     for side in ("l", "r"):
         pose = fit_arm(canvas, pose, side, prev)
         canvas.commit(pose_quads(pose, ARM[side]))
-    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=canvas.score_model(),
+    whole = Canvas(canvas.sil)
+    whole.commit(pose_quads(pose))
+    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=whole.score_model(),
                  legs_crossed=crossed)

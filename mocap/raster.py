@@ -12,10 +12,11 @@ import cv2
 import numpy as np
 
 from mocap.body import (SEGMENT_INDEX, SEGMENT_NAMES, WIDTH, Pose2D, forward_kinematics_2d,
-                        segment_endpoints)
+                        segment_endpoints, torso_width)
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
+_TORSO = SEGMENT_INDEX["torso"]
 
 
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -28,16 +29,20 @@ def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> n
     return np.stack([starts + h, ends + h, ends - h, starts - h], axis=-2)
 
 
-def joint_quads(joints: np.ndarray, scale: float, segments: np.ndarray | None = None) -> np.ndarray:
-    """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2)."""
+def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
+    """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2);
+    the torso is as wide as ``spread`` (shape (...,)) makes it look."""
     idx = np.arange(len(SEGMENT_NAMES)) if segments is None else np.asarray(segments)
     ends = segment_endpoints(joints)[..., idx, :, :]
-    return segment_quads(ends[..., 0, :], ends[..., 1, :], WIDTH[idx] * scale)
+    widths = np.broadcast_to(WIDTH[idx] * scale, ends.shape[:-2]).copy()
+    widths[..., idx == _TORSO] = (torso_width(spread) * scale)[..., None]
+    return segment_quads(ends[..., 0, :], ends[..., 1, :], widths)
 
 
 def pose_quads(pose: Pose2D, segments=SEGMENT_NAMES) -> np.ndarray:
     """The rectangles (k, 4, 2) of the named segments of a 2D pose."""
-    return joint_quads(forward_kinematics_2d(pose), pose.scale, [SEGMENT_INDEX[s] for s in segments])
+    return joint_quads(forward_kinematics_2d(pose), pose.scale,
+                       [SEGMENT_INDEX[s] for s in segments], pose.spread)
 
 
 def fill_quads(mask: np.ndarray, quads: np.ndarray, offset=(0, 0)) -> np.ndarray:
@@ -123,7 +128,8 @@ class Canvas:
             totals = np.empty(len(pts))
             for i, quads in enumerate(pts):
                 buf.fill(0)
-                cv2.fillPoly(buf, list(quads), 1, cv2.LINE_8, _SHIFT)
+                for quad in quads:  # one by one: fillPoly would make overlaps holes
+                    cv2.fillConvexPoly(buf, quad, 1, cv2.LINE_8, _SHIFT)
                 totals[i] = cv2.sumElems(cv2.multiply(weights, buf, dtype=cv2.CV_32F))[0]
             overlap = np.floor(totals / base)
             return similarity_from_counts(sil_area, totals - base * overlap, overlap)

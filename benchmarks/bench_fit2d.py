@@ -1,0 +1,103 @@
+"""2D fit accuracy and speed on videos rendered from real motion capture.
+
+Renders each BVH of ../shared/data/bvh from side and three-quarter views with the
+motion's own proportions, runs the pipeline, and prints per-clip and per-joint 2D
+errors in % of body height (image-side matching, as the 2D fit labels sides), then
+the fit's time per frame and the whole pipeline's frames per second.
+
+    python benchmarks/bench_fit2d.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+import cv2  # noqa: E402
+
+cv2.setNumThreads(1)
+
+from mocap.body import JOINTS  # noqa: E402
+from mocap.fit2d import FIT_SCALE, fit_frame, torso_spread  # noqa: E402
+from mocap.metrics import side_matched_errors  # noqa: E402
+from mocap.session import body_heights, extract_silhouettes, fit_silhouettes, normalise  # noqa: E402
+from mocap.synth import render_motion  # noqa: E402
+from mocap.video import open_video, processing_scale  # noqa: E402
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
+CLIPS = [  # (bvh, view, source frame range)
+    ("cmu_walk.bvh", "side", None), ("cmu_walk.bvh", "three-quarter", None),
+    ("cmu_run.bvh", "side", None), ("cmu_run.bvh", "three-quarter", None),
+    ("cmu_01_01_jumps.bvh", "side", (0, 1200)), ("cmu_01_01_jumps.bvh", "three-quarter", (0, 1200)),
+    ("walk01.bvh", "side", None), ("walk01.bvh", "three-quarter", None),
+]
+
+
+def run_clip(bvh: str, view: str, frames, workdir: Path):
+    video = workdir / f"{Path(bvh).stem}_{view}.mp4"
+    truth = render_motion(DATA / bvh, video, view=view, frames=frames)
+    info = open_video(video)
+    scale = processing_scale(info)
+    t0 = time.perf_counter()
+    sils = extract_silhouettes(info, scale)
+    heights = body_heights(sils, info.fps)
+    fits = fit_silhouettes(sils, heights, scale, info.fps)
+    total = time.perf_counter() - t0
+    fit_ms = time_fits(sils, heights, [f.fit.pose.spread if f.fit else None for f in fits])
+    pred = np.array([f.joints2d if f.joints2d is not None else np.full((16, 2), np.nan) for f in fits])
+    err = side_matched_errors(pred, truth.joints2d) / truth.body_height_px * 100
+    return err, fit_ms, info.frame_count / total, (info.width, info.height)
+
+
+def time_fits(sils, heights, spreads) -> np.ndarray:
+    """Milliseconds of the 2D fit alone (normalisation, torso foreshortening and
+    Algorithms 1-6) per frame."""
+    out, prev = [], None
+    for sil, h, spread in zip(sils, heights, spreads):
+        if sil is None:
+            continue
+        t = time.perf_counter()
+        small, _, _ = normalise(sil, h)
+        torso_spread(small, FIT_SCALE)
+        fit = fit_frame(small, FIT_SCALE, prev, spread)
+        out.append((time.perf_counter() - t) * 1000)
+        prev = fit.pose if fit.score >= 0.5 else None
+    return np.array(out)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="first clip of each motion only")
+    args = parser.parse_args()
+    if not DATA.is_dir():
+        print(f"skipped: {DATA} is absent")
+        return 0
+    clips = CLIPS[::2] if args.quick else CLIPS
+    all_err, all_ms = [], []
+    print(f"{'clip':34s} {'frames':>6s} {'median%':>8s} {'p90%':>6s} {'fit ms':>7s} {'fps':>6s}  size")
+    with tempfile.TemporaryDirectory() as tmp:
+        for bvh, view, frames in clips:
+            err, ms, fps, size = run_clip(bvh, view, frames, Path(tmp))
+            all_err.append(err)
+            all_ms.append(ms)
+            print(f"{Path(bvh).stem + ' ' + view:34s} {len(err):6d} {np.nanmedian(err):8.2f} "
+                  f"{np.nanpercentile(err, 90):6.2f} {np.median(ms):7.2f} {fps:6.1f}  {size[0]}x{size[1]}")
+    err = np.concatenate(all_err)
+    print(f"{'all':34s} {len(err):6d} {np.nanmedian(err):8.2f} {np.nanpercentile(err, 90):6.2f} "
+          f"{np.median(np.concatenate(all_ms)):7.2f}")
+    print("\nper joint, median % of body height:")
+    print("  ".join(f"{n}={np.nanmedian(err[:, i]):.1f}" for i, n in enumerate(JOINTS)))
+    print(f"frames with a result: {np.isfinite(err).all(axis=1).mean() * 100:.1f}%")
+    print("paper: about 1000 ms per frame (2.7 GHz Celeron)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

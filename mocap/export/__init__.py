@@ -1,0 +1,1 @@
+"""Exports of a fitted motion, one module per file format."""

@@ -1,0 +1,45 @@
+"""Error measures against ground truth: short pure functions over joint arrays."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mocap.body import JOINT_INDEX
+
+LIMBS = tuple(tuple((f"{j}_l", f"{j}_r") for j in names)
+              for names in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")))
+
+
+def side_matched_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Per-joint distances (F, J) where the prediction's left/right are image sides
+    (the 2D fit, section 3.3): for each arm pair and leg pair, the assignment of the
+    two predicted limbs to the true ones that gives the smaller total error."""
+    err = np.linalg.norm(pred - truth, axis=-1)
+    for limb in LIMBS:
+        left = [JOINT_INDEX[a] for a, _ in limb]
+        right = [JOINT_INDEX[b] for _, b in limb]
+        swapped_l = np.linalg.norm(pred[:, left] - truth[:, right], axis=-1)
+        swapped_r = np.linalg.norm(pred[:, right] - truth[:, left], axis=-1)
+        swap = (swapped_l + swapped_r).sum(1) < (err[:, left] + err[:, right]).sum(1)
+        err[np.ix_(swap, left)] = swapped_l[swap]
+        err[np.ix_(swap, right)] = swapped_r[swap]
+    return err
+
+
+def procrustes_aligned(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """pred (J, D) moved onto truth by the best similarity transform."""
+    mp, mt = pred.mean(0), truth.mean(0)
+    p, t = pred - mp, truth - mt
+    u, s, vt = np.linalg.svd(p.T @ t)
+    d = np.sign(np.linalg.det(u @ vt))
+    fix = np.ones(len(s))
+    fix[-1] = d
+    rot = (u * fix) @ vt
+    scale = (s * fix).sum() / max((p ** 2).sum(), 1e-12)
+    return scale * p @ rot + mt
+
+
+def pa_mpjpe(pred: np.ndarray, truth: np.ndarray) -> float:
+    """Mean per-joint error after Procrustes alignment, averaged over frames (F, J, 3)."""
+    return float(np.mean([np.linalg.norm(procrustes_aligned(p, t) - t, axis=-1).mean()
+                          for p, t in zip(pred, truth)]))

@@ -1,0 +1,238 @@
+"""Background estimation and silhouette extraction (paper, section 3.2), made robust.
+
+The paper takes the background as the regions that do not change over a few frames
+(Collins et al.) and the silhouette as the pixels whose difference from it exceeds a
+threshold, and notes that shadows and noise defeat it. Here:
+
+- the background is a per-pixel temporal median of frames sampled over the clip, each
+  first brought to a common exposure (the performer moves, so each pixel shows the
+  background in most samples);
+- each frame is brought to the background's exposure before differencing, so that an
+  auto-exposure jump does not turn the whole frame into foreground;
+- the threshold follows the noise of each pixel, measured over the samples;
+- soft shadows (the background darkened by a roughly uniform ratio, same chromaticity)
+  are removed;
+- the mask is cleaned and reduced to the one person-sized region, or to nothing when
+  nobody is there (callers mark such frames "no person").
+
+Frames are processed at whatever size they come in (see `video.processing_scale`);
+masks are in the pixels of those frames.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from mocap.errors import MocapError
+from mocap.video import VideoInfo, sample_frames
+
+_MAD_TO_SIGMA = 1.4826
+_MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
+_GAIN_SAMPLES = 1000  # pixels (on a regular grid) that estimate an exposure gain
+
+
+@dataclass(frozen=True)
+class Background:
+    """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel difference `threshold`
+    (HxW uint8 grey levels) and the clip's global noise `sigma` (grey levels)."""
+
+    image: np.ndarray
+    threshold: np.ndarray
+    sigma: float
+
+
+def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
+                        scale: float = 1.0, k: float = 3.0,
+                        min_threshold: float = 12.0) -> Background:
+    """Temporal median of exposure-normalised frames (section 3.2: the regions that
+    do not change), with a per-pixel threshold of `k` robust noise sigmas.
+
+    `source` is a video (`n_samples` frames spread over it are read at `scale`) or
+    the frames themselves (all are used). Each frame is first brought to the exposure
+    of the plain median, so that a frame exposed differently does not pull the median.
+    The threshold never drops below `min_threshold` grey levels, which keeps
+    compression artefacts of a very clean clip out of the silhouette.
+    """
+    if isinstance(source, VideoInfo):
+        frames = [f for _, f in sample_frames(source, n_samples, scale)]
+    else:
+        frames = list(source)
+    stack = _check_frames(frames)
+    reference = _median(stack)
+    for frame in stack:
+        frame[:] = cv2.transform(frame, np.diag(exposure_gain(frame, reference)))
+    background = _median(stack)
+    noise, sigma = _noise(stack, background)
+    threshold = np.clip(k * noise, min_threshold, 255).astype(np.uint8)
+    return Background(background, threshold, sigma)
+
+
+def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float]:
+    """Per-pixel noise level of the largest channel difference, and the global one.
+
+    The global level is the median deviation of all pixels of all frames from the
+    background. The per-pixel one (needs >= 5 frames) is taken from the lower quartile
+    over time, right even where the performer or their shadow covers a pixel in most
+    samples, then spread to the neighbours (texture edges) and floored at the global.
+    """
+    deviation = np.stack([cv2.absdiff(f, background).max(axis=2) for f in stack])
+    sigma = _MAD_TO_SIGMA * float(np.median(deviation))
+    noise = np.full(background.shape[:2], sigma, np.float32)
+    if len(stack) >= 5:
+        quartile = np.quantile(deviation, 0.25, axis=0).astype(np.float32)
+        local = cv2.dilate(_MAD_TO_SIGMA * _MEDIAN_PER_QUARTILE * quartile, np.ones((3, 3)))
+        noise = np.maximum(noise, local)
+    return noise, sigma
+
+
+def _median(stack: np.ndarray, rows: int = 32) -> np.ndarray:
+    """Per-pixel median over time of a uint8 frame stack, in strips of `rows` rows so
+    that the working memory stays small next to the stack."""
+    median = np.empty(stack.shape[1:], np.uint8)
+    for y in range(0, median.shape[0], rows):
+        median[y:y + rows] = np.median(stack[:, y:y + rows], axis=0) + 0.5
+    return median
+
+
+def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Per-channel gains that bring `frame` to the exposure of `reference`.
+
+    The median ratio over a regular grid of well-exposed pixels, then again over the
+    three quarters of them that agree best with that first gain (the performer and
+    shadows drop out): a global exposure change, robust to whatever moved.
+    """
+    stride = max(1, int(np.sqrt(frame.shape[0] * frame.shape[1] / _GAIN_SAMPLES)))
+    f = _channel_rows(frame[::stride, ::stride].reshape(-1, 3))
+    r = _channel_rows(reference[::stride, ::stride].reshape(-1, 3))
+    usable = ((f > 8) & (f < 250) & (r > 8) & (r < 250)).all(axis=0)
+    if not usable.any():
+        return np.ones(3, np.float32)
+    f, r = f[:, usable], r[:, usable]
+    ratio = r / f
+    residual = np.abs(f * np.median(ratio, axis=1)[:, None] - r).max(axis=0)
+    keep = residual <= np.percentile(residual, 75)
+    return np.median(ratio[:, keep], axis=1).astype(np.float32)
+
+
+def extract_silhouette(frame: np.ndarray, background: Background,
+                       shadow_ratio: tuple[float, float] = (0.35, 0.95),
+                       shadow_chroma: float = 0.12) -> np.ndarray:
+    """The performer's silhouette in `frame` (HxW uint8, 0 or 255), empty if nobody.
+
+    Section 3.2's thresholded difference from the background, after exposure
+    compensation, with soft shadows removed, cleaned by morphology and reduced to the
+    person-sized region.
+    """
+    if frame.shape != background.image.shape or frame.dtype != np.uint8:
+        raise ValueError(f"frame {frame.shape} {frame.dtype} does not match the "
+                         f"background {background.image.shape} uint8")
+    gain = exposure_gain(frame, background.image)
+    frame = cv2.transform(frame, np.diag(gain))
+    mask = foreground(frame, background)
+    return clean_mask(remove_shadows(mask, frame, background.image, shadow_ratio, shadow_chroma))
+
+
+def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
+    """Pixels whose largest channel difference exceeds the pixel's threshold."""
+    diff = cv2.absdiff(frame, background.image)
+    b, g, r = cv2.split(diff)
+    return cv2.compare(cv2.max(cv2.max(b, g), r), background.threshold, cv2.CMP_GT)
+
+
+def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: np.ndarray,
+                   ratio: tuple[float, float], chroma: float) -> np.ndarray:
+    """`mask` without its soft-shadow areas (the paper's noted failure, section 3.2).
+
+    A shadow pixel is the background darkened by one factor in `ratio` for all
+    channels (same chromaticity, within `chroma` of the brightest background
+    channel). Only solid areas of such pixels go: thin runs of them inside the
+    person (dark hair on a grey wall) survive the opening and stay.
+    """
+    darker = cv2.compare(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY),
+                         cv2.cvtColor(background, cv2.COLOR_BGR2GRAY), cv2.CMP_LT)
+    index = np.flatnonzero(cv2.bitwise_and(mask, darker).view(bool))
+    f = _channel_rows(np.take(frame.reshape(-1, 3), index, axis=0))
+    b = _channel_rows(np.take(background.reshape(-1, 3), index, axis=0)) + 1.0
+    level = f.sum(axis=0) / b.sum(axis=0)
+    residual = np.abs(f - level * b).max(axis=0)
+    like = ((level > ratio[0]) & (level < ratio[1])
+            & (residual < chroma * level * b.max(axis=0)))
+    shadow = np.zeros_like(mask)
+    shadow.reshape(-1)[index[like]] = 255
+    shadow = cv2.morphologyEx(shadow, cv2.MORPH_OPEN, _disk(mask.shape))
+    return cv2.bitwise_and(mask, cv2.bitwise_not(shadow))
+
+
+def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001,
+               min_piece: float = 0.02) -> np.ndarray:
+    """Open (speckle), close (small gaps), keep the person, fill its small holes.
+
+    The person is the largest region (none if under `min_area` of the frame) plus
+    regions of at least `min_piece` of its area near it, such as a leg cut off by a
+    thin gap; its holes under `max_hole` of its area are filled.
+    """
+    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _disk(mask.shape))
+    contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
+    person = np.zeros_like(mask)
+    if not contours:
+        return person
+    parents = hierarchy[0][:, 3]
+    areas = np.array([cv2.contourArea(c) for c in contours])
+    keep = _person_regions(contours, parents, areas, min_area * mask.size, min_piece)
+    if not keep:
+        return person
+    cv2.drawContours(person, [contours[i] for i in keep], -1, 255, cv2.FILLED)
+    limit = max_hole * areas[keep].sum()
+    holes = [c for c, p, a in zip(contours, parents, areas) if p in keep and a >= limit]
+    if holes:
+        open_holes = np.zeros_like(mask)
+        cv2.drawContours(open_holes, holes, -1, 255, cv2.FILLED)
+        person = cv2.bitwise_or(cv2.bitwise_and(person, cv2.bitwise_not(open_holes)),
+                                cv2.bitwise_and(person, mask))
+    return person
+
+
+def _person_regions(contours, parents, areas, min_area: float, min_piece: float) -> list[int]:
+    """Indices of the outer contours that make the person: the largest region and the
+    large regions whose bounding boxes come within a tenth of its height of it."""
+    outer = np.flatnonzero(parents < 0)
+    main = outer[np.argmax(areas[outer])]
+    if areas[main] < min_area:
+        return []
+    x, y, w, h = cv2.boundingRect(contours[main])
+    gap = max(2, h // 10)
+    keep = [int(main)]
+    for i in outer:
+        lx, ly, lw, lh = cv2.boundingRect(contours[i])
+        near = (lx <= x + w + gap and x <= lx + lw + gap
+                and ly <= y + h + gap and y <= ly + lh + gap)
+        if i != main and near and areas[i] >= min_piece * areas[main]:
+            keep.append(int(i))
+    return keep
+
+
+def _check_frames(frames: list[np.ndarray]) -> np.ndarray:
+    if not frames:
+        raise MocapError("no frames to estimate the background from")
+    shape = frames[0].shape
+    if len(shape) != 3 or shape[2] != 3 or any(
+            f.shape != shape or f.dtype != np.uint8 for f in frames):
+        raise ValueError(f"background frames must all be HxWx3 uint8 BGR like the "
+                         f"first, {shape} {frames[0].dtype}")
+    return np.stack(frames)
+
+
+def _disk(shape: tuple[int, ...]) -> np.ndarray:
+    """The structuring element of the cleaning: about 1% of the frame height, odd, >= 3."""
+    size = max(3, round(shape[0] / 100) | 1)
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
+
+
+def _channel_rows(pixels: np.ndarray) -> np.ndarray:
+    """(N, 3) uint8 pixels as a C-ordered (3, N) float32 array: fast per-channel rows."""
+    return np.ascontiguousarray(pixels.T, dtype=np.float32)

@@ -1,0 +1,539 @@
+"""`mocap synth`: render the 10-cylinder body into a video with exact ground truth.
+
+The body is posed by 3D joints (any proportions: segment lengths come from the joints;
+widths are Table 1's, read as diameters, scaled to the skeleton's body height) and seen
+by a fixed camera from a yaw angle about the vertical. Each cylinder is drawn as the
+convex hull of its two projected end circles, back to front by midpoint depth, over a
+static procedural background with mild per-frame sensor noise. The projection is
+scaled orthographic (the silhouette method's assumption) unless a focal length is given.
+
+World frame of the input joints: metres, right-handed, y up (BVH axes). Yaw 0 looks
+along the performer's initial lateral axis from their right side, so they face image
+right; 45 is three-quarter (turned toward the camera), 90 is the front view.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from mocap import body
+from mocap.bvh import contract_joints, read_bvh
+from mocap.errors import MocapError
+from mocap.fileio import atomic_write_json
+
+WALK_CYCLE = "walk-cycle"   # the source name of the procedural walk
+VIEWS = {"side": 0.0, "three-quarter": 45.0, "front": 90.0}
+_UP = np.array([0.0, 1.0, 0.0])
+_RING = np.exp(2j * np.pi * np.arange(24) / 24)           # 24 samples on each end ellipse
+_TORSO = body.SEGMENT_INDEX["torso"]
+_LIGHT = np.array([-0.5, 0.6, 0.62]) / np.linalg.norm([-0.5, 0.6, 0.62])  # camera frame
+# shading layers: (radius fraction, shift toward the light in radii, brightness)
+_LAYERS = np.array([[1.0, 0.0, 0.72], [0.62, 0.3, 1.0], [0.25, 0.55, 1.18]])
+_COLOURS = np.array([  # BGR per segment, in body.SEGMENT_NAMES order
+    (60, 70, 165), (135, 165, 220), (80, 95, 190), (125, 160, 215), (55, 60, 145),
+    (110, 145, 200), (145, 100, 60), (160, 115, 75), (120, 80, 45), (135, 92, 55)])
+_SHADES = np.clip(_COLOURS[:, None, :] * _LAYERS[None, :, 2:], 0, 255).tolist()
+_FOURCC = {".mp4": "mp4v", ".avi": "MJPG"}
+_NOISE_PAD = 32
+_PAN_SPEED = 3                                             # px/frame, moving background
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """How to film the body. ``yaw`` (degrees) overrides ``view`` when given."""
+
+    view: str = "side"
+    yaw: float | None = None
+    pitch: float = 0.0                 # degrees, positive looks down
+    size: tuple[int, int] = (640, 480)
+    fps: float = 30.0
+    perspective: float | None = None   # focal length in pixels; None = orthographic
+    body_fraction: float = 0.6         # body height / frame height, if the path fits
+    margin: float = 0.05               # free border, fraction of the frame
+    moving_background: bool = False
+    antialias: bool = True
+    noise: float = 2.0                 # sensor noise sigma, grey levels
+    seed: int = 0
+
+    @property
+    def yaw_deg(self) -> float:
+        """The camera yaw in degrees from ``yaw`` or the named ``view``."""
+        if self.yaw is not None:
+            return float(self.yaw)
+        if self.view not in VIEWS:
+            raise MocapError(f"unknown view {self.view!r} (choose {', '.join(VIEWS)})")
+        return VIEWS[self.view]
+
+
+@dataclass(frozen=True, eq=False)
+class Camera:
+    """A fixed camera. ``rotation`` rows are the image right, image up and toward-camera
+    axes in world coordinates; ``origin`` is the world point at the image centre
+    (orthographic, ``scale`` px per metre) or the eye (perspective, ``scale`` = focal px).
+    """
+
+    kind: str
+    yaw_deg: float
+    pitch_deg: float
+    rotation: np.ndarray
+    origin: np.ndarray
+    scale: float
+    cx: float
+    cy: float
+
+    def to_camera(self, world: np.ndarray) -> np.ndarray:
+        """World points (..., 3) -> camera frame (x right, y up, z toward the camera)."""
+        return (np.asarray(world) - self.origin) @ self.rotation.T
+
+    def project_camera(self, cam: np.ndarray) -> np.ndarray:
+        """Camera-frame points (..., 3) -> pixels (..., 2), x right, y down."""
+        xy = cam[..., :2] * self.scale
+        if self.kind == "perspective":
+            xy = xy / -cam[..., 2:3]
+        return np.stack([self.cx + xy[..., 0], self.cy - xy[..., 1]], axis=-1)
+
+    def to_dict(self) -> dict:
+        """JSON form; ``scale`` is named ``focal`` for a perspective camera."""
+        d = {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in asdict(self).items()}
+        d["focal" if self.kind == "perspective" else "scale"] = d.pop("scale")
+        d["projection"] = ("u = cx + s*x, v = cy - s*y" if self.kind == "orthographic" else
+                           "u = cx + f*x/(-z), v = cy - f*y/(-z)") + \
+            " with (x, y, z) = rotation @ (world - origin)"
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Camera":
+        """Inverse of ``to_dict``."""
+        return cls(kind=d["kind"], yaw_deg=d["yaw_deg"], pitch_deg=d["pitch_deg"],
+                   rotation=np.array(d["rotation"]), origin=np.array(d["origin"]),
+                   scale=d.get("scale", d.get("focal")), cx=d["cx"], cy=d["cy"])
+
+
+@dataclass(frozen=True, eq=False)
+class Truth:
+    """The exact ground truth of a rendered clip (see ``to_dict`` for the JSON)."""
+
+    source: str
+    fps: float
+    width: int
+    height: int
+    camera: Camera
+    body_height_m: float
+    body_height_px: float
+    source_frames: np.ndarray   # (F,) frame of the source motion shown in each frame
+    joints2d: np.ndarray        # (F, 16, 2) pixels, anatomical left/right
+    joints3d: np.ndarray        # (F, 16, 3) metres, camera-aligned, origin at the pelvis
+    pelvis_camera: np.ndarray   # (F, 3) pelvis in the camera frame (re-projection)
+
+    def to_dict(self) -> dict:
+        """The ``mocap-truth`` JSON document."""
+        frames = [{"index": i, "source_frame": int(s),
+                   "joints2d": np.round(j2, 3).tolist(), "joints3d": np.round(j3, 5).tolist(),
+                   "pelvis_camera": np.round(p, 5).tolist()}
+                  for i, (s, j2, j3, p) in enumerate(zip(
+                      self.source_frames, self.joints2d, self.joints3d, self.pelvis_camera))]
+        return {"format": "mocap-truth", "version": 1, "source": self.source,
+                "fps": self.fps, "width": self.width, "height": self.height,
+                "camera": self.camera.to_dict(), "body_height_m": self.body_height_m,
+                "body_height_px": self.body_height_px, "joints": list(body.JOINTS),
+                "frames": frames}
+
+
+def save_truth(truth: Truth, path: str | Path) -> None:
+    """Write the truth JSON (atomically)."""
+    atomic_write_json(path, truth.to_dict())
+
+
+def load_truth(path: str | Path) -> Truth:
+    """Read a truth JSON written by ``save_truth``."""
+    try:
+        d = json.loads(Path(path).read_text())
+        if d.get("format") != "mocap-truth" or d.get("version") != 1:
+            raise MocapError(f"{path}: not a mocap-truth version 1 file")
+        frames = d["frames"]
+        return Truth(source=d["source"], fps=d["fps"], width=d["width"], height=d["height"],
+                     camera=Camera.from_dict(d["camera"]), body_height_m=d["body_height_m"],
+                     body_height_px=d["body_height_px"],
+                     source_frames=np.array([f["source_frame"] for f in frames], dtype=int),
+                     joints2d=np.array([f["joints2d"] for f in frames], dtype=float),
+                     joints3d=np.array([f["joints3d"] for f in frames], dtype=float),
+                     pelvis_camera=np.array([f["pelvis_camera"] for f in frames], dtype=float))
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise MocapError(f"cannot read truth file {path}: {exc}") from None
+
+
+# -- camera ---------------------------------------------------------------------------
+
+def _rotation(yaw_deg: float, pitch_deg: float, joints0: np.ndarray) -> np.ndarray:
+    """World -> camera rotation for a yaw from the performer's initial lateral axis."""
+    j = body.JOINT_INDEX
+    pairs = joints0[[j["hip_l"], j["shoulder_l"]]] - joints0[[j["hip_r"], j["shoulder_r"]]]
+    left = pairs.sum(axis=0)
+    left = _unit(left - _UP * left[1], np.array([1.0, 0.0, 0.0]))
+    yaw, pitch = np.radians(yaw_deg), np.radians(pitch_deg)
+    look = np.cos(yaw) * left - np.sin(yaw) * np.cross(left, _UP)
+    right = np.cross(look, _UP)
+    up = np.cos(pitch) * _UP + np.sin(pitch) * look
+    look = np.cos(pitch) * look - np.sin(pitch) * _UP
+    return np.stack([right, up, -look])
+
+
+def frame_camera(joints_world: np.ndarray, radii: np.ndarray, opts: RenderOptions) -> Camera:
+    """The fixed camera that keeps every frame's body inside the image margins, the body
+    ``opts.body_fraction`` of the frame height tall when the whole path allows it."""
+    rot = _rotation(opts.yaw_deg, opts.pitch, joints_world[0])
+    height = body.body_height(joints_world[0])
+    pts = cylinder_points(joints_world @ rot.T, radii, _LAYERS[:1]).reshape(-1, 3)
+    mid = (pts.min(0) + pts.max(0)) / 2
+    width, frame_h = opts.size
+    half = np.array([width, frame_h]) * (0.5 - opts.margin)
+    wanted = opts.body_fraction * frame_h / height
+    if opts.perspective is None:
+        fit = np.min(half / np.maximum(np.abs(pts[:, :2] - mid[:2]).max(0), 1e-9))
+        kind, scale, origin = "orthographic", min(wanted, fit), mid
+    else:
+        rel = pts - mid
+        dist = max(opts.perspective / wanted, np.max(
+            rel[:, 2:] + opts.perspective * np.abs(rel[:, :2]) / half))
+        kind, scale, origin = "perspective", float(opts.perspective), mid + [0.0, 0.0, dist]
+    return Camera(kind=kind, yaw_deg=opts.yaw_deg, pitch_deg=float(opts.pitch), rotation=rot,
+                  origin=origin @ rot, scale=float(scale), cx=width / 2, cy=frame_h / 2)
+
+
+def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarray) -> np.ndarray:
+    """(..., 10, L, 2R, 3) points on both end ellipses of every segment, camera frame.
+
+    ``radii`` (10, 2) are each segment's lateral and front-to-back radii (only the
+    torso's differ: its lateral axis runs from the right hip and shoulder to the left
+    ones). One ring per shading layer: radii times ``layer[0]``, shifted toward the
+    light by ``layer[1]`` radii.
+    """
+    ends = body.segment_endpoints(joints_cam)                        # (..., 10, 2, 3)
+    axis = _unit(ends[..., 1, :] - ends[..., 0, :], _UP)
+    across = _unit(np.cross(axis, [0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
+    lateral = np.broadcast_to(across, axis.shape).copy()
+    lateral[..., _TORSO, :] = _torso_lateral(joints_cam)
+    lateral = _unit(lateral - (lateral * axis).sum(-1, keepdims=True) * axis, across)
+    sagittal = np.cross(axis, lateral)
+    light = _unit(_LIGHT - (axis @ _LIGHT)[..., None] * axis, across)
+    r = radii[:, None, :] * layers[:, :1]                            # (10, L, 2)
+    ring = (_RING.real[:, None] * r[..., None, 0:1, None] * lateral[..., None, None, None, :]
+            + _RING.imag[:, None] * r[..., None, 1:2, None] * sagittal[..., None, None, None, :])
+    shift = (radii[:, :1] * layers[:, 1])[..., None] * light[..., None, :]  # (..., 10, L, 3)
+    centres = ends[..., None, :, None, :] + shift[..., None, None, :]    # (..., 10, L, 2, 1, 3)
+    pts = centres + ring                                             # (..., 10, L, 2, R, 3)
+    return pts.reshape(*pts.shape[:-3], 2 * len(_RING), 3)
+
+
+def _torso_lateral(joints: np.ndarray) -> np.ndarray:
+    """(..., 3) the body's right-to-left direction from hips and shoulders."""
+    j = body.JOINT_INDEX
+    return (joints[..., j["hip_l"], :] - joints[..., j["hip_r"], :]
+            + joints[..., j["shoulder_l"], :] - joints[..., j["shoulder_r"], :])
+
+
+def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """Normalise along the last axis; near-zero vectors become ``fallback``."""
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.where(n > 1e-9, v / np.maximum(n, 1e-12), fallback)
+
+
+# -- pictures -------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Everything needed to draw any frame of a clip."""
+
+    opts: RenderOptions
+    camera: Camera
+    joints_cam: np.ndarray   # (F, 16, 3) camera frame
+    radii: np.ndarray        # (10, 2) lateral and front-to-back radii, metres
+    canvas: np.ndarray       # background, wider than the frame when it pans
+    noise: np.ndarray        # (2, H+pad, W+pad, 3) positive and negative sensor noise
+
+
+def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
+    """Camera, background and noise for rendering ``joints_world`` (F, 16, 3)."""
+    joints_world = np.asarray(joints_world, dtype=float)
+    if joints_world.ndim != 3 or joints_world.shape[1:] != (16, 3) or not len(joints_world):
+        raise MocapError(f"expected joints of shape (F, 16, 3), got {joints_world.shape}")
+    radii = body.semi_axes(body.body_height(joints_world[0]))
+    camera = frame_camera(joints_world, radii, opts)
+    width, height = opts.size
+    rng = np.random.default_rng(opts.seed)
+    pan = min(_PAN_SPEED * (len(joints_world) - 1), width) if opts.moving_background else 0
+    canvas = _room(width + pan, height, rng, clutter=opts.moving_background)
+    noise = rng.normal(0.0, opts.noise, (height + _NOISE_PAD, width + _NOISE_PAD, 3))
+    noise = np.stack([np.clip(noise, 0, 255), np.clip(-noise, 0, 255)]).round().astype(np.uint8)
+    return Scene(opts, camera, camera.to_camera(joints_world), radii, canvas, noise)
+
+
+def _room(width: int, height: int, rng: np.random.Generator, clutter: bool) -> np.ndarray:
+    """A deterministic room: wall and floor gradients, pictures, texture; ``clutter``
+    adds many saturated shapes (a busy scene for tracking)."""
+    t = np.linspace(0.0, 1.0, height)[:, None, None]
+    horizon = int(height * 0.62)
+    wall = np.array([172, 178, 184]) - 25 * t
+    floor = np.array([92, 105, 118]) + 40 * t
+    img = np.where(np.arange(height)[:, None, None] < horizon, wall, floor) * np.ones((1, width, 1))
+    for _ in range(max(3, width // 110)):
+        w, h = rng.uniform(0.06, 0.19) * width, rng.uniform(0.14, 0.5) * horizon
+        x, y = int(rng.uniform(0, width - w)), int(rng.uniform(0.1, 0.5) * horizon)
+        corner = (int(x + w), int(y + h))
+        colour = img[y, x] * rng.uniform(0.75, 1.05) + rng.uniform(-20, 20, 3)
+        cv2.rectangle(img, (x, y), corner, colour.tolist(), -1)
+        cv2.rectangle(img, (x, y), corner, (colour * 0.7).tolist(), 2)
+    cv2.rectangle(img, (0, horizon - 8), (width, horizon), (70, 80, 90), -1)
+    for _ in range(width // 8 if clutter else 0):
+        x, y = int(rng.integers(0, width)), int(rng.integers(0, height))
+        r, colour = int(rng.integers(3, 15)) * height // 240, rng.integers(20, 236, 3).tolist()
+        if rng.random() < 0.5:
+            cv2.circle(img, (x, y), r, colour, -1)
+        else:
+            cv2.rectangle(img, (x, y), (x + 2 * r, y + r), colour, -1)
+    coarse = cv2.resize(rng.normal(0, 6, (height // 16 + 2, width // 16 + 2)), (width, height),
+                        interpolation=cv2.INTER_CUBIC)
+    img += coarse[..., None] + rng.normal(0, 2.5, (height, width, 1))
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def background(scene: Scene, i: int) -> np.ndarray:
+    """The noise-free background of frame ``i`` (a view into the canvas)."""
+    width = scene.opts.size[0]
+    pan = scene.canvas.shape[1] - width
+    step = (i * _PAN_SPEED) % (2 * pan) if pan else 0
+    offset = step if step <= pan else 2 * pan - step
+    return scene.canvas[:, offset:offset + width]
+
+
+def draw_frame(scene: Scene, i: int) -> np.ndarray:
+    """The BGR image of frame ``i``: background, cylinders back to front, sensor noise."""
+    img = background(scene, i).copy()
+    pts = cylinder_points(scene.joints_cam[i], scene.radii, _LAYERS)
+    px = np.round(scene.camera.project_camera(pts) * 16).astype(np.int32)   # 4 fraction bits
+    depth = body.segment_endpoints(scene.joints_cam[i]).mean(axis=1)[:, 2]
+    line = cv2.LINE_AA if scene.opts.antialias else cv2.LINE_8
+    for k in np.argsort(depth):
+        for layer in range(len(_LAYERS)):
+            hull = cv2.convexHull(px[k, layer])
+            cv2.fillConvexPoly(img, hull, _SHADES[k][layer], line, 4)
+    if scene.opts.noise > 0:
+        width, height = scene.opts.size
+        dy, dx = np.random.default_rng([scene.opts.seed, i]).integers(0, _NOISE_PAD, 2)
+        cv2.add(img, scene.noise[0, dy:dy + height, dx:dx + width], dst=img)
+        cv2.subtract(img, scene.noise[1, dy:dy + height, dx:dx + width], dst=img)
+    return img
+
+
+def scene_truth(scene: Scene, source: str, source_frames: np.ndarray) -> Truth:
+    """The ground truth of every frame of ``scene``."""
+    cam = scene.camera
+    pelvis = scene.joints_cam[:, body.JOINT_INDEX["pelvis"]]
+    height_m = body.body_height(scene.joints_cam[0])
+    # a perspective body's size varies; quote it at the mean depth of the clip
+    depth = 1.0 if cam.kind == "orthographic" else float(-np.mean(pelvis[:, 2]))
+    width, height = scene.opts.size
+    return Truth(source=source, fps=float(scene.opts.fps), width=width, height=height,
+                 camera=cam, body_height_m=height_m, body_height_px=cam.scale * height_m / depth,
+                 source_frames=np.asarray(source_frames, dtype=int),
+                 joints2d=cam.project_camera(scene.joints_cam),
+                 joints3d=scene.joints_cam - pelvis[:, None], pelvis_camera=pelvis)
+
+
+# -- files ----------------------------------------------------------------------------
+
+def write_video(path: str | Path, frames, fps: float, size: tuple[int, int]) -> int:
+    """Write BGR frames (mp4v for .mp4, MJPG for .avi); check the count by reopening."""
+    path = Path(path)
+    code = _FOURCC.get(path.suffix.lower())
+    if code is None:
+        raise MocapError(f"{path}: video must end in {' or '.join(_FOURCC)}")
+    if not path.parent.is_dir():
+        raise MocapError(f"{path}: folder {path.parent} does not exist")
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*code), float(fps), size)
+    if not writer.isOpened():
+        raise MocapError(f"{path}: OpenCV cannot write {code} video here")
+    count = 0
+    try:
+        for frame in frames:
+            writer.write(frame)
+            count += 1
+    finally:
+        writer.release()
+    cap = cv2.VideoCapture(str(path))
+    found = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    cap.release()
+    if found != count:
+        raise MocapError(f"{path}: wrote {count} frames but the file holds {found}")
+    return count
+
+
+def render_clip(joints_world: np.ndarray, out_video: str | Path,
+                options: RenderOptions | None = None, *, truth_path: str | Path | None = None,
+                source: str = "joints", source_frames: np.ndarray | None = None,
+                **overrides) -> Truth:
+    """Render joints (F, 16, 3; metres, y up) to ``out_video`` and its truth JSON
+    (default: the video path with suffix .truth.json). Keyword ``overrides`` set
+    RenderOptions fields, e.g. ``render_clip(j, "a.mp4", view="front", seed=3)``."""
+    opts = replace(options or RenderOptions(), **overrides)
+    scene = plan_scene(joints_world, opts)
+    n = len(scene.joints_cam)
+    write_video(out_video, (draw_frame(scene, i) for i in range(n)), opts.fps, opts.size)
+    truth = scene_truth(scene, source, np.arange(n) if source_frames is None else source_frames)
+    save_truth(truth, truth_path or Path(out_video).with_suffix(".truth.json"))
+    return truth
+
+
+def resample_indices(n_source: int, frame_time: float, fps: float,
+                     frames: tuple[int | None, int | None] | None = None,
+                     seconds: float | None = None) -> np.ndarray:
+    """Source frame shown in each output frame: nearest frame in time, within the
+    ``frames`` (start, stop) range (Python slice rules), at most ``seconds`` long."""
+    start, stop, _ = slice(*(frames or (None, None))).indices(n_source)
+    if stop <= start:
+        raise MocapError(f"frame range {frames} is empty (the motion has {n_source} frames)")
+    duration = (stop - start) * frame_time
+    if seconds is not None:
+        duration = min(duration, seconds)
+    count = max(1, int(np.floor(duration * fps + 1e-6)))
+    picks = start + np.round(np.arange(count) / (fps * frame_time)).astype(int)
+    return np.minimum(picks, stop - 1)
+
+
+def render_motion(source: str | Path, out_video: str | Path,
+                  options: RenderOptions | None = None, *,
+                  frames: tuple[int | None, int | None] | None = None,
+                  seconds: float | None = None, in_place: bool = False,
+                  truth_path: str | Path | None = None, **overrides) -> Truth:
+    """Render a BVH file (resampled to the output fps by nearest frame), or with
+    ``source="walk-cycle"`` the procedural walk (``seconds`` long, default 4)."""
+    opts = replace(options or RenderOptions(), **overrides)
+    if str(source) == WALK_CYCLE:
+        joints, frame_time = walk_cycle(seconds or 4.0, opts.fps, in_place=in_place), 1 / opts.fps
+    else:
+        motion = read_bvh(source)
+        joints, frame_time = contract_joints(motion), motion.frame_time
+    picks = resample_indices(len(joints), frame_time, opts.fps, frames, seconds)
+    return render_clip(joints[picks], out_video, opts, truth_path=truth_path,
+                       source=Path(source).name, source_frames=picks)
+
+
+# -- a procedural walk ----------------------------------------------------------------
+
+def walk_cycle(seconds: float = 4.0, fps: float = 30.0, *, in_place: bool = False,
+               period: float = 1.1, hip_swing_deg: float = 20.0) -> np.ndarray:
+    """(F, 16, 3) joints of a walk with the model's proportions (body.LENGTH, 1.75 m).
+
+    Metres, y up; the walker faces +z (their left is +x) and advances along +z unless
+    ``in_place``. Hips swing sinusoidally, knees flex in early swing, arms swing
+    opposite to the legs; the pelvis rides so that the lower ankle is at y = 0.
+    """
+    n = max(1, int(round(seconds * fps)))
+    phase = 2 * np.pi * np.arange(n) / (fps * period)
+    unit = body.BODY_HEIGHT_M / body.BODY_HEIGHT
+    seg = dict(zip(body.SEGMENT_NAMES, body.LENGTH * unit))
+    lean, swing = np.radians(4.0), np.radians(hip_swing_deg)
+    pose = {"pelvis": np.zeros((n, 3)),
+            "neck": np.tile([0.0, np.cos(lean), np.sin(lean)], (n, 1)) * seg["torso"]}
+    pose["head_top"] = pose["neck"] + [0.0, seg["head"], 0.0]
+    pose["chest"] = body.CHEST_FRACTION * pose["neck"]
+    for side, sign, leg_phase in (("r", -1.0, phase), ("l", 1.0, phase + np.pi)):
+        hip = swing * np.sin(leg_phase)
+        knee = np.radians(8.0 + 55.0 * np.maximum(0.0, np.cos(leg_phase + 0.5)) ** 2)
+        arm = -0.8 * hip
+        elbow = np.radians(15.0) + 0.5 * np.maximum(arm, 0.0)
+        hip_at = pose["pelvis"] + [sign * body.HIP_HALF_SPAN * unit, 0.0, 0.0]
+        shoulder_at = pose["neck"] + [sign * body.SHOULDER_HALF_SPAN * unit, 0.0, 0.0]
+        _chain(pose, (f"hip_{side}", f"knee_{side}", f"ankle_{side}"), hip_at,
+               (seg["upper_leg_l"], seg["lower_leg_l"]), (hip, hip - knee), 0.0)
+        _chain(pose, (f"shoulder_{side}", f"elbow_{side}", f"wrist_{side}"), shoulder_at,
+               (seg["upper_arm_l"], seg["lower_arm_l"]), (arm, arm + elbow), 0.1 * sign)
+    out = np.stack([pose[name] for name in body.JOINTS], axis=1)
+    ankles = out[:, [body.JOINT_INDEX["ankle_l"], body.JOINT_INDEX["ankle_r"]], 1]
+    out[:, :, 1] -= ankles.min(axis=1)[:, None]
+    if not in_place:
+        step = 2 * (seg["upper_leg_l"] + seg["lower_leg_l"]) * np.sin(swing)
+        out[:, :, 2] += (2 * step / period * np.arange(n) / fps)[:, None]
+    return out
+
+
+def _chain(pose: dict, names: tuple[str, str, str], start: np.ndarray,
+           lengths: tuple[float, float], angles: tuple[np.ndarray, np.ndarray],
+           outward: float) -> None:
+    """Add a two-segment limb (e.g. hip, knee, ankle) to ``pose``, each segment
+    hanging down and swung forward by its angle."""
+    middle = start + lengths[0] * _sagittal(angles[0], outward)
+    end = middle + lengths[1] * _sagittal(angles[1], outward)
+    pose.update(zip(names, (start, middle, end)))
+
+
+def _sagittal(angle: np.ndarray, outward: float) -> np.ndarray:
+    """(F, 3) unit vectors pointing down, swung forward (+z) by ``angle`` radians and
+    tilted by ``outward`` along x."""
+    v = np.stack([np.full_like(angle, outward), -np.cos(angle), np.sin(angle)], axis=-1)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+# -- command line ---------------------------------------------------------------------
+
+def add_synth_arguments(parser) -> None:
+    """Arguments of `mocap synth`; sets ``run`` to the function that renders."""
+    parser.add_argument("source", help="BVH file, or 'walk-cycle' for the procedural walk")
+    parser.add_argument("out", help="video to write (.mp4 or .avi)")
+    parser.add_argument("--view", choices=list(VIEWS), default="side",
+                        help="camera direction relative to the performer (default side)")
+    parser.add_argument("--yaw", type=float, help="camera yaw in degrees (overrides --view)")
+    parser.add_argument("--pitch", type=float, default=0.0, help="degrees looking down")
+    parser.add_argument("--size", default="640x480", help="WIDTHxHEIGHT (default 640x480)")
+    parser.add_argument("--fps", type=float, default=30.0, help="output frame rate")
+    parser.add_argument("--frames", help="source frame range A:B (BVH frames)")
+    parser.add_argument("--seconds", type=float, help="maximum duration (walk-cycle: 4)")
+    parser.add_argument("--perspective", type=float, metavar="FOCAL_PX",
+                        help="pinhole camera with this focal length (default orthographic)")
+    parser.add_argument("--body-fraction", type=float, default=0.6,
+                        help="body height / frame height when the path fits (default 0.6)")
+    parser.add_argument("--moving-background", action="store_true",
+                        help="pan a cluttered background (for the tracking method)")
+    parser.add_argument("--no-antialias", action="store_true", help="hard polygon edges")
+    parser.add_argument("--noise", type=float, default=2.0, help="sensor noise sigma")
+    parser.add_argument("--in-place", action="store_true", help="walk-cycle on the spot")
+    parser.add_argument("--truth", help="ground truth JSON (default OUT.truth.json)")
+    parser.add_argument("--seed", type=int, default=0, help="background and noise seed")
+    parser.set_defaults(run=run_synth)
+
+
+def run_synth(args) -> None:
+    """Render as the parsed `mocap synth` arguments say and report what was written."""
+    opts = RenderOptions(view=args.view, yaw=args.yaw, pitch=args.pitch,
+                         size=_parse_pair(args.size, "x", "--size", int), fps=args.fps,
+                         perspective=args.perspective, body_fraction=args.body_fraction,
+                         moving_background=args.moving_background,
+                         antialias=not args.no_antialias, noise=args.noise, seed=args.seed)
+    if min(opts.size) < 16 or opts.fps <= 0 or not 0 < opts.body_fraction <= 1 or (
+            opts.perspective is not None and opts.perspective <= 0):
+        raise MocapError("--size must be at least 16x16, --fps and --perspective positive, "
+                         "--body-fraction in (0, 1]")
+    frames = _parse_pair(args.frames, ":", "--frames", lambda v: int(v) if v else None) \
+        if args.frames else None
+    truth = render_motion(args.source, args.out, opts, frames=frames, seconds=args.seconds,
+                          in_place=args.in_place, truth_path=args.truth)
+    print(f"wrote {args.out}: {len(truth.joints2d)} frames {truth.width}x{truth.height}, "
+          f"body {truth.body_height_px:.0f} px tall "
+          f"({100 * truth.body_height_px / truth.height:.0f}% of the frame), "
+          f"truth {args.truth or Path(args.out).with_suffix('.truth.json')}")
+
+
+def _parse_pair(text: str, sep: str, flag: str, convert) -> tuple:
+    """'640x480' -> (640, 480); '10:' -> (10, None); bad text -> MocapError."""
+    parts = text.split(sep)
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return tuple(convert(p.strip()) for p in parts)
+    except ValueError:
+        raise MocapError(f"{flag} expects A{sep}B, got {text!r}") from None

@@ -1,0 +1,234 @@
+"""Reading video frames and metadata with OpenCV (FFmpeg backend).
+
+Frames are BGR uint8 arrays, streamed one at a time: nothing here holds a whole video
+in memory. Every bad input becomes a `MocapError` whose one-line message names the
+file and the problem.
+
+Truncated or damaged files: the complete frames that decode are the video.
+`open_video` counts them (cheaply when the container's frame count is right, by
+decoding every frame when it is missing or wrong), `VideoInfo.frame_count` is that
+number, and iteration and random access stay inside it. When fewer frames decode
+than the container announces (a file cut short), the last one decoded is dropped:
+the cut almost always falls inside it, and FFmpeg then returns it half-decoded or
+repeats the previous picture.
+
+Large frames: `processing_scale` gives the factor that brings the longer side down
+to `max_side`; `iter_frames`, `read_frame` and `sample_frames` take it as `scale` and
+return frames resized with area averaging. Results computed on such frames are in
+downscaled pixels; the caller divides coordinates by the scale to get back to the
+original frame's pixels (CONTRACT.md).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from mocap.errors import MocapError
+
+DEFAULT_FPS = 25.0  # used when the container does not state a usable frame rate
+_MAX_GRAB_GAP = 32  # forward jumps up to this many frames decode instead of seeking
+
+_CONTAINERS = (  # (offset, magic bytes, name) for the error message of unopenable files
+    (8, b"AVI ", "AVI"),
+    (4, b"ftyp", "MP4/MOV"),
+    (0, b"\x1aE\xdf\xa3", "Matroska/WebM"),
+    (0, b"OggS", "Ogg"),
+    (0, b"FLV", "FLV"),
+)
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """A video that opened and decodes: `frame_count` frames of `width` x `height`
+    pixels at `fps` frames per second (DEFAULT_FPS when the file states none)."""
+
+    path: str
+    width: int
+    height: int
+    fps: float
+    frame_count: int
+
+
+def open_video(path: str | os.PathLike) -> VideoInfo:
+    """Open `path`, check that it is a video with decodable frames, and describe it."""
+    path = os.fspath(path)
+    _check_file(path)
+    cap = _capture(path)
+    try:
+        ok, frame = cap.read()
+        if not ok:
+            raise MocapError(_no_frame_message(path, cap))
+        fps = cap.get(cv2.CAP_PROP_FPS)
+        count = _count_frames(cap, path)
+    finally:
+        cap.release()
+    fps = fps if math.isfinite(fps) and 0 < fps <= 1000 else DEFAULT_FPS
+    return VideoInfo(path, frame.shape[1], frame.shape[0], float(fps), count)
+
+
+def processing_scale(info: VideoInfo, max_side: int = 1280) -> float:
+    """The factor (<= 1) that brings the longer side of the frames to `max_side`."""
+    return min(1.0, max_side / max(info.width, info.height))
+
+
+def iter_frames(source: VideoInfo | str | os.PathLike, start: int = 0,
+                stop: int | None = None, step: int = 1,
+                scale: float = 1.0) -> Iterator[tuple[int, np.ndarray]]:
+    """Yield `(index, frame)` for frames start, start+step, ... before `stop`.
+
+    `stop` defaults to (and is clipped to) the frame count. Frames are decoded one by
+    one; with `scale` < 1 each is downscaled (area averaging) as soon as it is read.
+    """
+    info = source if isinstance(source, VideoInfo) else open_video(source)
+    stop = info.frame_count if stop is None else min(stop, info.frame_count)
+    if start < 0 or step < 1:
+        raise MocapError(f"{info.path}: bad frame range start={start} step={step}")
+    reader = _Reader(info)
+    try:
+        for index in range(start, stop, step):
+            yield index, _resize(reader.read(index), scale)
+    finally:
+        reader.close()
+
+
+def read_frame(info: VideoInfo, index: int, scale: float = 1.0) -> np.ndarray:
+    """Frame `index` (random access: seek, or decode forward when seeking is unreliable)."""
+    if not 0 <= index < info.frame_count:
+        raise MocapError(f"{info.path}: frame {index} is out of range "
+                         f"(the video has {info.frame_count} frames)")
+    reader = _Reader(info)
+    try:
+        return _resize(reader.read(index), scale)
+    finally:
+        reader.close()
+
+
+def sample_frames(info: VideoInfo, n: int, scale: float = 1.0) -> list[tuple[int, np.ndarray]]:
+    """About `n` `(index, frame)` pairs spread evenly over the whole clip, first and last
+    included (all frames when the clip is shorter): the input of background estimation."""
+    indices = np.unique(np.linspace(0, info.frame_count - 1, max(n, 1)).round().astype(int))
+    reader = _Reader(info)
+    try:
+        return [(int(i), _resize(reader.read(int(i)), scale)) for i in indices]
+    finally:
+        reader.close()
+
+
+class _Reader:
+    """An open capture that knows the index of the frame it decodes next."""
+
+    def __init__(self, info: VideoInfo):
+        self.info = info
+        self.cap = _capture(info.path)
+        self.next = 0
+
+    def read(self, index: int) -> np.ndarray:
+        self._go_to(index)
+        ok, frame = self.cap.read()
+        if not ok:
+            raise MocapError(f"{self.info.path}: frame {index} could not be decoded")
+        self.next = index + 1
+        return frame
+
+    def close(self) -> None:
+        self.cap.release()
+
+    def _go_to(self, index: int) -> None:
+        """Seek when it pays and lands exactly; otherwise decode forward from frame 0."""
+        if index < self.next or index - self.next > _MAX_GRAB_GAP:
+            self.cap.set(cv2.CAP_PROP_POS_FRAMES, index)
+            if self.cap.get(cv2.CAP_PROP_POS_FRAMES) == index:
+                self.next = index
+                return
+            self.cap.release()
+            self.cap = _capture(self.info.path)
+            self.next = 0
+        while self.next < index:
+            if not self.cap.grab():
+                raise MocapError(f"{self.info.path}: frame {self.next} could not be decoded")
+            self.next += 1
+
+
+def _capture(path: str) -> cv2.VideoCapture:
+    cap = cv2.VideoCapture(path, cv2.CAP_FFMPEG)
+    if not cap.isOpened():
+        raise MocapError(_unopenable_message(path))
+    return cap
+
+
+def _check_file(path: str) -> None:
+    """Refuse what is not a regular, non-empty, non-image file before FFmpeg sees it."""
+    if not os.path.exists(path):
+        raise MocapError(f"{path}: no such file")
+    if os.path.isdir(path):
+        raise MocapError(f"{path}: is a directory, not a video file")
+    if not os.access(path, os.R_OK):
+        raise MocapError(f"{path}: cannot be read (permission denied)")
+    if os.path.getsize(path) == 0:
+        raise MocapError(f"{path}: the file is empty, not a video")
+    if cv2.haveImageReader(path):
+        raise MocapError(f"{path}: is a still image, not a video")
+
+
+def _count_frames(cap: cv2.VideoCapture, path: str) -> int:
+    """Complete frames that decode. The container's count is trusted only when its
+    last frame decodes and nothing follows it; else every frame is decoded (grab) and
+    counted, less the cut-off last one when the file holds fewer than announced."""
+    claimed = cap.get(cv2.CAP_PROP_FRAME_COUNT)
+    announced = 0 < claimed < 2**31
+    if announced:
+        last = int(claimed) - 1
+        cap.set(cv2.CAP_PROP_POS_FRAMES, last)
+        if cap.get(cv2.CAP_PROP_POS_FRAMES) == last and cap.grab() and not cap.grab():
+            return last + 1
+    cap.release()
+    cap.open(path, cv2.CAP_FFMPEG)
+    count = 0
+    while cap.grab():
+        count += 1
+    if announced and count < claimed:
+        count -= 1
+    if count == 0:
+        raise MocapError(f"{path}: no complete frame decodes (the file is truncated or damaged)")
+    return count
+
+
+def _no_frame_message(path: str, cap: cv2.VideoCapture) -> str:
+    if cap.get(cv2.CAP_PROP_FRAME_COUNT) == 0:
+        return f"{path}: the video contains no frames"
+    return f"{path}: no frame could be decoded (unsupported codec or damaged data)"
+
+
+def _unopenable_message(path: str) -> str:
+    """Name the container when it is recognisable, so that the message can tell a
+    damaged or unsupported video from a file that is no video at all."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    for offset, magic, name in _CONTAINERS:
+        if head[offset:offset + len(magic)] == magic:
+            codec = _avi_codec(head) if name == "AVI" else ""
+            return (f"{path}: cannot open this {name} video{codec}: unsupported codec, "
+                    f"or the file is truncated or damaged")
+    return f"{path}: not a video file (unrecognised format)"
+
+
+def _avi_codec(head: bytes) -> str:
+    """' (codec XXXX)' from the video stream header of an AVI file, if found."""
+    at = head.find(b"vids")
+    if at < 0 or len(head) < at + 8:
+        return ""
+    return f" (codec {head[at + 4:at + 8].decode('latin-1')!r})"
+
+
+def _resize(frame: np.ndarray, scale: float) -> np.ndarray:
+    if scale >= 1.0:
+        return frame
+    h, w = frame.shape[:2]
+    size = (max(1, round(w * scale)), max(1, round(h * scale)))
+    return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
