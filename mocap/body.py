@@ -65,6 +65,9 @@ TORSO_DEPTH = 22.0
 # arms hang beside the 40-wide torso, legs side by side under it.
 SHOULDER_HALF_SPAN = 20.0
 HIP_HALF_SPAN = 10.0
+# The shoulder joints sit this far below the neck (the base of the neck, the torso's
+# top), about 31 units under the crown as in people and in motion-capture skeletons.
+SHOULDER_DROP = 6.0
 # chest: the point on the pelvis->neck axis at this fraction (apex of the key triangle)
 CHEST_FRACTION = 0.6
 
@@ -82,6 +85,10 @@ LEFT_RIGHT_PAIRS: tuple[tuple[str, str], ...] = tuple(
 MIRROR_JOINTS = np.arange(len(JOINTS))
 for _l, _r in LEFT_RIGHT_PAIRS:
     MIRROR_JOINTS[JOINT_INDEX[_l]], MIRROR_JOINTS[JOINT_INDEX[_r]] = JOINT_INDEX[_r], JOINT_INDEX[_l]
+
+
+# neck = pelvis + NECK_PER_SHOULDER * (shoulder midpoint - pelvis)
+NECK_PER_SHOULDER = LENGTH[0] / (LENGTH[0] - SHOULDER_DROP)
 
 
 def torso_width(spread):
@@ -156,6 +163,7 @@ def _kinematic_matrix() -> np.ndarray:
     m[JOINT_INDEX["head_top"], 1 + SEGMENT_INDEX["head"]] = 1.0
     for side, sign in (("l", 1.0), ("r", -1.0)):
         m[JOINT_INDEX[f"shoulder_{side}"]] = m[JOINT_INDEX["neck"]]
+        m[JOINT_INDEX[f"shoulder_{side}"], 1 + SEGMENT_INDEX["torso"]] -= SHOULDER_DROP / LENGTH[SEGMENT_INDEX["torso"]]
         m[JOINT_INDEX[f"shoulder_{side}"], 11] = sign * SHOULDER_HALF_SPAN
         m[JOINT_INDEX[f"hip_{side}"]] = m[JOINT_INDEX["pelvis"]]
         m[JOINT_INDEX[f"hip_{side}"], 11] = sign * HIP_HALF_SPAN

@@ -236,12 +236,14 @@ def contract_joints_units(motion: BvhMotion) -> np.ndarray:
         if name in body.JOINT_INDEX:
             out[:, body.JOINT_INDEX[name]] = pos[:, j]
     out[:, body.JOINT_INDEX["head_top"]] = _head_top(motion, pos, found["head"])
-    # The model's pelvis and neck are the ends of the torso, where the legs and the
-    # arms attach; skeletons place their root and neck joints variously, so the
-    # contract's pelvis and neck are the midpoints of the hips and of the shoulders.
+    # The model's pelvis and neck are the ends of the torso: the legs attach at the
+    # pelvis, the arms a little below the neck (body.SHOULDER_DROP). Skeletons place
+    # their root and neck joints variously, so the contract's pelvis is the midpoint
+    # of the hips and its neck continues the pelvis->shoulders axis by that drop.
     ij = body.JOINT_INDEX
     out[:, ij["pelvis"]] = pelvis = (out[:, ij["hip_l"]] + out[:, ij["hip_r"]]) / 2
-    out[:, ij["neck"]] = neck = (out[:, ij["shoulder_l"]] + out[:, ij["shoulder_r"]]) / 2
+    shoulders = (out[:, ij["shoulder_l"]] + out[:, ij["shoulder_r"]]) / 2
+    out[:, ij["neck"]] = neck = pelvis + body.NECK_PER_SHOULDER * (shoulders - pelvis)
     out[:, ij["chest"]] = pelvis + body.CHEST_FRACTION * (neck - pelvis)
     return out
 

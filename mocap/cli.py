@@ -28,6 +28,12 @@ def _add_synth(sub) -> None:
     add_synth_arguments(p)
 
 
+def _add_sheet(sub) -> None:
+    from mocap.contact import add_sheet_arguments
+    p = sub.add_parser("sheet", help="contact sheet: frames beside their silhouettes and fitted skeletons")
+    add_sheet_arguments(p)
+
+
 def _progress(done: int, total: int) -> None:
     """A terminal progress bar, redrawn at each whole percent (a line per 10% when
     stderr is not a terminal)."""
@@ -49,6 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     _add_fit(sub)
     _add_synth(sub)
+    _add_sheet(sub)
     return parser
 
 

@@ -291,6 +291,18 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
     return guesses
 
 
+def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
+    """Pixels on one image side ('l' or 'r') of the torso's axis: an arm explains only
+    silhouette on its own side (section 3.3 names limbs by image side), so one arm
+    cannot take the other's pixels."""
+    joints = forward_kinematics_2d(pose)
+    pelvis, neck = joints[JOINT_INDEX["pelvis"]], joints[JOINT_INDEX["neck"]]
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]]
+    # positive on the image-right of the upward axis (image y points down)
+    cross = (neck[0] - pelvis[0]) * (ys - pelvis[1]) - (neck[1] - pelvis[1]) * (xs - pelvis[0])
+    return cross < 0 if side == "l" else cross > 0
+
+
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
     """One arm: the best-scoring first guess, refined by Algorithm 1 (upper arm with
     the lower arm attached, then the lower arm) and Algorithm 6."""
@@ -333,7 +345,7 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
     pose, crossed = fit_legs(canvas, pose, prev)
     canvas.commit(pose_quads(pose, LEG["l"] + LEG["r"]))
     for side in ("l", "r"):
-        pose = fit_arm(canvas, pose, side, prev)
+        pose = fit_arm(canvas.fork(keep=image_side(canvas.sil.shape, pose, side)), pose, side, prev)
         canvas.commit(pose_quads(pose, ARM[side]))
     whole = Canvas(canvas.sil)
     whole.commit(pose_quads(pose))

@@ -104,6 +104,16 @@ class Canvas:
         self.sil = (silhouette > 0).astype(np.uint8)
         self.fixed = np.zeros_like(self.sil)
 
+    def fork(self, quads=(), keep: np.ndarray | None = None) -> "Canvas":
+        """A copy whose fitted part also holds quads, and whose silhouette is only
+        the pixels where keep is true (for a part that may explain only those)."""
+        other = Canvas.__new__(Canvas)
+        other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
+        other.fixed = self.fixed.copy()
+        if len(quads):
+            other.commit(quads)
+        return other
+
     def region_scorer(self, reach: np.ndarray):
         """A function candidates (B, k, 4, 2) -> S (B,) of Eq. 1-3 on the partial silhouette.
 

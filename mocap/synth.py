@@ -448,7 +448,8 @@ def walk_cycle(seconds: float = 4.0, fps: float = 30.0, *, in_place: bool = Fals
         arm = -0.8 * hip
         elbow = np.radians(15.0) + 0.5 * np.maximum(arm, 0.0)
         hip_at = pose["pelvis"] + [sign * body.HIP_HALF_SPAN * unit, 0.0, 0.0]
-        shoulder_at = pose["neck"] + [sign * body.SHOULDER_HALF_SPAN * unit, 0.0, 0.0]
+        shoulder_at = pose["neck"] / body.NECK_PER_SHOULDER + [
+            sign * body.SHOULDER_HALF_SPAN * unit, 0.0, 0.0]
         _chain(pose, (f"hip_{side}", f"knee_{side}", f"ankle_{side}"), hip_at,
                (seg["upper_leg_l"], seg["lower_leg_l"]), (hip, hip - knee), 0.0)
         _chain(pose, (f"shoulder_{side}", f"elbow_{side}", f"wrist_{side}"), shoulder_at,

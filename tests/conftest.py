@@ -1,0 +1,37 @@
+"""Shared fixtures: rendered walks fitted once per test session."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+from helpers import render_walk
+
+from mocap.cli import main
+from mocap.synth import Truth
+
+
+@dataclass(frozen=True)
+class FittedClip:
+    video: Path
+    motion: Path
+    truth: Truth
+
+
+@pytest.fixture(scope="session")
+def fitted_walk(tmp_path_factory):
+    """fitted_walk(view) -> FittedClip: the walk of helpers.render_walk seen from
+    `view`, fitted by `mocap fit` (each view rendered and fitted once)."""
+    cache: dict[str, FittedClip] = {}
+
+    def get(view: str = "side") -> FittedClip:
+        if view not in cache:
+            folder = tmp_path_factory.mktemp(f"walk-{view}")
+            video, motion = folder / "walk.mp4", folder / "walk.motion.json"
+            truth = render_walk(video, view=view)
+            assert main(["fit", str(video), "--out", str(motion), "--quiet"]) == 0
+            cache[view] = FittedClip(video, motion, truth)
+        return cache[view]
+
+    return get
