@@ -63,7 +63,7 @@ TORSO_DEPTH = 22.0
 
 # Where the limbs attach, in model units from the torso axis (not in Table 1):
 # arms hang beside the 40-wide torso, legs side by side under it.
-SHOULDER_HALF_SPAN = 20.0
+SHOULDER_HALF_SPAN = 18.0
 HIP_HALF_SPAN = 10.0
 # The shoulder joints sit this far below the neck (the base of the neck, the torso's
 # top), about 31 units under the crown as in people and in motion-capture skeletons.
@@ -96,6 +96,12 @@ def torso_width(spread):
     the ellipse's extent across the line of sight, W when frontal, TORSO_DEPTH in profile."""
     w = WIDTH[SEGMENT_NAMES.index("torso")]
     return np.sqrt(TORSO_DEPTH ** 2 + (w ** 2 - TORSO_DEPTH ** 2) * np.asarray(spread) ** 2)
+
+
+def spread_for_width(width):
+    """The inverse of torso_width: the seen span fraction for a seen torso width."""
+    w = WIDTH[SEGMENT_NAMES.index("torso")]
+    return np.sqrt(np.clip((np.asarray(width) ** 2 - TORSO_DEPTH ** 2) / (w ** 2 - TORSO_DEPTH ** 2), 0, 1))
 
 
 def semi_axes(body_height: float) -> np.ndarray:

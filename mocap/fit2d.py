@@ -21,8 +21,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
-                        forward_kinematics_2d, forward_kinematics_2d_batch)
-from mocap.contour import arm_curve, find_angle, find_elbow_corner, lower_leg_curves, lower_legs_cross
+                        forward_kinematics_2d, forward_kinematics_2d_batch, spread_for_width)
+from mocap.contour import (arm_curve, find_angle, find_elbow_corner, lower_leg_curves,
+                           lower_legs_cross, row_runs)
 from mocap.raster import Canvas, joint_quads, pose_quads
 
 TORSO_HEAD = ("torso", "head")
@@ -86,67 +87,71 @@ class Knob:
                       spread=float(spread[0]))
 
 
-def coarse_to_fine(score, lo: float, hi: float, divisions: int, min_interval: float,
-                   center: float | None = None) -> tuple[float, float]:
-    """The shared search of Algorithms 1 and 6: sample, keep the best, narrow, repeat.
+def coarse_to_fine(score, n: int, opening: np.ndarray, opening_scores: np.ndarray,
+                   start: int, divisions: int) -> int:
+    """The shared search of Algorithms 1 and 6 over n ordered values (indices).
 
-    Each round scores ``divisions + 1`` values across the interval around the best
-    so far (clipped to [lo, hi]); the interval then shrinks to two divisions.
-    ``score`` takes an array of values. The incumbent starts at ``center`` with its
-    own score, so a flat score keeps it (the paper starts from S = 0, which lets a
-    flat score drift to the range's start).
+    The opening round (a sweep of the whole range, already scored) is compared with
+    the incumbent ``start``, which wins ties so that a flat score keeps it (the
+    paper starts from S = 0, which lets a flat score drift to the range's start).
+    Each later round samples ``divisions`` steps across the interval around the
+    best so far, then the interval shrinks to two of those steps, until it is one
+    value wide. ``score`` maps an index array to similarities; each is scored once.
     """
-    best = (lo + hi) / 2 if center is None else float(np.clip(center, lo, hi))
-    best_s = float(score(np.array([best]))[0])
-    interval = hi - lo
-    while interval > min_interval:
-        values = np.linspace(max(lo, best - interval / 2), min(hi, best + interval / 2), divisions + 1)
-        scores = score(values)
-        k = int(np.argmax(scores))
-        if scores[k] > best_s:
-            best, best_s = float(values[k]), float(scores[k])
-        interval = 2 * interval / divisions
-    return best, best_s
+    known = np.full(n, -np.inf)
+    known[opening] = opening_scores
+    if np.isinf(known[start]):
+        known[start] = score(np.array([start]))[0]
+    best = start if known[start] >= opening_scores.max() else int(opening[np.argmax(opening_scores)])
+    interval = 2.0 * (opening[1] - opening[0])
+    while interval > 1.0:
+        step = interval / divisions
+        idx = sorted({min(max(round(best + (j - divisions / 2) * step), 0), n - 1)
+                      for j in range(divisions + 1)})
+        new = [i for i in idx if known[i] == -np.inf]
+        if new:
+            known[new] = score(np.array(new))
+        top = max(idx, key=lambda i: known[i])
+        if known[top] > known[best]:
+            best = top
+        interval = 2.0 * step
+    return best
 
 
 def search(canvas: Canvas, pose: Pose2D, knob: Knob, drawn, lo: float, hi: float,
-           center: float, divisions: int, min_interval: float, sweep_step: float) -> Pose2D:
-    """Turn one knob to maximise S of the drawn segments on their partial silhouette.
+           center: float, resolution: float, sweep_step: float, divisions: int) -> Pose2D:
+    """Turn one knob over [lo, hi] (to ``resolution``) to maximise S of the drawn
+    segments on their partial silhouette.
 
-    The range is first swept every ``sweep_step``: those poses outline the partial
-    silhouette (the region the range reaches) and are scored as the first, coarsest
-    round, so a narrow optimum between the paper's wide first divisions is not
-    missed; the coarse-to-fine search then narrows around the best of them.
+    Every value on the grid is posed at once; the poses every ``sweep_step`` outline
+    the partial silhouette (the region the range reaches) and are the opening,
+    coarsest round, so a narrow optimum between wide first divisions is not missed.
     """
     drawn_idx = [SEGMENT_INDEX[s] for s in drawn]
-
-    def quads(values):
-        pelvis, angle, ratio, spread = knob.batch(pose, values)
-        joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-        return joint_quads(joints, pose.scale, drawn_idx, spread)
-    sweep = np.linspace(lo, hi, max(3, int(np.ceil((hi - lo) / sweep_step)) + 1))
-    sweep_quads = quads(sweep)
-    region = canvas.region_scorer(sweep_quads)
-    scores = region(sweep_quads)
-    k = int(np.argmax(scores))
-    step = sweep[1] - sweep[0]
-    start = sweep[k] if scores[k] > region(quads(np.array([center])))[0] else center
-    best, _ = coarse_to_fine(lambda v: region(quads(v)), max(lo, start - step),
-                             min(hi, start + step), divisions, min_interval, start)
-    return knob.apply(pose, best)
+    values = np.linspace(lo, hi, max(3, int(round((hi - lo) / resolution)) + 1))
+    pelvis, angle, ratio, spread = knob.batch(pose, values)
+    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+    quads = joint_quads(joints, pose.scale, drawn_idx, spread)
+    every = max(1, int(round(sweep_step / (values[1] - values[0]))))
+    opening = np.unique(np.r_[np.arange(0, len(values), every), len(values) - 1])
+    opening_scores, score = canvas.sweep_scorer(quads[opening])
+    start = int(np.argmin(np.abs(values - center)))
+    best = coarse_to_fine(lambda i: score(quads[i]), len(values), opening, opening_scores,
+                          start, divisions)
+    return knob.apply(pose, float(values[best]))
 
 
 def search_angle(canvas, pose, segments, drawn, lo, hi, center) -> Pose2D:
     """Algorithm 1: rotate segment(s) about the image normal to maximise S (to 1 degree)."""
     return search(canvas, pose, Knob("angle", tuple(segments)), drawn, lo, hi, center,
-                  8, 1.0, ANGLE_SWEEP_STEP)
+                  1.0, ANGLE_SWEEP_STEP, 8)
 
 
 def search_ratio(canvas, pose, segment, drawn) -> Pose2D:
     """Algorithm 6: the foreshortening ratio maximising S (to one pixel of length)."""
     i = SEGMENT_INDEX[segment]
     return search(canvas, pose, Knob("ratio", (segment,)), drawn, *RATIO_RANGE, pose.ratio[i],
-                  5, 1.0 / max(LENGTH[i] * pose.scale, 1.0), 0.25)
+                  1.0 / max(LENGTH[i] * pose.scale, 1.0), 0.25, 5)
 
 
 def _around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: float):
@@ -178,20 +183,30 @@ def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
 
 
 def torso_spread(silhouette: np.ndarray, scale: float) -> float:
-    """The torso's horizontal foreshortening on one frame, before any limb is fitted.
-
-    Arms in front of or behind the torso widen it on some frames, so callers take
-    a low percentile over neighbouring frames (the body turns slowly, arms swing).
-    """
-    canvas = Canvas(silhouette)
-    return fit_spread(canvas, place_torso(canvas, initial_pose(canvas.sil, scale), None)).spread
+    """The torso's horizontal foreshortening on one frame (section 3.4), from its
+    seen width: the narrowest quarter of the silhouette's widths across the torso's
+    middle rows, converted by ``body.torso_width``. Arms in front of or behind the
+    torso widen some rows and some frames, so callers also take a low percentile
+    over neighbouring frames (the body turns slowly, arms swing)."""
+    ys = np.flatnonzero(silhouette.any(axis=1))
+    if len(ys) == 0:
+        return 1.0
+    head, torso = LENGTH[SEGMENT_INDEX["head"]] * scale, LENGTH[SEGMENT_INDEX["torso"]] * scale
+    band = silhouette[int(ys[0] + head + 0.25 * torso): int(ys[0] + head + 0.75 * torso)] > 0
+    rows, starts, ends = row_runs(band)
+    if len(rows) == 0:
+        return 1.0
+    widest = np.zeros(band.shape[0])
+    np.maximum.at(widest, rows, ends - starts)
+    width = np.percentile(widest[widest > 0], 25) / scale
+    return float(spread_for_width(width))
 
 
 def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
     """The torso's horizontal position by the same search (the paper takes the
     silhouette's middle, which arms and a swinging leg pull off the torso)."""
     r = reach * pose.scale
-    return search(canvas, pose, Knob("x"), TORSO_HEAD, -r, r, 0.0, 6, 0.5, 2.0)
+    return search(canvas, pose, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0, 6)
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D, bool]:
@@ -231,12 +246,11 @@ def _swap_lower_legs(pose: Pose2D) -> Pose2D:
 
 
 def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
-    """Score both ways of joining the lower legs to the thighs; keep the better
+    """Score both ways of joining the lower legs to the knees; keep the better
     (a check on Algorithm 5's verdict, which scan lines alone can get wrong)."""
     legs = LEG["l"] + LEG["r"]
-    swapped = _fit_thighs(canvas, _swap_lower_legs(pose), pose)
-    a, b = pose_quads(pose, legs), pose_quads(swapped, legs)
-    scores = canvas.region_scorer(np.concatenate([a, b]))(np.stack([a, b]))
+    swapped = _swap_lower_legs(pose)
+    scores, _ = canvas.sweep_scorer(np.stack([pose_quads(pose, legs), pose_quads(swapped, legs)]))
     return swapped if scores[1] > scores[0] else pose
 
 
@@ -244,7 +258,7 @@ def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
     """The torso's horizontal foreshortening (section 3.4): how much of the shoulder
     and hip span is seen, 0 in profile .. 1 frontal, from the torso's seen width,
     by Algorithm 6's search."""
-    return search(canvas, pose, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 5, 0.05, 0.25)
+    return search(canvas, pose, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05, 0.25, 5)
 
 
 def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
@@ -309,8 +323,7 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pos
     upper, lower = ARM[side]
     poses = [Knob("angle", (lower,)).apply(Knob("angle", (upper,)).apply(pose, gu), gl)
              for gu, gl in arm_candidates(canvas, pose, side, prev)]
-    quads = np.stack([pose_quads(p, ARM[side]) for p in poses])
-    scores = canvas.region_scorer(quads.reshape(-1, 4, 2))(quads)
+    scores, _ = canvas.sweep_scorer(np.stack([pose_quads(p, ARM[side]) for p in poses]))
     pose = poses[int(np.argmax(scores))]
     h = ARM_REFINE_HALF_RANGE
     gu, gl = pose.angle[SEGMENT_INDEX[upper]], pose.angle[SEGMENT_INDEX[lower]]

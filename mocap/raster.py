@@ -11,8 +11,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from mocap.body import (SEGMENT_INDEX, SEGMENT_NAMES, WIDTH, Pose2D, forward_kinematics_2d,
-                        segment_endpoints, torso_width)
+from mocap.body import (SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH, Pose2D,
+                        forward_kinematics_2d, torso_width)
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
@@ -22,20 +22,28 @@ _TORSO = SEGMENT_INDEX["torso"]
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
     """Corners (..., 4, 2) of rectangles of the given widths from starts to ends."""
     d = ends - starts
-    n = np.linalg.norm(d, axis=-1, keepdims=True)
-    normal = np.where(n > 1e-9, np.stack([-d[..., 1], d[..., 0]], axis=-1) / np.maximum(n, 1e-9),
-                      np.array([1.0, 0.0]))
-    h = normal * (widths[..., None] / 2)
-    return np.stack([starts + h, ends + h, ends - h, starts - h], axis=-2)
+    half = widths / (2 * np.maximum(np.sqrt((d * d).sum(-1)), 1e-9))
+    h = np.empty_like(d)
+    h[..., 0] = -d[..., 1] * half
+    h[..., 1] = d[..., 0] * half
+    out = np.empty(d.shape[:-1] + (4, 2))
+    out[..., 0, :] = starts + h
+    out[..., 1, :] = ends + h
+    out[..., 2, :] = ends - h
+    out[..., 3, :] = starts - h
+    return out
 
 
 def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
     """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2);
     the torso is as wide as ``spread`` (shape (...,)) makes it look."""
     idx = np.arange(len(SEGMENT_NAMES)) if segments is None else np.asarray(segments)
-    ends = segment_endpoints(joints)[..., idx, :, :]
-    widths = np.broadcast_to(WIDTH[idx] * scale, ends.shape[:-2]).copy()
-    widths[..., idx == _TORSO] = (torso_width(spread) * scale)[..., None]
+    ends = joints[..., SEGMENT_JOINTS[idx], :]
+    widths = np.empty(ends.shape[:-2])
+    widths[...] = WIDTH[idx] * scale
+    torso = idx == _TORSO
+    if torso.any():
+        widths[..., torso] = (torso_width(spread) * scale)[..., None]
     return segment_quads(ends[..., 0, :], ends[..., 1, :], widths)
 
 
@@ -78,6 +86,16 @@ def similarity(silhouette: np.ndarray, model: np.ndarray) -> float:
                                         np.count_nonzero(sil & mod)))
 
 
+def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
+    pts = np.round((np.asarray(candidates, float) - offset) * _ONE).astype(np.int32)
+    planes = np.zeros((len(pts),) + shape, np.uint8)
+    for plane, quads in zip(planes, pts):
+        for quad in quads:  # one by one: fillPoly would make overlaps holes
+            cv2.fillConvexPoly(plane, quad, 1, cv2.LINE_8, _SHIFT)
+    return planes
+
+
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
     """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
     pts = np.asarray(quads, float).reshape(-1, 2)
@@ -114,36 +132,31 @@ class Canvas:
             other.commit(quads)
         return other
 
-    def region_scorer(self, reach: np.ndarray):
-        """A function candidates (B, k, 4, 2) -> S (B,) of Eq. 1-3 on the partial silhouette.
+    def sweep_scorer(self, sweep: np.ndarray):
+        """Score a sweep of candidates (B, k, 4, 2) on the partial silhouette they
+        outline; returns (their S (B,) of Eq. 1-3, a function scoring more candidates).
 
-        ``reach`` holds the polygons the searched segments can occupy; the partial
-        silhouette is the silhouette inside them that the fitted part does not
-        already explain. Each candidate costs one fill and two OpenCV reductions:
-        the weights are 1 on free pixels plus ``base`` (more than the window's
-        pixel count) on partial-silhouette pixels, so one sum tells both counts.
+        The partial silhouette is the silhouette inside the swept area that the
+        fitted part does not already explain. Candidates are drawn into planes of
+        one array and weighed at once: 1 for a free pixel plus ``base`` (more than
+        the window's pixel count) for a partial-silhouette pixel, so one product
+        tells both counts.
         """
-        x0, y0, x1, y1 = bounding_window(reach, self.sil.shape)
+        x0, y0, x1, y1 = bounding_window(sweep, self.sil.shape)
+        offset = np.array([x0, y0], float)
+        shape = (y1 - y0, x1 - x0)
+        planes = _draw_planes(sweep, offset, shape)
         free = self.fixed[y0:y1, x0:x1] == 0
-        reachable = fill_quads(np.zeros((y1 - y0, x1 - x0), np.uint8), reach, (x0, y0)) > 0
-        target = free & reachable & (self.sil[y0:y1, x0:x1] > 0)
+        target = free & planes.any(axis=0) & (self.sil[y0:y1, x0:x1] > 0)
         sil_area = int(np.count_nonzero(target))
         base = float(free.size + 1)
-        weights = (free + base * target).astype(np.float32)
-        buf = np.zeros((y1 - y0, x1 - x0), np.uint8)
-        offset = np.array([x0, y0], float)
+        weights = (free + base * target).astype(np.float64).ravel()
 
-        def score(candidates: np.ndarray) -> np.ndarray:
-            pts = np.round((np.asarray(candidates, float) - offset) * _ONE).astype(np.int32)
-            totals = np.empty(len(pts))
-            for i, quads in enumerate(pts):
-                buf.fill(0)
-                for quad in quads:  # one by one: fillPoly would make overlaps holes
-                    cv2.fillConvexPoly(buf, quad, 1, cv2.LINE_8, _SHIFT)
-                totals[i] = cv2.sumElems(cv2.multiply(weights, buf, dtype=cv2.CV_32F))[0]
+        def weigh(planes_: np.ndarray) -> np.ndarray:
+            totals = planes_.reshape(len(planes_), -1) @ weights
             overlap = np.floor(totals / base)
             return similarity_from_counts(sil_area, totals - base * overlap, overlap)
-        return score
+        return weigh(planes), lambda candidates: weigh(_draw_planes(candidates, offset, shape))
 
     def commit(self, quads) -> None:
         """Make quads part of the fitted model."""
