@@ -189,18 +189,18 @@ def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndar
     Every joint is a fixed linear combination of the pelvis, the segment vectors and
     the image-left unit vector scaled by the seen span (KINEMATIC_MATRIX).
     """
-    a = np.radians(angle)
-    length = LENGTH * ratio * scale
-    basis = np.empty((len(pelvis), 12, 2))
-    basis[:, 0] = pelvis
-    basis[:, 1:11, 0] = np.cos(a) * length
-    basis[:, 1:11, 1] = -np.sin(a) * length
-    t = a[:, SEGMENT_INDEX["torso"]]
-    # image-left normal of the torso axis: (-sin t, -cos t) points left for t in (0, 180)
-    flip = np.where(np.sin(t) >= 0, 1.0, -1.0) * spread * scale
-    basis[:, 11, 0] = -np.abs(np.sin(t)) * spread * scale
-    basis[:, 11, 1] = -np.cos(t) * flip
-    return KINEMATIC_MATRIX @ basis
+    a = np.radians(angle).T                                   # (10, B)
+    length = LENGTH[:, None] * ratio.T * scale
+    basis = np.empty((12, len(pelvis), 2))
+    basis[0] = pelvis
+    basis[1:11, :, 0] = np.cos(a) * length
+    basis[1:11, :, 1] = -np.sin(a) * length
+    sin_t, cos_t = np.sin(a[SEGMENT_INDEX["torso"]]), np.cos(a[SEGMENT_INDEX["torso"]])
+    span = spread * scale
+    # image-left normal of the torso axis: (-sin t, -cos t), flipped if the torso points down
+    basis[11, :, 0] = -np.abs(sin_t) * span
+    basis[11, :, 1] = -np.copysign(cos_t, sin_t) * span
+    return (KINEMATIC_MATRIX @ basis.reshape(12, -1)).reshape(len(JOINTS), -1, 2).transpose(1, 0, 2)
 
 
 SEGMENT_JOINTS = np.array([[JOINT_INDEX[a], JOINT_INDEX[b]] for a, b in SEGMENTS.values()])

@@ -24,7 +24,7 @@ from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
                         forward_kinematics_2d, forward_kinematics_2d_batch, spread_for_width)
 from mocap.contour import (arm_curve, find_angle, find_elbow_corner, lower_leg_curves,
                            lower_legs_cross, row_runs)
-from mocap.raster import Canvas, joint_quads, pose_quads
+from mocap.raster import Canvas, joint_quads, pose_quads, sweep_scorer
 
 TORSO_HEAD = ("torso", "head")
 LEG = {"l": ("upper_leg_l", "lower_leg_l"), "r": ("upper_leg_r", "lower_leg_r")}
@@ -36,9 +36,11 @@ NECK_RANGE = (45.0, 135.0)       # Table 1
 THIGH_RANGE = (200.0, 340.0)
 RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs differ from Table 1
 TRACK_HALF_RANGE = 25.0          # degrees searched around a previous estimate
+THIGH_TRACK_HALF_RANGE = 40.0    # the same for thighs, which swing fastest
 ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
+RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
 ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
-FIT_BODY_PX = 128.0              # body height of the normalised silhouette the fit works on
+FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
 
 
@@ -61,105 +63,161 @@ class Knob:
     segments: tuple[str, ...] = ()
 
     def apply(self, pose: Pose2D, value: float) -> Pose2D:
-        return self._pose_of(self.batch(pose, np.array([value])), pose.scale)
+        idx = [SEGMENT_INDEX[s] for s in self.segments]
+        if self.field in ("angle", "ratio"):
+            arr = getattr(pose, self.field).copy()
+            arr[idx] = value
+            return replace(pose, **{self.field: arr})
+        if self.field == "x":
+            return replace(pose, pelvis=np.array([pose.pelvis[0] + value, pose.pelvis[1]]))
+        return replace(pose, spread=float(value))
 
     def batch(self, pose: Pose2D, values: np.ndarray):
         """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""
         n = len(values)
-        pelvis = np.repeat(np.asarray(pose.pelvis, float)[None], n, 0)
-        angle, ratio = np.repeat(pose.angle[None], n, 0), np.repeat(pose.ratio[None], n, 0)
-        spread = np.full(n, pose.spread)
-        idx = [SEGMENT_INDEX[s] for s in self.segments]
+        pelvis = np.broadcast_to(pose.pelvis, (n, 2))
+        angle = np.broadcast_to(pose.angle, (n, len(pose.angle)))
+        ratio = np.broadcast_to(pose.ratio, (n, len(pose.ratio)))
+        spread = np.broadcast_to(float(pose.spread), (n,))
         if self.field == "angle":
-            angle[:, idx] = values[:, None]
+            angle = angle.copy()
+            angle[:, [SEGMENT_INDEX[s] for s in self.segments]] = values[:, None]
         elif self.field == "ratio":
-            ratio[:, idx] = values[:, None]
+            ratio = ratio.copy()
+            ratio[:, [SEGMENT_INDEX[s] for s in self.segments]] = values[:, None]
         elif self.field == "x":
-            pelvis[:, 0] += values
+            pelvis = pelvis + np.c_[values, np.zeros(n)]
         else:
-            spread = values.astype(float)
+            spread = values
         return pelvis, angle, ratio, spread
 
-    @staticmethod
-    def _pose_of(arrays, scale: float) -> Pose2D:
-        pelvis, angle, ratio, spread = arrays
-        return Pose2D(pelvis=pelvis[0], scale=scale, angle=angle[0], ratio=ratio[0],
-                      spread=float(spread[0]))
 
+def coarse_to_fine(n: int, opening: list[int], start: int, interval: int):
+    """The shared narrowing search of Algorithms 1 and 6 over n ordered values, as a
+    generator: it yields index arrays to score, is sent their similarities, and
+    returns the best index.
 
-def coarse_to_fine(score, n: int, opening: np.ndarray, opening_scores: np.ndarray,
-                   start: int, divisions: int) -> int:
-    """The shared search of Algorithms 1 and 6 over n ordered values (indices).
-
-    The opening round (a sweep of the whole range, already scored) is compared with
-    the incumbent ``start``, which wins ties so that a flat score keeps it (the
-    paper starts from S = 0, which lets a flat score drift to the range's start).
-    Each later round samples ``divisions`` steps across the interval around the
-    best so far, then the interval shrinks to two of those steps, until it is one
-    value wide. ``score`` maps an index array to similarities; each is scored once.
+    The opening round (a division of the whole range, with the incumbent ``start``)
+    picks the best; ``start`` wins ties, so a flat score keeps it (the paper starts
+    from S = 0, which lets a flat score drift to the range's start). The interval of
+    two divisions around the best (``interval`` values wide) is then divided at
+    full resolution, which ends the narrowing.
     """
-    known = np.full(n, -np.inf)
-    known[opening] = opening_scores
-    if np.isinf(known[start]):
-        known[start] = score(np.array([start]))[0]
-    best = start if known[start] >= opening_scores.max() else int(opening[np.argmax(opening_scores)])
-    interval = 2.0 * (opening[1] - opening[0])
-    while interval > 1.0:
-        step = interval / divisions
-        idx = sorted({min(max(round(best + (j - divisions / 2) * step), 0), n - 1)
-                      for j in range(divisions + 1)})
-        new = [i for i in idx if known[i] == -np.inf]
-        if new:
-            known[new] = score(np.array(new))
-        top = max(idx, key=lambda i: known[i])
-        if known[top] > known[best]:
-            best = top
-        interval = 2.0 * step
-    return best
+    known = dict(zip(opening, (yield np.array(opening)).tolist()))
+    best = max(opening, key=lambda i: (known[i], i == start))
+    near = [i for i in range(max(best - interval // 2, 0), min(best + interval // 2, n - 1) + 1)
+            if i not in known]
+    if near:
+        known.update(zip(near, (yield np.array(near)).tolist()))
+    top = max(near or [best], key=known.__getitem__)
+    return top if known[top] > known[best] else best
+
+
+@dataclass(frozen=True)
+class Search:
+    """One knob to turn over [lo, hi] to ``resolution`` for the drawn segments, first
+    divided every ``sweep_step`` (see ``search_all``)."""
+
+    canvas: Canvas
+    knob: Knob
+    drawn: tuple[str, ...]
+    lo: float
+    hi: float
+    center: float
+    resolution: float
+    sweep_step: float
+
+
+def search_all(pose: Pose2D, searches: list[Search]) -> Pose2D:
+    """Run independent searches (each turns its own knob of ``pose``) in lockstep and
+    apply their results: Algorithm 1's (and 6's) narrowing with two levels of division.
+
+    Every value of each grid is posed at once. The first level divides the range
+    every ``sweep_step``; those poses also outline the search's partial silhouette
+    (the region the range reaches, on its own canvas). The second divides the two
+    divisions around the best at full resolution. All searches' candidates of a
+    round are scored together.
+    """
+    grids, gens, requests = [], [], []
+    for job in searches:
+        n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
+        step = (job.hi - job.lo) / (n - 1)
+        values = job.lo + step * np.arange(n)
+        pelvis, angle, ratio, spread = job.knob.batch(pose, values)
+        joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+        grids.append((values, joint_quads(joints, pose.scale, [SEGMENT_INDEX[d] for d in job.drawn], spread)))
+        every = max(1, int(round(job.sweep_step / step)))
+        start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
+        gens.append(coarse_to_fine(n, sorted({*range(0, n, every), n - 1, start}), start, 2 * every))
+        requests.append(next(gens[-1]))
+    replies, score = sweep_scorer([(job.canvas, grid[1][req]) for job, grid, req in
+                                   zip(searches, grids, requests)])
+    best = [0] * len(searches)
+    active = list(range(len(searches)))
+    while active:
+        asking = {}
+        for j, reply in zip(active, replies):
+            try:
+                asking[j] = gens[j].send(reply)
+            except StopIteration as done:
+                best[j] = done.value
+        active = list(asking)
+        replies = score([grids[j][1][asking[j]] for j in active]) if active else []
+    for job, (values, _), i in zip(searches, grids, best):
+        pose = job.knob.apply(pose, float(values[i]))
+    return pose
 
 
 def search(canvas: Canvas, pose: Pose2D, knob: Knob, drawn, lo: float, hi: float,
-           center: float, resolution: float, sweep_step: float, divisions: int) -> Pose2D:
-    """Turn one knob over [lo, hi] (to ``resolution``) to maximise S of the drawn
-    segments on their partial silhouette.
+           center: float, resolution: float, sweep_step: float) -> Pose2D:
+    """One search of ``search_all``."""
+    return search_all(pose, [Search(canvas, knob, tuple(drawn), lo, hi, center, resolution, sweep_step)])
 
-    Every value on the grid is posed at once; the poses every ``sweep_step`` outline
-    the partial silhouette (the region the range reaches) and are the opening,
-    coarsest round, so a narrow optimum between wide first divisions is not missed.
-    """
-    drawn_idx = [SEGMENT_INDEX[s] for s in drawn]
-    values = np.linspace(lo, hi, max(3, int(round((hi - lo) / resolution)) + 1))
-    pelvis, angle, ratio, spread = knob.batch(pose, values)
-    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-    quads = joint_quads(joints, pose.scale, drawn_idx, spread)
-    every = max(1, int(round(sweep_step / (values[1] - values[0]))))
-    opening = np.unique(np.r_[np.arange(0, len(values), every), len(values) - 1])
-    opening_scores, score = canvas.sweep_scorer(quads[opening])
-    start = int(np.argmin(np.abs(values - center)))
-    best = coarse_to_fine(lambda i: score(quads[i]), len(values), opening, opening_scores,
-                          start, divisions)
-    return knob.apply(pose, float(values[best]))
+
+def angle_search(canvas: Canvas, segments, drawn, lo: float, hi: float, center: float) -> Search:
+    """Algorithm 1: rotate segment(s) about the image normal to maximise S (to 1 degree)."""
+    return Search(canvas, Knob("angle", tuple(segments)), tuple(drawn), lo, hi, center,
+                  1.0, ANGLE_SWEEP_STEP)
+
+
+def ratio_search(canvas: Canvas, pose: Pose2D, segment: str, drawn) -> Search:
+    """Algorithm 6: the foreshortening ratio maximising S (to one pixel of length)."""
+    i = SEGMENT_INDEX[segment]
+    return Search(canvas, Knob("ratio", (segment,)), tuple(drawn), *RATIO_RANGE, pose.ratio[i],
+                  1.0 / max(LENGTH[i] * pose.scale, 1.0), RATIO_SWEEP_STEP)
 
 
 def search_angle(canvas, pose, segments, drawn, lo, hi, center) -> Pose2D:
-    """Algorithm 1: rotate segment(s) about the image normal to maximise S (to 1 degree)."""
-    return search(canvas, pose, Knob("angle", tuple(segments)), drawn, lo, hi, center,
-                  1.0, ANGLE_SWEEP_STEP, 8)
+    """One Algorithm 1 search (``angle_search``), applied to pose."""
+    return search_all(pose, [angle_search(canvas, segments, drawn, lo, hi, center)])
 
 
 def search_ratio(canvas, pose, segment, drawn) -> Pose2D:
-    """Algorithm 6: the foreshortening ratio maximising S (to one pixel of length)."""
-    i = SEGMENT_INDEX[segment]
-    return search(canvas, pose, Knob("ratio", (segment,)), drawn, *RATIO_RANGE, pose.ratio[i],
-                  1.0 / max(LENGTH[i] * pose.scale, 1.0), 0.25, 5)
+    """One Algorithm 6 search (``ratio_search``), applied to pose."""
+    return search_all(pose, [ratio_search(canvas, pose, segment, drawn)])
 
 
-def _around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: float):
-    """(lo, hi, centre): near the previous frame's angle, else the whole range."""
+def refine_limb(pose: Pose2D, limb: tuple[str, str], canvas: Canvas, half_range: float) -> Pose2D:
+    """A limb's distal angle within ``half_range`` (Algorithm 1), then its proximal
+    and distal foreshortening ratios (Algorithm 6)."""
+    upper, lower = limb
+    pose = search_angle(canvas, pose, (lower,), (lower,),
+                        *_span(pose.angle[SEGMENT_INDEX[lower]], half_range))
+    pose = search_ratio(canvas, pose, upper, limb)
+    return search_ratio(canvas, pose, lower, (lower,))
+
+
+def _span(center: float, half: float) -> tuple[float, float, float]:
+    return center - half, center + half, center
+
+
+def _around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: float,
+            half: float = TRACK_HALF_RANGE):
+    """(lo, hi, centre): within ``half`` of the previous frame's angle, else the whole range."""
     if prev is None:
         return lo, hi, default
     c = float(np.clip(prev.angle[SEGMENT_INDEX[segment]], lo, hi))
-    return max(lo, c - TRACK_HALF_RANGE), min(hi, c + TRACK_HALF_RANGE), c
+    return max(lo, c - half), min(hi, c + half), c
 
 
 def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
@@ -206,36 +264,26 @@ def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
     """The torso's horizontal position by the same search (the paper takes the
     silhouette's middle, which arms and a swinging leg pull off the torso)."""
     r = reach * pose.scale
-    return search(canvas, pose, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0, 6)
+    return search(canvas, pose, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0)
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D, bool]:
     """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5),
-    upper legs by Algorithm 1 with the lower legs attached, each lower leg refined
-    by Algorithm 1, then ratios (Algorithm 6)."""
+    upper legs by Algorithm 1 with the lower legs attached (Fig. 3b-c), each lower
+    leg refined by Algorithm 1, then ratios (Algorithm 6)."""
     curves, runs = lower_leg_curves(canvas.sil, forward_kinematics_2d(pose), pose.scale)
     crossed = lower_legs_cross(runs)
     for side, other in (("l", "r"), ("r", "l")):
         default = (prev or pose).angle[SEGMENT_INDEX[LEG[side][1]]]
         pose = Knob("angle", (LEG[side][1],)).apply(
             pose, find_angle(curves[other if crossed else side], default))
-    pose = _best_leg_pairing(canvas, _fit_thighs(canvas, pose, prev))
-    for side in ("l", "r"):
-        upper, lower = LEG[side]
-        c = pose.angle[SEGMENT_INDEX[lower]]
-        pose = search_angle(canvas, pose, (lower,), (lower,), c - TRACK_HALF_RANGE,
-                            c + TRACK_HALF_RANGE, c)
-        pose = search_ratio(canvas, pose, upper, LEG[side])
-        pose = search_ratio(canvas, pose, lower, (lower,))
+    for side in "lr":
+        pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side],
+                            *_around(prev, LEG[side][0], *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
+    pose = _best_leg_pairing(canvas, pose)
+    for side in "lr":
+        pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
     return pose, crossed
-
-
-def _fit_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
-    """Algorithm 1 for both upper legs with their lower legs attached (Fig. 3b-c)."""
-    for side in ("l", "r"):
-        c = (prev or pose).angle[SEGMENT_INDEX[LEG[side][0]]]
-        pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side], *THIGH_RANGE, c)
-    return pose
 
 
 def _swap_lower_legs(pose: Pose2D) -> Pose2D:
@@ -250,7 +298,7 @@ def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
     (a check on Algorithm 5's verdict, which scan lines alone can get wrong)."""
     legs = LEG["l"] + LEG["r"]
     swapped = _swap_lower_legs(pose)
-    scores, _ = canvas.sweep_scorer(np.stack([pose_quads(pose, legs), pose_quads(swapped, legs)]))
+    (scores,), _ = sweep_scorer([(canvas, np.stack([pose_quads(pose, legs), pose_quads(swapped, legs)]))])
     return swapped if scores[1] > scores[0] else pose
 
 
@@ -258,7 +306,7 @@ def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
     """The torso's horizontal foreshortening (section 3.4): how much of the shoulder
     and hip span is seen, 0 in profile .. 1 frontal, from the torso's seen width,
     by Algorithm 6's search."""
-    return search(canvas, pose, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05, 0.25, 5)
+    return search(canvas, pose, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05, RATIO_SWEEP_STEP)
 
 
 def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
@@ -318,19 +366,24 @@ def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
 
 
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
-    """One arm: the best-scoring first guess, refined by Algorithm 1 (upper arm with
-    the lower arm attached, then the lower arm) and Algorithm 6."""
+    """One arm, on its image side: the best-scoring first guess, refined by
+    Algorithm 1 (upper arm with the lower arm attached, then the lower arm) and
+    Algorithm 6."""
+    own = canvas.fork(keep=image_side(canvas.sil.shape, pose, side))
+    pose = best_arm_guess(own, pose, side, prev)
+    upper = ARM[side][0]
+    pose = search_angle(own, pose, (upper,), ARM[side],
+                        *_span(pose.angle[SEGMENT_INDEX[upper]], ARM_REFINE_HALF_RANGE))
+    return refine_limb(pose, ARM[side], own, ARM_REFINE_HALF_RANGE)
+
+
+def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
+    """The arm_candidates guess with the highest S."""
     upper, lower = ARM[side]
     poses = [Knob("angle", (lower,)).apply(Knob("angle", (upper,)).apply(pose, gu), gl)
              for gu, gl in arm_candidates(canvas, pose, side, prev)]
-    scores, _ = canvas.sweep_scorer(np.stack([pose_quads(p, ARM[side]) for p in poses]))
-    pose = poses[int(np.argmax(scores))]
-    h = ARM_REFINE_HALF_RANGE
-    gu, gl = pose.angle[SEGMENT_INDEX[upper]], pose.angle[SEGMENT_INDEX[lower]]
-    pose = search_angle(canvas, pose, (upper,), ARM[side], gu - h, gu + h, gu)
-    pose = search_angle(canvas, pose, (lower,), (lower,), gl - h, gl + h, gl)
-    pose = search_ratio(canvas, pose, upper, ARM[side])
-    return search_ratio(canvas, pose, lower, (lower,))
+    (scores,), _ = sweep_scorer([(canvas, np.stack([pose_quads(p, ARM[side]) for p in poses]))])
+    return poses[int(np.argmax(scores))]
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
@@ -358,7 +411,7 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
     pose, crossed = fit_legs(canvas, pose, prev)
     canvas.commit(pose_quads(pose, LEG["l"] + LEG["r"]))
     for side in ("l", "r"):
-        pose = fit_arm(canvas.fork(keep=image_side(canvas.sil.shape, pose, side)), pose, side, prev)
+        pose = fit_arm(canvas, pose, side, prev)
         canvas.commit(pose_quads(pose, ARM[side]))
     whole = Canvas(canvas.sil)
     whole.commit(pose_quads(pose))
