@@ -1,8 +1,9 @@
-"""`mocap fit | synth`: the command line face of the pipeline."""
+"""`mocap fit | synth | sheet`: the command line face of the pipeline."""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from mocap.errors import MocapError
@@ -34,20 +35,42 @@ def _add_sheet(sub) -> None:
     add_sheet_arguments(p)
 
 
-def _progress(done: int, total: int) -> None:
-    """A terminal progress bar, redrawn at each whole percent (a line per 10% when
-    stderr is not a terminal)."""
-    step = 1 if sys.stderr.isatty() else 10
-    percent = 100 * done // max(total, 1)
-    if percent // step == 100 * (done - 1) // max(total, 1) // step and done < total:
-        return
-    width = 30
-    filled = width * done // max(total, 1)
-    bar = f"[{'#' * filled}{'.' * (width - filled)}] {percent:3d}% ({done}/{total} steps)"
-    if sys.stderr.isatty():
-        print(f"\r{bar}", end="\n" if done >= total else "", file=sys.stderr, flush=True)
-    else:
-        print(bar, file=sys.stderr, flush=True)
+class _Bar:
+    """A progress bar on stderr, redrawn at each whole percent on a terminal (a line
+    per 10% otherwise); ``end`` finishes an unfinished line before other output."""
+
+    def __init__(self) -> None:
+        self.open = False
+
+    def __call__(self, done: int, total: int) -> None:
+        tty = sys.stderr.isatty()
+        step = 1 if tty else 10
+        percent = 100 * done // max(total, 1)
+        if percent // step == 100 * (done - 1) // max(total, 1) // step and done < total:
+            return
+        filled = 30 * done // max(total, 1)
+        bar = f"[{'#' * filled}{'.' * (30 - filled)}] {percent:3d}% ({done}/{total} steps)"
+        if tty:
+            self.open = done < total
+            print(f"\r{bar}", end="" if self.open else "\n", file=sys.stderr, flush=True)
+        else:
+            print(bar, file=sys.stderr, flush=True)
+
+    def end(self) -> None:
+        if self.open:
+            print(file=sys.stderr)
+            self.open = False
+
+
+_progress = _Bar()
+
+
+def _quiet_video_libraries() -> None:
+    """Keep FFmpeg's and OpenCV's own log lines off stderr: errors are ours to say."""
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+    import cv2
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -61,12 +84,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    _quiet_video_libraries()
     try:
         args.run(args)
     except MocapError as exc:
+        _progress.end()
         print(f"mocap: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        _progress.end()
         print("mocap: interrupted", file=sys.stderr)
         return 130
     return 0

@@ -124,11 +124,6 @@ def test_the_installed_command_reports_in_one_line(tmp_path, mocap_command):
     assert done.stderr.splitlines() == [f"mocap: error: {missing}: no such file"]
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "FFmpeg and OpenCV print their own log lines (moov atom not found, WARN ... VIDEOIO) "
-    "to stderr before the error; quieting them at import of mocap.video fixes it "
-    "(OPENCV_FFMPEG_LOGLEVEL=-8, cv2.utils.logging.setLogLevel(LOG_LEVEL_ERROR)): "
-    "then remove this marker"))
 def test_ffmpeg_messages_stay_off_stderr(tmp_path, mocap_command):
     video = _text_mp4(tmp_path)
     done = subprocess.run([mocap_command, "fit", str(video)], capture_output=True,
