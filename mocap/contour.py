@@ -90,14 +90,13 @@ def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
     band = sil[max(y0, 0):max(y1, y0 + 1), x0:int(pelvis[0] + half)]
     rows, starts, ends = row_runs(band)
     leg_w = WIDTH[SEGMENT_INDEX["lower_leg_l"]] * scale
+    keep = (ends - starts) >= 0.25 * leg_w
+    rows, starts, ends = rows[keep], starts[keep], ends[keep]
     curves = {"l": [], "r": []}
     counts = []
-    for r in np.unique(rows):
-        s, e = starts[rows == r], ends[rows == r]
-        keep = (e - s) >= 0.25 * leg_w
-        s, e = s[keep], e[keep]
-        if len(s) == 0:
-            continue
+    cuts = np.flatnonzero(np.diff(rows)) + 1        # runs come row by row, left to right
+    for r, s, e in zip(rows[np.r_[0, cuts]] if len(rows) else [], np.split(starts, cuts),
+                       np.split(ends, cuts)):
         counts.append(len(s))
         for side, x in _leg_centres(s, e, leg_w, curves).items():
             curves[side].append((x, r))

@@ -40,6 +40,7 @@ THIGH_TRACK_HALF_RANGE = 40.0    # the same for thighs, which swing fastest
 ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
 RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
 ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
+SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
 FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
 
@@ -63,10 +64,9 @@ class Knob:
     segments: tuple[str, ...] = ()
 
     def apply(self, pose: Pose2D, value: float) -> Pose2D:
-        idx = [SEGMENT_INDEX[s] for s in self.segments]
         if self.field in ("angle", "ratio"):
             arr = getattr(pose, self.field).copy()
-            arr[idx] = value
+            arr[self.indices] = value
             return replace(pose, **{self.field: arr})
         if self.field == "x":
             return replace(pose, pelvis=np.array([pose.pelvis[0] + value, pose.pelvis[1]]))
@@ -75,48 +75,48 @@ class Knob:
     def batch(self, pose: Pose2D, values: np.ndarray):
         """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""
         n = len(values)
-        pelvis = np.broadcast_to(pose.pelvis, (n, 2))
-        angle = np.broadcast_to(pose.angle, (n, len(pose.angle)))
-        ratio = np.broadcast_to(pose.ratio, (n, len(pose.ratio)))
-        spread = np.broadcast_to(float(pose.spread), (n,))
-        if self.field == "angle":
-            angle = angle.copy()
-            angle[:, [SEGMENT_INDEX[s] for s in self.segments]] = values[:, None]
-        elif self.field == "ratio":
-            ratio = ratio.copy()
-            ratio[:, [SEGMENT_INDEX[s] for s in self.segments]] = values[:, None]
+        pelvis = np.repeat(pose.pelvis[None], n, 0)
+        angle, ratio = np.repeat(pose.angle[None], n, 0), np.repeat(pose.ratio[None], n, 0)
+        spread = np.full(n, pose.spread)
+        if self.field in ("angle", "ratio"):
+            (angle if self.field == "angle" else ratio)[:, self.indices] = values[:, None]
         elif self.field == "x":
-            pelvis = pelvis + np.c_[values, np.zeros(n)]
+            pelvis[:, 0] += values
         else:
             spread = values
         return pelvis, angle, ratio, spread
 
+    @property
+    def indices(self) -> list[int]:
+        return [SEGMENT_INDEX[s] for s in self.segments]
 
-def coarse_to_fine(n: int, opening: list[int], start: int, interval: int):
-    """The shared narrowing search of Algorithms 1 and 6 over n ordered values, as a
-    generator: it yields index arrays to score, is sent their similarities, and
-    returns the best index.
 
-    The opening round (a division of the whole range, with the incumbent ``start``)
-    picks the best; ``start`` wins ties, so a flat score keeps it (the paper starts
-    from S = 0, which lets a flat score drift to the range's start). The interval of
-    two divisions around the best (``interval`` values wide) is then divided at
-    full resolution, which ends the narrowing.
+def coarse_to_fine(score, n: int, opening: list[int], opening_scores: np.ndarray, start: int,
+                   interval: int) -> int:
+    """The shared narrowing search of Algorithms 1 and 6 over n ordered values.
+
+    The opening round (a division of the whole range, with the incumbent ``start``,
+    already scored) picks the best; ``start`` wins ties, so a flat score keeps it
+    (the paper starts from S = 0, which lets a flat score drift to the range's
+    start). The interval of two divisions around the best (``interval`` values
+    wide) is then divided at full resolution, which ends the narrowing. ``score``
+    maps index arrays to S.
     """
-    known = dict(zip(opening, (yield np.array(opening)).tolist()))
+    known = dict(zip(opening, opening_scores.tolist()))
     best = max(opening, key=lambda i: (known[i], i == start))
     near = [i for i in range(max(best - interval // 2, 0), min(best + interval // 2, n - 1) + 1)
             if i not in known]
-    if near:
-        known.update(zip(near, (yield np.array(near)).tolist()))
-    top = max(near or [best], key=known.__getitem__)
+    if not near:
+        return best
+    known.update(zip(near, score(np.array(near)).tolist()))
+    top = max(near, key=known.__getitem__)
     return top if known[top] > known[best] else best
 
 
 @dataclass(frozen=True)
 class Search:
     """One knob to turn over [lo, hi] to ``resolution`` for the drawn segments, first
-    divided every ``sweep_step`` (see ``search_all``)."""
+    divided every ``sweep_step`` (see ``search``)."""
 
     canvas: Canvas
     knob: Knob
@@ -128,50 +128,27 @@ class Search:
     sweep_step: float
 
 
-def search_all(pose: Pose2D, searches: list[Search]) -> Pose2D:
-    """Run independent searches (each turns its own knob of ``pose``) in lockstep and
-    apply their results: Algorithm 1's (and 6's) narrowing with two levels of division.
+def search(pose: Pose2D, job: Search) -> Pose2D:
+    """Turn one knob of pose to maximise S of the drawn segments on their partial
+    silhouette: Algorithm 1's (and 6's) narrowing with two levels of division.
 
-    Every value of each grid is posed at once. The first level divides the range
-    every ``sweep_step``; those poses also outline the search's partial silhouette
-    (the region the range reaches, on its own canvas). The second divides the two
-    divisions around the best at full resolution. All searches' candidates of a
-    round are scored together.
+    Every value of the grid is posed at once. The first level divides the range
+    every ``sweep_step``; those poses also outline the partial silhouette (the
+    region the range reaches). The second divides the two divisions around the
+    best at full resolution.
     """
-    grids, gens, requests = [], [], []
-    for job in searches:
-        n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
-        step = (job.hi - job.lo) / (n - 1)
-        values = job.lo + step * np.arange(n)
-        pelvis, angle, ratio, spread = job.knob.batch(pose, values)
-        joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-        grids.append((values, joint_quads(joints, pose.scale, [SEGMENT_INDEX[d] for d in job.drawn], spread)))
-        every = max(1, int(round(job.sweep_step / step)))
-        start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
-        gens.append(coarse_to_fine(n, sorted({*range(0, n, every), n - 1, start}), start, 2 * every))
-        requests.append(next(gens[-1]))
-    replies, score = sweep_scorer([(job.canvas, grid[1][req]) for job, grid, req in
-                                   zip(searches, grids, requests)])
-    best = [0] * len(searches)
-    active = list(range(len(searches)))
-    while active:
-        asking = {}
-        for j, reply in zip(active, replies):
-            try:
-                asking[j] = gens[j].send(reply)
-            except StopIteration as done:
-                best[j] = done.value
-        active = list(asking)
-        replies = score([grids[j][1][asking[j]] for j in active]) if active else []
-    for job, (values, _), i in zip(searches, grids, best):
-        pose = job.knob.apply(pose, float(values[i]))
-    return pose
-
-
-def search(canvas: Canvas, pose: Pose2D, knob: Knob, drawn, lo: float, hi: float,
-           center: float, resolution: float, sweep_step: float) -> Pose2D:
-    """One search of ``search_all``."""
-    return search_all(pose, [Search(canvas, knob, tuple(drawn), lo, hi, center, resolution, sweep_step)])
+    n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
+    step = (job.hi - job.lo) / (n - 1)
+    values = job.lo + step * np.arange(n)
+    pelvis, angle, ratio, spread = job.knob.batch(pose, values)
+    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+    quads = joint_quads(joints, pose.scale, [SEGMENT_INDEX[d] for d in job.drawn], spread)
+    every = max(1, int(round(job.sweep_step / step)))
+    start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
+    opening = sorted({*range(0, n, every), n - 1, start})
+    first, score = sweep_scorer(job.canvas, quads[opening])
+    best = coarse_to_fine(lambda i: score(quads[i]), n, opening, first, start, 2 * every)
+    return job.knob.apply(pose, float(values[best]))
 
 
 def angle_search(canvas: Canvas, segments, drawn, lo: float, hi: float, center: float) -> Search:
@@ -189,12 +166,12 @@ def ratio_search(canvas: Canvas, pose: Pose2D, segment: str, drawn) -> Search:
 
 def search_angle(canvas, pose, segments, drawn, lo, hi, center) -> Pose2D:
     """One Algorithm 1 search (``angle_search``), applied to pose."""
-    return search_all(pose, [angle_search(canvas, segments, drawn, lo, hi, center)])
+    return search(pose, angle_search(canvas, segments, drawn, lo, hi, center))
 
 
 def search_ratio(canvas, pose, segment, drawn) -> Pose2D:
     """One Algorithm 6 search (``ratio_search``), applied to pose."""
-    return search_all(pose, [ratio_search(canvas, pose, segment, drawn)])
+    return search(pose, ratio_search(canvas, pose, segment, drawn))
 
 
 def refine_limb(pose: Pose2D, limb: tuple[str, str], canvas: Canvas, half_range: float) -> Pose2D:
@@ -243,7 +220,8 @@ def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
 def torso_spread(silhouette: np.ndarray, scale: float) -> float:
     """The torso's horizontal foreshortening on one frame (section 3.4), from its
     seen width: the narrowest quarter of the silhouette's widths across the torso's
-    middle rows, converted by ``body.torso_width``. Arms in front of or behind the
+    middle rows, less the pixel by which edges and the difference threshold widen a
+    silhouette, converted by ``body.spread_for_width``. Arms in front of or behind the
     torso widen some rows and some frames, so callers also take a low percentile
     over neighbouring frames (the body turns slowly, arms swing)."""
     ys = np.flatnonzero(silhouette.any(axis=1))
@@ -256,7 +234,7 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
         return 1.0
     widest = np.zeros(band.shape[0])
     np.maximum.at(widest, rows, ends - starts)
-    width = np.percentile(widest[widest > 0], 25) / scale
+    width = (np.percentile(widest[widest > 0], 25) - SILHOUETTE_BLEED_PX) / scale
     return float(spread_for_width(width))
 
 
@@ -264,7 +242,7 @@ def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
     """The torso's horizontal position by the same search (the paper takes the
     silhouette's middle, which arms and a swinging leg pull off the torso)."""
     r = reach * pose.scale
-    return search(canvas, pose, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0)
+    return search(pose, Search(canvas, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0))
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D, bool]:
@@ -298,7 +276,7 @@ def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
     (a check on Algorithm 5's verdict, which scan lines alone can get wrong)."""
     legs = LEG["l"] + LEG["r"]
     swapped = _swap_lower_legs(pose)
-    (scores,), _ = sweep_scorer([(canvas, np.stack([pose_quads(pose, legs), pose_quads(swapped, legs)]))])
+    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(pose, legs), pose_quads(swapped, legs)]))
     return swapped if scores[1] > scores[0] else pose
 
 
@@ -306,7 +284,8 @@ def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
     """The torso's horizontal foreshortening (section 3.4): how much of the shoulder
     and hip span is seen, 0 in profile .. 1 frontal, from the torso's seen width,
     by Algorithm 6's search."""
-    return search(canvas, pose, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05, RATIO_SWEEP_STEP)
+    return search(pose, Search(canvas, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05,
+                               RATIO_SWEEP_STEP))
 
 
 def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
@@ -359,7 +338,7 @@ def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
     cannot take the other's pixels."""
     joints = forward_kinematics_2d(pose)
     pelvis, neck = joints[JOINT_INDEX["pelvis"]], joints[JOINT_INDEX["neck"]]
-    ys, xs = np.mgrid[0:shape[0], 0:shape[1]]
+    ys, xs = np.arange(shape[0])[:, None], np.arange(shape[1])[None, :]
     # positive on the image-right of the upward axis (image y points down)
     cross = (neck[0] - pelvis[0]) * (ys - pelvis[1]) - (neck[1] - pelvis[1]) * (xs - pelvis[0])
     return cross < 0 if side == "l" else cross > 0
@@ -382,7 +361,7 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
     upper, lower = ARM[side]
     poses = [Knob("angle", (lower,)).apply(Knob("angle", (upper,)).apply(pose, gu), gl)
              for gu, gl in arm_candidates(canvas, pose, side, prev)]
-    (scores,), _ = sweep_scorer([(canvas, np.stack([pose_quads(p, ARM[side]) for p in poses]))])
+    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(p, ARM[side]) for p in poses]))
     return poses[int(np.argmax(scores))]
 
 

@@ -86,55 +86,40 @@ def similarity(silhouette: np.ndarray, model: np.ndarray) -> float:
                                         np.count_nonzero(sil & mod)))
 
 
-def _draw_planes(groups: list[np.ndarray], offset: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Each candidate's polygons (groups of (B, k, 4, 2)) filled into its own 0/1
-    plane of one array (sum of B, H, W)."""
-    planes = np.zeros((sum(len(g) for g in groups),) + shape, np.uint8)
-    planes_left = iter(planes)
-    for group in groups:
-        pts = ((group - offset) * _ONE).round().astype(np.int32)
-        for plane, quads in zip(planes_left, pts):
-            for quad in quads:  # one by one: fillPoly would make overlaps holes
-                cv2.fillConvexPoly(plane, quad, 1, cv2.LINE_8, _SHIFT)
+def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
+    pts = ((candidates - offset) * _ONE).round().astype(np.int32)
+    planes = np.zeros((len(pts),) + shape, np.uint8)
+    for plane, quads in zip(planes, pts):
+        for quad in quads:  # one by one: fillPoly would make overlaps holes
+            cv2.fillConvexPoly(plane, quad, 1, cv2.LINE_8, _SHIFT)
     return planes
 
 
-def sweep_scorer(jobs: list[tuple["Canvas", np.ndarray]]):
-    """Score sweeps of candidates, one per job (canvas, candidates (B, k, 4, 2)), each
-    on the partial silhouette its sweep outlines; returns (the sweeps' S arrays,
-    a function scoring a further list of candidate arrays, one per job).
+def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
+    """Score a sweep of candidates (B, k, 4, 2) on the partial silhouette it outlines;
+    returns (their S (B,) of Eq. 1-3, a function scoring further candidates).
 
-    The partial silhouette of a job is the silhouette inside the area its sweep
-    covers that its canvas's fitted part does not already explain. All candidates
-    are drawn into planes of one array and weighed in one product: per job, a pixel
-    weighs 1 if free plus ``base`` (more than the window's pixel count) if in the
-    partial silhouette, so one sum tells both counts of Eq. 1-2.
+    The partial silhouette is the silhouette inside the swept area that the canvas's
+    fitted part does not already explain. Candidates are drawn into planes of one
+    array and weighed in one product: a pixel weighs 1 if free plus ``base`` (more
+    than the window's pixel count) if in the partial silhouette, so one sum tells
+    both counts of Eq. 1-2.
     """
-    x0, y0, x1, y1 = bounding_window(np.concatenate([q.reshape(-1, 2) for _, q in jobs]),
-                                     jobs[0][0].sil.shape)
+    x0, y0, x1, y1 = bounding_window(sweep, canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
-    base = float(shape[0] * shape[1] + 1)
-    planes = _draw_planes([q for _, q in jobs], offset, shape)
-    columns, areas, first = [], [], 0
-    for canvas, sweep in jobs:
-        free = canvas.fixed[y0:y1, x0:x1] == 0
-        swept = planes[first:first + len(sweep)].any(axis=0)
-        target = free & swept & canvas.sil[y0:y1, x0:x1].astype(bool)
-        columns.append(free.ravel() + base * target.ravel())
-        areas.append(np.count_nonzero(target))
-        first += len(sweep)
-    weights, areas = np.stack(columns, axis=1), np.array(areas, float)
+    planes = _draw_planes(sweep, offset, shape)
+    free = canvas.fixed[y0:y1, x0:x1] == 0
+    target = free & planes.any(axis=0) & canvas.sil[y0:y1, x0:x1].astype(bool)
+    sil_area = np.count_nonzero(target)
+    base = float(free.size + 1)
+    weights = free.ravel() + base * target.ravel()
 
-    def weigh(planes_: np.ndarray, sizes: list[int]) -> list[np.ndarray]:
-        owner = np.repeat(np.arange(len(sizes)), sizes)
-        totals = (planes_.reshape(len(owner), -1) @ weights)[np.arange(len(owner)), owner]
+    def weigh(planes_: np.ndarray) -> np.ndarray:
+        totals = planes_.reshape(len(planes_), -1) @ weights
         overlap = np.floor(totals / base)
-        s = similarity_from_counts(areas[owner], totals - base * overlap, overlap)
-        return np.split(s, np.cumsum(sizes)[:-1])
-
-    def score(groups: list[np.ndarray]) -> list[np.ndarray]:
-        return weigh(_draw_planes(groups, offset, shape), [len(g) for g in groups])
-    return weigh(planes, [len(q) for _, q in jobs]), score
+        return similarity_from_counts(sil_area, totals - base * overlap, overlap)
+    return weigh(planes), lambda candidates: weigh(_draw_planes(candidates, offset, shape))
 
 
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
