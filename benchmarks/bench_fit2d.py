@@ -3,7 +3,7 @@
 Renders each BVH of ../shared/data/bvh from side and three-quarter views with the
 motion's own proportions, runs the pipeline, and prints per-clip and per-joint 2D
 errors in % of body height (image-side matching, as the 2D fit labels sides), then
-the fit's time per frame and the whole pipeline's frames per second.
+the fit's CPU time per frame (benchmarks/bench_pipeline.py times the whole command).
 
     python benchmarks/bench_fit2d.py [--quick]
 """
@@ -45,15 +45,13 @@ def run_clip(bvh: str, view: str, frames, workdir: Path):
     truth = render_motion(DATA / bvh, video, view=view, frames=frames)
     info = open_video(video)
     scale = processing_scale(info)
-    t0 = time.perf_counter()
     sils = extract_silhouettes(info, scale)
     heights = body_heights(sils, info.fps)
     fits = fit_silhouettes(sils, heights, scale, info.fps)
-    total = time.perf_counter() - t0
     fit_ms = time_fits(sils, heights, [f.fit.pose.spread if f.fit else None for f in fits])
     pred = np.array([f.joints2d if f.joints2d is not None else np.full((16, 2), np.nan) for f in fits])
     err = side_matched_errors(pred, truth.joints2d) / truth.body_height_px * 100
-    return err, fit_ms, info.frame_count / total, (info.width, info.height)
+    return err, fit_ms, (info.width, info.height)
 
 
 def time_fits(sils, heights, spreads, repeats: int = 3) -> np.ndarray:
@@ -85,21 +83,23 @@ def main() -> int:
         return 0
     clips = CLIPS[::2] if args.quick else CLIPS
     all_err, all_ms = [], []
-    print(f"{'clip':34s} {'frames':>6s} {'median%':>8s} {'p90%':>6s} {'fit ms':>7s} {'fps':>6s}  size")
+    print(f"{'clip':34s} {'frames':>6s} {'median%':>8s} {'p90%':>6s} {'fit ms':>7s}  size")
     with tempfile.TemporaryDirectory() as tmp:
         for bvh, view, frames in clips:
-            err, ms, fps, size = run_clip(bvh, view, frames, Path(tmp))
+            err, ms, size = run_clip(bvh, view, frames, Path(tmp))
             all_err.append(err)
             all_ms.append(ms)
             print(f"{Path(bvh).stem + ' ' + view:34s} {len(err):6d} {np.nanmedian(err):8.2f} "
-                  f"{np.nanpercentile(err, 90):6.2f} {np.median(ms):7.2f} {fps:6.1f}  {size[0]}x{size[1]}")
+                  f"{np.nanpercentile(err, 90):6.2f} {np.median(ms):7.2f}  {size[0]}x{size[1]}")
     err = np.concatenate(all_err)
     print(f"{'all':34s} {len(err):6d} {np.nanmedian(err):8.2f} {np.nanpercentile(err, 90):6.2f} "
           f"{np.median(np.concatenate(all_ms)):7.2f}")
     print("\nper joint, median % of body height:")
     print("  ".join(f"{n}={np.nanmedian(err[:, i]):.1f}" for i, n in enumerate(JOINTS)))
     print(f"frames with a result: {np.isfinite(err).all(axis=1).mean() * 100:.1f}%")
-    print("paper: about 1000 ms per frame (2.7 GHz Celeron)")
+    ms = np.median(np.concatenate(all_ms))
+    print(f"2D fit: {ms:.2f} ms per frame (median, one thread, CPU time); the paper: about "
+          f"1000 ms (2.7 GHz Celeron), {1000 / ms:.0f} times slower")
     return 0
 
 

@@ -190,12 +190,13 @@ def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndar
     the image-left unit vector scaled by the seen span (KINEMATIC_MATRIX).
     """
     a = np.radians(angle).T                                   # (10, B)
+    cos, sin = np.cos(a), np.sin(a)
     length = LENGTH[:, None] * ratio.T * scale
     basis = np.empty((12, len(pelvis), 2))
     basis[0] = pelvis
-    basis[1:11, :, 0] = np.cos(a) * length
-    basis[1:11, :, 1] = -np.sin(a) * length
-    sin_t, cos_t = np.sin(a[SEGMENT_INDEX["torso"]]), np.cos(a[SEGMENT_INDEX["torso"]])
+    basis[1:11, :, 0] = cos * length
+    basis[1:11, :, 1] = -sin * length
+    sin_t, cos_t = sin[SEGMENT_INDEX["torso"]], cos[SEGMENT_INDEX["torso"]]
     span = spread * scale
     # image-left normal of the torso axis: (-sin t, -cos t), flipped if the torso points down
     basis[11, :, 0] = -np.abs(sin_t) * span

@@ -35,7 +35,7 @@ NECK_RANGE = (45.0, 135.0)       # Table 1
 # fitted; frames outside Table 1 are flagged for review instead of forced inside.
 THIGH_RANGE = (200.0, 340.0)
 RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs differ from Table 1
-TRACK_HALF_RANGE = 25.0          # degrees searched around a previous estimate
+TRACK_HALF_RANGE = 20.0          # degrees searched around a previous estimate
 THIGH_TRACK_HALF_RANGE = 40.0    # the same for thighs, which swing fastest
 ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
 RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
@@ -358,23 +358,26 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pos
 
 def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
     """The arm_candidates guess with the highest S."""
-    upper, lower = ARM[side]
-    poses = [Knob("angle", (lower,)).apply(Knob("angle", (upper,)).apply(pose, gu), gl)
-             for gu, gl in arm_candidates(canvas, pose, side, prev)]
-    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(p, ARM[side]) for p in poses]))
-    return poses[int(np.argmax(scores))]
+    guesses = np.array(arm_candidates(canvas, pose, side, prev))
+    both = Knob("angle", ARM[side])
+    pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
+    angle[:, both.indices[1]] = guesses[:, 1]
+    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+    scores, _ = sweep_scorer(canvas, joint_quads(joints, pose.scale, both.indices, spread))
+    upper, lower = guesses[int(np.argmax(scores))]
+    return Knob("angle", (ARM[side][1],)).apply(both.apply(pose, upper), lower)
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
     """Torso location from Table 1 ratios: the head at the silhouette's top, the pelvis
     head+torso lengths below, x at the horizontal middle of the silhouette there."""
-    ys, xs = np.nonzero(silhouette)
-    top = ys.min()
+    rows = np.flatnonzero(silhouette.any(axis=1))
+    top, bottom = int(rows[0]), int(rows[-1])
     head = LENGTH[SEGMENT_INDEX["head"]] * scale
-    pelvis_y = top + head + LENGTH[SEGMENT_INDEX["torso"]] * scale
-    band = (ys >= top + head) & (ys <= pelvis_y)
-    x = float(np.median(xs[band])) if band.any() else float(np.median(xs))
-    return Pose2D(pelvis=np.array([x, min(pelvis_y, ys.max())]), scale=scale)
+    pelvis_y = min(top + head + LENGTH[SEGMENT_INDEX["torso"]] * scale, bottom)
+    xs = np.nonzero(silhouette[int(top + head): int(pelvis_y) + 1])[1]
+    x = float(np.median(xs)) if len(xs) else float(np.median(np.nonzero(silhouette)[1]))
+    return Pose2D(pelvis=np.array([x, pelvis_y]), scale=scale)
 
 
 def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,

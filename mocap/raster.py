@@ -8,6 +8,8 @@ model already fitted, so each candidate costs one small polygon fill and two cou
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
@@ -88,7 +90,7 @@ def similarity(silhouette: np.ndarray, model: np.ndarray) -> float:
 
 def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
-    pts = ((candidates - offset) * _ONE).round().astype(np.int32)
+    pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32)   # windows keep them >= 0
     planes = np.zeros((len(pts),) + shape, np.uint8)
     for plane, quads in zip(planes, pts):
         for quad in quads:  # one by one: fillPoly would make overlaps holes
@@ -124,13 +126,11 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
 
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
     """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
-    pts = np.asarray(quads, float).reshape(-1, 2)
+    pts = quads.reshape(-1, 2)
+    (ax, ay), (bx, by) = pts.min(axis=0).tolist(), pts.max(axis=0).tolist()
     h, w = shape
-    x0 = int(np.clip(np.floor(pts[:, 0].min() - pad), 0, w))
-    y0 = int(np.clip(np.floor(pts[:, 1].min() - pad), 0, h))
-    x1 = int(np.clip(np.ceil(pts[:, 0].max() + pad) + 1, x0, w))
-    y1 = int(np.clip(np.ceil(pts[:, 1].max() + pad) + 1, y0, h))
-    return x0, y0, x1, y1
+    x0, y0 = min(max(math.floor(ax - pad), 0), w), min(max(math.floor(ay - pad), 0), h)
+    return x0, y0, min(max(math.ceil(bx + pad) + 1, x0), w), min(max(math.ceil(by + pad) + 1, y0), h)
 
 
 class Canvas:
