@@ -14,8 +14,7 @@ right; 45 is three-quarter (turned toward the camera), 90 is the front view.
 
 from __future__ import annotations
 
-import json
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -24,7 +23,8 @@ import numpy as np
 from mocap import body
 from mocap.bvh import contract_joints, read_bvh
 from mocap.errors import MocapError
-from mocap.fileio import atomic_write_json
+from mocap.truth import Camera, Truth, save_truth
+from mocap.walk import walk_cycle
 
 WALK_CYCLE = "walk-cycle"   # the source name of the procedural walk
 VIEWS = {"side": 0.0, "three-quarter": 45.0, "front": 90.0}
@@ -68,103 +68,6 @@ class RenderOptions:
         if self.view not in VIEWS:
             raise MocapError(f"unknown view {self.view!r} (choose {', '.join(VIEWS)})")
         return VIEWS[self.view]
-
-
-@dataclass(frozen=True, eq=False)
-class Camera:
-    """A fixed camera. ``rotation`` rows are the image right, image up and toward-camera
-    axes in world coordinates; ``origin`` is the world point at the image centre
-    (orthographic, ``scale`` px per metre) or the eye (perspective, ``scale`` = focal px).
-    """
-
-    kind: str
-    yaw_deg: float
-    pitch_deg: float
-    rotation: np.ndarray
-    origin: np.ndarray
-    scale: float
-    cx: float
-    cy: float
-
-    def to_camera(self, world: np.ndarray) -> np.ndarray:
-        """World points (..., 3) -> camera frame (x right, y up, z toward the camera)."""
-        return (np.asarray(world) - self.origin) @ self.rotation.T
-
-    def project_camera(self, cam: np.ndarray) -> np.ndarray:
-        """Camera-frame points (..., 3) -> pixels (..., 2), x right, y down."""
-        xy = cam[..., :2] * self.scale
-        if self.kind == "perspective":
-            xy = xy / -cam[..., 2:3]
-        return np.stack([self.cx + xy[..., 0], self.cy - xy[..., 1]], axis=-1)
-
-    def to_dict(self) -> dict:
-        """JSON form; ``scale`` is named ``focal`` for a perspective camera."""
-        d = {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in asdict(self).items()}
-        d["focal" if self.kind == "perspective" else "scale"] = d.pop("scale")
-        d["projection"] = ("u = cx + s*x, v = cy - s*y" if self.kind == "orthographic" else
-                           "u = cx + f*x/(-z), v = cy - f*y/(-z)") + \
-            " with (x, y, z) = rotation @ (world - origin)"
-        return d
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "Camera":
-        """Inverse of ``to_dict``."""
-        return cls(kind=d["kind"], yaw_deg=d["yaw_deg"], pitch_deg=d["pitch_deg"],
-                   rotation=np.array(d["rotation"]), origin=np.array(d["origin"]),
-                   scale=d.get("scale", d.get("focal")), cx=d["cx"], cy=d["cy"])
-
-
-@dataclass(frozen=True, eq=False)
-class Truth:
-    """The exact ground truth of a rendered clip (see ``to_dict`` for the JSON)."""
-
-    source: str
-    fps: float
-    width: int
-    height: int
-    camera: Camera
-    body_height_m: float
-    body_height_px: float
-    source_frames: np.ndarray   # (F,) frame of the source motion shown in each frame
-    joints2d: np.ndarray        # (F, 16, 2) pixels, anatomical left/right
-    joints3d: np.ndarray        # (F, 16, 3) metres, camera-aligned, origin at the pelvis
-    pelvis_camera: np.ndarray   # (F, 3) pelvis in the camera frame (re-projection)
-
-    def to_dict(self) -> dict:
-        """The ``mocap-truth`` JSON document."""
-        frames = [{"index": i, "source_frame": int(s),
-                   "joints2d": np.round(j2, 3).tolist(), "joints3d": np.round(j3, 5).tolist(),
-                   "pelvis_camera": np.round(p, 5).tolist()}
-                  for i, (s, j2, j3, p) in enumerate(zip(
-                      self.source_frames, self.joints2d, self.joints3d, self.pelvis_camera))]
-        return {"format": "mocap-truth", "version": 1, "source": self.source,
-                "fps": self.fps, "width": self.width, "height": self.height,
-                "camera": self.camera.to_dict(), "body_height_m": self.body_height_m,
-                "body_height_px": self.body_height_px, "joints": list(body.JOINTS),
-                "frames": frames}
-
-
-def save_truth(truth: Truth, path: str | Path) -> None:
-    """Write the truth JSON (atomically)."""
-    atomic_write_json(path, truth.to_dict())
-
-
-def load_truth(path: str | Path) -> Truth:
-    """Read a truth JSON written by ``save_truth``."""
-    try:
-        d = json.loads(Path(path).read_text())
-        if d.get("format") != "mocap-truth" or d.get("version") != 1:
-            raise MocapError(f"{path}: not a mocap-truth version 1 file")
-        frames = d["frames"]
-        return Truth(source=d["source"], fps=d["fps"], width=d["width"], height=d["height"],
-                     camera=Camera.from_dict(d["camera"]), body_height_m=d["body_height_m"],
-                     body_height_px=d["body_height_px"],
-                     source_frames=np.array([f["source_frame"] for f in frames], dtype=int),
-                     joints2d=np.array([f["joints2d"] for f in frames], dtype=float),
-                     joints3d=np.array([f["joints3d"] for f in frames], dtype=float),
-                     pelvis_camera=np.array([f["pelvis_camera"] for f in frames], dtype=float))
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
-        raise MocapError(f"cannot read truth file {path}: {exc}") from None
 
 
 # -- camera ---------------------------------------------------------------------------
@@ -421,63 +324,6 @@ def render_motion(source: str | Path, out_video: str | Path,
     picks = resample_indices(len(joints), frame_time, opts.fps, frames, seconds)
     return render_clip(joints[picks], out_video, opts, truth_path=truth_path,
                        source=Path(source).name, source_frames=picks)
-
-
-# -- a procedural walk ----------------------------------------------------------------
-
-def walk_cycle(seconds: float = 4.0, fps: float = 30.0, *, in_place: bool = False,
-               period: float = 1.1, hip_swing_deg: float = 20.0) -> np.ndarray:
-    """(F, 16, 3) joints of a walk with the model's proportions (body.LENGTH, 1.75 m).
-
-    Metres, y up; the walker faces +z (their left is +x) and advances along +z unless
-    ``in_place``. Hips swing sinusoidally, knees flex in early swing, arms swing
-    opposite to the legs; the pelvis rides so that the lower ankle is at y = 0.
-    """
-    n = max(1, int(round(seconds * fps)))
-    phase = 2 * np.pi * np.arange(n) / (fps * period)
-    unit = body.BODY_HEIGHT_M / body.BODY_HEIGHT
-    seg = dict(zip(body.SEGMENT_NAMES, body.LENGTH * unit))
-    lean, swing = np.radians(4.0), np.radians(hip_swing_deg)
-    pose = {"pelvis": np.zeros((n, 3)),
-            "neck": np.tile([0.0, np.cos(lean), np.sin(lean)], (n, 1)) * seg["torso"]}
-    pose["head_top"] = pose["neck"] + [0.0, seg["head"], 0.0]
-    pose["chest"] = body.CHEST_FRACTION * pose["neck"]
-    for side, sign, leg_phase in (("r", -1.0, phase), ("l", 1.0, phase + np.pi)):
-        hip = swing * np.sin(leg_phase)
-        knee = np.radians(8.0 + 55.0 * np.maximum(0.0, np.cos(leg_phase + 0.5)) ** 2)
-        arm = -0.8 * hip
-        elbow = np.radians(15.0) + 0.5 * np.maximum(arm, 0.0)
-        hip_at = pose["pelvis"] + [sign * body.HIP_HALF_SPAN * unit, 0.0, 0.0]
-        shoulder_at = pose["neck"] / body.NECK_PER_SHOULDER + [
-            sign * body.SHOULDER_HALF_SPAN * unit, 0.0, 0.0]
-        _chain(pose, (f"hip_{side}", f"knee_{side}", f"ankle_{side}"), hip_at,
-               (seg["upper_leg_l"], seg["lower_leg_l"]), (hip, hip - knee), 0.0)
-        _chain(pose, (f"shoulder_{side}", f"elbow_{side}", f"wrist_{side}"), shoulder_at,
-               (seg["upper_arm_l"], seg["lower_arm_l"]), (arm, arm + elbow), 0.1 * sign)
-    out = np.stack([pose[name] for name in body.JOINTS], axis=1)
-    ankles = out[:, [body.JOINT_INDEX["ankle_l"], body.JOINT_INDEX["ankle_r"]], 1]
-    out[:, :, 1] -= ankles.min(axis=1)[:, None]
-    if not in_place:
-        step = 2 * (seg["upper_leg_l"] + seg["lower_leg_l"]) * np.sin(swing)
-        out[:, :, 2] += (2 * step / period * np.arange(n) / fps)[:, None]
-    return out
-
-
-def _chain(pose: dict, names: tuple[str, str, str], start: np.ndarray,
-           lengths: tuple[float, float], angles: tuple[np.ndarray, np.ndarray],
-           outward: float) -> None:
-    """Add a two-segment limb (e.g. hip, knee, ankle) to ``pose``, each segment
-    hanging down and swung forward by its angle."""
-    middle = start + lengths[0] * _sagittal(angles[0], outward)
-    end = middle + lengths[1] * _sagittal(angles[1], outward)
-    pose.update(zip(names, (start, middle, end)))
-
-
-def _sagittal(angle: np.ndarray, outward: float) -> np.ndarray:
-    """(F, 3) unit vectors pointing down, swung forward (+z) by ``angle`` radians and
-    tilted by ``outward`` along x."""
-    v = np.stack([np.full_like(angle, outward), -np.cos(angle), np.sin(angle)], axis=-1)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
 # -- command line ---------------------------------------------------------------------

@@ -9,7 +9,7 @@ import pytest
 from helpers import render_walk
 
 from mocap.cli import main
-from mocap.synth import Truth
+from mocap.truth import Truth
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from mocap import synth
-from mocap.synth import RenderOptions, Truth, walk_cycle
+from mocap.synth import RenderOptions
+from mocap.truth import Truth
+from mocap.walk import walk_cycle
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DOG_WALKER = SHARED_DATA / "video" / "dog_walker.avi"

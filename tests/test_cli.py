@@ -16,7 +16,8 @@ from helpers import frame_joints, render_walk, write_empty_scene
 from mocap.cli import main
 from mocap.export.motion_json import read_motion
 from mocap.metrics import side_matched_errors
-from mocap.synth import render_clip, walk_cycle, write_video
+from mocap.synth import render_clip, write_video
+from mocap.walk import walk_cycle
 from mocap.video import iter_frames
 
 

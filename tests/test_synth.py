@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 from mocap import body, synth
+from mocap.truth import load_truth
+from mocap.walk import walk_cycle
 from mocap.cli import main
 from mocap.errors import MocapError
 
@@ -41,12 +43,12 @@ def body_mask(scene: synth.Scene, i: int) -> np.ndarray:
 
 
 def test_walk_cycle_has_model_proportions():
-    joints = synth.walk_cycle(2.0, 30.0)
+    joints = walk_cycle(2.0, 30.0)
     assert joints.shape == (60, 16, 3)
     assert body.body_height(joints[0]) == pytest.approx(1.75)
     assert joints[:, [J["ankle_l"], J["ankle_r"]], 1].min(axis=1) == pytest.approx(np.zeros(60))
     assert joints[-1, J["pelvis"], 2] > 2.0          # walks forward along +z
-    in_place = synth.walk_cycle(2.0, 30.0, in_place=True)
+    in_place = walk_cycle(2.0, 30.0, in_place=True)
     assert np.ptp(in_place[:, J["pelvis"], 2]) == pytest.approx(0.0)
 
 
@@ -65,7 +67,7 @@ def test_orthographic_body_height_in_pixels(view):
 @pytest.mark.parametrize("perspective", [None, 700.0])
 def test_every_segment_is_drawn_where_the_truth_says(perspective):
     opts = synth.RenderOptions(view="three-quarter", noise=0.0, perspective=perspective)
-    scene = synth.plan_scene(synth.walk_cycle(1.0, 15.0), opts)
+    scene = synth.plan_scene(walk_cycle(1.0, 15.0), opts)
     truth = synth.scene_truth(scene, "walk", np.arange(15))
     ends = body.segment_endpoints(truth.joints2d)                 # (F, 10, 2, 2)
     for i in range(0, 15, 3):
@@ -82,7 +84,7 @@ def test_every_segment_is_drawn_where_the_truth_says(perspective):
 
 def test_video_and_truth_files(tmp_path):
     out = tmp_path / "clip.avi"
-    truth = synth.render_clip(synth.walk_cycle(0.5, 30.0, in_place=True), out,
+    truth = synth.render_clip(walk_cycle(0.5, 30.0, in_place=True), out,
                               size=(320, 240), view="side", seed=3)
     cap = cv2.VideoCapture(str(out))
     frames = [cap.read()[1] for _ in range(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)))]
@@ -90,36 +92,36 @@ def test_video_and_truth_files(tmp_path):
     doc = json.loads((tmp_path / "clip.truth.json").read_text())
     assert doc["format"] == "mocap-truth" and doc["joints"] == list(body.JOINTS)
     assert doc["camera"]["kind"] == "orthographic" and len(doc["frames"]) == 15
-    loaded = synth.load_truth(tmp_path / "clip.truth.json")
+    loaded = load_truth(tmp_path / "clip.truth.json")
     np.testing.assert_allclose(loaded.joints2d, truth.joints2d, atol=1e-3)
 
 
 @pytest.mark.parametrize("perspective", [None, 900.0])
 def test_truth_reprojects(perspective, tmp_path):
-    joints = synth.walk_cycle(1.0, 10.0)
+    joints = walk_cycle(1.0, 10.0)
     truth = synth.render_clip(joints, tmp_path / "a.mp4", view="three-quarter",
                               pitch=10.0, perspective=perspective)
-    cam = synth.load_truth(tmp_path / "a.truth.json").camera
+    cam = load_truth(tmp_path / "a.truth.json").camera
     reproj = cam.project_camera(truth.joints3d + truth.pelvis_camera[:, None])
     np.testing.assert_allclose(reproj, truth.joints2d, atol=1e-6)
     np.testing.assert_allclose(cam.project_camera(cam.to_camera(joints)), truth.joints2d, atol=1e-6)
 
 
 def test_camera_frame_and_anatomical_sides():
-    scene = synth.plan_scene(synth.walk_cycle(1.0, 10.0), synth.RenderOptions(view="side"))
+    scene = synth.plan_scene(walk_cycle(1.0, 10.0), synth.RenderOptions(view="side"))
     truth = synth.scene_truth(scene, "w", np.arange(10))
     j3 = truth.joints3d[0]
     assert np.allclose(j3[J["pelvis"]], 0.0)
     assert j3[J["head_top"], 1] > 1.0 - 0.5           # y up
     assert j3[J["hip_r"], 2] > j3[J["hip_l"], 2]       # side view from the performer's right
     assert truth.joints2d[-1, J["pelvis"], 0] > truth.joints2d[0, J["pelvis"], 0]  # walks right
-    front = synth.scene_truth(synth.plan_scene(synth.walk_cycle(1.0, 10.0),
+    front = synth.scene_truth(synth.plan_scene(walk_cycle(1.0, 10.0),
                                                synth.RenderOptions(view="front")), "w", [0])
     assert front.joints2d[0, J["hip_l"], 0] > front.joints2d[0, J["hip_r"], 0]  # mirror view
 
 
 def test_background_static_or_moving():
-    joints = synth.walk_cycle(1.0, 10.0)
+    joints = walk_cycle(1.0, 10.0)
     still = synth.plan_scene(joints, synth.RenderOptions(seed=5))
     assert np.array_equal(synth.background(still, 0), synth.background(still, 9))
     assert not np.array_equal(synth.draw_frame(still, 0)[:40], synth.draw_frame(still, 1)[:40])

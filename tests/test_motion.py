@@ -1,0 +1,155 @@
+"""Keyframes -> every frame: rotations, slerp, constant bones, root, smoothing."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from mocap import body
+from mocap.bvh import contract_joints, read_bvh
+from mocap.errors import MocapError
+from mocap.motion import BONES, PARENTS, build_motion, forward_kinematics
+from mocap.synth import resample_indices
+from mocap.walk import walk_cycle
+
+CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
+FPS = 30.0
+
+
+def segment_lengths(joints: np.ndarray) -> np.ndarray:
+    """(F, 10) lengths of the 10 segments."""
+    ends = body.segment_endpoints(joints)
+    return np.linalg.norm(ends[..., 1, :] - ends[..., 0, :], axis=-1)
+
+
+def keyframes_of(joints: np.ndarray, step: int) -> dict[int, np.ndarray]:
+    """Every step-th frame of (F, 16, 3) joints as a keyframe dict."""
+    return {i: joints[i] for i in range(0, len(joints), step)}
+
+
+@pytest.fixture(scope="module")
+def walk():
+    """Two seconds of the procedural walk (world joints, moving forward)."""
+    return walk_cycle(2.0, FPS)
+
+
+def test_bones_are_depth_first_tree():
+    assert PARENTS[0] == -1 and all(0 <= p < b for b, p in enumerate(PARENTS) if b)
+    assert set(body.JOINTS) <= set(BONES)
+
+
+def test_every_frame_a_keyframe_reproduces_the_input(walk):
+    pelvis = walk[:, body.JOINT_INDEX["pelvis"]]
+    motion = build_motion(keyframes_of(walk - pelvis[:, None], 1), len(walk), FPS, root=pelvis)
+    assert motion.keyframes.all()
+    assert np.abs(motion.world_joints - walk).max() < 1e-9
+    assert np.abs(motion.joints3d[:, body.JOINT_INDEX["pelvis"]]).max() < 1e-12
+
+
+def test_random_contract_poses_are_reproduced():
+    """Any pose of the contract body (torso and limbs turned anyhow, shoulders
+    twisted and tilted against the hips) comes back exactly from its joints."""
+    rng = np.random.default_rng(0)
+    base = build_motion({0: walk_cycle(0.1, FPS)[0]}, 1, FPS)
+    rot = Rotation.random(40 * len(BONES), random_state=1).as_quat().reshape(40, len(BONES), 4)
+    # the chest only twists about the torso axis: it lies on that axis
+    rot[:, BONES.index("chest")] = Rotation.from_euler("y", rng.uniform(-90, 90, (40, 1)),
+                                                       degrees=True).as_quat()
+    joints = forward_kinematics(base.offsets, rot)[:, [BONES.index(j) for j in body.JOINTS]]
+    motion = build_motion(keyframes_of(joints, 1), len(joints), FPS)
+    assert np.abs(motion.joints3d - joints).max() < 1e-9
+
+
+def test_sparse_keyframes(walk):
+    keys = keyframes_of(walk, 3)
+    motion = build_motion(keys, len(walk), FPS)
+    err = np.linalg.norm(motion.world_joints - walk, axis=-1)[:max(keys) + 1]
+    assert motion.keyframes.sum() == len(keys) and err[list(keys)].max() < 1e-9
+    lengths = segment_lengths(motion.joints3d)
+    assert np.ptp(lengths, axis=0).max() < 1e-9          # interpolated bones keep length
+    assert err.mean() < 0.005 and err.max() < 0.06       # slerp follows the walk
+    assert np.allclose(np.linalg.norm(motion.rotations, axis=-1), 1.0)
+    assert (np.sum(motion.rotations[1:] * motion.rotations[:-1], axis=-1) >= 0).all()
+
+
+def test_hold_outside_the_keyframes(walk):
+    motion = build_motion({5: walk[5], 9: walk[9]}, 15, FPS)
+    assert np.allclose(motion.world_joints[:5], walk[5], atol=1e-9)
+    assert np.allclose(motion.world_joints[9:], walk[9], atol=1e-9)
+
+
+def test_single_keyframe_holds_everywhere(walk):
+    motion = build_motion({3: walk[3]}, 8, FPS)
+    assert np.allclose(motion.world_joints, walk[3], atol=1e-9)
+    assert motion.keyframes.tolist() == [i == 3 for i in range(8)]
+
+
+def test_root_track_fills_gaps(walk):
+    root = np.full((len(walk), 3), np.nan)
+    root[[0, 10]] = [[0.0, 1.0, 0.0], [1.0, 1.0, 2.0]]
+    motion = build_motion({0: walk[0]}, len(walk), FPS, root=root)
+    assert np.allclose(motion.root[5], [0.5, 1.0, 1.0]) and np.allclose(motion.root[20], root[10])
+    assert np.abs(motion.joints3d[:, body.JOINT_INDEX["pelvis"]]).max() < 1e-12
+
+
+def test_smoothing_keeps_keyframes_and_smooths(walk):
+    """Slerp turns at every keyframe; smoothing takes out those corners (less
+    squared acceleration) and so also comes closer to the true walk."""
+    keys = keyframes_of(walk, 4)
+    plain = build_motion(keys, len(walk), FPS)
+    smooth = build_motion(keys, len(walk), FPS, smooth=2.0)
+    assert np.abs(smooth.world_joints[list(keys)] - walk[list(keys)]).max() < 1e-9
+    assert np.ptp(segment_lengths(smooth.joints3d), axis=0).max() < 1e-9
+
+    def acceleration(m):
+        return np.sum(np.diff(m.joints3d, 2, axis=0) ** 2)
+
+    def error(m):
+        return np.linalg.norm(m.world_joints - walk, axis=-1)[:max(keys) + 1].mean()
+
+    assert acceleration(smooth) < 0.6 * acceleration(plain)
+    assert error(smooth) < 0.8 * error(plain)
+
+
+def test_degenerate_bones():
+    pose = walk_cycle(0.1, FPS)[0]
+    flat = pose.copy()
+    flat[body.JOINT_INDEX["wrist_l"]] = flat[body.JOINT_INDEX["elbow_l"]]      # zero length
+    up = pose.copy()   # an arm straight up: opposite its rest direction
+    shoulder = up[body.JOINT_INDEX["shoulder_r"]]
+    up[body.JOINT_INDEX["elbow_r"]] = shoulder + [0.0, 0.25, 0.0]
+    up[body.JOINT_INDEX["wrist_r"]] = shoulder + [0.0, 0.6, 0.0]
+    motion = build_motion({0: pose, 2: flat, 4: up, 6: np.zeros((16, 3))}, 7, FPS)
+    assert np.isfinite(motion.joints3d).all() and np.isfinite(motion.rotations).all()
+    assert np.abs(motion.world_joints[4] - up).max() < 1e-9
+
+
+@pytest.mark.parametrize("keys, n, fps, kwargs", [
+    ({}, 5, FPS, {}),
+    ({7: np.zeros((16, 3))}, 5, FPS, {}),
+    ({0: np.zeros((15, 3))}, 5, FPS, {}),
+    ({0: np.full((16, 3), np.nan)}, 5, FPS, {}),
+    ({0: np.zeros((16, 3))}, 5, 0.0, {}),
+    ({0: np.zeros((16, 3))}, 5, FPS, {"root": np.zeros((4, 3))}),
+    ({0: np.zeros((16, 3))}, 5, FPS, {"smooth": -1.0}),
+])
+def test_bad_requests_are_refused(keys, n, fps, kwargs):
+    with pytest.raises(MocapError):
+        build_motion(keys, n, fps, **kwargs)
+
+
+def test_real_motion_capture():
+    """CMU walk at 30 fps: keyframes come back within the spread of the capture's
+    own segment lengths (its spine bends), every frame keeps constant bones."""
+    if not CMU_WALK.exists():
+        pytest.skip(f"{CMU_WALK} absent")
+    capture = read_bvh(CMU_WALK)
+    joints = contract_joints(capture)
+    joints = joints[resample_indices(len(joints), capture.frame_time, FPS, None, None)]
+    pelvis = joints[:, body.JOINT_INDEX["pelvis"]]
+    keys = keyframes_of(joints - pelvis[:, None], 3)
+    motion = build_motion(keys, len(joints), FPS, root=pelvis, smooth=1.0)
+    err = np.linalg.norm(motion.world_joints - joints, axis=-1)[list(keys)]
+    assert err.max() < 0.01
+    assert np.ptp(segment_lengths(motion.joints3d), axis=0).max() < 1e-9
