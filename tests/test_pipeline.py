@@ -14,7 +14,7 @@ from mocap.cli import main
 from mocap.export.motion_json import read_motion
 from mocap.metrics import side_matched_errors
 
-MAX_MEDIAN_ERROR = 0.05   # of the body height
+MAX_MEDIAN_ERROR = 0.035  # of the body height
 
 
 def percent_errors(motion: dict, truth) -> np.ndarray:

@@ -1,0 +1,93 @@
+"""The 2D fit: the similarity of Eq. 1-3, the searches of Algorithms 1-6, and whole
+fits against exact truth (the model's own masks; rendered real motion capture)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mocap.body import JOINTS, SEGMENT_INDEX, Pose2D, default_angles, forward_kinematics_2d
+from mocap.contour import find_angle, find_elbow_corner, lower_legs_cross
+from mocap.fit2d import FIT_SCALE, coarse_to_fine, fit_frame, two_link_angles
+from mocap.metrics import side_matched_errors
+from mocap.raster import draw_model, similarity, similarity_from_counts
+from mocap.session import body_heights, extract_silhouettes, fit_silhouettes
+from mocap.synth import render_motion
+from mocap.video import open_video, processing_scale
+
+CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
+
+
+def test_similarity_is_eq_3():
+    a = np.zeros((10, 10), np.uint8)
+    b = np.zeros((10, 10), np.uint8)
+    a[:, :6] = 1          # 60 silhouette pixels
+    b[:, 4:] = 1          # 60 model pixels, 20 shared, union 100
+    p, n = 40 / 100, 40 / 100
+    assert similarity(a, b) == pytest.approx(np.exp(-p - n) * (1 - p))
+    assert similarity(a, a) == pytest.approx(1.0)
+    assert similarity_from_counts(60, 0, 0) == 0.0
+
+
+def test_coarse_to_fine_finds_the_peak_and_keeps_a_flat_start():
+    values = np.maximum(0.0, 1.0 - np.abs(np.arange(101) - 63) / 6)   # between divisions
+    opening = list(range(0, 101, 5))
+    best = coarse_to_fine(lambda i: values[i], 101, opening + [40], values[opening + [40]], 40, 10)
+    assert best == 63
+    flat = np.zeros(101)
+    assert coarse_to_fine(lambda i: flat[i], 101, opening + [37], flat[opening + [37]], 37, 10) == 37
+
+
+def test_elbow_corner_and_line_angles():
+    upper = np.c_[np.zeros(10), np.arange(10.0)]                 # straight down
+    lower = np.c_[np.arange(1, 8.0), np.full(7, 9.0)]            # then to the right
+    arm = np.vstack([upper, lower])
+    assert find_elbow_corner(arm) in (8, 9, 10)
+    assert find_angle(upper, 0.0) == pytest.approx(-90.0)        # y down is -90 (270)
+    assert find_elbow_corner(upper) == -1
+
+
+def test_knee_crossing_reads_one_line_then_two():
+    assert lower_legs_cross([1, 1, 1, 2, 2, 2, 2, 2])
+    assert not lower_legs_cross([2, 2, 2, 2, 2])
+    assert not lower_legs_cross([1, 1, 1, 1])
+
+
+def test_two_link_angles_reach_the_point():
+    start, end = np.array([0.0, 0.0]), np.array([30.0, 20.0])
+    for upper, lower in two_link_angles(start, end, 25.0, 20.0):
+        elbow = start + 25 * np.array([np.cos(np.radians(upper)), -np.sin(np.radians(upper))])
+        tip = elbow + 20 * np.array([np.cos(np.radians(lower)), -np.sin(np.radians(lower))])
+        assert tip == pytest.approx(end, abs=1e-6)
+
+
+def test_fit_recovers_the_model_from_its_own_mask():
+    angle = default_angles()
+    for name, a in (("torso", 95), ("upper_leg_l", 250), ("lower_leg_l", 260), ("upper_leg_r", 290),
+                    ("lower_leg_r", 300), ("upper_arm_l", 240), ("lower_arm_l", 200),
+                    ("upper_arm_r", 300), ("lower_arm_r", 330)):
+        angle[SEGMENT_INDEX[name]] = a
+    truth = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.8)
+    fit = fit_frame(draw_model(truth, (160, 200)) * 255, FIT_SCALE)
+    err = np.linalg.norm(fit.joints - forward_kinematics_2d(truth), axis=1) / (175 * FIT_SCALE)
+    assert np.median(err) < 0.02, dict(zip(JOINTS, err.round(3)))
+    assert fit.score > 0.8
+
+
+def test_fit_on_rendered_motion_capture(tmp_path):
+    """Real motion (its own proportions, not the model's), side view: median 2D error
+    within 3.5% of the body height on every frame's result."""
+    if not CMU_WALK.is_file():
+        pytest.skip(f"{CMU_WALK} is absent")
+    video = tmp_path / "walk.avi"
+    truth = render_motion(CMU_WALK, video, view="side", size=(480, 360), seconds=1.5)
+    info = open_video(video)
+    scale = processing_scale(info)
+    sils = extract_silhouettes(info, scale)
+    fits = fit_silhouettes(sils, body_heights(sils, info.fps), scale, info.fps)
+    assert all(f.joints2d is not None for f in fits)
+    pred = np.array([f.joints2d for f in fits])
+    err = side_matched_errors(pred, truth.joints2d) / truth.body_height_px
+    assert np.median(err) < 0.035, f"median {np.median(err):.3f}"
