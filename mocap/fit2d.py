@@ -38,8 +38,8 @@ RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs diffe
 TRACK_HALF_RANGE = 20.0          # degrees searched around a previous estimate
 THIGH_TRACK_HALF_RANGE = 40.0    # the same for thighs, which swing fastest
 ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
-RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
 ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
+RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
 SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
 FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
@@ -151,27 +151,19 @@ def search(pose: Pose2D, job: Search) -> Pose2D:
     return job.knob.apply(pose, float(values[best]))
 
 
-def angle_search(canvas: Canvas, segments, drawn, lo: float, hi: float, center: float) -> Search:
+def search_angle(canvas: Canvas, pose: Pose2D, segments, drawn, lo: float, hi: float,
+                 center: float) -> Pose2D:
     """Algorithm 1: rotate segment(s) about the image normal to maximise S (to 1 degree)."""
-    return Search(canvas, Knob("angle", tuple(segments)), tuple(drawn), lo, hi, center,
-                  1.0, ANGLE_SWEEP_STEP)
+    return search(pose, Search(canvas, Knob("angle", tuple(segments)), tuple(drawn), lo, hi,
+                               center, 1.0, ANGLE_SWEEP_STEP))
 
 
-def ratio_search(canvas: Canvas, pose: Pose2D, segment: str, drawn) -> Search:
+def search_ratio(canvas: Canvas, pose: Pose2D, segment: str, drawn) -> Pose2D:
     """Algorithm 6: the foreshortening ratio maximising S (to one pixel of length)."""
     i = SEGMENT_INDEX[segment]
-    return Search(canvas, Knob("ratio", (segment,)), tuple(drawn), *RATIO_RANGE, pose.ratio[i],
-                  1.0 / max(LENGTH[i] * pose.scale, 1.0), RATIO_SWEEP_STEP)
-
-
-def search_angle(canvas, pose, segments, drawn, lo, hi, center) -> Pose2D:
-    """One Algorithm 1 search (``angle_search``), applied to pose."""
-    return search(pose, angle_search(canvas, segments, drawn, lo, hi, center))
-
-
-def search_ratio(canvas, pose, segment, drawn) -> Pose2D:
-    """One Algorithm 6 search (``ratio_search``), applied to pose."""
-    return search(pose, ratio_search(canvas, pose, segment, drawn))
+    return search(pose, Search(canvas, Knob("ratio", (segment,)), tuple(drawn), *RATIO_RANGE,
+                               pose.ratio[i], 1.0 / max(LENGTH[i] * pose.scale, 1.0),
+                               RATIO_SWEEP_STEP))
 
 
 def refine_limb(pose: Pose2D, limb: tuple[str, str], canvas: Canvas, half_range: float) -> Pose2D:
