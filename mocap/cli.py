@@ -10,17 +10,28 @@ from mocap.errors import MocapError
 
 
 def _add_fit(sub) -> None:
-    p = sub.add_parser("fit", help="fit the body model to every frame of a video")
+    p = sub.add_parser("fit", help="fit the body model to every frame of a video and lift it to 3D")
     p.add_argument("video", help="input video (any container/codec OpenCV reads)")
+    p.add_argument("--annotations", metavar="FILE",
+                   help="mocap-annotations JSON: orientation, foreshortening, joint overrides, keyframes")
     p.add_argument("--out", default=None, help="motion JSON to write (default: VIDEO.motion.json)")
+    p.add_argument("--bvh", metavar="FILE", help="also write the animation as BVH")
+    p.add_argument("--glb", metavar="FILE", help="also write the animated cylinder body as GLB")
+    p.add_argument("--csv", metavar="FILE", help="also write the joint positions as CSV")
+    p.add_argument("--smooth", type=float, default=0.0, metavar="SIGMA",
+                   help="Gaussian smoothing of the animation in frames, keyframes kept (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(run=_run_fit)
 
 
 def _run_fit(args) -> None:
     from mocap.session import fit_video_to_file
-    out = fit_video_to_file(args.video, args.out, progress=None if args.quiet else _progress)
-    print(f"wrote {out}")
+    if args.smooth < 0:
+        raise MocapError(f"--smooth must be 0 or more, got {args.smooth}")
+    written = fit_video_to_file(args.video, args.out, annotations=args.annotations, bvh=args.bvh,
+                                glb=args.glb, csv=args.csv, smooth=args.smooth,
+                                progress=None if args.quiet else _progress)
+    print("wrote " + ", ".join(str(p) for p in written))
 
 
 def _add_synth(sub) -> None:
@@ -33,6 +44,23 @@ def _add_sheet(sub) -> None:
     from mocap.contact import add_sheet_arguments
     p = sub.add_parser("sheet", help="contact sheet: frames beside their silhouettes and fitted skeletons")
     add_sheet_arguments(p)
+
+
+def _add_serve(sub) -> None:
+    p = sub.add_parser("serve", help="review and correct a video's fit in the browser, export the animation")
+    p.add_argument("video", nargs="?", default=None,
+                   help="input video (default: the bundled sample_videos/walk.mp4)")
+    p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080, the next free one if taken)")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
+
+    def run(args) -> None:
+        try:  # the app package, imported only here: mocap itself never needs viser
+            from app.main import main as serve
+        except ImportError as exc:
+            raise MocapError(f"mocap serve needs the app extra: pip install -e '.[app]' ({exc})") from None
+        serve(args.video, args.port, args.host, progress=_progress)
+
+    p.set_defaults(run=run)
 
 
 class _Bar:
@@ -79,6 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_fit(sub)
     _add_synth(sub)
     _add_sheet(sub)
+    _add_serve(sub)
     return parser
 
 

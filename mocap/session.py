@@ -1,10 +1,15 @@
-"""From a video file to a fitted 2D body on every frame: the pipeline the command
-line and the app share.
+"""From a video file to a 3D animation: the pipeline the command line and the app share.
 
 Two passes over the video, both streamed: silhouettes (section 3.2), kept as small
 bit-packed crops, then the 2D fit (section 3.3) on each crop normalised to the
 model's size. The body's height in pixels comes from the silhouettes' heights
 around each frame, so a performer who walks toward the camera keeps a right scale.
+
+Then ``Session`` owns the video's per-frame fits and the user's annotations: it
+resolves the lifting inputs (orientation, sides, overrides, signs: the user's over
+the first guess of ``mocap.orientation``), lifts the keyframes (section 3.4), and
+interpolates the other frames (``mocap.motion``). An edit of the annotations
+re-resolves the inputs (fast) and re-lifts only the frames whose inputs changed.
 """
 
 from __future__ import annotations
@@ -17,9 +22,15 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from mocap.body import MIRROR_JOINTS, Pose2D
+from mocap.annotations import Annotations, load_annotations
+from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, JOINTS, SEGMENT_NAMES, Pose2D
 from mocap.errors import MocapError
 from mocap.export.motion_json import write_motion
+from mocap.lift import (LENGTH, anatomical_joints, clip_lengths, known_sides, lift_pose, runs,
+                        track_sides)
+from mocap.motion import Motion, build_motion
+from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
+                               segment_vectors, yaws)
 from mocap.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
 from mocap.silhouette import estimate_background, extract_silhouette
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
@@ -32,6 +43,10 @@ MARGIN = 0.25                   # of the body height, around the silhouette's bo
 SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame
 SPREAD_WINDOW_S = 0.5           # half-width of that window, seconds
 MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a search centre
+# Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
+# fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
+# percentile would measure that scatter; clean 2D joints use lift.clip_lengths' 90th.
+FIT_LENGTH_PERCENTILE = 50.0
 
 
 @dataclass(frozen=True)
@@ -67,6 +82,7 @@ class FrameFit:
     joints2d: np.ndarray | None
     score: float | None
     fit: Fit2D | None = None
+    body_px: float | None = None    # video pixels of the model's 175-unit body height
 
 
 def extract_silhouettes(info: VideoInfo, scale: float,
@@ -134,7 +150,7 @@ def fit_silhouettes(silhouettes: list[Silhouette | None], heights: np.ndarray, s
             small, origin, step = normalise(sil, heights[index])
             fit = fit_frame(small, FIT_SCALE, prev, spreads[index])
             joints = (origin + (fit.joints + 0.5) * step - 0.5) / scale
-            fits.append(FrameFit(index, joints, fit.score, fit))
+            fits.append(FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale))
             prev = fit.pose if fit.score >= MIN_TRACK_SCORE else None
         if progress:
             progress(index + 1, len(silhouettes))
@@ -155,33 +171,198 @@ def fit_video(path: str | os.PathLike, progress: Progress | None = None) -> tupl
     return info, fit_silhouettes(silhouettes, heights, scale, info.fps, second)
 
 
-def anatomical(joints_image_side: np.ndarray) -> np.ndarray:
-    """Image-side joints to the performer's own sides, for a performer facing the
-    camera (their left on the image's right). The 3D stage decides from the
-    orientation; until then this is the default reading."""
-    return joints_image_side[MIRROR_JOINTS]
-
-
-def motion_frames(fits: list[FrameFit]) -> list[dict]:
-    """Motion-file entries: joints2d and score where a person was fitted, else person: false."""
-    frames = []
-    for f in fits:
-        if f.joints2d is None:
-            frames.append({"index": f.index, "keyframe": False, "person": False})
-        else:
-            frames.append({"index": f.index, "keyframe": True, "person": True, "score": f.score,
-                           "joints2d": anatomical(f.joints2d)})
-    return frames
-
-
 def video_dict(info: VideoInfo) -> dict:
     return {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
             "frame_count": info.frame_count}
 
 
+# -- lifting inputs: the user's annotations over the first guess ----------------------
+
+@dataclass(frozen=True, eq=False)
+class Inputs:
+    """Everything the lifting needs per frame. Frames without a person have
+    orientation None and NaN joints."""
+
+    orientation: list[str | None]
+    yaw: np.ndarray            # (F,) degrees, see lift.facing_yaw
+    swap: np.ndarray           # (F, 2) bool: image-left arms, legs are the right ones
+    joints2d: np.ndarray       # (F, 16, 2) anatomical pixels, joint overrides applied
+    px_per_unit: np.ndarray    # (F,) pixels per model unit (body height / 175)
+    signs: np.ndarray          # (F, 10) +1 toward, -1 away
+    lengths: np.ndarray        # (10,) segment lengths in model units
+
+    def key(self, frame: int) -> tuple:
+        """What a frame's lifted pose depends on (a cache key)."""
+        return (self.yaw[frame], self.px_per_unit[frame], self.joints2d[frame].tobytes(),
+                self.signs[frame].tobytes(), self.lengths.tobytes())
+
+    def lift(self, frame: int) -> np.ndarray:
+        """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
+        return lift_pose(self.joints2d[frame], self.px_per_unit[frame], self.yaw[frame],
+                         self.signs[frame], self.lengths)
+
+
+def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Image-side joints (F, 16, 2), body heights (F,) and torso spreads (F,) of the
+    fits, NaN where nobody was found."""
+    nan = np.full((len(JOINTS), 2), np.nan)
+    joints = np.array([nan if f.joints2d is None else f.joints2d for f in fits], float)
+    body_px = np.array([np.nan if f.body_px is None else f.body_px for f in fits], float)
+    spread = np.array([np.nan if f.fit is None else f.fit.pose.spread for f in fits], float)
+    return joints.reshape(len(fits), len(JOINTS), 2), body_px, spread
+
+
+def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
+                   annotations: Annotations, lengths: np.ndarray | None = None) -> Inputs:
+    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one;
+    the sides from it (profiles followed through time, joint overrides deciding); the
+    overrides put in; segment lengths from the clip (lift.clip_lengths); the signs
+    guessed with the user's held signs as constraints (orientation.held_user_signs)."""
+    n = len(joints_image)
+    person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
+    guessed = guess_orientations(joints_image, body_px, spread, fps)
+    said = annotations.orientations(n)
+    orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
+    overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
+    facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
+    swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x)
+    joints = anatomical_joints(joints_image, swap)
+    for i, points in overrides.items():
+        for joint, xy in points.items():
+            joints[i, JOINT_INDEX[joint]] = xy
+    ppu = body_px / BODY_HEIGHT
+    if lengths is None:
+        lengths = (clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE)
+                   if person.any() else LENGTH.copy())
+    # signs are judged on the longer 90th-percentile lengths: where the fit's noise
+    # makes a segment look unforeshortened they still keep the two depths apart
+    judged = clip_lengths(joints[person], ppu[person]) if person.any() else lengths
+    yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
+    signs = np.ones((n, len(SEGMENT_NAMES)), int)
+    values, since = annotations.held_signs(n)
+    for r in runs(person):
+        _, depth = segment_vectors(joints[r], ppu[r], lengths)
+        fixed = held_user_signs(values[r], since[r] - r.start, depth <= NEGLIGIBLE * lengths)
+        signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed, fps)
+    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
+
+
+def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """(F, 3) pelvis trajectory in metres (NaN where nobody is): x from the image
+    centre, y above the clip's ground (its lowest ankles), z = 0 (orthographic
+    projection says nothing about distance)."""
+    per_m = px_per_unit * BODY_HEIGHT / BODY_HEIGHT_M
+    pelvis = joints2d[:, JOINT_INDEX["pelvis"]]
+    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]], 1]
+    ground = np.nanpercentile(ankles, 98) if np.isfinite(ankles).any() else size[1]
+    return np.stack([(pelvis[:, 0] - size[0] / 2) / per_m, (ground - pelvis[:, 1]) / per_m,
+                     np.zeros(len(pelvis))], axis=-1)
+
+
+# -- the session ----------------------------------------------------------------------
+
+class Session:
+    """A video's per-frame 2D fits and the user's annotations; lifts on demand.
+
+    ``annotate`` replaces the annotations (already checked; see
+    mocap.annotations); the lifting inputs are re-resolved and only frames whose
+    inputs changed are lifted again.
+    """
+
+    def __init__(self, info: VideoInfo, fits: list[FrameFit],
+                 annotations: Annotations | None = None, smooth: float = 0.0):
+        self.info, self.fits, self.smooth = info, fits, smooth
+        self._arrays = fit_arrays(fits)
+        self._annotations = annotations or Annotations()
+        self._inputs: Inputs | None = None
+        self._poses: dict[int, tuple[tuple, np.ndarray]] = {}
+
+    @classmethod
+    def from_video(cls, video: str | os.PathLike, annotations: str | os.PathLike | None = None, *,
+                   smooth: float = 0.0, progress: Progress | None = None) -> "Session":
+        """Fit a video; annotations (a file) are checked before the fit starts."""
+        info = open_video(video)
+        notes = load_annotations(annotations, info.frame_count) if annotations else None
+        info, fits = fit_video(video, progress)
+        return cls(info, fits, notes, smooth)
+
+    @property
+    def annotations(self) -> Annotations:
+        return self._annotations
+
+    def annotate(self, annotations: Annotations) -> None:
+        """Take new annotations; lifting inputs are resolved again when next needed."""
+        self._annotations, self._inputs = annotations, None
+
+    @property
+    def inputs(self) -> Inputs:
+        if self._inputs is None:
+            joints, body_px, spread = self._arrays
+            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations)
+        return self._inputs
+
+    def pose3d(self, frame: int) -> np.ndarray | None:
+        """(16, 3) lifted joints of a frame (metres, contract frame), None without a person;
+        cached until the frame's inputs change."""
+        if self.fits[frame].joints2d is None:
+            return None
+        key = self.inputs.key(frame)
+        cached = self._poses.get(frame)
+        if cached is None or cached[0] != key:
+            cached = self._poses[frame] = (key, self.inputs.lift(frame))
+        return cached[1]
+
+    def keyframes(self) -> list[int]:
+        """The annotations' keyframes (default every frame) where a person was found."""
+        return [k for k in self._annotations.keyframe_indices(len(self.fits))
+                if self.fits[k].joints2d is not None]
+
+    def motion(self) -> Motion:
+        """Keyframes lifted, the frames between interpolated (mocap.motion)."""
+        keys = self.keyframes()
+        if not keys:
+            raise MocapError(f"{self.info.path}: no keyframe shows a person, nothing to lift")
+        size = (self.info.width, self.info.height)
+        root = root_track(self.inputs.joints2d, self.inputs.px_per_unit, size)
+        return build_motion({k: self.pose3d(k) for k in keys}, len(self.fits), self.info.fps,
+                            root=root, smooth=self.smooth)
+
+    def motion_frames(self, motion: Motion) -> list[dict]:
+        """Motion-file entries (CONTRACT.md). A frame without a person stays
+        ``person: false``; it gets interpolated joints3d when it lies between keyframes."""
+        keys = np.flatnonzero(motion.keyframes)
+        frames = []
+        for f in self.fits:
+            entry: dict = {"index": f.index, "keyframe": bool(motion.keyframes[f.index]),
+                           "person": f.joints2d is not None}
+            if f.joints2d is not None:
+                if entry["keyframe"]:
+                    entry["score"] = f.score
+                entry["orientation"] = self.inputs.orientation[f.index]
+                entry["joints2d"] = self.inputs.joints2d[f.index]
+            if f.joints2d is not None or keys[0] < f.index < keys[-1]:
+                entry["joints3d"] = motion.joints3d[f.index]
+            frames.append(entry)
+        return frames
+
+    def write(self, out: str | os.PathLike, *, bvh: str | os.PathLike | None = None,
+              glb: str | os.PathLike | None = None, csv: str | os.PathLike | None = None) -> list[Path]:
+        """Write the motion file and the exports asked for; returns the paths written."""
+        from mocap.export.bvh import write_bvh
+        from mocap.export.csv import write_csv
+        from mocap.export.glb import write_glb
+        motion = self.motion()
+        written = [write_motion(out, video_dict(self.info), self.motion_frames(motion))]
+        for path, writer in ((bvh, write_bvh), (glb, write_glb), (csv, write_csv)):
+            if path is not None:
+                written.append(writer(path, motion))
+        return written
+
+
 def fit_video_to_file(video: str | os.PathLike, out: str | os.PathLike | None, *,
-                      progress: Progress | None = None) -> Path:
-    """`mocap fit`: fit every frame and write the motion file."""
-    info, fits = fit_video(video, progress)
+                      annotations: str | os.PathLike | None = None, bvh=None, glb=None, csv=None,
+                      smooth: float = 0.0, progress: Progress | None = None) -> list[Path]:
+    """`mocap fit`: fit, lift, interpolate and write the motion file and exports."""
+    session = Session.from_video(video, annotations, smooth=smooth, progress=progress)
     out = Path(out) if out else Path(video).with_suffix(".motion.json")
-    return write_motion(out, video_dict(info), motion_frames(fits))
+    return session.write(out, bvh=bvh, glb=glb, csv=csv)

@@ -1,0 +1,220 @@
+"""3D lifting (section 3.4) on videos rendered from real motion capture, exact truth.
+
+For walk, run and jumps from ../shared/data/bvh, each seen from the side and in
+three-quarter view (640x480, 30 fps, orthographic), it prints:
+
+  (a) lifting alone: the TRUE 2D joints, the true orientation, signs and torso
+      foreshortening, segment lengths from the clip -> PA-MPJPE (mm);
+  (b) the whole pipeline (silhouettes, 2D fit, lifting, interpolation) with an
+      annotation file written from the truth (orientation changes, every sign on
+      every frame, the left wrist and ankle on the first profile frame) ->
+      PA-MPJPE; beside it the floor the 2D fit allows: its 2D joints (with our
+      sides) with the TRUE depths;
+  (c) no annotations: how often the automatic signs are right on segments whose
+      foreshortening is not negligible (|dZ| > 0.25 length), automatic signs on the
+      true 2D joints, the orientation, and the user inputs still needed (a simulated
+      user who goes through the clip and corrects the first wrong frame each time)
+      beside Taylor's (14 clicks per keyframe, one keyframe in 5 frames, plus
+      every sign change) and the paper's (sign changes + orientation; 12-21% of
+      Taylor's).
+
+    python benchmarks/bench_lift.py [--seconds 6]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mocap.annotations import Annotations, annotations_for_poses
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_NAMES
+from mocap.lift import (clip_lengths, depth_fractions, facing_yaw, image_to_model, lift_pose,
+                        orientation_of_yaw, signs_of, yaw_of, UNIT_M)
+from mocap.metrics import pa_mpjpe
+from mocap.orientation import NEGLIGIBLE, guess_signs
+from mocap.session import Session, fit_video
+from mocap.synth import render_motion
+
+BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
+CLIPS = (("walk", "cmu_walk.bvh"), ("walk", "walk01.bvh"), ("run", "cmu_run.bvh"),
+         ("jumps", "cmu_01_01_jumps.bvh"))
+VIEWS = ("side", "three-quarter")
+TAYLOR_CLICKS, TAYLOR_KEY_EVERY = 14, 5
+LIMBS = {"arms": ("elbow", "wrist"), "legs": ("knee", "ankle")}
+
+
+def truth_of(truth) -> dict:
+    """Per-frame true orientation, yaw, signs and non-negligible mask."""
+    yaw = np.array([yaw_of(p) for p in truth.joints3d])
+    return {"yaw": yaw, "orientation": [orientation_of_yaw(y) for y in yaw],
+            "signs": np.array([signs_of(p) for p in truth.joints3d]),
+            "visible": np.array([depth_fractions(p) for p in truth.joints3d]) > NEGLIGIBLE}
+
+
+def lift_true_2d(truth, t: dict) -> float:
+    """(a) PA-MPJPE of lifting the true 2D joints with the true inputs."""
+    n = len(truth.joints2d)
+    ppu = np.full(n, truth.body_height_px / BODY_HEIGHT)
+    lengths = clip_lengths(truth.joints2d, ppu)
+    spread = np.abs(np.cos(np.radians(t["yaw"])))
+    yaw = [facing_yaw(o, s) for o, s in zip(t["orientation"], spread)]
+    pred = np.array([lift_pose(truth.joints2d[i], ppu[i], yaw[i], t["signs"][i], lengths) for i in range(n)])
+    return pa_mpjpe(pred, truth.joints3d)
+
+
+def auto_signs_true_2d(truth, t: dict) -> float:
+    """(c) automatic signs from the true 2D joints and true orientation."""
+    n = len(truth.joints2d)
+    ppu = np.full(n, truth.body_height_px / BODY_HEIGHT)
+    spread = np.abs(np.cos(np.radians(t["yaw"])))
+    yaw = np.array([facing_yaw(o, s) for o, s in zip(t["orientation"], spread)])
+    signs = guess_signs(truth.joints2d, ppu, yaw, clip_lengths(truth.joints2d, ppu))
+    return float((signs == t["signs"])[t["visible"]].mean())
+
+
+def floor_2d(session: Session, truth) -> float:
+    """PA-MPJPE of the fitted 2D joints (our sides) with the true depths."""
+    inputs = session.inputs
+    xy = np.stack([image_to_model(j, p) for j, p in zip(inputs.joints2d, inputs.px_per_unit)]) * UNIT_M
+    return pa_mpjpe(np.concatenate([xy, truth.joints3d[..., 2:]], axis=-1), truth.joints3d)
+
+
+def wrong_sides(session: Session, truth, frame: int) -> list[str]:
+    """Limb pairs whose fitted 2D limbs are clearly given the wrong sides on a frame."""
+    out = []
+    got, want = session.inputs.joints2d[frame], truth.joints2d[frame]
+    for pair, names in LIMBS.items():
+        left = [JOINT_INDEX[f"{n}_l"] for n in names]
+        right = [JOINT_INDEX[f"{n}_r"] for n in names]
+        keep = np.linalg.norm(got[left] - want[left], axis=-1).sum() + np.linalg.norm(got[right] - want[right], axis=-1).sum()
+        swap = np.linalg.norm(got[left] - want[right], axis=-1).sum() + np.linalg.norm(got[right] - want[left], axis=-1).sum()
+        if swap < 0.7 * keep:
+            out.append(pair)
+    return out
+
+
+def first_mistake(session: Session, truth, t: dict, sides_fixed: set[int]) -> tuple[int, dict] | None:
+    """The earliest frame with a wrong orientation, side or sign, and what is wrong
+    (sides once per frame: an override that cannot mend a bad 2D fit is not repeated)."""
+    inputs = session.inputs
+    wrong_sign = (inputs.signs != t["signs"]) & t["visible"]
+    for i in range(len(truth.joints2d)):
+        if inputs.orientation[i] != t["orientation"][i]:
+            return i, {"orientation": t["orientation"][i]}
+        pairs = [] if i in sides_fixed else wrong_sides(session, truth, i)
+        if pairs:
+            return i, {"sides": pairs}
+        if wrong_sign[i].any():
+            return i, {"signs": np.flatnonzero(wrong_sign[i]).tolist()}
+    return None
+
+
+def simulate_user(session: Session, truth, t: dict, cap: int = 400) -> dict:
+    """Inputs a user needs: from no annotations, correct the first wrong frame (its
+    orientation, else the sides by one joint override per limb pair, else every
+    wrong sign) until nothing is wrong."""
+    notes, counts = Annotations(), {"orientation": 0, "sides": 0, "signs": 0}
+    sides_fixed: set[int] = set()
+    for _ in range(cap):
+        session.annotate(notes)
+        found = first_mistake(session, truth, t, sides_fixed)
+        if found is None:
+            break
+        i, what = found
+        if "sides" in what:
+            sides_fixed.add(i)
+        if "orientation" in what:
+            notes = notes.with_orientation(i, what["orientation"])
+            counts["orientation"] += 1
+        for pair in what.get("sides", []):
+            joint = f"{LIMBS[pair][1]}_l"
+            notes = notes.with_joint(i, joint, tuple(truth.joints2d[i, JOINT_INDEX[joint]]))
+            counts["sides"] += 1
+        for k in what.get("signs", []):
+            notes = notes.with_foreshortening(i, SEGMENT_NAMES[k], "toward" if t["signs"][i, k] > 0 else "away")
+            counts["signs"] += 1
+    return counts
+
+
+def sign_changes(t: dict) -> int:
+    """Sign inputs without any guess: each segment's first non-negligible sign and
+    every later change (the paper's and Taylor's foreshortening clicks)."""
+    total = 0
+    for k in range(len(SEGMENT_NAMES)):
+        seen = t["signs"][t["visible"][:, k], k]
+        total += int(len(seen) > 0) + int(np.count_nonzero(np.diff(seen)))
+    return total
+
+
+def run_clip(bvh: Path, view: str, seconds: float, folder: Path) -> dict:
+    video = folder / f"{bvh.stem}_{view}.mp4"
+    truth = render_motion(bvh, video, view=view, seconds=seconds, size=(640, 480), fps=30.0)
+    t = truth_of(truth)
+    info, fits = fit_video(video)
+    row = {"frames": len(fits), "a": lift_true_2d(truth, t), "c_true2d": auto_signs_true_2d(truth, t)}
+    session = Session(info, fits, annotations_for_poses(truth.joints3d, truth.joints2d))
+    row["b"] = pa_mpjpe(session.motion().joints3d, truth.joints3d)
+    row["floor"] = floor_2d(session, truth)
+    session.annotate(Annotations())
+    inputs = session.inputs
+    row["c_signs"] = float((inputs.signs == t["signs"])[t["visible"]].mean())
+    row["c_orient"] = float(np.mean([a == b for a, b in zip(inputs.orientation, t["orientation"])]))
+    row["c_visible"] = int(t["visible"].sum())
+    row["inputs"] = simulate_user(session, truth, t)
+    row["changes"] = sign_changes(t)
+    row["taylor"] = TAYLOR_CLICKS * int(np.ceil(len(fits) / TAYLOR_KEY_EVERY)) + row["changes"]
+    row["paper"] = row["changes"] + 1 + sum(a != b for a, b in zip(t["orientation"], t["orientation"][1:]))
+    return row
+
+
+def print_table(rows: list[tuple[str, dict]]) -> None:
+    print("PA-MPJPE in mm (body height 1.75 m); signs on segments with |dZ| > 0.25 length\n")
+    print(f"{'clip':22s} {'frames':>6s} {'(a) true2D':>10s} {'(b) annot':>9s} {'2D floor':>8s} "
+          f"{'(c) signs':>9s} {'true2D':>6s} {'orient':>6s} {'n':>5s}")
+    for name, r in rows:
+        print(f"{name:22s} {r['frames']:6d} {1000 * r['a']:10.1f} {1000 * r['b']:9.1f} {1000 * r['floor']:8.1f} "
+              f"{100 * r['c_signs']:8.1f}% {100 * r['c_true2d']:5.1f}% {100 * r['c_orient']:5.0f}% {r['c_visible']:5d}")
+    mean = {k: np.mean([r[k] for _, r in rows]) for k in ("a", "b", "floor", "c_signs", "c_true2d", "c_orient")}
+    print(f"{'mean':22s} {'':6s} {1000 * mean['a']:10.1f} {1000 * mean['b']:9.1f} {1000 * mean['floor']:8.1f} "
+          f"{100 * mean['c_signs']:8.1f}% {100 * mean['c_true2d']:5.1f}% {100 * mean['c_orient']:5.0f}%")
+    n = sum(r["c_visible"] for _, r in rows)
+    pooled = {k: sum(r[k] * r["c_visible"] for _, r in rows) / n for k in ("c_signs", "c_true2d")}
+    print(f"{'all segments pooled':22s} {'':6s} {'':10s} {'':9s} {'':8s} "
+          f"{100 * pooled['c_signs']:8.1f}% {100 * pooled['c_true2d']:5.1f}% {'':6s} {n:5d}")
+    print("\nUser inputs still needed without annotations (simulated user) vs the paper's accounting")
+    print(f"{'clip':22s} {'orient':>6s} {'sides':>5s} {'signs':>5s} {'ours':>5s} {'paper':>5s} "
+          f"{'Taylor':>6s} {'ours/Taylor':>11s} {'paper/Taylor':>12s}")
+    for name, r in rows:
+        ours = sum(r["inputs"].values())
+        print(f"{name:22s} {r['inputs']['orientation']:6d} {r['inputs']['sides']:5d} {r['inputs']['signs']:5d} "
+              f"{ours:5d} {r['paper']:5d} {r['taylor']:6d} {100 * ours / r['taylor']:10.1f}% "
+              f"{100 * r['paper'] / r['taylor']:11.1f}%")
+    print("paper (section 4): walking 60/290 = 21%, dancing 59/506 = 12%")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seconds", type=float, default=6.0, help="longest clip, seconds (default 6)")
+    args = parser.parse_args()
+    missing = [name for _, name in CLIPS if not (BVH / name).is_file()]
+    if missing:
+        print(f"skipped: {', '.join(missing)} absent from {BVH}")
+        return 0
+    rows, start = [], time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        for kind, name in CLIPS:
+            for view in VIEWS:
+                rows.append((f"{kind} {Path(name).stem[:8]} {view[:5]}",
+                             run_clip(BVH / name, view, args.seconds, Path(tmp))))
+    print_table(rows)
+    print(f"\n{len(rows)} clips in {time.perf_counter() - start:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,297 @@
+"""What the user said: the `mocap-annotations` file (CONTRACT.md) — validation that
+names the bad place, sticky resolution, atomic saving.
+
+Orientation and foreshortening are sticky: a frame's entry holds from that frame on
+until a later entry changes it. Joint overrides hold for their own frame only.
+``keyframes`` is optional (None: every frame). How a held sign meets the automatic
+first guess is decided in ``mocap.orientation.resolve_inputs``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
+from mocap.errors import MocapError
+from mocap.fileio import atomic_write_json
+from mocap.lift import FORESHORTENING, ORIENTATIONS
+
+FORMAT, VERSION = "mocap-annotations", 1
+_FRAME_KEY = re.compile(r"0|[1-9][0-9]*")
+_TOP_KEYS = ("format", "version", "keyframes", "frames")
+_FRAME_KEYS = ("orientation", "foreshortening", "joints2d")
+
+
+@dataclass(frozen=True)
+class FrameNote:
+    """The user's inputs on one frame; empty fields say nothing."""
+
+    orientation: str | None = None
+    foreshortening: dict[str, str] = field(default_factory=dict)     # segment -> toward/away
+    joints2d: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    def is_empty(self) -> bool:
+        return self.orientation is None and not self.foreshortening and not self.joints2d
+
+    def to_dict(self) -> dict:
+        out: dict = {}
+        if self.orientation is not None:
+            out["orientation"] = self.orientation
+        if self.foreshortening:
+            out["foreshortening"] = dict(self.foreshortening)
+        if self.joints2d:
+            out["joints2d"] = {j: [float(x), float(y)] for j, (x, y) in self.joints2d.items()}
+        return out
+
+
+@dataclass(frozen=True)
+class Annotations:
+    """All the user's inputs: frame index -> FrameNote, and the keyframes (None: all)."""
+
+    frames: dict[int, FrameNote] = field(default_factory=dict)
+    keyframes: tuple[int, ...] | None = None
+
+    # -- editing (each returns a new, checked Annotations) --------------------------
+
+    def _with_note(self, frame: int, **changes) -> "Annotations":
+        note = replace(self.frames.get(frame, FrameNote()), **changes)
+        frames = {k: v for k, v in self.frames.items() if k != frame}
+        if not note.is_empty():
+            frames[frame] = note
+        return replace(self, frames=dict(sorted(frames.items())))
+
+    def with_orientation(self, frame: int, orientation: str | None) -> "Annotations":
+        """Set (or with None clear) the orientation entry of a frame."""
+        if orientation is not None and orientation not in ORIENTATIONS:
+            raise MocapError(f"unknown orientation {orientation!r} (choose {', '.join(ORIENTATIONS)})")
+        return self._with_note(frame, orientation=orientation)
+
+    def with_foreshortening(self, frame: int, segment: str, value: str | None) -> "Annotations":
+        """Set (or with None clear) one segment's foreshortening entry on a frame."""
+        if segment not in SEGMENT_INDEX:
+            raise MocapError(f"unknown segment {segment!r}")
+        if value is not None and value not in FORESHORTENING:
+            raise MocapError(f"foreshortening must be 'toward' or 'away', not {value!r}")
+        signs = {**self.frames.get(frame, FrameNote()).foreshortening, segment: value}
+        return self._with_note(frame, foreshortening={k: v for k, v in signs.items() if v is not None})
+
+    def with_joint(self, frame: int, joint: str, xy: tuple[float, float] | None) -> "Annotations":
+        """Set (or with None clear) a joint override on a frame."""
+        if joint not in JOINTS:
+            raise MocapError(f"unknown joint {joint!r}")
+        if xy is not None and not (len(xy) == 2 and all(math.isfinite(float(v)) for v in xy)):
+            raise MocapError(f"joint override must be two finite numbers, not {xy!r}")
+        joints = {**self.frames.get(frame, FrameNote()).joints2d,
+                  joint: None if xy is None else (float(xy[0]), float(xy[1]))}
+        return self._with_note(frame, joints2d={k: v for k, v in joints.items() if v is not None})
+
+    # -- sticky resolution ----------------------------------------------------------
+
+    def orientations(self, n_frames: int) -> list[str | None]:
+        """Each frame's orientation held from the latest entry at or before it."""
+        out: list[str | None] = [None] * n_frames
+        for frame, note in self.frames.items():
+            if note.orientation is not None and frame < n_frames:
+                out[frame:] = [note.orientation] * (n_frames - frame)
+        return out
+
+    def held_signs(self, n_frames: int) -> tuple[np.ndarray, np.ndarray]:
+        """(values, since), both (F, 10): each segment's latest sign at or before each
+        frame (+1 toward, -1 away, 0 none) and the frame of that entry (-1 none)."""
+        values = np.zeros((n_frames, len(SEGMENT_NAMES)), np.int8)
+        since = np.full((n_frames, len(SEGMENT_NAMES)), -1)
+        for frame, note in self.frames.items():
+            for segment, value in note.foreshortening.items():
+                if frame < n_frames:
+                    k = SEGMENT_INDEX[segment]
+                    values[frame:, k] = 1 if value == "toward" else -1
+                    since[frame:, k] = frame
+        return values, since
+
+    def overrides(self) -> dict[int, dict[str, tuple[float, float]]]:
+        """frame -> {joint: (x, y)} of the joint overrides (own frame only)."""
+        return {f: dict(n.joints2d) for f, n in self.frames.items() if n.joints2d}
+
+    def keyframe_indices(self, n_frames: int) -> list[int]:
+        """The keyframes, every frame when none were given."""
+        return list(range(n_frames)) if self.keyframes is None else [k for k in self.keyframes if k < n_frames]
+
+    def to_dict(self) -> dict:
+        out: dict = {"format": FORMAT, "version": VERSION}
+        if self.keyframes is not None:
+            out["keyframes"] = list(self.keyframes)
+        out["frames"] = {str(k): v.to_dict() for k, v in self.frames.items()}
+        return out
+
+
+# -- reading and checking -------------------------------------------------------------
+
+class _Bad(Exception):
+    """A problem at a place in the document (turned into one MocapError)."""
+
+    def __init__(self, place: str, problem: str):
+        super().__init__(f"{place}: {problem}" if place else problem)
+
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _unique_keys(pairs: list) -> dict:
+    keys = [k for k, _ in pairs]
+    if len(set(keys)) != len(keys):
+        dup = next(k for k in keys if keys.count(k) > 1)
+        raise ValueError(f"duplicate key {json.dumps(dup)}")
+    return dict(pairs)
+
+
+def _kind(value) -> str:
+    return {dict: "an object", list: "a list", str: "a string", bool: "true/false",
+            type(None): "null"}.get(type(value), "a number")
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _expect(value, kind: type, place: str, what: str):
+    if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
+        raise _Bad(place, f"expected {what}, got {_kind(value)}")
+    return value
+
+
+def _frame_index(key: str, frame_count: int | None, place: str) -> int:
+    if not _FRAME_KEY.fullmatch(key):
+        raise _Bad(place, f"frame key {json.dumps(key)} is not a frame index (0, 1, 2, ...)")
+    index = int(key)
+    if frame_count is not None and index >= frame_count:
+        raise _Bad(place, f"frame {index} is out of range (the video has {frame_count} frames)")
+    return index
+
+
+def _keyframes(value, frame_count: int | None) -> tuple[int, ...]:
+    _expect(value, list, "keyframes", "a list of frame indices")
+    if not value:
+        raise _Bad("keyframes", "empty list (leave it out for every frame)")
+    for i, k in enumerate(value):
+        if not isinstance(k, int) or isinstance(k, bool) or k < 0:
+            raise _Bad(f"keyframes[{i}]", f"expected a frame index, got {json.dumps(k)[:40]}")
+        if frame_count is not None and k >= frame_count:
+            raise _Bad(f"keyframes[{i}]", f"frame {k} is out of range (the video has {frame_count} frames)")
+    return tuple(sorted(set(value)))
+
+
+def _note(value, place: str) -> FrameNote:
+    _expect(value, dict, place, "an object")
+    for key in value:
+        if key not in _FRAME_KEYS:
+            raise _Bad(place, f"unknown key {json.dumps(key)} (expected {', '.join(_FRAME_KEYS)})")
+    orientation = value.get("orientation")
+    if orientation is not None and orientation not in ORIENTATIONS:
+        raise _Bad(f"{place}.orientation", f"unknown orientation {json.dumps(orientation)[:40]} "
+                   f"(choose {', '.join(ORIENTATIONS)})")
+    signs = _expect(value.get("foreshortening", {}), dict, f"{place}.foreshortening", "an object")
+    for segment, sign in signs.items():
+        if segment not in SEGMENT_INDEX:
+            raise _Bad(f"{place}.foreshortening", f"unknown segment {json.dumps(segment)[:40]}")
+        if sign not in FORESHORTENING:
+            raise _Bad(f"{place}.foreshortening.{segment}",
+                       f"expected \"toward\" or \"away\", got {json.dumps(sign)[:40]}")
+    joints = _expect(value.get("joints2d", {}), dict, f"{place}.joints2d", "an object")
+    points = {}
+    for joint, xy in joints.items():
+        if joint not in JOINTS:
+            raise _Bad(f"{place}.joints2d", f"unknown joint {json.dumps(joint)[:40]}")
+        if not (isinstance(xy, list) and len(xy) == 2 and all(_is_number(v) and math.isfinite(v) for v in xy)):
+            raise _Bad(f"{place}.joints2d.{joint}", f"expected [x, y] in pixels, got {json.dumps(xy)[:40]}")
+        points[joint] = (float(xy[0]), float(xy[1]))
+    return FrameNote(orientation, dict(signs), points)
+
+
+def parse_annotations(data, frame_count: int | None = None) -> Annotations:
+    """Check a decoded annotation document; raises _Bad naming the place."""
+    _expect(data, dict, "", "a JSON object")
+    for key in data:
+        if key not in _TOP_KEYS:
+            raise _Bad("", f"unknown key {json.dumps(key)[:40]} (expected {', '.join(_TOP_KEYS)})")
+    if data.get("format") != FORMAT:
+        raise _Bad("format", f"expected \"{FORMAT}\", got {json.dumps(data.get('format'))[:40]}")
+    version = data.get("version")
+    if not (isinstance(version, int) and not isinstance(version, bool) and version == VERSION):
+        raise _Bad("version", f"expected {VERSION}, got {json.dumps(version)[:40]}")
+    keyframes = _keyframes(data["keyframes"], frame_count) if "keyframes" in data else None
+    frames = _expect(data.get("frames", {}), dict, "frames", "an object")
+    notes = {}
+    for key, value in frames.items():
+        place = f"frames[{json.dumps(key)[:40]}]"
+        notes[_frame_index(key, frame_count, place)] = _note(value, place)
+    return Annotations({k: v for k, v in sorted(notes.items()) if not v.is_empty()}, keyframes)
+
+
+def annotations_from_text(text: str, frame_count: int | None = None,
+                          source: str = "annotations") -> Annotations:
+    """Decode and check annotation JSON; any problem is one MocapError naming the place."""
+    try:
+        data = json.loads(text, parse_constant=_no_constant, object_pairs_hook=_unique_keys)
+    except (ValueError, RecursionError) as exc:
+        raise MocapError(f"{source}: not valid JSON ({exc})") from None
+    try:
+        return parse_annotations(data, frame_count)
+    except _Bad as exc:
+        raise MocapError(f"{source}: {exc}") from None
+
+
+def load_annotations(path: str | os.PathLike, frame_count: int | None = None) -> Annotations:
+    """Read an annotation file, checked against the video's frame count."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise MocapError(f"{path}: no such annotation file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MocapError(f"{path}: cannot read annotations ({exc})") from None
+    return annotations_from_text(text, frame_count, str(path))
+
+
+def save_annotations(path: str | os.PathLike, annotations: Annotations) -> Path:
+    """Write the annotation file atomically (a crash never leaves half a file)."""
+    return atomic_write_json(path, annotations.to_dict())
+
+
+def annotations_for_poses(joints3d: np.ndarray, joints2d: np.ndarray | None = None) -> Annotations:
+    """What a user who knew the 3D poses (F, 16, 3; contract frame) would say: each
+    orientation change (lift.orientation_of_yaw) and every segment's sign on every
+    frame; with their 2D joints (F, 16, 2), also where the left wrist and ankle are,
+    once per profile stretch (on its frame within a second where the pair is widest
+    apart), since in a profile the image cannot tell the sides apart.
+    For benchmarks and tests against ground truth."""
+    from mocap.lift import orientation_of_yaw, signs_of, yaw_of
+    joints3d = np.asarray(joints3d, float)
+    names = [orientation_of_yaw(yaw_of(pose)) for pose in joints3d]
+    notes = Annotations()
+    for i, (pose, name) in enumerate(zip(joints3d, names)):
+        if i == 0 or name != names[i - 1]:
+            notes = notes.with_orientation(i, name)
+            if joints2d is not None and name in ("left", "right"):
+                notes = _side_anchors(notes, joints2d, i, names)
+        for segment, sign in zip(SEGMENT_NAMES, signs_of(pose)):
+            notes = notes.with_foreshortening(i, segment, FORESHORTENING[0] if sign > 0 else FORESHORTENING[1])
+    return notes
+
+
+def _side_anchors(notes: Annotations, joints2d: np.ndarray, start: int, names: list[str]) -> Annotations:
+    stop = start
+    while stop < min(len(names), start + 30) and names[stop] == names[start]:
+        stop += 1
+    for joint in ("wrist_l", "ankle_l"):
+        j, k = JOINTS.index(joint), JOINTS.index(joint[:-1] + "r")
+        gap = np.linalg.norm(joints2d[start:stop, j] - joints2d[start:stop, k], axis=-1)
+        i = start + int(np.argmax(gap))
+        notes = notes.with_joint(i, joint, tuple(float(v) for v in joints2d[i, j]))
+    return notes

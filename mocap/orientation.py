@@ -1,0 +1,276 @@
+"""A first guess where the user said nothing (beyond the paper, which asks the user for
+the orientation and every foreshortening direction): orientation, which image-side
+limb is which in a profile, and every segment's sign.
+
+Which image-side limb is which is decided in ``mocap.lift`` (``track_sides``).
+Three cues, each a short function:
+
+- **walking direction** (pelvis track) and **knee bends** (knees point the way the
+  performer faces) say whether the performer faces image left or right; a growing
+  body (walking toward a perspective camera) says forward, a shrinking one backward,
+  and otherwise forward is assumed. Forward and backward cannot be told apart from a
+  silhouette under orthographic projection: mirroring every depth and swapping left
+  and right gives the same image (the Necker ambiguity); the user says it once.
+- **joint limits**: knees bend backward, elbows forward, thighs and upper arms do not
+  cross the body's midline or swing far backward, the torso does not lean far back.
+- **temporal coherence**: a sign can only change where its segment passes through
+  the image plane, so the chosen depths move smoothly; the signs are chosen by a
+  Viterbi search minimising the depths' acceleration (second order, so that a depth
+  passing through zero keeps going rather than bouncing back).
+
+User entries enter as hard constraints on their frames, so one correction carries
+through the whole stretch where the segment stays out of the image plane.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
+from mocap.lift import LENGTH, TOWARD, facing_yaw, lateral_axis, relative_depths, runs
+
+NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not matter
+PROFILE_SPREAD = 0.5       # torso spread below which the body is in profile (yaw 60..120)
+WALK_SPEED = 0.15          # body heights per second: slower pelvis tracks say nothing
+GROWTH = 0.05              # relative body-size change per second that says toward/away
+CUE_WINDOW_S = 1.0         # half-window over which direction cues are pooled, seconds
+MIN_RUN_S = 0.5            # orientation runs shorter than this join their neighbours
+LIMIT_WEIGHT = 30.0        # model units of acceleration per unit of joint-limit violation
+DEPTH_FILTER_S = 0.15      # seconds: a running median of each |dZ| the signs are chosen on
+SAGITTAL_WEIGHT = 0.5      # limit units per length of depth against the sagittal-plane prior
+ARM_REST = 0.15            # sine of the upper arms' rest angle out from the sagittal plane
+_J = JOINT_INDEX
+_LIMBS = {  # limb -> (upper segment, lower segment, side sign: +1 left, -1 right)
+    "arm_l": ("upper_arm_l", "lower_arm_l", 1.0), "arm_r": ("upper_arm_r", "lower_arm_r", -1.0),
+    "leg_l": ("upper_leg_l", "lower_leg_l", 1.0), "leg_r": ("upper_leg_r", "lower_leg_r", -1.0)}
+_SIGN_PAIRS = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
+
+
+# -- second-order Viterbi -------------------------------------------------------------
+
+def viterbi2(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+    """(F,) state per frame minimising sum(emission) + sum ||x[t+1] - 2 x[t] + x[t-1]||.
+
+    ``values`` (F, S, D) is what each state puts where, ``emission`` (F, S) a cost per
+    state, ``allowed`` (F, S) a hard mask (every frame needs one allowed state).
+    """
+    n, s = emission.shape
+    cost = np.where(allowed if allowed is not None else True, emission, np.inf)
+    if n == 1:
+        return np.array([int(np.argmin(cost[0]))])
+    # best[a, b]: the cheapest path whose last two states are a (t-1), b (t)
+    best = cost[0][:, None] + cost[1][None, :]
+    back = []
+    for t in range(2, n):
+        acc = np.linalg.norm(values[t][None, None] - 2 * values[t - 1][None, :, None]
+                             + values[t - 2][:, None, None], axis=-1)           # (a, b, c)
+        total = best[:, :, None] + acc
+        arg = np.argmin(total, axis=0)                                          # (b, c)
+        best = np.take_along_axis(total, arg[None], axis=0)[0] + cost[t][None, :]
+        back.append(arg)
+    a, b = np.unravel_index(int(np.argmin(best)), best.shape)
+    path = [b, a]
+    for arg in reversed(back):
+        a, b = arg[a, b], a
+        path.append(a)
+    return np.array(path[::-1])
+
+
+# -- orientation ----------------------------------------------------------------------
+
+def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> np.ndarray:
+    """(F,) evidence that the performer faces image right (> 0) or left (< 0):
+    pelvis speed in body heights per second (if brisk), plus the knees' bends."""
+    pelvis = joints2d[:, _J["pelvis"], 0] / body_px
+    speed = np.gradient(pelvis) * fps if len(pelvis) > 1 else np.zeros(1)
+    walk = np.where(np.abs(speed) > WALK_SPEED, np.sign(speed), 0.0)
+    knees = sum(_knee_bend(joints2d, side) for side in "lr") / body_px
+    return 2.0 * walk + np.clip(10.0 * knees, -1.0, 1.0)
+
+
+def _knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
+    """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
+    hip, knee, ankle = (joints2d[:, _J[f"{n}_{side}"]] for n in ("hip", "knee", "ankle"))
+    along = ankle - hip
+    t = np.clip(((knee - hip) * along).sum(-1) / np.maximum((along ** 2).sum(-1), 1e-9), 0, 1)
+    return (knee - hip - t[:, None] * along)[:, 0]
+
+
+def pooled(values: np.ndarray, fps: float) -> np.ndarray:
+    """Each frame's value averaged over the finite values within CUE_WINDOW_S."""
+    half = max(1, int(round(CUE_WINDOW_S * fps)))
+    out = np.full(len(values), np.nan)
+    for i in np.flatnonzero(np.isfinite(values)):
+        out[i] = np.nanmean(values[max(0, i - half): i + half + 1])
+    return out
+
+
+def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.ndarray,
+                       fps: float) -> list[str | None]:
+    """Each frame's orientation (None where nobody is): facing side from the walking
+    direction and knee bends, profile when the torso's spread is below
+    PROFILE_SPREAD, backward only when the body shrinks (walks away), and runs
+    shorter than MIN_RUN_S merged into their neighbours."""
+    ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
+    side = np.full(len(ok), np.nan)
+    growth = np.full(len(ok), np.nan)
+    for r in runs(ok):
+        side[r] = pooled(facing_side_cues(joints2d[r], body_px[r], fps), fps)
+        log_px = np.log(body_px[r])
+        growth[r] = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps)
+    names = [None] * len(ok)
+    for i in np.flatnonzero(ok):
+        facing = "left" if side[i] < 0 else "right"
+        if spread[i] < PROFILE_SPREAD:
+            names[i] = facing
+        else:
+            names[i] = f"{'backward' if growth[i] < -GROWTH else 'forward'}_{facing}"
+    return merge_short_runs(names, max(1, int(round(MIN_RUN_S * fps))))
+
+
+def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]:
+    """Runs of one name shorter than ``shortest`` frames take the preceding run's name
+    (the following one's at the start), so the user sees few changes."""
+    out = list(names)
+    bounds = [i for i in range(1, len(out) + 1) if i == len(out) or out[i] != out[i - 1]]
+    start = 0
+    for end in bounds:
+        if out[start] is not None and end - start < shortest:
+            left = out[start - 1] if start > 0 else None
+            right = out[end] if end < len(out) else None
+            fill = left if left is not None else right
+            if fill is not None:
+                out[start:end] = [fill] * (end - start)
+        start = end
+    return out
+
+
+# -- foreshortening signs -------------------------------------------------------------
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-9)
+
+
+def limb_penalty(upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left: np.ndarray,
+                 side: float, leg: bool) -> np.ndarray:
+    """Joint-limit violation (>= 0) of limbs given as 3D upper/lower vectors (..., 3).
+
+    Legs: thigh not more than 30 degrees back nor across the midline, knee bending
+    backward only. Arms: upper arm not across the midline nor more than 60 degrees
+    back, elbow bending forward, not outward. Both prefer the sagittal plane (limbs
+    swing forward and back; arms hang ARM_REST out from it, beside the torso).
+    """
+    u, l = _unit(upper), _unit(lower)
+    bend = l - (l * u).sum(-1, keepdims=True) * u
+    uf, ul = (u * facing).sum(-1), side * (u * left).sum(-1)
+    bf, bl = (bend * facing).sum(-1), side * (bend * left).sum(-1)
+    if leg:
+        ll = side * (l * left).sum(-1)
+        return (np.maximum(0, -uf - 0.5) + np.maximum(0, -ul - 0.25) + 0.3 * np.maximum(0, ul - 0.5)
+                + np.maximum(0, bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - 0.3)
+                + np.abs(ul) + np.abs(ll))
+    return (np.maximum(0, -ul) + 0.5 * np.maximum(0, ul - 0.3) + np.maximum(0, -uf - 0.87)
+            + 0.5 * np.maximum(0, -bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - np.maximum(bf, 0))
+            + np.abs(ul - ARM_REST))
+
+
+def lean_penalty(axis: np.ndarray, facing: np.ndarray, left: np.ndarray, back: float) -> np.ndarray:
+    """Torso or head leaning back more than ``back`` (a cosine) or sideways."""
+    a = _unit(axis)
+    return np.maximum(0, -(a * facing).sum(-1) - back) + np.maximum(0, np.abs((a * left).sum(-1)) - 0.2)
+
+
+def _frame_axes(yaw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rad = np.radians(yaw)
+    facing = np.stack([np.sin(rad), np.zeros_like(rad), np.cos(rad)], axis=-1)
+    left = np.stack([lateral_axis(y) for y in yaw]) if len(yaw) else np.zeros((0, 3))
+    return facing, left
+
+
+def segment_vectors(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.ndarray):
+    """(F, 10, 2) image vectors (x right, y up, model units) and (F, 10) |dZ| (Eq. 5)."""
+    ends = joints2d[:, SEGMENT_JOINTS]
+    vec = (ends[:, :, 1] - ends[:, :, 0]) * np.array([1.0, -1.0]) / px_per_unit[:, None, None]
+    depth = np.stack([relative_depths(j, p, np.full(10, TOWARD), lengths)
+                      for j, p in zip(joints2d, px_per_unit)])
+    return vec, depth
+
+
+def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
+                lengths: np.ndarray = LENGTH, fixed: np.ndarray | None = None,
+                fps: float = 30.0) -> np.ndarray:
+    """(F, 10) +1 toward / -1 away for anatomical 2D joints (F, 16, 2), NaN-free frames.
+
+    Each limb's (upper, lower) signs, the torso's and the head's are chosen over the
+    clip by ``viterbi2``: per frame, joint-limit penalties (``limb_penalty``, a
+    backward or sideways lean for torso and head) and disagreement with
+    ``sagittal_depth``; between frames, the acceleration of the depths (Eq. 5's
+    |dZ|, a running median over DEPTH_FILTER_S against the 2D fit's noise).
+    ``fixed`` (F, 10) holds the user's signs (+1/-1) where given, 0 elsewhere.
+    """
+    fixed = np.zeros((len(joints2d), 10), int) if fixed is None else fixed
+    vec, depth = segment_vectors(joints2d, px_per_unit, lengths)
+    width = 2 * int(round(DEPTH_FILTER_S * fps / 2)) + 1
+    depth = median_filter(depth, size=(width, 1), mode="nearest")
+    yaw = np.asarray(yaw, float)
+    facing, left = _frame_axes(yaw)
+    sagittal = sagittal_depth(vec[..., 0], yaw, lengths)                          # (F, 10)
+    out = np.ones((len(joints2d), 10), int)
+    for name, back in (("torso", 0.2), ("head", 0.3)):
+        k = SEGMENT_INDEX[name]
+        states = np.array([1, -1])[None]
+        z = states * depth[:, [k]]                                                 # (F, 2)
+        axis = np.concatenate([np.repeat(vec[:, None, k], 2, 1), z[..., None]], axis=-1)
+        cost = (lean_penalty(axis, facing[:, None], left[:, None], back)
+                + SAGITTAL_WEIGHT * np.maximum(0, -states * sagittal[:, [k]]))
+        allowed = (fixed[:, [k]] == 0) | (fixed[:, [k]] == states)
+        out[:, k] = states[0, viterbi2(z[..., None], LIMIT_WEIGHT * cost, allowed)]
+    for upper, lower, side in _LIMBS.values():
+        ku, kl = SEGMENT_INDEX[upper], SEGMENT_INDEX[lower]
+        pick = _limb_signs(vec[:, [ku, kl]], depth[:, [ku, kl]], sagittal[:, [ku, kl]],
+                           fixed[:, [ku, kl]], facing, left, side, "leg" in upper)
+        out[:, ku], out[:, kl] = _SIGN_PAIRS[pick, 0], _SIGN_PAIRS[pick, 1]
+    return out
+
+
+def _limb_signs(vec: np.ndarray, depth: np.ndarray, sagittal: np.ndarray, fixed: np.ndarray,
+                facing: np.ndarray, left: np.ndarray, side: float, leg: bool) -> np.ndarray:
+    """(F,) index into _SIGN_PAIRS of one limb's (upper, lower) signs; arguments are
+    the two segments' image vectors (F, 2, 2), |dZ|, sagittal depths and user signs."""
+    su, sl = _SIGN_PAIRS[:, 0][None], _SIGN_PAIRS[:, 1][None]
+    zu, zl = su * depth[:, [0]], sl * depth[:, [1]]                                # (F, 4)
+    u3 = np.concatenate([np.repeat(vec[:, None, 0], 4, 1), zu[..., None]], axis=-1)
+    l3 = np.concatenate([np.repeat(vec[:, None, 1], 4, 1), zl[..., None]], axis=-1)
+    cost = (limb_penalty(u3, l3, facing[:, None], left[:, None], side, leg)
+            + SAGITTAL_WEIGHT * (np.maximum(0, -su * sagittal[:, [0]]) + np.maximum(0, -sl * sagittal[:, [1]])))
+    allowed = ((fixed[:, [0]] == 0) | (fixed[:, [0]] == su)) & ((fixed[:, [1]] == 0) | (fixed[:, [1]] == sl))
+    return viterbi2(np.stack([zu, zu + zl], axis=-1), LIMIT_WEIGHT * cost, allowed)
+
+
+def sagittal_depth(dx: np.ndarray, yaw: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(F, 10) each segment's depth as a fraction of its length if it lay in the
+    performer's sagittal plane (walking and running limbs nearly do): a segment that
+    points the way the performer faces comes toward the camera when they are turned
+    toward it, so dZ = dx / tan(yaw). Image x is what the 2D fit gets best; Eq. 5's
+    lengths are far noisier. Near frontal (|sin yaw| < 1/3) the divisor is held at
+    1/3: there dx is mostly sideways motion and says little."""
+    rad = np.radians(yaw)
+    sin = np.where(np.sin(rad) < 0, -1.0, 1.0) * np.maximum(np.abs(np.sin(rad)), 1 / 3)
+    return np.clip(dx * (np.cos(rad) / sin)[:, None] / lengths, -1.0, 1.0)
+
+
+def yaws(orientations: list[str | None], spread: np.ndarray) -> np.ndarray:
+    """(F,) facing yaw per frame (NaN where no orientation)."""
+    return np.array([np.nan if o is None else facing_yaw(o, s) for o, s in zip(orientations, spread)])
+
+
+def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarray) -> np.ndarray:
+    """(F, 10) the user's signs where they hold, 0 elsewhere: an entry holds from its
+    frame until a later entry or until its segment next passes through the image plane
+    (``negligible`` (F, 10)), where the sign may change and the first guess resumes."""
+    passes = np.cumsum(negligible, axis=0)
+    frames = np.arange(len(values))[:, None]
+    at_entry = np.take_along_axis(passes, np.clip(since, 0, len(values) - 1), axis=0)
+    holds = (since >= 0) & (since <= frames) & (passes == at_entry)
+    return np.where(holds, values, 0)

@@ -1,0 +1,94 @@
+"""Scaled orthographic lifting (section 3.4, Eq. 4-5) against exact truth: the model's
+own walk, and real motion capture from ../shared/data (skipped when absent)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import SHARED_DATA
+
+from mocap import lift, synth
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
+from mocap.bvh import contract_joints, read_bvh
+from mocap.metrics import pa_mpjpe
+from mocap.walk import walk_cycle
+
+CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
+
+
+def seen(joints_world: np.ndarray, view: str, fps: float = 30.0):
+    """The truth of a clip as the renderer would film it, without drawing it."""
+    scene = synth.plan_scene(joints_world, synth.RenderOptions(view=view, size=(640, 480), fps=fps))
+    return synth.scene_truth(scene, "test", np.arange(len(joints_world)))
+
+
+def lift_truth(truth, lengths=LENGTH, use_orientation: bool = True) -> np.ndarray:
+    """Lift every frame of a truth from its 2D joints and its true inputs."""
+    ppu = truth.body_height_px / BODY_HEIGHT
+    out = []
+    for j2, j3 in zip(truth.joints2d, truth.joints3d):
+        yaw = lift.yaw_of(j3)
+        if use_orientation:
+            yaw = lift.facing_yaw(lift.orientation_of_yaw(yaw), abs(np.cos(np.radians(yaw))))
+        out.append(lift.lift_pose(j2, ppu, yaw, lift.signs_of(j3), lengths))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("view", ["side", "three-quarter", "front"])
+def test_lifting_the_models_own_walk_is_exact(view):
+    truth = seen(walk_cycle(1.2, 15.0), view)
+    pred = lift_truth(truth, use_orientation=False)
+    assert np.abs(pred - truth.joints3d).max() < 1e-3        # metres
+
+
+def test_eq5_depth_and_sign():
+    joints = np.zeros((16, 2))
+    joints[JOINT_INDEX["hip_l"]] = [0, 0]
+    joints[JOINT_INDEX["knee_l"]] = [30, 0]                  # 30 px at 1 px/unit; thigh is 46 long
+    dz = lift.relative_depths(joints, 1.0, np.array([1] * 6 + [-1] + [1] * 3))
+    assert dz[SEGMENT_INDEX["upper_leg_l"]] == pytest.approx(-np.sqrt(46 ** 2 - 30 ** 2))
+    longer = joints.copy()
+    longer[JOINT_INDEX["knee_l"]] = [60, 0]                  # longer than the model: in the image plane
+    assert lift.relative_depths(longer, 1.0, np.ones(10))[SEGMENT_INDEX["upper_leg_l"]] == 0.0
+
+
+@pytest.mark.parametrize("name, yaw", [("forward_right", 30.0), ("forward_left", -50.0), ("right", 90.0),
+                                       ("left", -90.0), ("backward_right", 135.0), ("backward_left", -170.0)])
+def test_the_six_orientations(name, yaw):
+    assert lift.orientation_of_yaw(yaw) == name
+    spread = abs(np.cos(np.radians(yaw)))
+    expected = yaw if name not in ("left", "right") else 90.0 * np.sign(yaw)
+    assert lift.facing_yaw(name, spread) == pytest.approx(expected)
+    # facing the camera the performer's left is image right; turned away, image left
+    left_x = lift.lateral_axis(lift.facing_yaw(name, spread))[0]
+    rule = lift.image_left_is_right(name)
+    assert rule is None if name in ("left", "right") else rule == (left_x > 0)
+
+
+def test_the_performers_left_in_a_profile_is_away_from_the_camera_when_facing_right():
+    assert lift.lateral_axis(90.0) == pytest.approx([0.0, 0.0, -1.0])
+    pose = lift.lift_pose(np.zeros((16, 2)), 1.0, 90.0, np.ones(10))
+    assert pose[JOINT_INDEX["hip_l"], 2] < 0 < pose[JOINT_INDEX["hip_r"], 2]
+
+
+def test_clip_lengths_are_what_the_clip_shows():
+    truth = seen(walk_cycle(2.0, 15.0), "side")
+    lengths = lift.clip_lengths(truth.joints2d, np.full(len(truth.joints2d), truth.body_height_px / BODY_HEIGHT))
+    assert lengths == pytest.approx(LENGTH, rel=0.03)
+
+
+def test_signs_and_depths_read_back_from_a_pose():
+    pose = seen(walk_cycle(0.5, 15.0), "three-quarter").joints3d[3]
+    ends = pose[SEGMENT_JOINTS]
+    assert (lift.signs_of(pose) == np.where(ends[:, 1, 2] >= ends[:, 0, 2], 1, -1)).all()
+    assert ((lift.depth_fractions(pose) >= 0) & (lift.depth_fractions(pose) <= 1)).all()
+
+
+@pytest.mark.parametrize("view", ["side", "three-quarter"])
+def test_lifting_real_motion_capture_from_true_2d_within_30_mm(view):
+    if not CMU_WALK.exists():
+        pytest.skip(f"real data absent: {CMU_WALK} (../shared/data beside the checkout)")
+    motion = read_bvh(CMU_WALK)
+    truth = seen(contract_joints(motion)[::4], view)
+    lengths = lift.clip_lengths(truth.joints2d, np.full(len(truth.joints2d), truth.body_height_px / BODY_HEIGHT))
+    assert pa_mpjpe(lift_truth(truth, lengths), truth.joints3d) < 0.030

@@ -1,0 +1,114 @@
+"""The first guess where the user said nothing: orientation, sides, signs (against the
+exact truth of the model's own walk and, when present, real motion capture)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import SHARED_DATA
+
+from mocap import lift, synth
+from mocap.body import BODY_HEIGHT, MIRROR_JOINTS
+from mocap.bvh import contract_joints, read_bvh
+from mocap.lift import known_sides, runs, track_sides
+from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, viterbi2
+from mocap.walk import walk_cycle
+
+CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
+
+
+def seen(joints_world: np.ndarray, view: str, fps: float = 15.0):
+    scene = synth.plan_scene(joints_world, synth.RenderOptions(view=view, size=(640, 480), fps=fps))
+    return synth.scene_truth(scene, "test", np.arange(len(joints_world)))
+
+
+def true_inputs(truth):
+    ppu = np.full(len(truth.joints2d), truth.body_height_px / BODY_HEIGHT)
+    yaw = np.array([lift.yaw_of(p) for p in truth.joints3d])
+    names = [lift.orientation_of_yaw(y) for y in yaw]
+    yaw = np.array([lift.facing_yaw(n, abs(np.cos(np.radians(y)))) for n, y in zip(names, yaw)])
+    signs = np.array([lift.signs_of(p) for p in truth.joints3d])
+    visible = np.array([lift.depth_fractions(p) for p in truth.joints3d]) > NEGLIGIBLE
+    return ppu, yaw, names, signs, visible
+
+
+def test_second_order_viterbi_keeps_crossing_tracks_apart():
+    t = np.arange(11.0)
+    a, b = t - 5, 5 - t                                   # two tracks crossing at t = 5
+    low, high = np.minimum(a, b), np.maximum(a, b)        # what a sorting observer sees
+    states = np.stack([np.stack([low, high], -1), np.stack([high, low], -1)], axis=1)   # (F, 2, 2)
+    allowed = np.ones((11, 2), bool)
+    allowed[0, 1] = False
+    path = viterbi2(states, np.zeros((11, 2)), allowed)
+    follows = np.where(path[:, None] == 0, states[:, 0], states[:, 1])
+    assert np.allclose(follows[:, 0], a) or np.allclose(follows[:, 0], b)
+    assert np.allclose(follows[:, 0], a)
+
+
+@pytest.mark.parametrize("view", ["three-quarter", "side"])
+def test_signs_of_the_models_walk_are_guessed(view):
+    truth = seen(walk_cycle(2.2, 15.0), view)
+    ppu, yaw, _, signs, visible = true_inputs(truth)
+    guess = guess_signs(truth.joints2d, ppu, yaw, fps=15.0)
+    if visible.any():
+        assert (guess == signs)[visible].mean() >= 0.9
+
+
+def test_a_users_sign_holds_until_its_segment_passes_the_image_plane():
+    truth = seen(walk_cycle(2.2, 15.0), "three-quarter")
+    ppu, yaw, _, signs, visible = true_inputs(truth)
+    k = int(np.argmax(visible.sum(axis=0)))               # the segment most out of the image plane
+    stretch = runs(visible[:, k])[0]
+    values, since = np.zeros_like(signs), np.full(signs.shape, -1)
+    values[stretch.start:, k], since[stretch.start:, k] = -signs[stretch.start, k], stretch.start
+    fixed = held_user_signs(values, since, ~visible)      # the user insists on the other sign
+    guess = guess_signs(truth.joints2d, ppu, yaw, fixed=fixed, fps=15.0)
+    assert (guess[stretch, k] == -signs[stretch, k]).all()
+    after = np.flatnonzero(visible[stretch.stop:, k]) + stretch.stop
+    assert (guess[after, k] == signs[after, k]).mean() >= 0.9     # the guess resumes after it
+
+
+def test_real_walk_signs_from_true_2d():
+    if not CMU_WALK.exists():
+        pytest.skip(f"real data absent: {CMU_WALK} (../shared/data beside the checkout)")
+    truth = seen(contract_joints(read_bvh(CMU_WALK))[::4], "three-quarter", fps=30.0)
+    ppu, yaw, _, signs, visible = true_inputs(truth)
+    guess = guess_signs(truth.joints2d, ppu, yaw, lift.clip_lengths(truth.joints2d, ppu), fps=30.0)
+    assert (guess == signs)[visible].mean() >= 0.9
+
+
+@pytest.mark.parametrize("view, mirror, expected", [
+    ("three-quarter", False, "forward_right"), ("side", False, "right"),
+    ("three-quarter", True, "forward_left"), ("side", True, "left")])
+def test_orientation_from_the_walking_direction(view, mirror, expected):
+    truth = seen(walk_cycle(2.2, 15.0), view)
+    joints = truth.joints2d[:, MIRROR_JOINTS]              # the fit's image sides, facing the camera
+    spread = np.abs(np.cos(np.radians([lift.yaw_of(p) for p in truth.joints3d])))
+    if mirror:                                            # the same walk seen in a mirror: to the left
+        joints = joints.copy()
+        joints[..., 0] = truth.width - joints[..., 0]
+        joints = joints[:, MIRROR_JOINTS]
+    body_px = np.full(len(joints), truth.body_height_px)
+    names = guess_orientations(joints, body_px, spread, 15.0)
+    assert names.count(expected) >= 0.9 * len(names)
+
+
+def test_sides_follow_the_orientation_rule_where_it_is_known():
+    truth = seen(walk_cycle(1.0, 15.0), "three-quarter")
+    image_side = truth.joints2d[:, MIRROR_JOINTS]          # forward: image-left limbs are the right ones
+    known = known_sides(["forward_right"] * len(image_side), {}, image_side)
+    swap = track_sides(image_side, known, np.ones(len(image_side)))
+    assert swap.all()
+    backward = known_sides(["backward_right"] * len(image_side), {}, image_side)
+    assert not track_sides(image_side, backward, np.ones(len(image_side))).any()
+
+
+def test_a_joint_override_decides_the_sides_in_a_profile():
+    truth = seen(walk_cycle(1.0, 15.0), "side")
+    joints = truth.joints2d.copy()                          # anatomical: image-left is left, no swap
+    frame = int(np.argmax(np.abs(joints[:, 12, 0] - joints[:, 15, 0])))   # ankles widest apart
+    says = {frame: {"ankle_l": tuple(joints[frame, 12]), "wrist_l": tuple(joints[frame, 6])}}
+    known = known_sides(["right"] * len(joints), says, joints)
+    assert (known[frame] == 0).all() and (np.delete(known, frame, axis=0) == -1).all()
+    swap = track_sides(joints, known, np.ones(len(joints)))
+    assert not swap[frame].any()

@@ -1,0 +1,111 @@
+"""The whole pipeline in 3D: `mocap fit --annotations ... --bvh --glb --csv`, the
+Session that re-lifts only what an edit changes, and frames without a person."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers import render_walk, render_walk_with_exit
+
+from mocap import lift
+from mocap.annotations import Annotations, annotations_for_poses, save_annotations
+from mocap.body import JOINTS, SEGMENT_INDEX
+from mocap.cli import main
+from mocap.export.motion_json import read_motion
+from mocap.metrics import pa_mpjpe
+from mocap.orientation import NEGLIGIBLE
+from mocap.session import Session, fit_video
+
+
+@pytest.fixture(scope="module")
+def walk(tmp_path_factory):
+    """The three-quarter walk of helpers.render_walk, rendered and fitted once."""
+    folder = tmp_path_factory.mktemp("walk3d")
+    video = folder / "walk.mp4"
+    truth = render_walk(video, view="three-quarter")
+    info, fits = fit_video(video)
+    return video, truth, info, fits
+
+
+def test_fit_with_annotations_writes_3d_and_every_export(walk, tmp_path):
+    video, truth, _, _ = walk
+    notes = tmp_path / "a.json"
+    save_annotations(notes, annotations_for_poses(truth.joints3d, truth.joints2d))
+    out = {k: tmp_path / f"m.{k}" for k in ("json", "bvh", "glb", "csv")}
+    assert main(["fit", str(video), "--annotations", str(notes), "--out", str(out["json"]),
+                 "--bvh", str(out["bvh"]), "--glb", str(out["glb"]), "--csv", str(out["csv"]), "--quiet"]) == 0
+    assert all(p.stat().st_size > 0 for p in out.values())
+    frames = read_motion(out["json"])["frames"]
+    joints3d = np.array([f["joints3d"] for f in frames])
+    assert joints3d.shape == (30, 16, 3)
+    assert {f["orientation"] for f in frames} == {"forward_right"}
+    assert pa_mpjpe(joints3d, truth.joints3d) < 0.110
+    # joints2d are anatomical now: matched side by side to the truth, not mirrored
+    joints2d = np.array([f["joints2d"] for f in frames])
+    assert np.median(np.linalg.norm(joints2d - truth.joints2d, axis=-1)) < 0.05 * truth.body_height_px
+
+
+def test_without_annotations_the_first_guess_is_used(walk):
+    _, truth, info, fits = walk
+    session = Session(info, fits)
+    inputs = session.inputs
+    assert set(inputs.orientation) == {"forward_right"}
+    assert inputs.swap.all()                          # facing the camera: image-left is their right
+    visible = np.array([lift.depth_fractions(p) for p in truth.joints3d]) > NEGLIGIBLE
+    signs = np.array([lift.signs_of(p) for p in truth.joints3d])
+    assert (inputs.signs == signs)[visible].mean() >= 0.6
+    assert pa_mpjpe(session.motion().joints3d, truth.joints3d) < 0.150
+
+
+def test_a_sign_click_relifts_only_what_it_changes(walk):
+    _, truth, info, fits = walk
+    session = Session(info, fits)
+    before = {i: session.pose3d(i) for i in range(len(fits))}
+    assert session.pose3d(5) is before[5]                                  # cached
+    k = SEGMENT_INDEX["lower_arm_r"]
+    frame = 12
+    flipped = "away" if session.inputs.signs[frame, k] > 0 else "toward"
+    session.annotate(session.annotations.with_foreshortening(frame, "lower_arm_r", flipped))
+    after = {i: session.pose3d(i) for i in range(len(fits))}
+    changed = [i for i in after if after[i] is not before[i]]
+    assert frame in changed and len(changed) < len(fits) // 2
+    assert session.inputs.signs[frame, k] == (1 if flipped == "toward" else -1)
+    moved = after[frame] - before[frame]
+    assert np.abs(moved[JOINTS.index("wrist_r"), 2]) > 0 or lift.depth_fractions(before[frame])[k] == 0
+
+
+def test_keyframes_from_annotations_and_the_rest_interpolated(walk):
+    _, truth, info, fits = walk
+    session = Session(info, fits, Annotations(keyframes=(0, 10, 20, 29)))
+    frames = session.motion_frames(session.motion())
+    assert [f["index"] for f in frames if f["keyframe"]] == [0, 10, 20, 29]
+    for f in frames:
+        assert f["person"] and "joints3d" in f and "joints2d" in f
+        assert ("score" in f) == f["keyframe"]
+
+
+def test_frames_without_a_person_are_interpolated_between_keyframes(tmp_path):
+    video = tmp_path / "exit.avi"
+    render_walk_with_exit(video, gone=slice(12, 18))
+    info, fits = fit_video(video)
+    session = Session(info, fits)
+    motion = session.motion()
+    frames = session.motion_frames(motion)
+    for f in frames:
+        gone = 12 <= f["index"] < 18
+        assert f["person"] == (not gone) and f["keyframe"] == (not gone)
+        assert "joints3d" in f and (("joints2d" in f) == (not gone))
+    assert np.isfinite(motion.joints3d).all() and np.isfinite(motion.root).all()
+
+
+def test_bad_annotations_stop_the_fit_before_it_starts(walk, tmp_path, capsys):
+    video = walk[0]
+    notes, out = tmp_path / "bad.json", tmp_path / "m.json"
+    notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1,
+                                 "frames": {"99": {"orientation": "left"}}}))
+    assert main(["fit", str(video), "--annotations", str(notes), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f'mocap: error: {notes}: frames["99"]: frame 99 is out of range') and err.count("\n") == 1
+    assert not out.exists()
