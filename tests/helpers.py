@@ -8,8 +8,10 @@ estimate (a temporal median) see the empty scene at every pixel.
 from __future__ import annotations
 
 import dataclasses
+import shutil
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from mocap import synth
@@ -57,3 +59,16 @@ def frame_joints(motion: dict) -> np.ndarray:
     """(F, 16, 2) joints2d of a motion file, NaN where no person was found."""
     return np.array([f["joints2d"] if f.get("person", True) else np.full((16, 2), np.nan)
                      for f in motion["frames"]], dtype=float)
+
+
+def text_mp4(folder: Path) -> Path:
+    """A text file named like a video."""
+    path = folder / "notes.mp4"
+    path.write_text("this is not a video\n" * 20)
+    return path
+
+
+def png_avi(folder: Path) -> Path:
+    """A still image renamed like a video."""
+    cv2.imwrite(str(folder / "still.png"), np.zeros((48, 64, 3), np.uint8))
+    return shutil.move(folder / "still.png", folder / "still.avi")

@@ -11,7 +11,7 @@ import subprocess
 import cv2
 import numpy as np
 import pytest
-from helpers import frame_joints, render_walk, write_empty_scene
+from helpers import frame_joints, png_avi, render_walk, text_mp4, write_empty_scene
 
 from mocap.cli import main
 from mocap.export.motion_json import read_motion
@@ -36,17 +36,6 @@ def assert_one_line_error(err: list[str], *words: str) -> None:
 
 # -- bad input ----------------------------------------------------------------------
 
-def _text_mp4(tmp_path):
-    path = tmp_path / "notes.mp4"
-    path.write_text("this is not a video\n" * 20)
-    return path
-
-
-def _png_avi(tmp_path):
-    cv2.imwrite(str(tmp_path / "still.png"), np.zeros((48, 64, 3), np.uint8))
-    return shutil.move(tmp_path / "still.png", tmp_path / "still.avi")
-
-
 def _header_only_avi(tmp_path):
     path = tmp_path / "zero.avi"
     cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (160, 120)).release()
@@ -62,8 +51,8 @@ def _nobody_avi(tmp_path):
 @pytest.mark.parametrize("make, problem", [
     (lambda p: p / "missing.mp4", "no such file"),
     (lambda p: p, "is a directory"),
-    (_text_mp4, "not a video file"),
-    (_png_avi, "still image"),
+    (text_mp4, "not a video file"),
+    (png_avi, "still image"),
     (_header_only_avi, "no frames"),
     (_nobody_avi, "no person found in any of its 20 frames"),
 ])
@@ -126,7 +115,7 @@ def test_the_installed_command_reports_in_one_line(tmp_path, mocap_command):
 
 
 def test_ffmpeg_messages_stay_off_stderr(tmp_path, mocap_command):
-    video = _text_mp4(tmp_path)
+    video = text_mp4(tmp_path)
     done = subprocess.run([mocap_command, "fit", str(video)], capture_output=True,
                           text=True, stdin=subprocess.DEVNULL, timeout=60)
     assert done.returncode == 2

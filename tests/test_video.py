@@ -3,12 +3,13 @@ bad input refused with a one-line MocapError that names the file and the problem
 
 from __future__ import annotations
 
-import shutil
 import types
 
 import cv2
 import numpy as np
 import pytest
+
+from helpers import png_avi, text_mp4
 
 from mocap.errors import MocapError
 from mocap.video import iter_frames, open_video, processing_scale, read_frame, sample_frames
@@ -88,17 +89,6 @@ def test_truncated_avi_reads_the_frames_that_decode(tmp_path):
     assert [level(f) for f in frames] == list(range(info.frame_count))
 
 
-def _text_mp4(tmp_path):
-    path = tmp_path / "notes.mp4"
-    path.write_text("this is not a video\n" * 20)
-    return path
-
-
-def _png_avi(tmp_path):
-    cv2.imwrite(str(tmp_path / "still.png"), np.zeros((48, 64, 3), np.uint8))
-    return shutil.move(tmp_path / "still.png", tmp_path / "still.avi")
-
-
 def _zero_frame_avi(tmp_path):
     return write_clip(tmp_path / "zero.avi", n=0)
 
@@ -127,8 +117,8 @@ def _empty_file(tmp_path):
     (lambda p: p / "missing.mp4", "no such file"),
     (lambda p: p, "is a directory"),
     (_empty_file, "empty"),
-    (_text_mp4, "not a video file"),
-    (_png_avi, "still image"),
+    (text_mp4, "not a video file"),
+    (png_avi, "still image"),
     (_zero_frame_avi, "no frames"),
     (_truncated_mp4, "truncated"),
     (_unknown_codec_avi, "codec 'QZQZ'"),
