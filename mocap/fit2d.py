@@ -387,7 +387,5 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
     for side in ("l", "r"):
         pose = fit_arm(canvas, pose, side, prev)
         canvas.commit(pose_quads(pose, ARM[side]))
-    whole = Canvas(canvas.sil)
-    whole.commit(pose_quads(pose))
-    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=whole.score_model(),
+    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=canvas.score_model(),
                  legs_crossed=crossed)
