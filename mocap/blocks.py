@@ -1,0 +1,193 @@
+"""Morph blocks and their weighted similarity: the block-matching part of the
+tracking paper (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000, section
+"Feature tracking", Fig. 6-7 and the block-matching Eq. 3-5).
+
+A feature morph-block is ``A = {(x, y), m, n, theta}`` (Fig. 7): (x, y) is where one
+short side meets the middle line, m the height (along the middle line, which is the
+projected skeleton), n the width and theta the angle of the middle line to the image
+x axis. Here a block is a row ``(x, y, theta, m, n)`` of an array, theta in radians
+measured in the image (x right, y down), so many candidates are scored at once.
+
+The colour of a block is read on a grid of sub-pixels ("gridding lines evenly in the
+direction of theta and theta + 90 degrees") by bilinear interpolation (cv2.remap).
+The paper samples the smaller block's m x n pixels; here every part has a fixed grid
+of at most ROWS x COLS sub-pixels in block coordinates, which keeps the colour model
+one array per part whatever the block's size and bounds the cost of a candidate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+X, Y, THETA, M, N = range(5)
+ROWS, COLS = 14, 7                 # largest sub-pixel grid of a block
+CHANNEL_WEIGHTS = np.full(3, 1 / 3, np.float32)   # W_R, W_G, W_B of Eq. 3
+CENTRE_WEIGHT, MARGIN_WEIGHT = 2.0, 1.0           # W_1 > W_2 of Eq. 4
+MIN_DIFF = 1.0                     # grey levels: keeps S = 1/D finite for a perfect match
+
+
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """Sub-pixel positions of a block in block units and the region weights of Eq. 5.
+
+    ``along`` (R,) runs from 0 (the side at (x, y)) to 1 (the far side) in units of m,
+    or past both sides (see ``make_grid``); ``across`` (C,) from -1/2 to 1/2 in units
+    of n; ``weights`` (R, C) are W_1 on the centre region b_1 and W_2 on the margin
+    b_2, normalised to sum to one so that 1/S is a weighted mean difference in grey
+    levels.
+    """
+
+    along: np.ndarray
+    across: np.ndarray
+    weights: np.ndarray
+
+
+def make_grid(m: float, n: float, beyond: float = 0.0) -> Grid:
+    """The grid of a block m x n pixels: one sub-pixel per pixel, at most ROWS x COLS,
+    with the centre region b_1 = {m/4 <= i <= 3m/4 and n/4 <= j <= 3n/4} (Eq. 5).
+
+    Beyond the paper, ``beyond`` > 0 stretches the rows that fraction of m past both
+    short sides: the block then also holds what lies beyond its joints (the next
+    part, or background), so that its ends, and with them its length, show in S.
+    Inside a limb of one colour a block can otherwise slide and shrink at no cost.
+    """
+    rows = int(np.clip(round(m), 3, ROWS))
+    cols = int(np.clip(round(n), 3, COLS))
+    along = (np.arange(rows) + 0.5) / rows * (1 + 2 * beyond) - beyond
+    across = (np.arange(cols) + 0.5) / cols - 0.5
+    centre = (np.abs(along - 0.5) <= 0.25)[:, None] & (np.abs(across) <= 0.25)[None, :]
+    weights = np.where(centre, CENTRE_WEIGHT, MARGIN_WEIGHT)
+    return Grid(along, across, (weights / weights.sum()).astype(np.float32))
+
+
+def between(start: np.ndarray, end: np.ndarray, n) -> np.ndarray:
+    """Blocks (K, 5) of width(s) n from points ``start`` (K, 2) to ``end`` (K, 2)."""
+    d = end - start
+    return np.column_stack([start, np.arctan2(d[:, 1], d[:, 0]),
+                            np.maximum(np.hypot(d[:, 0], d[:, 1]), 2.0),
+                            np.broadcast_to(n, len(d))])
+
+
+def block_end(blocks: np.ndarray) -> np.ndarray:
+    """(..., 2) the middle of the far side of blocks (..., 5)."""
+    return blocks[..., :2] + blocks[..., M, None] * np.stack(
+        [np.cos(blocks[..., THETA]), np.sin(blocks[..., THETA])], axis=-1)
+
+
+def to_block(point: np.ndarray, block: np.ndarray) -> np.ndarray:
+    """A pixel in a block's own frame: (along, across) in units of its height m."""
+    d = point - block[:2]
+    c, s = np.cos(block[THETA]), np.sin(block[THETA])
+    return np.array([d[0] * c + d[1] * s, -d[0] * s + d[1] * c]) / block[M]
+
+
+def from_block(coords: np.ndarray, block: np.ndarray) -> np.ndarray:
+    """The pixel at block-frame coordinates (the inverse of ``to_block``)."""
+    c, s = np.cos(block[THETA]), np.sin(block[THETA])
+    a, b = coords * block[M]
+    return block[:2] + np.array([a * c - b * s, a * s + b * c])
+
+
+def block_points(blocks: np.ndarray, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (x, y), each (B*R, C) float32, of every block's sub-pixels."""
+    cos, sin = np.cos(blocks[:, THETA]), np.sin(blocks[:, THETA])
+    down = grid.along[None, :, None] * blocks[:, M, None, None]       # along the middle line
+    side = grid.across[None, None, :] * blocks[:, N, None, None]      # across it
+    x = blocks[:, X, None, None] + down * cos[:, None, None] - side * sin[:, None, None]
+    y = blocks[:, Y, None, None] + down * sin[:, None, None] + side * cos[:, None, None]
+    shape = (-1, len(grid.across))
+    return x.reshape(shape).astype(np.float32), y.reshape(shape).astype(np.float32)
+
+
+def sample_blocks(image: np.ndarray, blocks: np.ndarray, grid: Grid) -> np.ndarray:
+    """Colours (B, R, C, 3) float32 of the blocks' sub-pixels, bilinear interpolation
+    ("quadric linear interpolation" of the paper's steps 2-3)."""
+    x, y = block_points(np.atleast_2d(blocks), grid)
+    out = cv2.remap(image, x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return out.reshape(len(np.atleast_2d(blocks)), len(grid.along), len(grid.across), 3
+                       ).astype(np.float32)
+
+
+def similarity(model: np.ndarray, samples: np.ndarray, grid: Grid) -> np.ndarray:
+    """S (B,) of each sampled block against the colour model (R, C, 3):
+
+    diff_ij = W_R |X_ij[R] - X'_ij[R]| + W_G |...G| + W_B |...B|          (Eq. 3)
+    S = 1 / (W_1 sum_{b_1} diff_ij + W_2 sum_{b_2} diff_ij)                 (Eq. 4)
+
+    with the region weights of Eq. 5 normalised (Grid), so 1/S is in grey levels.
+    """
+    diff = np.abs(samples - model) @ CHANNEL_WEIGHTS                   # (B, R, C)
+    return 1.0 / np.maximum((diff * grid.weights).sum(axis=(1, 2)), MIN_DIFF)
+
+
+def score(image: np.ndarray, model: np.ndarray, grid: Grid, blocks: np.ndarray) -> np.ndarray:
+    """S (B,) of blocks (B, 5) (or one block (5,)) of ``image`` against ``model``."""
+    return similarity(model, sample_blocks(image, blocks, grid), grid)
+
+
+def ring(radius: int) -> np.ndarray:
+    """Integer offsets (8r, 2) on the square ring of Chebyshev radius r around the
+    search centre (one circle of the search path, Fig. 6); r = 0 is the centre."""
+    if radius == 0:
+        return np.zeros((1, 2))
+    r = radius
+    side = np.arange(-r, r)
+    return np.concatenate([np.c_[side, np.full(2 * r, -r)], np.c_[np.full(2 * r, r), side],
+                           np.c_[-side, np.full(2 * r, r)], np.c_[np.full(2 * r, -r), -side]])
+
+
+def morphs(block: np.ndarray, d_theta: np.ndarray, d_m: np.ndarray, zoom: bool) -> np.ndarray:
+    """Candidate blocks (K, 5) at one position: theta' = theta + d_theta and
+    m' = m + d_m for every pair; with ``zoom`` n' changes in proportion,
+    n' = n + (n/m) d_m (the head zooms as a whole), else n' = n."""
+    t, dm = np.meshgrid(d_theta, d_m, indexing="ij")
+    out = np.repeat(block[None], t.size, axis=0)
+    out[:, THETA] += t.ravel()
+    out[:, M] = np.maximum(block[M] + dm.ravel(), 2.0)
+    if zoom:
+        out[:, N] = block[N] * out[:, M] / block[M]
+    return out
+
+
+def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
+           d_theta: np.ndarray, d_m: np.ndarray, *, zoom: bool = False,
+           max_ring: int = 0, step: float = 1.0) -> tuple[np.ndarray, float]:
+    """The best block and its S, searched along the path of Fig. 6.
+
+    Every point of a circle of the path gets every morph (theta' in theta +- d_theta,
+    m' in m +- d_m); the search goes on to the next circle while the circle just done
+    held a better block than all before it, up to ``max_ring`` circles of ``step``
+    pixels (max_ring 0: the position is fixed, e.g. a limb hanging from its parent).
+    """
+    shapes = morphs(start, d_theta, d_m, zoom)
+    best, best_s = start, -1.0
+    for radius in range(max_ring + 1):
+        offsets = ring(radius) * step
+        cands = np.repeat(shapes[None], len(offsets), axis=0)
+        cands[..., :2] += offsets[:, None, :]
+        cands = cands.reshape(-1, 5)
+        s = score(image, model, grid, cands)
+        k = int(np.argmax(s))
+        if s[k] <= best_s:
+            break
+        best, best_s = cands[k], float(s[k])
+    return best, best_s
+
+
+def lengthen(image: np.ndarray, model: np.ndarray, grid: Grid, block: np.ndarray,
+             extra: np.ndarray, tolerance: float) -> tuple[np.ndarray, float]:
+    """The longest of the block and its versions lengthened by ``extra`` pixels whose
+    S is within ``tolerance`` of the best of them, with that S.
+
+    Beyond the paper: along a limb of one colour S hardly changes when the block
+    slides or shrinks inside the limb (an aperture problem), so a search by S alone
+    lets limbs shrink frame after frame; the limb's end is where S drops.
+    """
+    cands = np.repeat(block[None], len(extra) + 1, axis=0)
+    cands[1:, M] += extra
+    s = score(image, model, grid, cands)
+    k = int(np.flatnonzero(s >= (1.0 - tolerance) * s.max()).max())
+    return cands[k], float(s[k])

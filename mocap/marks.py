@@ -1,0 +1,76 @@
+"""The user's marks: the 16 joints placed by hand on frame 0, the only input of the
+tracking method (Pan, Zhuang and Liu 2000: "the user only needs to mark the joints of
+the first frame"). Checked once here, so that the tracker and the calibration can
+trust them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, LENGTH, SEGMENT_NAMES
+from mocap.errors import MocapError
+
+KEY_TRIANGLE = ("shoulder_l", "shoulder_r", "chest")
+MIN_KEY_SIDE = 0.04        # of the body height: shorter key-triangle sides "coincide"
+MIN_KEY_ANGLE_DEG = 8.0    # a key-triangle corner nearer 0 or 180 degrees is "collinear"
+_LENGTH = dict(zip(SEGMENT_NAMES, LENGTH))
+
+
+def check_marks(marks, width: int, height: int) -> np.ndarray:
+    """The 16 marked joints of frame 0 as a (16, 2) array in JOINTS order, refused
+    with a MocapError naming the joint when one is missing or outside the
+    ``width`` x ``height`` frame, or when the key triangle (both shoulders and the
+    chest, from which the camera is calibrated) is degenerate.
+
+    ``marks`` is a (16, 2) array (NaN: not marked) or a mapping joint name -> (x, y),
+    such as frame 0's ``joints2d`` of an annotations file.
+    """
+    if isinstance(marks, Mapping):
+        unknown = sorted(set(marks) - set(JOINTS))
+        if unknown:
+            raise MocapError(f"unknown joint {unknown[0]!r} in the marks")
+        marks = np.array([marks.get(j, (np.nan, np.nan)) for j in JOINTS], dtype=float)
+    marks = np.asarray(marks, dtype=float)
+    if marks.shape != (len(JOINTS), 2):
+        raise MocapError(f"expected 16 marked joints (x, y), got an array of shape {marks.shape}")
+    for name, (x, y) in zip(JOINTS, marks):
+        if not (np.isfinite(x) and np.isfinite(y)):
+            raise MocapError(f"joint {name} is not marked on frame 0 (all 16 joints are needed)")
+        if not (0 <= x < width and 0 <= y < height):
+            raise MocapError(f"joint {name} at ({x:.1f}, {y:.1f}) is outside the "
+                             f"{width}x{height} frame")
+    check_key_triangle(marks)
+    return marks
+
+
+def check_key_triangle(marks: np.ndarray) -> None:
+    """Refuse a key triangle with two corners nearly on one point (shoulders seen in
+    profile) or a corner nearly on the line through the other two."""
+    pts = marks[[JOINT_INDEX[j] for j in KEY_TRIANGLE]]
+    least = MIN_KEY_SIDE * BODY_HEIGHT * body_scale(marks)
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        if np.hypot(*(pts[i] - pts[j])) < least:
+            raise MocapError(f"degenerate key triangle: {KEY_TRIANGLE[i]} and {KEY_TRIANGLE[j]} "
+                             f"nearly coincide (a profile view?); the shoulders and the chest "
+                             f"must span a triangle")
+    for k in range(3):
+        a, b = pts[(k + 1) % 3] - pts[k], pts[(k + 2) % 3] - pts[k]
+        cos = a @ b / (np.hypot(*a) * np.hypot(*b))
+        if np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) > 180.0 - MIN_KEY_ANGLE_DEG:
+            raise MocapError(f"degenerate key triangle: {KEY_TRIANGLE[k]} is nearly on the "
+                             f"line through the other two key joints")
+
+
+def body_scale(marks: np.ndarray) -> float:
+    """Pixels per model unit of a marked skeleton: the least foreshortened of the
+    head-and-trunk line and the two legs against their model lengths."""
+    def seen(*names: str) -> float:
+        return sum(np.hypot(*(marks[JOINT_INDEX[a]] - marks[JOINT_INDEX[b]]))
+                   for a, b in zip(names, names[1:]))
+    trunk = seen("head_top", "neck", "pelvis") / (_LENGTH["head"] + _LENGTH["torso"])
+    leg = _LENGTH["upper_leg_l"] + _LENGTH["lower_leg_l"]
+    legs = [seen(f"hip_{s}", f"knee_{s}", f"ankle_{s}") / leg for s in "lr"]
+    return max(trunk, *legs, 1e-6)

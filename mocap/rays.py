@@ -1,0 +1,99 @@
+"""Joints on their viewing rays, centre to fringe: the second step of the tracking
+paper's reconstruction (Pan, Zhuang and Liu 2000, section "Reconstruction of 3D human
+motion skeleton": "we begin with a known neighboring point and use the knowledge of
+human skeleton length to find a point" on the joint's ray).
+
+A joint at bone length l from a known joint K lies where its ray meets the sphere of
+radius l around K: two points, mirror images in depth. The trunk's joints take the
+root nearer the rigid trunk carried by the key triangle. The paper settles the limbs'
+choice by continuity from frame to frame; here the choice for each limb (two bones,
+four combinations per frame) is made for the whole clip at once by dynamic
+programming: the sequence with the smallest sum of squared accelerations of the
+middle and end joints, plus a penalty for leaving the joints' ranges (knees and
+elbows bent the wrong way, an upper arm or thigh pointing through the trunk). A
+greedy frame-to-frame choice cannot tell, where a bone passes through the image
+plane (the two roots meet), whether it goes on or turns back; acceleration can.
+Where a whole limb's mirror image is as smooth and as possible as the limb (a limb
+that never crosses the image plane, within its ranges), the choice stays a guess.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mocap.body import JOINT_INDEX
+
+# (root, middle, end, bend, side): a knee bends the shank backward (+1), an elbow the
+# forearm forward (-1), about the performer's left axis; side +1 left, -1 right
+LIMBS = tuple((*(JOINT_INDEX[f"{name}_{s}"] for name in (a, b, c)), bend, side)
+              for s, side in (("l", 1.0), ("r", -1.0))
+              for a, b, c, bend in (("shoulder", "elbow", "wrist", -1.0),
+                                    ("hip", "knee", "ankle", 1.0)))
+HINGE_WEIGHT = 0.02     # m^2 of squared acceleration that a fully reversed hinge costs
+INWARD_FREE = 0.2       # sine of the angle an upper arm or thigh may point toward the midline
+
+
+def ray_roots(known: np.ndarray, rays: np.ndarray, length: float) -> np.ndarray:
+    """(..., 2, 3) the two points on each ray (..., 3) through the optical centre at
+    ``length`` from ``known`` (..., 3), the nearer first; where the ray passes
+    farther than ``length`` (2D tracking error) both are its point nearest ``known``."""
+    u = rays / np.linalg.norm(rays, axis=-1, keepdims=True)
+    along = (u * known).sum(-1)
+    half = np.sqrt(np.maximum(along ** 2 - (known * known).sum(-1) + length ** 2, 0.0))
+    return np.stack([(along - half)[..., None] * u, (along + half)[..., None] * u], axis=-2)
+
+
+def nearer_root(known: np.ndarray, rays: np.ndarray, length: float,
+                guess: np.ndarray) -> np.ndarray:
+    """(..., 3) of the two roots (``ray_roots``) the one nearer ``guess`` (..., 3)."""
+    roots = ray_roots(known, rays, length)
+    miss = np.linalg.norm(roots - guess[..., None, :], axis=-1)
+    return np.where((miss[..., 1] < miss[..., 0])[..., None], roots[..., 1, :], roots[..., 0, :])
+
+
+def limb_candidates(root: np.ndarray, rays: np.ndarray, lengths: tuple[float, float]) -> np.ndarray:
+    """(F, 4, 2, 3) the middle and end joint of a limb for each of the four root
+    choices (middle near/far x end near/far) on every frame; ``root`` (F, 3), ``rays``
+    (F, 2, 3) of the middle and end joints."""
+    middle = ray_roots(root, rays[:, 0], lengths[0])                      # (F, 2, 3)
+    end = ray_roots(middle, rays[:, 1, None, :], lengths[1])              # (F, 2, 2, 3)
+    return np.stack([np.repeat(middle, 2, axis=1), end.reshape(-1, 4, 3)], axis=2)
+
+
+def limb_penalty(root: np.ndarray, cands: np.ndarray, left: np.ndarray, bend: float,
+                 side: float) -> np.ndarray:
+    """(F, 4) how far each candidate leaves the joints' ranges (0 inside): a hinge
+    (knee, elbow) bent the wrong way about the performer's left axis ``left`` (F, 3)
+    (up to 1, reversed), plus an upper arm or thigh pointing toward the body's
+    midline beyond INWARD_FREE (through the trunk)."""
+    upper = cands[:, :, 0] - root[:, None]
+    lower = cands[:, :, 1] - cands[:, :, 0]
+    turn = (np.cross(upper, lower) * left[:, None]).sum(-1)
+    length = np.linalg.norm(upper, axis=-1)
+    hinge = -bend * turn / np.maximum(length * np.linalg.norm(lower, axis=-1), 1e-12)
+    inward = -side * (upper * left[:, None]).sum(-1) / np.maximum(length, 1e-12)
+    return np.maximum(0.0, hinge) + np.maximum(0.0, inward - INWARD_FREE)
+
+
+def choose_limb(relative: np.ndarray, penalty: np.ndarray) -> np.ndarray:
+    """(F,) the candidate index per frame minimising HINGE_WEIGHT * penalty plus the
+    squared accelerations of the candidates' joints ``relative`` (F, 4, 2, 3) to the
+    limb's root: a Viterbi search over pairs of consecutive choices."""
+    n = len(relative)
+    flat = relative.reshape(n, 4, -1)
+    unary = HINGE_WEIGHT * penalty
+    if n == 1:
+        return np.array([int(np.argmin(unary[0]))])
+    cost = unary[0][:, None] + unary[1][None, :]                          # (prev, cur)
+    back = []
+    for f in range(2, n):
+        acc = flat[f][None, None] - 2 * flat[f - 1][None, :, None] + flat[f - 2][:, None, None]
+        total = cost[:, :, None] + (acc ** 2).sum(-1)                     # (c, a, b)
+        back.append(np.argmin(total, axis=0))                             # best c per (a, b)
+        cost = np.min(total, axis=0) + unary[f][None, :]
+    a, b = np.unravel_index(int(np.argmin(cost)), cost.shape)
+    path = [b, a]
+    for step in reversed(back):
+        a, b = step[a, b], a
+        path.append(a)
+    return np.array(path[::-1])

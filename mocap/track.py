@@ -1,0 +1,148 @@
+"""The tracking method (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000) as
+one call: the user marks the 16 joints on frame 0; every frame is tracked
+(mocap.tracker), stretches of low reliability are filled by interpolation, and the
+3D skeleton is reconstructed under perspective (mocap.perspective) from the 2D
+joints lightly smoothed in time (SMOOTH_S).
+
+    result = track_video("clip.mp4", marks)        # marks: (16, 2) or {joint: (x, y)}
+    result.joints2d, result.reliability, result.joints3d
+
+Frames are streamed: only the current and the previous frame are in memory. Large
+frames are tracked at video.processing_scale (1280 px on the longer side); results
+are in the original frame's pixels.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from mocap.body import JOINT_INDEX, JOINTS
+from mocap.errors import MocapError
+from mocap.marks import check_marks
+from mocap.perspective import default_camera, reconstruct, to_contract
+from mocap.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
+from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
+
+Progress = Callable[[int, int], None]
+LOW_RELIABILITY = 0.5      # a part matched this much worse than usual is taken as hidden
+# seconds (Gaussian sigma) over which the 2D joints are smoothed for the 3D alone: a
+# pixel of tracking jitter moves a joint on its ray by centimetres where its bone is
+# nearly in the image plane (depth sqrt(l^2 - d^2) is steep there)
+SMOOTH_S = 0.05
+
+
+def _joint_parts() -> list[tuple[int, ...]]:
+    """For every joint, the parts whose match placed it: the head's joints by the
+    head, the trunk's (with shoulders and hips, carried by it) by the trunk, a limb's
+    middle and end joints by both of its parts."""
+    out = [(TORSO,)] * len(JOINTS)
+    out[JOINT_INDEX["head_top"]] = out[JOINT_INDEX["neck"]] = (HEAD,)
+    for k in LIMBS:
+        out[PART_JOINTS[k, 1]] = out[PART_JOINTS[k + 1, 1]] = (k, k + 1)
+    return out
+
+
+JOINT_PARTS = _joint_parts()
+
+
+@dataclass(frozen=True, eq=False)
+class TrackResult:
+    """What the tracking method found in a video.
+
+    ``joints2d`` (F, 16, 2): pixels of the original frames, anatomical sides as
+    marked, low-reliability stretches interpolated; ``reliability`` (F, 16) in
+    [0, 1]: the similarity of the match that placed each joint over that part's
+    median similarity in the clip (1 on the marked frame 0; below LOW_RELIABILITY the
+    joint was interpolated where reliable frames surround it); ``joints3d``
+    (F, 16, 3): metres, CONTRACT.md's frame; ``focal_px``: the focal length assumed.
+    """
+
+    info: VideoInfo
+    joints2d: np.ndarray
+    reliability: np.ndarray
+    joints3d: np.ndarray
+    focal_px: float
+
+
+def track_frames(frames: Iterable[np.ndarray], marks: np.ndarray,
+                 progress: Callable[[int], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Track checked ``marks`` (16, 2) of the first frame through ``frames`` (BGR,
+    consumed one at a time): (F, 16, 2) joints and (F, 10) similarities S of the
+    parts (frame 0: the marks, S = inf)."""
+    it = iter(frames)
+    tracker = BodyTracker(next(it), marks)
+    joints, similarity = [marks], [np.full(len(PARTS), np.inf)]
+    for frame in it:
+        found, s = tracker.step(frame)
+        joints.append(found)
+        similarity.append(s)
+        if progress:
+            progress(len(joints))
+    return np.array(joints), np.array(similarity)
+
+
+def joint_reliability(similarity: np.ndarray) -> np.ndarray:
+    """(F, 16) reliability of every joint from the parts' similarities (F, 10): each
+    part's S over its median S in the clip, at most 1; a joint's is the least of its
+    parts' (JOINT_PARTS)."""
+    usual = np.median(similarity[1:], axis=0) if len(similarity) > 1 else np.ones(len(PARTS))
+    part = np.minimum(similarity / usual, 1.0)
+    return np.stack([part[:, list(parts)].min(axis=1) for parts in JOINT_PARTS], axis=1)
+
+
+def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray,
+                    threshold: float = LOW_RELIABILITY) -> np.ndarray:
+    """Joints (F, 16, 2) with every stretch of frames below ``threshold`` that lies
+    between two reliable frames replaced by linear interpolation between them (the
+    paper's handling of self-occlusion); stretches at the end of the clip stay."""
+    out = joints2d.copy()
+    frames = np.arange(len(joints2d))
+    for j in range(joints2d.shape[1]):
+        good = np.flatnonzero(reliability[:, j] >= threshold)
+        bad = frames[(reliability[:, j] < threshold) & (frames > good[0]) & (frames < good[-1])]
+        for c in range(2):
+            out[bad, j, c] = np.interp(bad, good, joints2d[good, j, c])
+    return out
+
+
+def _turn(orientation: str | None) -> str | None:
+    """'left' or 'right' from a CONTRACT.md orientation (e.g. forward_right)."""
+    if orientation is None:
+        return None
+    side = orientation.rsplit("_", 1)[-1]
+    if side not in ("left", "right"):
+        raise MocapError(f"unknown orientation {orientation!r}")
+    return side
+
+
+def track_video(video: str | os.PathLike, marks, progress: Progress | None = None, *,
+                focal_px: float | None = None, orientation: str | None = None) -> TrackResult:
+    """Track a video from the 16 joints marked on its frame 0 and reconstruct 3D.
+
+    ``marks``: (16, 2) pixels in JOINTS order or a mapping joint -> (x, y) (frame 0's
+    ``joints2d`` of an annotations file); bad marks raise a MocapError naming the
+    joint. ``focal_px``: the camera's focal length in pixels if known (default: the
+    frame width, see mocap.perspective). ``orientation``: the performer's orientation
+    on frame 0 in CONTRACT.md's words; its side ("right" of forward_right) tells
+    which way the body is turned, which the key triangle alone cannot.
+    ``progress(done, total)`` is called after every frame.
+    """
+    info = open_video(video)
+    marks = check_marks(marks, info.width, info.height)
+    turn = _turn(orientation)
+    scale = processing_scale(info)
+    step = (lambda done: progress(done, info.frame_count)) if progress else None
+    frames = (frame for _, frame in iter_frames(info, scale=scale))
+    joints, similarity = track_frames(frames, (marks + 0.5) * scale - 0.5, step)
+    joints = (joints + 0.5) / scale - 0.5
+    reliability = joint_reliability(similarity)
+    joints2d = fill_unreliable(joints, reliability)
+    camera = default_camera(info.width, info.height, focal_px)
+    steady = gaussian_filter1d(joints2d, SMOOTH_S * info.fps, axis=0, mode="nearest")
+    joints3d = to_contract(reconstruct(steady, camera, turn))
+    return TrackResult(info, joints2d, reliability, joints3d, camera.focal)

@@ -1,0 +1,266 @@
+"""Tracking the marked body from one frame to the next, head to feet: the tracking
+paper's feature tracking (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000,
+section "Feature tracking").
+
+Each of the 10 body parts is a morph block (mocap.blocks) from one of its joints to the
+other, as wide as its cylinder (body.WIDTH; the torso as wide as the marked shoulders
+show it turned) at the marked skeleton's scale. Its colours on frame 0 are its colour
+model. Every later frame is tracked head to feet:
+
+1. the head (calvaria to neck): its calvaria predicted by image difference
+   (mocap.headmotion, Eq. 1-5 of the head part) or by constant velocity, whichever
+   start the block match scores higher (a moving background breaks the image
+   difference's premise of a still background), then the morph-block search of
+   position, angle and scale along the search path (Fig. 6);
+2. the trunk hanging from the neck (angle and length); the chest keeps its marked
+   place in the trunk's frame; shoulders and hips move with the trunk;
+3. each limb from its root: the upper part's angle and length, the lower part's
+   position, angle and length, all started where constant velocity predicts them
+   (the paper's motion prediction); beyond the paper, the limb is also looked for
+   all around its root (``around_root``), which finds a lost limb again;
+4. every colour model updated by linear weighting with its new block when the match
+   is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
+   the marked frame's colours, so that a model cannot drift onto clutter.
+
+The similarity S of each part's match is its reliability on that frame.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from mocap import blocks
+from mocap.blocks import M, N, THETA, block_end, from_block, to_block
+from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HALF_SPAN, WIDTH,
+                        torso_width)
+from mocap.headmotion import P_START, adapt_threshold, head_displacement
+from mocap.marks import body_scale
+
+BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
+MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
+SHORTEST = 0.3             # ... and at least this fraction of its longest
+LENGTHEN_STEPS = np.arange(1, 6) * 0.03   # of the longest: lengthenings tried (blocks.lengthen)
+LENGTHEN_TOLERANCE = 0.03  # relative loss of S a lengthening may cost
+UPDATE_RATE = 0.3          # linear weighting of a colour model by the new block
+UPDATE_MIN = 0.9           # of the part's median S so far: worse matches leave the model
+ANCHOR = 0.5               # weight of frame 0's colours in every updated model
+HISTORY = 150              # frames of S that the median looks back on
+AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
+USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One morph-block search (blocks.search): angle offsets (degrees), length offsets
+    (fractions of m), circles of the position search path (0: the position is held)
+    and their spacing in pixels."""
+
+    d_theta_deg: tuple[float, ...]
+    d_m: tuple[float, ...]
+    rings: int = 0
+    step: float = 1.0
+
+
+def _span(limit: float, step: float) -> tuple[float, ...]:
+    return tuple(np.arange(-limit, limit + step / 2, step))
+
+
+_HELD, _FREE = Stage(_span(2, 1), _span(0.03, 0.03)), Stage(_span(2, 1), _span(0.03, 0.03), 1, 0.5)
+_SWING = Stage(_span(30, 5), _span(0.2, 0.1))
+SCHEDULES = {  # coarse to fine, by the kind of part
+    "head": (Stage(_span(6, 3), _span(0.06, 0.06), 8), _FREE),
+    "torso": (Stage(_span(12, 3), _span(0.1, 0.05)), _HELD),
+    "upper": (_SWING, _HELD),
+    "lower": (_SWING, Stage(_span(4, 2), (0.0,), 3), _FREE),
+}
+
+
+@dataclass(frozen=True)
+class Part:
+    """A tracked block from joint ``start`` (its (x, y)) to joint ``end``."""
+
+    segment: str
+    start: str
+    end: str
+
+    @property
+    def schedule(self) -> tuple[Stage, ...]:
+        return SCHEDULES[self.segment.split("_")[0]]
+
+
+PARTS = (Part("head", "head_top", "neck"), Part("torso", "neck", "pelvis"),
+         *(Part(f"{kind}_{side}", f"{a}_{side}", f"{b}_{side}") for side in "lr"
+           for kind, a, b in (("upper_arm", "shoulder", "elbow"), ("lower_arm", "elbow", "wrist"),
+                              ("upper_leg", "hip", "knee"), ("lower_leg", "knee", "ankle"))))
+PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
+LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
+HEAD, TORSO = 0, 1
+
+
+def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
+    """(10,) block widths in pixels: each cylinder's width at ``scale`` pixels per
+    unit, the torso as wide as the marked shoulders show it turned."""
+    j = JOINT_INDEX
+    axis = marks[j["pelvis"]] - marks[j["neck"]]
+    normal = np.array([-axis[1], axis[0]]) / max(np.hypot(*axis), 1e-9)
+    span = abs((marks[j["shoulder_l"]] - marks[j["shoulder_r"]]) @ normal)
+    widths = np.array([WIDTH[SEGMENT_INDEX[p.segment]] for p in PARTS]) * scale
+    widths[TORSO] = torso_width(min(span / (2 * SHOULDER_HALF_SPAN * scale), 1.0)) * scale
+    return widths
+
+
+def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
+    """(16, 2) joints of the 10 tracked blocks: each part's start and end joints, the
+    chest at ``chest`` in the trunk's block frame."""
+    joints = np.empty((len(JOINTS), 2))
+    joints[PART_JOINTS[:, 0]] = parts[:, :2]
+    joints[PART_JOINTS[:, 1]] = block_end(parts)
+    joints[JOINT_INDEX["chest"]] = from_block(chest, parts[TORSO])
+    return joints
+
+
+def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: np.ndarray,
+                part: Part, longest: float) -> tuple[np.ndarray, float]:
+    """The part's block and S in ``image``, searched coarse to fine from the predicted
+    ``start``; every part but the head kept between SHORTEST and 1 times ``longest``
+    pixels and finally lengthened to its end (blocks.lengthen)."""
+    best, s = start.copy(), 0.0
+    for stage in part.schedule:
+        best[M] = np.clip(best[M], SHORTEST * longest, longest)
+        best, s = blocks.search(image, model, grid, best, np.radians(stage.d_theta_deg),
+                                best[M] * np.asarray(stage.d_m), zoom=part.segment == "head",
+                                max_ring=stage.rings, step=stage.step)
+    if part.segment != "head":
+        best[M] = np.clip(best[M], SHORTEST * longest, longest)
+        extra = LENGTHEN_STEPS * longest
+        best, s = blocks.lengthen(image, model, grid, best, extra[best[M] + extra <= longest],
+                                  LENGTHEN_TOLERANCE)
+    return best, s
+
+
+def around_root(image: np.ndarray, root: np.ndarray, upper: tuple,
+                lower: tuple) -> tuple[np.ndarray, float]:
+    """Beyond the paper: the best lower block of a limb hanging from ``root`` over
+    every pair of directions of its two parts, AROUND_STEP degrees apart, each part
+    at its usual length, and the pair's cost (the sum of the two 1/S). A limb lost
+    to clutter or to its twin is found again where it shows. ``upper`` and ``lower``
+    are each (colour model, grid, width, length)."""
+    angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
+    (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
+    uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
+                            root + m_u * np.c_[np.cos(angles), np.sin(angles)], n_u)
+    starts = np.repeat(block_end(uppers), len(angles), axis=0)
+    turns = np.tile(np.c_[np.cos(angles), np.sin(angles)], (len(angles), 1))
+    lowers = blocks.between(starts, starts + m_l * turns, n_l)
+    cost = (1.0 / blocks.score(image, model_u, grid_u, uppers))[:, None] \
+        + (1.0 / blocks.score(image, model_l, grid_l, lowers)).reshape(len(angles), -1)
+    best = int(np.argmin(cost))
+    return lowers[best], float(cost.flat[best])
+
+
+class BodyTracker:
+    """The state carried from frame to frame: every part's block and its change over
+    the last frame (constant-velocity prediction), the colour models and the
+    similarities of the last HISTORY frames, the head's adaptive threshold p and the
+    last frame."""
+
+    def __init__(self, frame0: np.ndarray, marks: np.ndarray):
+        scale = body_scale(marks)
+        self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]],
+                                     part_widths(marks, scale))
+        self.longest = MAX_STRETCH * np.maximum(
+            scale * LENGTH[[SEGMENT_INDEX[p.segment] for p in PARTS]], self.blocks[:, M])
+        self.head_width = self.blocks[HEAD, N]
+        # usual lengths (around_root): as marked, unless marked much foreshortened
+        self.lengths = np.maximum(self.blocks[:, M], USUAL_MIN * self.longest / MAX_STRETCH)
+        self.velocity = np.zeros_like(self.blocks)
+        self.grids = [blocks.make_grid(b[M], b[N], 0.0 if k == HEAD else BEYOND)
+                      for k, b in enumerate(self.blocks)]
+        self.models = [blocks.sample_blocks(frame0, b, g)[0]
+                       for b, g in zip(self.blocks, self.grids)]
+        self.marked = list(self.models)
+        self.history: deque[np.ndarray] = deque(maxlen=HISTORY)
+        self.chest = to_block(marks[JOINT_INDEX["chest"]], self.blocks[TORSO])
+        self.p = P_START
+        self.frame = frame0
+
+    def step(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Track the next frame: its (16, 2) joints and the (10,) similarities S."""
+        predicted = self._predicted()
+        new, s = predicted.copy(), np.zeros(len(PARTS))
+        new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
+        predicted[TORSO, :2] = block_end(new[HEAD])
+        new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
+        for k in LIMBS:
+            self._track_limb(frame, new, s, predicted, k)
+        self._update(frame, new, s)
+        return skeleton(new, self.chest), s
+
+    def _predicted(self) -> np.ndarray:
+        """Every block changed as over the last frame; widths follow the head's zoom
+        (the whole body nears or recedes)."""
+        predicted = self.blocks + self.velocity
+        predicted[:, M] = np.maximum(predicted[:, M], 2.0)
+        predicted[1:, N] = self.blocks[1:, N] * predicted[HEAD, M] / self.blocks[HEAD, M]
+        return predicted
+
+    def _search(self, image: np.ndarray, k: int, start: np.ndarray, new: np.ndarray):
+        """Part k's block and S searched from ``start`` (search_part)."""
+        return search_part(image, self.models[k], self.grids[k], start, PARTS[k],
+                           self.longest[k] * new[HEAD, N] / self.head_width)
+
+    def _track_head(self, frame: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, float]:
+        """The head block, searched from the better of the image difference's and
+        constant velocity's calvaria; then p adapts to the displacement found."""
+        head = self.blocks[HEAD]
+        moved = head_displacement(self.frame, frame, head[:2], block_end(head), self.p)
+        starts = np.stack([np.r_[head[:2] + moved.vector, predicted[2:]], predicted])
+        scores = blocks.score(frame, self.models[HEAD], self.grids[HEAD], starts)
+        start = starts[int(np.argmax(scores))]
+        found, s = self._search(frame, HEAD, start, self.blocks)
+        self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
+        return found, s
+
+    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
+                    predicted: np.ndarray, k: int) -> None:
+        """A limb (parts k, k + 1): its root carried by the trunk's motion, the upper
+        part's direction and length searched from their prediction, the lower part
+        from its prediction hanging there; beyond the paper, where it fits better,
+        from the best pair of directions all around the root (``around_root``)."""
+        root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
+        start = predicted[k].copy()
+        start[:2] = root
+        upper, _ = self._search(image, k, start, new)
+        start = predicted[k + 1].copy()
+        start[:2] = block_end(upper)
+        self._hang(image, new, s, k, root, start)
+        parts = [(self.models[i], self.grids[i], new[i, N],
+                  self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
+        lower, cost = around_root(image, root, *parts)
+        if cost < 1.0 / s[k] + 1.0 / s[k + 1]:
+            self._hang(image, new, s, k, root, lower)
+
+    def _hang(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
+              root: np.ndarray, lower: np.ndarray) -> None:
+        """Limb k from its ``root`` and the lower part searched from ``lower``: the
+        upper part then runs from the root to where the lower part begins."""
+        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new)
+        new[k] = blocks.between(root[None], new[k + 1, None, :2], new[k, N])[0]
+        s[k] = blocks.score(image, self.models[k], self.grids[k], new[k])[0]
+
+    def _update(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> None:
+        """Velocities; colour models by linear weighting (matches at least UPDATE_MIN
+        of the part's median S only, so an occluder's colours stay out)."""
+        self.velocity = new - self.blocks
+        self.velocity[:, THETA] = (self.velocity[:, THETA] + np.pi) % (2 * np.pi) - np.pi
+        self.blocks = new
+        self.history.append(s)
+        typical = np.median(self.history, axis=0)
+        for k in np.flatnonzero(s >= UPDATE_MIN * typical):
+            seen = blocks.sample_blocks(frame, new[k], self.grids[k])[0]
+            adapted = (1 - UPDATE_RATE) * self.models[k] + UPDATE_RATE * seen
+            self.models[k] = ANCHOR * self.marked[k] + (1 - ANCHOR) * adapted
+        self.frame = frame

@@ -1,0 +1,118 @@
+"""Perspective reconstruction (tracking paper, Eq. 6-11): calibration from exact
+projections, the key joints of later frames, joints on their rays, and whole clips
+reconstructed from exact projections of the model's own walk."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from mocap import perspective as P
+from mocap.errors import MocapError
+from mocap.metrics import pa_mpjpe
+from mocap.rays import choose_limb, ray_roots
+from mocap.synth import RenderOptions, plan_scene, scene_truth
+from mocap.walk import walk_cycle
+
+CAMERA = P.Pinhole(800.0, 320.0, 240.0)
+
+
+def known_pose(yaw_deg: float, span: float = 0.36) -> P.Calibration:
+    """A body turned by ``yaw_deg`` (and slightly tilted), 6 m in front of CAMERA."""
+    turn = Rotation.from_euler("y", np.radians(yaw_deg)) * Rotation.from_euler("x", 0.05)
+    rotation = Rotation.from_matrix(P.FACING_CAMERA) * turn
+    return P.Calibration(rotation.as_rotvec(), np.array([0.4, -0.3, 6.0]), span)
+
+
+@pytest.mark.parametrize("yaw, span", [(35.0, 0.36), (-50.0, 0.30), (20.0, 0.42)])
+def test_calibration_recovers_a_known_camera(yaw, span):
+    truth = known_pose(yaw, span)
+    marks = CAMERA.project(truth.to_camera(truth.model()))
+    found = P.calibrate(marks, CAMERA, "right" if yaw > 0 else "left")
+    turn = Rotation.from_rotvec(found.rotvec).inv() * Rotation.from_rotvec(truth.rotvec)
+    assert np.degrees(turn.magnitude()) < 1e-3
+    assert np.abs(found.translation - truth.translation).max() < 1e-4
+    assert found.span == pytest.approx(span, abs=1e-5)
+    assert found.yaw == pytest.approx(yaw, abs=0.2)          # the slight tilt moves it a little
+    assert np.abs(P.line_distances(np.r_[found.rotvec, found.translation, found.span],
+                                   CAMERA, marks)).max() < 1e-6
+
+
+def test_the_turn_picks_between_the_two_fits():
+    truth = known_pose(40.0)
+    marks = CAMERA.project(truth.to_camera(truth.model()))
+    assert P.calibrate(marks, CAMERA, "right").yaw > 0
+    assert P.calibrate(marks, CAMERA, "left").yaw < 0
+
+
+def test_marks_that_fit_no_view_are_refused():
+    truth = known_pose(30.0)
+    marks = CAMERA.project(truth.to_camera(truth.model()))
+    marks[P.JOINT_INDEX["chest"]] += (60.0, 0.0)            # the chest beside the body
+    with pytest.raises(MocapError, match="cannot calibrate"):
+        P.calibrate(marks, CAMERA)
+
+
+def test_key_depths_follow_the_moving_triangle():
+    """Eq. 10-11: from the previous depths to the new frame's, sides kept."""
+    before, after = known_pose(30.0), known_pose(38.0)
+    triangle = before.model()[P.KEY]
+    sides = [np.linalg.norm(triangle[i] - triangle[j]) for i, j in P.KEY_LINES]
+    moved = after.to_camera(triangle) + [0.05, 0.0, -0.1]
+    rays = CAMERA.rays(CAMERA.project(moved))
+    depths = P.key_depths(rays, before.to_camera(triangle)[:, 2], np.array(sides))
+    assert np.allclose(depths, moved[:, 2], atol=1e-7)
+
+
+def test_ray_roots_lie_on_the_ray_at_the_bone_length():
+    known, ray = np.array([0.1, -0.2, 5.0]), np.array([0.05, 0.01, 1.0])
+    roots = ray_roots(known, ray, 0.4)
+    assert np.allclose(np.linalg.norm(roots - known, axis=-1), 0.4)
+    assert np.allclose(np.cross(roots, ray), 0.0, atol=1e-12)
+    assert roots[0, 2] < roots[1, 2]
+    miss = ray_roots(known, ray, 0.01)                      # the ray passes farther away
+    assert np.allclose(miss[0], miss[1])
+    assert np.allclose(np.cross(miss[0] - known, ray) @ ray, 0.0)
+
+
+def test_the_limb_choice_goes_on_through_the_image_plane():
+    """A bone swinging through the image plane: its two roots meet there; the
+    smallest-acceleration path keeps swinging instead of turning back."""
+    t = np.linspace(0.0, 1.0, 30)
+    true = np.stack([np.full_like(t, 0.2), -0.4 * np.ones_like(t), 0.5 * (t - 0.45)], axis=1)
+    mirror = true * [1.0, 1.0, -1.0]
+    cands = np.stack([true, mirror, true, mirror], axis=1)[:, :, None, :].repeat(2, axis=2)
+    picked = choose_limb(cands, np.zeros((len(t), 4)))
+    assert np.allclose(cands[np.arange(len(t)), picked, 0], true)
+
+
+@pytest.mark.parametrize("yaw, bound_mm", [(60.0, 1.0), (120.0, 1.0), (40.0, 20.0)])
+def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm):
+    """The walk of the model's own proportions seen at its true bone lengths. At a
+    render yaw of 40 degrees a forearm that is nearly straight has two mirror-image
+    depths that are equally smooth and equally possible; the choice can miss it."""
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
+                                                           yaw=yaw))
+    truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
+    camera = P.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    turn = "right" if yaw < 90 else "left"
+    found = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
+    trunk = [P.JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis", "shoulder_l",
+                                         "shoulder_r", "hip_l", "hip_r")]
+    assert np.abs(found[:, trunk] - scene.joints_cam[:, trunk] * [1, -1, -1]).max() < 1e-6
+    assert pa_mpjpe(P.to_contract(found), truth.joints3d) * 1000 < bound_mm
+    assert np.allclose(P.to_contract(found)[:, P.JOINT_INDEX["pelvis"]], 0.0)
+
+
+def test_measured_lengths_read_bones_seen_side_on():
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
+                                                           yaw=90.0))
+    truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
+    camera = P.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    depth = -truth.pelvis_camera[:, 2]
+    found = P.measured_lengths(truth.joints2d, depth, camera)
+    true = P.bone_lengths(truth.joints3d[0])
+    trunk = [P.BONE_INDEX[P.JOINT_INDEX["chest"], P.JOINT_INDEX["pelvis"]]]
+    assert found[trunk] == pytest.approx(true[trunk], rel=0.05)
+    assert np.all(found <= true * 1.05)

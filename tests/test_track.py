@@ -1,0 +1,184 @@
+"""The tracking method's 2D side: the marks, morph blocks (block-matching Eq. 3-5,
+sub-pixel sampling, the search path), the head's image difference (Eq. 1-5), the
+reliability fill, and tracking a rendered walk over a moving, cluttered background."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from mocap import blocks, synth
+from mocap.body import JOINT_INDEX, JOINTS
+from mocap.errors import MocapError
+from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
+from mocap.marks import check_marks
+from mocap.track import LOW_RELIABILITY, fill_unreliable, joint_reliability, track_video
+from mocap.walk import walk_cycle
+
+
+@pytest.fixture(scope="module")
+def walk(tmp_path_factory):
+    """A 320x240 three-quarter walk, pinhole camera, panning cluttered background."""
+    video = tmp_path_factory.mktemp("track") / "walk.mp4"
+    truth = synth.render_clip(walk_cycle(1.6, 15.0), video, size=(320, 240), fps=15.0, yaw=45.0,
+                              perspective=400.0, moving_background=True, seed=3)
+    return video, truth
+
+
+# -- marks --------------------------------------------------------------------------------
+
+def test_good_marks_pass_as_array_or_mapping(walk):
+    marks = walk[1].joints2d[0]
+    assert np.array_equal(check_marks(marks, 320, 240), marks)
+    as_dict = {name: tuple(xy) for name, xy in zip(JOINTS, marks)}
+    assert np.array_equal(check_marks(as_dict, 320, 240), marks)
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda m: m.pop("wrist_r"), "joint wrist_r is not marked"),
+    (lambda m: m.update(knee_l=(np.nan, 10.0)), "joint knee_l is not marked"),
+    (lambda m: m.update(ankle_l=(100.0, 240.0)),
+     r"joint ankle_l at \(100.0, 240.0\) is outside the 320x240"),
+    (lambda m: m.update(elbow_x=(1.0, 1.0)), "unknown joint 'elbow_x'"),
+    (lambda m: m.update(shoulder_l=m["shoulder_r"]), "shoulder_l and shoulder_r nearly coincide"),
+    (lambda m: m.update(chest=tuple((np.add(m["shoulder_l"], m["shoulder_r"])) / 2 + [0.5, 0.0])),
+     "chest is nearly on the line"),
+])
+def test_bad_marks_name_the_joint(walk, change, message):
+    marks = {name: tuple(xy) for name, xy in zip(JOINTS, walk[1].joints2d[0])}
+    change(marks)
+    with pytest.raises(MocapError, match=message):
+        check_marks(marks, 320, 240)
+
+
+def test_marks_of_the_wrong_shape_are_refused():
+    with pytest.raises(MocapError, match="expected 16 marked joints"):
+        check_marks(np.zeros((15, 2)), 320, 240)
+
+
+# -- morph blocks -------------------------------------------------------------------------
+
+def test_similarity_is_the_weighted_difference_of_eq_3_to_5():
+    grid = blocks.make_grid(8, 6)         # centre b1, the middle half: rows 2-5, columns 1-4
+    model = np.zeros((8, 6, 3), np.float32)
+    seen = np.zeros((1, 8, 6, 3), np.float32)
+    seen[0, :, :, 0] = 30.0                                # one channel off by 30 everywhere
+    seen[0, 3, 3] = [30.0, 60.0, 90.0]                     # one centre sub-pixel off more
+    diff = np.full((8, 6), 10.0)                           # W_R = W_G = W_B = 1/3
+    diff[3, 3] = 60.0
+    weights = np.full((8, 6), blocks.MARGIN_WEIGHT)
+    weights[2:6, 1:5] = blocks.CENTRE_WEIGHT
+    expected = weights.sum() / (weights * diff).sum()
+    assert blocks.similarity(model, seen, grid)[0] == pytest.approx(expected, rel=1e-5)
+
+
+def test_sub_pixel_sampling_is_bilinear():
+    y, x = np.mgrid[0:60, 0:80].astype(np.float32)
+    image = np.dstack([x, y, x + y]).astype(np.float32)   # a linear ramp: bilinear is exact
+    block = np.array([20.3, 15.7, np.radians(33.0), 21.4, 6.6])
+    grid = blocks.make_grid(block[blocks.M], block[blocks.N])
+    xs, ys = blocks.block_points(block[None], grid)
+    seen = blocks.sample_blocks(image, block, grid)[0]
+    assert np.allclose(seen[..., 0], xs, atol=0.01) and np.allclose(seen[..., 1], ys, atol=0.01)
+
+
+def test_rings_of_the_search_path():
+    for r in range(4):
+        ring = blocks.ring(r)
+        assert len({tuple(p) for p in ring}) == max(1, 8 * r)
+        assert np.all(np.abs(ring).max(axis=1) == r)
+
+
+def test_search_finds_a_moved_turned_block():
+    rng = np.random.default_rng(1)
+    image = rng.integers(0, 255, (120, 120, 3)).astype(np.uint8)
+    image = cv2.GaussianBlur(image, (5, 5), 2)
+    true = np.array([50.0, 30.0, np.radians(70.0), 40.0, 12.0])
+    along = np.array([np.cos(true[2]), np.sin(true[2])])
+    across = np.array([-along[1], along[0]])
+    corners = [true[:2] + s * 6 * across + t * 40 * along
+               for s, t in ((1, 0), (1, 1), (-1, 1), (-1, 0))]
+    cv2.fillConvexPoly(image, np.round(corners).astype(np.int32), (40, 90, 200))
+    grid = blocks.make_grid(40, 12, beyond=0.3)
+    model = blocks.sample_blocks(image, true, grid)[0]
+    start = true + [3.0, -2.0, np.radians(6.0), 0.0, 0.0]
+    found, s = blocks.search(image, model, grid, start, np.radians(np.arange(-8, 9, 2.0)),
+                             np.array([0.0]), max_ring=5)
+    assert np.hypot(*(found[:2] - true[:2])) <= 1.0
+    assert abs(np.degrees(found[2] - true[2])) <= 1.0
+    assert s == pytest.approx(1.0)                         # exact match: 1 / MIN_DIFF
+
+
+# -- the head's image difference ------------------------------------------------------------
+
+def test_two_peaks_give_the_displacement_and_its_direction():
+    t = np.arange(-40.0, 41.0)
+    profile = np.zeros_like(t)
+    profile[(t >= -10) & (t < -4)] = 90.0                  # H uncovered: 6 px wide
+    profile[(t >= 10) & (t < 16)] = 90.0                   # H' covers: 6 px farther out
+    assert two_peak_displacement(t, profile, 0.5) == pytest.approx(6.0)
+    assert two_peak_displacement(-t[::-1], profile[::-1], 0.5) == pytest.approx(-6.0)
+    assert adapt_threshold(0.5, 8.0, 6.0) > 0.5 > adapt_threshold(0.5, 4.0, 6.0)
+
+
+def test_head_motion_by_image_difference_on_a_still_background():
+    rng = np.random.default_rng(2)
+    room = cv2.GaussianBlur(rng.integers(60, 200, (160, 160, 3)).astype(np.uint8), (0, 0), 3)
+    frames = []
+    for centre in ((70, 80), (75, 77)):                    # the head moves (5, -3)
+        img = room.copy()
+        cv2.circle(img, centre, 10, (140, 170, 220), -1)
+        frames.append(img)
+    moved = head_displacement(frames[0], frames[1], np.array([70.0, 70.0]),
+                              np.array([70.0, 90.0]), 0.5)
+    assert np.hypot(*(moved.vector - [5.0, -3.0])) < 1.5
+
+
+# -- reliability and filling ------------------------------------------------------------------
+
+def test_unreliable_stretches_are_interpolated_between_reliable_frames():
+    joints = np.zeros((6, 16, 2))
+    joints[:, :, 0] = np.array([0.0, 1.0, 50.0, 60.0, 4.0, 70.0])[:, None]   # 2, 3 lost; 5 the end
+    reliability = np.ones((6, 16))
+    reliability[[2, 3, 5]] = LOW_RELIABILITY / 2
+    filled = fill_unreliable(joints, reliability)
+    assert np.allclose(filled[:, 0, 0], [0.0, 1.0, 2.0, 3.0, 4.0, 70.0])
+
+
+def test_joint_reliability_follows_the_parts_that_placed_it():
+    s = np.ones((5, 10)) * 0.2
+    s[0] = np.inf                                          # the marked frame
+    s[2, 3] = 0.05                                         # lower_arm_l matched 4x worse
+    r = joint_reliability(s)
+    assert np.all(r[0] == 1.0)
+    assert r[2, JOINT_INDEX["wrist_l"]] == pytest.approx(0.25)
+    assert r[2, JOINT_INDEX["elbow_l"]] == pytest.approx(0.25)
+    assert r[2, JOINT_INDEX["wrist_r"]] == 1.0
+
+
+# -- whole clips ---------------------------------------------------------------------------
+
+def test_tracking_a_rendered_walk_on_a_moving_background(walk):
+    video, truth = walk
+    done = []
+    result = track_video(video, truth.joints2d[0], lambda d, t: done.append((d, t)),
+                         orientation="forward_right")
+    n = len(truth.joints2d)
+    assert result.joints2d.shape == (n, 16, 2) and result.reliability.shape == (n, 16)
+    assert result.joints3d.shape == (n, 16, 3) and np.isfinite(result.joints3d).all()
+    assert done[-1] == (n, n) and result.focal_px == 320.0
+    err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
+    assert np.median(err) < 0.03
+    trunk = [JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis")]
+    assert err[:, trunk].max() < 0.05
+
+
+def test_track_video_refuses_bad_marks_before_tracking(walk):
+    video, truth = walk
+    marks = truth.joints2d[0].copy()
+    marks[JOINT_INDEX["hip_r"]] = (400.0, 10.0)
+    with pytest.raises(MocapError, match="hip_r"):
+        track_video(video, marks)
+    with pytest.raises(MocapError, match="orientation"):
+        track_video(video, truth.joints2d[0], orientation="upside_down")
