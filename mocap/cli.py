@@ -12,6 +12,10 @@ from mocap.errors import MocapError
 def _add_fit(sub) -> None:
     p = sub.add_parser("fit", help="fit the body model to every frame of a video and lift it to 3D")
     p.add_argument("video", help="input video (any container/codec OpenCV reads)")
+    p.add_argument("--method", choices=("silhouette", "track"), default="silhouette",
+                   help="silhouette: fit the cylinder body to each frame's silhouette (static "
+                        "background); track: follow the joints marked on frame 0 (any background; "
+                        "needs --annotations)")
     p.add_argument("--annotations", metavar="FILE",
                    help="mocap-annotations JSON: orientation, foreshortening, joint overrides, keyframes")
     p.add_argument("--out", default=None, help="motion JSON to write (default: VIDEO.motion.json)")
@@ -28,7 +32,8 @@ def _run_fit(args) -> None:
     from mocap.session import fit_video_to_file
     if args.smooth < 0:
         raise MocapError(f"--smooth must be 0 or more, got {args.smooth}")
-    written = fit_video_to_file(args.video, args.out, annotations=args.annotations, bvh=args.bvh,
+    written = fit_video_to_file(args.video, args.out, annotations=args.annotations,
+                                method=args.method, bvh=args.bvh,
                                 glb=args.glb, csv=args.csv, smooth=args.smooth,
                                 progress=None if args.quiet else _progress)
     print("wrote " + ", ".join(str(p) for p in written))

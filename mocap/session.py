@@ -33,6 +33,7 @@ from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held
                                segment_vectors, yaws)
 from mocap.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
 from mocap.silhouette import estimate_background, extract_silhouette
+from mocap.track import track_video
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
 
 Progress = Callable[[int, int], None]
@@ -348,21 +349,59 @@ class Session:
     def write(self, out: str | os.PathLike, *, bvh: str | os.PathLike | None = None,
               glb: str | os.PathLike | None = None, csv: str | os.PathLike | None = None) -> list[Path]:
         """Write the motion file and the exports asked for; returns the paths written."""
-        from mocap.export.bvh import write_bvh
-        from mocap.export.csv import write_csv
-        from mocap.export.glb import write_glb
         motion = self.motion()
-        written = [write_motion(out, video_dict(self.info), self.motion_frames(motion))]
-        for path, writer in ((bvh, write_bvh), (glb, write_glb), (csv, write_csv)):
-            if path is not None:
-                written.append(writer(path, motion))
-        return written
+        return write_outputs(self.info, motion, self.motion_frames(motion), out, bvh=bvh, glb=glb,
+                             csv=csv)
+
+
+def write_outputs(info: VideoInfo, motion: Motion, frames: list[dict], out, *, bvh=None, glb=None,
+                  csv=None) -> list[Path]:
+    """The motion file and the exports asked for (None: not wanted); the paths written."""
+    from mocap.export.bvh import write_bvh
+    from mocap.export.csv import write_csv
+    from mocap.export.glb import write_glb
+    written = [write_motion(out, video_dict(info), frames)]
+    for path, writer in ((bvh, write_bvh), (glb, write_glb), (csv, write_csv)):
+        if path is not None:
+            written.append(writer(path, motion))
+    return written
 
 
 def fit_video_to_file(video: str | os.PathLike, out: str | os.PathLike | None, *,
-                      annotations: str | os.PathLike | None = None, bvh=None, glb=None, csv=None,
-                      smooth: float = 0.0, progress: Progress | None = None) -> list[Path]:
-    """`mocap fit`: fit, lift, interpolate and write the motion file and exports."""
-    session = Session.from_video(video, annotations, smooth=smooth, progress=progress)
+                      annotations: str | os.PathLike | None = None, method: str = "silhouette",
+                      bvh=None, glb=None, csv=None, smooth: float = 0.0,
+                      progress: Progress | None = None) -> list[Path]:
+    """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
+    interpolate and write the motion file and exports."""
     out = Path(out) if out else Path(video).with_suffix(".motion.json")
+    if method == "track":
+        info, motion, frames = track_motion(video, annotations, smooth, progress)
+        return write_outputs(info, motion, frames, out, bvh=bvh, glb=glb, csv=csv)
+    session = Session.from_video(video, annotations, smooth=smooth, progress=progress)
     return session.write(out, bvh=bvh, glb=glb, csv=csv)
+
+
+def track_motion(video: str | os.PathLike, annotations: str | os.PathLike | None, smooth: float,
+                 progress: Progress | None) -> tuple[VideoInfo, Motion, list[dict]]:
+    """The tracking method (mocap.track) from the 16 joints marked in the annotations'
+    frame 0, its keyframes interpolated like the silhouette method's. A frame's
+    score is the mean reliability of its joints' block matches."""
+    info = open_video(video)
+    if annotations is None:
+        raise MocapError("the tracking method needs --annotations with frame 0's 16 joints "
+                         '(frames["0"].joints2d)')
+    notes = load_annotations(annotations, info.frame_count)
+    first = notes.frames.get(0)
+    result = track_video(video, first.joints2d if first else {}, progress,
+                         orientation=notes.orientations(1)[0])
+    heights = np.linalg.norm(result.joints2d[:, JOINT_INDEX["head_top"]] - result.joints2d[
+        :, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1), axis=-1)
+    ppu = np.full(info.frame_count, np.percentile(heights, SCALE_PERCENTILE) / BODY_HEIGHT)
+    root = root_track(result.joints2d, ppu, (info.width, info.height))
+    keys = notes.keyframe_indices(info.frame_count)
+    motion = build_motion({k: result.joints3d[k] for k in keys}, info.frame_count, info.fps,
+                          root=root, smooth=smooth)
+    frames = [{"index": i, "keyframe": bool(motion.keyframes[i]), "person": True,
+               "score": float(result.reliability[i].mean()), "joints2d": result.joints2d[i],
+               "joints3d": motion.joints3d[i]} for i in range(info.frame_count)]
+    return info, motion, frames
