@@ -1,0 +1,159 @@
+"""The page's controls: built by one function that returns a dataclass of handles.
+
+Built on ``server.gui``, so every tab shares them (one truth). Hotkeys are viser
+commands; ``HOTKEYS`` lists them once for the commands and the help text.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.state import AppState, FrameView
+from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
+from mocap.lift import ORIENTATIONS
+
+AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
+NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing"
+FRAME_STEPS = ("◀ frame", "frame ▶")
+KEY_STEPS = ("◀ keyframe", "keyframe ▶")
+EDITS = ("↶ undo", "redo ↷")
+DOWNLOADS = {"BVH": "bvh", "GLB": "glb", "motion JSON": "json"}
+SIGN_COLOURS = {1: "teal", -1: "grape"}
+FLAT = 0.05                         # |dZ| / length below which a segment lies in the image plane
+REVIEW_LINES = 8                    # doubtful frames listed on the page
+# action -> (label in the command palette, key, modifier). The keys of a video editor's
+# J/K/L; viser's own camera keys (W, A, S, D, Q, E, the arrows) are left alone.
+HOTKEYS: dict[str, tuple[str, str, str | None]] = {
+    "prev_frame": ("Previous frame", "J", None),
+    "next_frame": ("Next frame", "L", None),
+    "prev_key": ("Previous keyframe", "J", "shift"),
+    "next_key": ("Next keyframe", "L", "shift"),
+    "keyframe": ("Mark or unmark keyframe", "K", None),
+    "doubtful": ("Next doubtful frame", "N", None),
+    "undo": ("Undo", "Z", "cmd/ctrl"),
+    "redo": ("Redo", "Z", "cmd/ctrl+shift"),
+    "play": ("Play or pause the animation", "P", None),
+}
+
+
+def segment_label(segment: str) -> str:
+    """'upper_arm_l' -> 'upper arm L'."""
+    words = segment.split("_")
+    return " ".join(words[:-1]) + f" {words[-1].upper()}" if words[-1] in ("l", "r") else segment
+
+
+HELP = "  \n".join(f"**{'+'.join(filter(None, [mod, key]))}** {label.lower()}"
+                   for label, key, mod in HOTKEYS.values())
+
+
+@dataclass(frozen=True)
+class Controls:
+    """Handles of every control on the page."""
+
+    progress: object
+    status: object
+    frame: object
+    frame_steps: object
+    key_steps: object
+    keyframe: object
+    frame_info: object
+    orientation: object
+    orientation_note: object
+    segments: dict
+    joint: object
+    clear_override: object
+    overrides: object
+    edits: object
+    doubtful: object
+    review: object
+    play: object
+    downloads: object
+    commands: dict
+
+
+def build_controls(gui, n_frames: int) -> Controls:
+    """Lay out the control panel for a video of ``n_frames`` frames: the frame and
+    the undo history always in view, the rest on tabs."""
+    gui.configure_theme(control_width="large", show_share_button=False)
+    gui.main_panel.dock_right()
+    progress = gui.add_progress_bar(0.0, animated=True)
+    status = gui.add_markdown("Preprocessing…")
+    frame = gui.add_slider("Frame", 0, max(n_frames - 1, 0), 1, 0)
+    frame_steps = gui.add_button_group("Step", FRAME_STEPS)
+    key_steps = gui.add_button_group("Jump", KEY_STEPS)
+    keyframe = gui.add_button("Unmark keyframe", icon="key")
+    frame_info = gui.add_markdown("")
+    edits = gui.add_button_group("Edit", EDITS)
+    tabs = gui.add_tab_group()
+    with tabs.add_tab("Body", icon="walk"):
+        orientation = gui.add_dropdown("Facing", (AUTO, *ORIENTATIONS), initial_value=AUTO,
+                                       hint="which way the performer faces, from this frame on")
+        orientation_note = gui.add_markdown("")
+        gui.add_markdown("Foreshortening: toward or away from the camera. Click to flip, "
+                         "or click the segment in 3D.")
+        segments = {s: gui.add_button(segment_label(s), disabled=True) for s in SEGMENT_NAMES}
+    with tabs.add_tab("Joints", icon="target"):
+        joint = gui.add_dropdown("Place", (NO_JOINT, *JOINTS), initial_value=NO_JOINT,
+                                 hint="choose a joint, then click where it is on the video frame")
+        gui.add_markdown("Choose a joint, then click where it is on the video frame.")
+        clear_override = gui.add_button("Clear override", icon="eraser",
+                                        hint="the chosen joint's, or every one on this frame")
+        overrides = gui.add_markdown("")
+    with tabs.add_tab("Review", icon="alert-triangle"):
+        doubtful = gui.add_button("Next doubtful frame", icon="alert-triangle")
+        review = gui.add_markdown("")
+    with tabs.add_tab("Export", icon="download"):
+        play = gui.add_button("Play", icon="player-play", disabled=True)
+        downloads = gui.add_button_group("Download", tuple(DOWNLOADS))
+    with gui.add_folder("Keys", expand_by_default=False):
+        gui.add_markdown(HELP)
+    commands = {action: gui.add_command(label, hotkey=key, modifier=mod)
+                for action, (label, key, mod) in HOTKEYS.items()}
+    return Controls(progress, status, frame, frame_steps, key_steps, keyframe, frame_info,
+                    orientation, orientation_note, segments, joint, clear_override, overrides,
+                    edits, doubtful, review, play, downloads, commands)
+
+
+# -- what the controls say about a frame ------------------------------------------------
+
+def sign_button(segment: str, view: FrameView) -> dict:
+    """Label, colour and state of a segment's foreshortening toggle."""
+    if view.signs is None:
+        return {"label": f"{segment_label(segment)}: –", "color": None, "disabled": True}
+    k = SEGMENT_INDEX[segment]
+    sign, note = view.signs[k], view.sign_notes[k]
+    flat = " · in the image plane" if view.depths[k] < FLAT else ""
+    return {"label": f"{segment_label(segment)}: {'toward' if sign > 0 else 'away'}{flat}"
+                     + ("" if note == "guessed" else f" ({note})"),
+            "color": SIGN_COLOURS[sign], "disabled": False}
+
+
+def frame_text(view: FrameView) -> str:
+    """The frame's markdown: which frame, whether a keyframe, fit quality, doubts."""
+    head = f"**Frame {view.index}** of 0–{view.n_frames - 1} · " + (
+        "keyframe" if view.keyframe else "not a keyframe (interpolated in the export)")
+    if not view.fitted:
+        body = "Not fitted yet." if view.progress.error is None else "Not fitted."
+    elif view.score is None:
+        body = "Nobody found on this frame."
+    else:
+        body = f"Similarity S = **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
+    return f"{head}  \n{body}"
+
+
+def orientation_text(view: FrameView) -> str:
+    """Which way the performer faces on the frame, and who said so."""
+    if view.orientation is None:
+        return "Facing: not known yet."
+    return f"Facing **{view.orientation.replace('_', ' ')}** ({view.orientation_note})."
+
+
+def review_text(state: AppState) -> str:
+    """The review queue's head as markdown."""
+    queue = state.review_queue()
+    if not state.progress.ready:
+        return "Ranked once every frame is fitted."
+    if not queue:
+        return "No doubtful frame."
+    lines = [f"- **{d.frame}**: {'; '.join(d.reasons)}" for d in queue[:REVIEW_LINES]]
+    return f"{len(queue)} doubtful frames, most doubtful first:\n" + "\n".join(lines)

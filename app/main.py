@@ -1,0 +1,309 @@
+"""`mocap serve`: the browser app on one video.
+
+``App`` wires the controls (``app.controls``) and the scene (``app.views``) to one
+``AppState``: a callback only turns an event into a call on the state; every change
+of the state redraws what it changed (``App.refresh``), for every tab at once.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import viser
+
+from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, NO_JOINT, Controls,
+                          build_controls, frame_text, orientation_text, review_text, sign_button)
+from app.state import AppState, FrameView
+from app.views import FrameCache, Layout, SceneView, caption_image, silhouette_image, video_image
+from mocap.body import JOINT_INDEX
+from mocap.errors import MocapError
+
+SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
+CAMERA_FOV = math.radians(30.0)
+
+
+class Player:
+    """Plays the animation in the 3D panels at the video's frame rate, in a thread."""
+
+    def __init__(self, app: "App"):
+        self.app = app
+        self.frame = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def playing(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def toggle(self) -> None:
+        if self.playing:
+            self.stop()
+        else:
+            self.start()
+
+    def start(self) -> None:
+        """Play from the current frame on, looping."""
+        motion = self.app.state.motion()
+        self.frame = self.app.state.frame
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, args=(motion.joints3d, motion.fps),
+                                        daemon=True, name="mocap-player")
+        self._thread.start()
+        self.app.refresh(force=True)
+
+    def _run(self, joints3d: np.ndarray, fps: float) -> None:
+        while not self._stop.wait(1.0 / fps):
+            self.frame = (self.frame + 1) % len(joints3d)
+            self.app.show_playing(joints3d[self.frame], self.frame)
+
+    def stop(self) -> None:
+        """Stop, and make the frame the animation stopped at the current one."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if not self.app.state.go_to(self.frame):
+            self.app.refresh(force=True)
+
+
+class App:
+    """One video's app on one viser server."""
+
+    def __init__(self, server: viser.ViserServer, state: AppState):
+        self.server, self.state = server, state
+        self.frames = FrameCache(state.info, state.scale)
+        height, width = self.frames.get(0).shape[:2]
+        self.size = (width, height)
+        self.layout = Layout.for_video(width, height)
+        self.scene = SceneView(server.scene, self.layout, self.size, self._image_clicked,
+                               lambda segment, event: self._run(event.client, lambda: self._flip(segment)))
+        self.controls: Controls = build_controls(server.gui, state.n_frames)
+        self.player = Player(self)
+        self._render_lock = threading.RLock()
+        self._shown: dict[str, object] = {}
+        self._wire()
+        self._place_camera()
+        state.on_change(self.refresh)
+        self.refresh()
+
+    # -- events -> state ----------------------------------------------------------
+
+    def _run(self, client, action: Callable[[], object]) -> None:
+        """Do a user's action; a refused one is said to that user's tab."""
+        try:
+            action()
+        except MocapError as exc:
+            if client is not None:
+                client.add_notification("Not done", str(exc), color="red", auto_close_seconds=6.0)
+
+    def _on(self, action: Callable[[], object]) -> Callable:
+        """An event callback that runs ``action`` for the event's tab."""
+        return lambda event: self._run(event.client, action)
+
+    def _wire(self) -> None:
+        c, state = self.controls, self.state
+        actions: dict[str, Callable[[], object]] = {
+            "prev_frame": lambda: state.go_to(state.frame - 1),
+            "next_frame": lambda: state.go_to(state.frame + 1),
+            "prev_key": lambda: self._jump(state.keyframe_after(state.frame, -1)),
+            "next_key": lambda: self._jump(state.keyframe_after(state.frame, 1)),
+            "keyframe": lambda: state.toggle_keyframe(state.frame),
+            "doubtful": lambda: self._jump(state.next_doubtful(), "no doubtful frame"),
+            "undo": lambda: self._jump(state.undo(), "nothing to undo"),
+            "redo": lambda: self._jump(state.redo(), "nothing to redo"),
+            "play": self.player.toggle,
+        }
+        for action, command in c.commands.items():
+            command.on_trigger(self._on(actions[action]))
+        for handle, action in ((c.keyframe, "keyframe"), (c.doubtful, "doubtful"), (c.play, "play")):
+            handle.on_click(self._on(actions[action]))
+        for group, options, pair in ((c.frame_steps, FRAME_STEPS, ("prev_frame", "next_frame")),
+                                     (c.key_steps, KEY_STEPS, ("prev_key", "next_key")),
+                                     (c.edits, EDITS, ("undo", "redo"))):
+            group.on_click(lambda e, o=options, p=pair: self._run(
+                e.client, actions[p[o.index(e.target.value)]]))
+        c.frame.on_update(self._from_client(lambda: state.go_to(int(c.frame.value))))
+        c.orientation.on_update(self._from_client(lambda: state.set_orientation(
+            state.frame, None if c.orientation.value == AUTO else c.orientation.value)))
+        c.joint.on_update(lambda _e: self.refresh())
+        c.clear_override.on_click(self._on(self._clear_override))
+        c.downloads.on_click(lambda e: self._run(e.client, lambda: self._download(e)))
+        for segment, button in c.segments.items():
+            button.on_click(self._on(lambda s=segment: self._flip(s)))
+
+    def _from_client(self, action: Callable[[], object]) -> Callable:
+        """An on_update callback that ignores the server's own updates of the control."""
+        return lambda e: self._run(e.client, action) if e.client is not None else None
+
+    def _jump(self, frame: int | None, otherwise: str = "no such frame to go to") -> None:
+        if frame is None:
+            raise MocapError(otherwise)
+        self.state.go_to(frame)
+
+    def _flip(self, segment: str) -> None:
+        self.state.flip_sign(self.state.frame, segment)
+
+    def _image_clicked(self, event) -> None:
+        joint = self.controls.joint.value
+        def place() -> None:
+            if joint == NO_JOINT:
+                raise MocapError("choose a joint under 'Joint override' first, then click where it is")
+            at = self.layout.video_pixel(event.ray_origin, event.ray_direction, self.size)
+            if at is not None:
+                xy = (at[0] / self.state.scale - 0.5, at[1] / self.state.scale - 0.5)
+                self.state.set_override(self.state.frame, joint, xy)
+        self._run(event.client, place)
+
+    def _clear_override(self) -> None:
+        joint = self.controls.joint.value
+        self.state.clear_overrides(self.state.frame, None if joint == NO_JOINT else joint)
+
+    def _download(self, event) -> None:
+        name, data = self.state.export(DOWNLOADS[event.target.value])
+        event.client.send_file_download(name, data, save_immediately=True)
+
+    # -- state -> page ------------------------------------------------------------
+
+    def refresh(self, force: bool = False) -> None:
+        """Show the current state: only what changed since the last time is sent."""
+        with self._render_lock:
+            if force:
+                self._shown.clear()
+            view = self.state.view()
+            self._show_images(view)
+            if not self.player.playing:
+                self._show_pose(view)
+            self._show_controls(view)
+
+    def _changed(self, part: str, key: object) -> bool:
+        if self._shown.get(part) == key:
+            return False
+        self._shown[part] = key
+        return True
+
+    def _marks(self, view: FrameView) -> dict[str, tuple[float, float]]:
+        """Joints ringed on the video frame: the overrides, and the joint being placed."""
+        marks = dict(view.overrides)
+        joint = self.controls.joint.value
+        if joint != NO_JOINT and joint not in marks and view.joints2d is not None:
+            marks[joint] = tuple(view.joints2d[JOINT_INDEX[joint]])
+        return marks
+
+    def _show_images(self, view: FrameView) -> None:
+        marks = self._marks(view)
+        if self._changed("video", (view.index, sorted(marks.items()))):
+            self.scene.show_video(video_image(self.frames.get(view.index), marks, self.state.scale))
+        joints = None if view.joints2d is None else view.joints2d.tobytes()
+        if self._changed("silhouette", (view.index, view.silhouette_ready, joints, view.sides_known,
+                                        sorted(view.overrides.items()))):
+            self.scene.show_silhouette(self._silhouette_image(view))
+        self.scene.caption("video", f"video frame {view.index}")
+        self.scene.caption("silhouette", "silhouette and fit" + (
+            f" · S = {view.score:.2f}" if view.score is not None else ""))
+
+    def _silhouette_image(self, view: FrameView) -> np.ndarray:
+        if not view.silhouette_ready:
+            return caption_image(self.size, "silhouette not found yet")
+        if view.silhouette is None:
+            return caption_image(self.size, "nobody found on this frame")
+        return silhouette_image(view.silhouette, view.joints2d, view.sides_known, view.overrides,
+                                self.state.scale, self.size)
+
+    def _show_pose(self, view: FrameView) -> None:
+        if self._changed("pose", None if view.pose3d is None else view.pose3d.tobytes()):
+            self.scene.show_pose(view.pose3d)
+        if view.pose3d is not None:
+            note = ""
+        elif not view.progress.ready:
+            note = " · after the fit" if view.progress.error is None else " · none"
+        else:
+            note = " · nobody found"
+        self.scene.caption("front", "3D, seen from the camera" + note)
+        self.scene.caption("side", "3D, seen from the side (camera to the right)" + note)
+
+    def show_playing(self, joints3d: np.ndarray, frame: int) -> None:
+        """Pose the 3D bodies for a frame of the playing animation."""
+        with self._render_lock:
+            self.scene.show_pose(joints3d)
+            self.scene.caption("front", f"3D · playing frame {frame}")
+            self._shown.pop("pose", None)
+
+    def _show_controls(self, view: FrameView) -> None:
+        c = self.controls
+        self._show_progress(view)
+        _set(c.frame, value=view.index)
+        _set(c.keyframe, label="Unmark keyframe" if view.keyframe else "Mark as keyframe")
+        _set(c.frame_info, content=frame_text(view))
+        _set(c.orientation, value=view.orientation if view.orientation_note == "set here" else AUTO)
+        _set(c.orientation_note, content=orientation_text(view))
+        for segment, button in c.segments.items():
+            _set(button, **sign_button(segment, view))
+        _set(c.overrides, content="  \n".join(f"**{j}** at ({x:.0f}, {y:.0f})"
+                                              for j, (x, y) in view.overrides.items())
+             or "No override on this frame.")
+        _set(c.play, disabled=not view.progress.ready,
+             label="Pause" if self.player.playing else "Play",
+             icon="player-pause" if self.player.playing else "player-play")
+        _set(c.review, content=review_text(self.state))
+
+    def _show_progress(self, view: FrameView) -> None:
+        p, c = view.progress, self.controls
+        _set(c.progress, value=100.0 * p.done / max(p.total, 1), visible=not p.ready)
+        if p.error is not None:
+            text = f"**Stopped:** {p.error}"
+        elif p.ready:
+            text = f"{view.n_frames} frames fitted. Edits are saved to `{self.state.path.name}`."
+        else:
+            text = f"Preprocessing: {p.stage}… {100 * p.done // max(p.total, 1)}%"
+        _set(c.status, content=text)
+
+    def _place_camera(self) -> None:
+        """Look at the four panels from +z, all of them in view."""
+        camera = self.server.initial_camera
+        reach = self.layout.height + 0.5
+        camera.fov = CAMERA_FOV
+        camera.look_at = (0.0, 0.0, 0.0)
+        camera.position = (0.0, 0.0, 1.1 * reach / math.tan(CAMERA_FOV / 2))
+        camera.up = (0.0, 1.0, 0.0)
+
+
+def _set(handle, **props) -> None:
+    """Assign the props of a handle that differ (each assignment is a message)."""
+    for name, value in props.items():
+        if getattr(handle, name) != value:
+            setattr(handle, name, value)
+
+
+def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: int = 8080) -> App:
+    """The app on ``video`` (default: the bundled sample) on a new viser server;
+    preprocessing starts with ``app.state.start()``."""
+    state = AppState(video or SAMPLE)
+    return App(viser.ViserServer(host=host, port=port, verbose=False), state)
+
+
+def main(video: str | None = None, port: int = 8080, host: str = "127.0.0.1",
+         progress: Callable[[int, int], None] | None = None) -> None:
+    """Serve until interrupted: print the page's address, then preprocess with
+    ``progress(done, total)`` reporting each step."""
+    app = create(video, host=host, port=port)
+    print(f"mocap: serving {app.state.info.path} at http://{host}:{app.server.get_port()}/",
+          flush=True)
+    app.state.start(progress)
+    try:
+        app.state.ready.wait()
+        if app.state.progress.error is not None:
+            print(f"mocap: {app.state.progress.error}", file=sys.stderr, flush=True)
+        else:
+            print(f"mocap: ready, {app.state.n_frames} frames fitted; edits are saved to "
+                  f"{app.state.path}", flush=True)
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        app.server.stop()

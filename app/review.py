@@ -1,0 +1,94 @@
+"""The review queue: which frames' fits deserve a look, and why.
+
+Four signs of a doubtful frame, each a short function over a session's resolved
+lifting inputs (anatomical 2D joints, overrides applied) and fits:
+
+- a low silhouette similarity S (Eq. 3) of the fit;
+- a segment seen nearly end-on (foreshortening ratio near zero), where its image
+  direction and its depth (Eq. 5) are least sure;
+- a joint limit of Table 1 broken (waist, neck, hips);
+- a likely left/right swap: the left and right hands or feet each lie nearer where
+  the other one was on the frame before.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mocap.body import ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.session import Session
+
+LOW_SCORE = 0.7           # S below this is a doubtful fit
+END_ON_RATIO = 0.3        # seen length / length below this: the segment points at the camera
+SWAP_MARGIN = 0.5         # crossed distances below this fraction of the kept ones: a swap
+SWAP_MIN_MOVE = 0.03      # of the body height: smaller motions say nothing about sides
+REASON_WEIGHT = 0.3       # doubt added by each reason beyond the score's own 1 - S
+_PAIRS = (("wrist_l", "wrist_r"), ("ankle_l", "ankle_r"))
+
+
+@dataclass(frozen=True)
+class Doubt:
+    """A frame worth reviewing: how doubtful (higher first) and why."""
+
+    frame: int
+    value: float
+    reasons: tuple[str, ...]
+
+
+def end_on_segments(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(F, 10) bool: segments seen shorter than END_ON_RATIO of their length."""
+    ends = joints2d[:, SEGMENT_JOINTS]
+    seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) / px_per_unit[:, None]
+    return seen < END_ON_RATIO * lengths
+
+
+def broken_limits(joints2d: np.ndarray) -> np.ndarray:
+    """(F, len(ANGLE_LIMITS)) bool: image angles outside Table 1's joint limits."""
+    out = []
+    for segment, (lo, hi) in ANGLE_LIMITS.items():
+        a, b = SEGMENT_JOINTS[SEGMENT_INDEX[segment]]
+        d = joints2d[:, b] - joints2d[:, a]
+        angle = np.degrees(np.arctan2(-d[:, 1], d[:, 0])) % 360.0
+        out.append((angle < lo) | (angle > hi))
+    return np.stack(out, axis=1)
+
+
+def likely_swaps(joints2d: np.ndarray, px_per_unit: np.ndarray) -> np.ndarray:
+    """(F, 2) bool for hands and feet: each of the pair lies much nearer the other's
+    place on the previous frame than its own (frame 0 never)."""
+    out = np.zeros((len(joints2d), len(_PAIRS)), bool)
+    for p, (left, right) in enumerate(_PAIRS):
+        now = joints2d[1:, [JOINT_INDEX[left], JOINT_INDEX[right]]]
+        before = joints2d[:-1, [JOINT_INDEX[left], JOINT_INDEX[right]]]
+        kept = np.linalg.norm(now - before, axis=-1).sum(-1)
+        crossed = np.linalg.norm(now - before[:, ::-1], axis=-1).sum(-1)
+        moved = kept > SWAP_MIN_MOVE * BODY_HEIGHT * px_per_unit[1:]
+        out[1:, p] = moved & (crossed < SWAP_MARGIN * kept)
+    return out
+
+
+def review_queue(session: Session) -> list[Doubt]:
+    """Every doubtful frame with a person, most doubtful first."""
+    inputs = session.inputs
+    scores = np.array([np.nan if f.score is None else f.score for f in session.fits])
+    signs = (scores < LOW_SCORE,
+             end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
+             broken_limits(inputs.joints2d),
+             likely_swaps(inputs.joints2d, inputs.px_per_unit))
+    queue = []
+    for i in np.flatnonzero(np.isfinite(scores)):
+        reasons = _reasons(scores[i], *(sign[i] for sign in signs))
+        if reasons:
+            queue.append(Doubt(int(i), float(1.0 - scores[i] + REASON_WEIGHT * len(reasons)), reasons))
+    return sorted(queue, key=lambda d: (-d.value, d.frame))
+
+
+def _reasons(score: float, low: bool, end_on: np.ndarray, limits: np.ndarray,
+             swaps: np.ndarray) -> tuple[str, ...]:
+    """One frame's doubts in words."""
+    return ((f"low similarity S={score:.2f}",) * bool(low)
+            + tuple(f"{SEGMENT_NAMES[k]} seen end-on" for k in np.flatnonzero(end_on))
+            + tuple(f"{name} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
+            + tuple(f"{('hands', 'feet')[p]} may have swapped sides" for p in np.flatnonzero(swaps)))

@@ -1,0 +1,221 @@
+"""What the scene shows of a frame: the video frame, the silhouette with the fitted
+model over it, and the lifted 3D cylinder body seen from the camera and from the side.
+
+Four panels on a 2 x 2 grid in the plane z = 0 of a y-up scene, looked at from +z:
+the two images on top, the 3D body under them (front view under the video frame,
+side view under the silhouette). Images are drawn with OpenCV (numpy in, numpy out);
+``SceneView`` only moves viser handles, so an update costs a few messages;
+``FrameCache`` keeps recently shown video frames decoded.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Callable
+
+import cv2
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, semi_axes
+from mocap.overlay import draw_skeleton, segment_colour, silhouette_view
+from mocap.session import Silhouette
+from mocap.video import VideoInfo, read_frame
+
+PANEL_HEIGHT = 1.9          # scene units (metres) of each panel: a 1.75 m body fits
+GAP = 0.3                   # between panels, room for their captions
+CENTRE_RGB = (150, 150, 160)        # torso and head in 3D (the scene is white)
+MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
+UNSIDED_BGR = (90, 200, 90)         # the 2D model before left and right are known
+AMBIENT = 1.2                       # ambient light intensity beside the default lights
+UPRIGHT = (0.0, 1.0, 0.0, 0.0)      # half turn about x: viser images put row 0 at -y
+SIDE = tuple(Rotation.from_euler("y", 90, degrees=True).as_quat(scalar_first=True))
+_J = JOINT_INDEX
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where the panels sit: centres (x, y) in the scene, and the image panels' size."""
+
+    width: float
+    height: float
+    video: tuple[float, float]
+    silhouette: tuple[float, float]
+    front: tuple[float, float]
+    side: tuple[float, float]
+
+    @classmethod
+    def for_video(cls, width_px: int, height_px: int) -> "Layout":
+        w = PANEL_HEIGHT * width_px / height_px
+        dx, dy = (w + GAP) / 2, (PANEL_HEIGHT + GAP) / 2
+        return cls(w, PANEL_HEIGHT, (-dx, dy), (dx, dy), (-dx, -dy), (dx, -dy))
+
+    def video_pixel(self, origin, direction, size: tuple[int, int]) -> tuple[float, float] | None:
+        """Where a click ray meets the video panel, in pixels of an image of ``size``
+        (width, height); None when it misses."""
+        o, d = np.asarray(origin, float), np.asarray(direction, float)
+        if abs(d[2]) < 1e-9:
+            return None
+        p = o - o[2] / d[2] * d
+        u = (p[0] - self.video[0]) / self.width + 0.5
+        v = 0.5 - (p[1] - self.video[1]) / self.height
+        if not (0 <= u <= 1 and 0 <= v <= 1):
+            return None
+        return u * size[0], v * size[1]
+
+
+def segment_transforms(joints3d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centres (10, 3), orientations (10, 4; w, x, y, z) and lengths (10,) of the
+    cylinders of a pose: each one's local z runs proximal -> distal, its local x
+    toward the body's left (the torso's ellipse lies across the shoulders)."""
+    ends = np.asarray(joints3d, float)[SEGMENT_JOINTS]
+    axis = ends[:, 1] - ends[:, 0]
+    length = np.linalg.norm(axis, axis=-1)
+    z = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 1.0, 0.0])
+    j = np.asarray(joints3d, float)
+    left = j[_J["shoulder_l"]] - j[_J["shoulder_r"]] + j[_J["hip_l"]] - j[_J["hip_r"]]
+    x = left[None] - (z @ left)[:, None] * z
+    # a segment along the body's left-right line: any direction across it will do
+    across = np.cross(z, np.eye(3)[np.argmin(np.abs(z), axis=1)])
+    x = np.where(np.linalg.norm(x, axis=-1, keepdims=True) > 1e-6, x, across)
+    x /= np.linalg.norm(x, axis=-1, keepdims=True)
+    frames = np.stack([x, np.cross(z, x), z], axis=-1)
+    wxyz = Rotation.from_matrix(frames).as_quat(scalar_first=True)
+    return (ends[:, 0] + ends[:, 1]) / 2, wxyz, length
+
+
+def segment_rgb(segment: str) -> tuple[int, int, int]:
+    """The 3D colour of a segment: the overlay's left/right colours, grey in the middle."""
+    if not segment.endswith(("_l", "_r")):
+        return CENTRE_RGB
+    b, g, r = segment_colour(segment)
+    return r, g, b
+
+
+def caption_image(size: tuple[int, int], text: str) -> np.ndarray:
+    """A grey RGB image of ``size`` (width, height) that says ``text``."""
+    image = np.full((size[1], size[0], 3), 60, np.uint8)
+    scale = size[1] / 400
+    (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
+    cv2.putText(image, text, ((size[0] - tw) // 2, (size[1] + th) // 2), cv2.FONT_HERSHEY_SIMPLEX,
+                scale, (230, 230, 230), 2, cv2.LINE_AA)
+    return image
+
+
+def mark_joints(image: np.ndarray, points: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
+    """Ring and name each joint of ``points`` (video pixels) on a BGR image at ``scale``."""
+    radius = max(4, image.shape[0] // 60)
+    for name, (x, y) in points.items():
+        centre = (int(round(x * scale)), int(round(y * scale)))
+        cv2.circle(image, centre, radius, MARK_BGR, 2, cv2.LINE_AA)
+        cv2.putText(image, name, (centre[0] + radius + 2, centre[1] - radius), cv2.FONT_HERSHEY_SIMPLEX,
+                    image.shape[0] / 800, MARK_BGR, 1, cv2.LINE_AA)
+    return image
+
+
+def video_image(frame_bgr: np.ndarray, marks: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
+    """The video frame (RGB) with the joints of ``marks`` ringed."""
+    return cv2.cvtColor(mark_joints(frame_bgr.copy(), marks, scale), cv2.COLOR_BGR2RGB)
+
+
+def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None, sides_known: bool,
+                     overrides: dict[str, tuple[float, float]], scale: float,
+                     size: tuple[int, int]) -> np.ndarray:
+    """The silhouette in grey with the fitted model over it (RGB, ``size`` = width,
+    height of the processed frame); limbs in one colour until the sides are known."""
+    mask = np.zeros((size[1], size[0]), np.uint8)
+    if silhouette is not None:
+        x0, y0, x1, y1 = silhouette.box
+        mask[y0:y1, x0:x1] = silhouette.mask()
+    view = silhouette_view(mask, None)
+    if joints2d is not None:
+        thickness = max(2, size[1] // 240)
+        draw_skeleton(view, joints2d * scale, thickness, None if sides_known else UNSIDED_BGR)
+        mark_joints(view, overrides, scale)
+    return cv2.cvtColor(view, cv2.COLOR_BGR2RGB)
+
+
+class FrameCache:
+    """Decoded video frames at the processing scale; the most recent few are kept."""
+
+    def __init__(self, info: VideoInfo, scale: float, size: int = 48):
+        self.info, self.scale, self.size = info, scale, size
+        self._frames: OrderedDict[int, np.ndarray] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, index: int) -> np.ndarray:
+        with self._lock:
+            if index not in self._frames:
+                self._frames[index] = read_frame(self.info, index, self.scale)
+                if len(self._frames) > self.size:
+                    self._frames.popitem(last=False)
+            self._frames.move_to_end(index)
+            return self._frames[index]
+
+
+class SceneView:
+    """The scene's panels and the handles that update them."""
+
+    def __init__(self, scene, layout: Layout, image_size: tuple[int, int],
+                 on_image_click: Callable[[object], None], on_segment_click: Callable[[str, object], None]):
+        self.layout, self.size = layout, image_size
+        scene.set_up_direction("+y")
+        # plain lights: the default image-based lighting costs seconds in software WebGL
+        scene.configure_environment_map(None)
+        scene.configure_default_lights(cast_shadow=False)
+        scene.add_light_ambient("/ambient", intensity=AMBIENT)
+        blank = caption_image(image_size, "loading")
+        self.video = self._image(scene, "/video", blank, layout.video)
+        self.silhouette = self._image(scene, "/silhouette", blank, layout.silhouette)
+        self.video.on_click(on_image_click)
+        self.captions = {name: scene.add_label(f"/captions/{name}", "", anchor="bottom-left",
+                                               position=(at[0] - layout.width / 2,
+                                                         at[1] + layout.height / 2 + 0.02, 0.0))
+                         for name, at in (("video", layout.video), ("silhouette", layout.silhouette),
+                                          ("front", layout.front), ("side", layout.side))}
+        self.radii = semi_axes(BODY_HEIGHT_M)
+        self.bodies = [self._body(scene, name, at, wxyz, on_segment_click)
+                       for name, at, wxyz in (("front", layout.front, (1.0, 0.0, 0.0, 0.0)),
+                                              ("side", layout.side, SIDE))]
+
+    def _image(self, scene, name: str, image: np.ndarray, at: tuple[float, float]):
+        return scene.add_image(name, image, self.layout.width, self.layout.height,
+                               jpeg_quality=85, wxyz=UPRIGHT, position=(at[0], at[1], 0.0),
+                               cast_shadow=False, receive_shadow=False)
+
+    @staticmethod
+    def _body(scene, name: str, at: tuple[float, float], wxyz, on_click: Callable[[str, object], None]) -> list:
+        scene.add_frame(f"/body/{name}", show_axes=False, wxyz=wxyz, position=(at[0], at[1], 0.0))
+        handles = []
+        for segment in SEGMENT_NAMES:
+            handle = scene.add_cylinder(f"/body/{name}/{segment}", radius=1.0, height=1.0,
+                                        color=segment_rgb(segment), radial_segments=20,
+                                        cast_shadow=False, receive_shadow=False, visible=False)
+            handle.on_click(lambda event, s=segment: on_click(s, event))
+            handles.append(handle)
+        return handles
+
+    def show_video(self, image: np.ndarray) -> None:
+        self.video.image = image
+
+    def show_silhouette(self, image: np.ndarray) -> None:
+        self.silhouette.image = image
+
+    def show_pose(self, joints3d: np.ndarray | None) -> None:
+        """Pose both 3D bodies (pelvis at their panel's centre), or hide them."""
+        if joints3d is None:
+            for handle in (h for body in self.bodies for h in body):
+                handle.visible = False
+            return
+        centres, wxyz, lengths = segment_transforms(joints3d - joints3d[_J["pelvis"]])
+        for body in self.bodies:
+            for k, handle in enumerate(body):
+                handle.position, handle.wxyz = centres[k], wxyz[k]
+                handle.scale = (float(self.radii[k, 0]), float(self.radii[k, 1]), float(lengths[k]))
+                handle.visible = True
+
+    def caption(self, name: str, text: str) -> None:
+        if self.captions[name].text != text:
+            self.captions[name].text = text

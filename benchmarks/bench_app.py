@@ -1,0 +1,140 @@
+"""Latency of the browser app, server side, on a 640x480 video.
+
+From a user's action (the call its callback makes) to the update of the page having
+been sent: a foreshortening toggle to the new 3D pose (budget 50 ms), a frame change
+to all three views (video frame, silhouette and fit, 3D; budget 100 ms), and a joint
+override and an undo to every view they change. "Queued" is when the server has
+queued every message of the update; "received" is when a connected websocket client
+(what a browser tab's socket gets, without a browser) has received all of it: a
+marker label queued after the update says when.
+
+    python benchmarks/bench_app.py [--video VIDEO] [--seconds S] [--repeats N]
+
+Default video: the bundled sample (640x480, 99 frames). ``--seconds`` renders the
+procedural walk at 640x480 and 30 fps for that long instead (how latency grows with
+the clip: each edit re-resolves the lifting inputs of the whole clip).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import viser
+import zstandard
+from websockets.sync.client import connect
+
+from app.main import SAMPLE, create
+from mocap.body import SEGMENT_NAMES
+from mocap.lift import depth_fractions
+from mocap.synth import render_clip
+from mocap.walk import walk_cycle
+
+
+class Receiver:
+    """A websocket client of the server that notes when a marker text arrives."""
+
+    def __init__(self, port: int):
+        self.socket = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"],
+                              max_size=None)
+        self.wanted, self.arrived = b"", threading.Event()
+        self._zstd = zstandard.ZstdDecompressor()
+        threading.Thread(target=self._run, daemon=True).start()
+
+    def _run(self) -> None:
+        for data in self.socket:
+            inner, packed = int.from_bytes(data[:8], "little"), int.from_bytes(data[8:16], "little")
+            payload = self._zstd.decompress(data[16:16 + packed], max_output_size=inner)
+            if self.wanted and self.wanted in payload:
+                self.arrived.set()
+
+    def expect(self, marker: str) -> None:
+        self.wanted = marker.encode()
+        self.arrived.clear()
+
+
+def measure(app, receiver: Receiver, marker, action) -> tuple[float, float]:
+    """(queued, received) milliseconds of one action's update."""
+    text = f"bench-marker-{time.monotonic_ns()}"
+    receiver.expect(text)
+    t0 = time.perf_counter()
+    action()
+    queued = time.perf_counter()
+    marker.text = text
+    app.server.flush()
+    if not receiver.arrived.wait(10.0):
+        raise RuntimeError("the update never arrived")
+    return 1000 * (queued - t0), 1000 * (time.perf_counter() - t0)
+
+
+def plan(app, rng: np.random.Generator) -> dict[str, tuple]:
+    """action name -> (frame -> the call to time, budget in ms or None). Frame changes
+    come first, while no frame has been decoded and drawn yet."""
+    state = app.state
+
+    def flip(frame: int):
+        state.go_to(frame)
+        segment = deepest_segment(state)
+        return lambda: state.flip_sign(frame, segment)
+
+    def override(frame: int):
+        state.go_to(frame)
+        return lambda: state.set_override(frame, "wrist_r", (rng.uniform(0, 640), rng.uniform(0, 480)))
+    return {"frame change -> three views": (lambda f: (lambda: state.go_to(f)), 100.0),
+            "toggle -> 3D pose": (flip, 50.0),
+            "joint override -> all views": (override, None),
+            "undo -> all views": (lambda f: state.undo, None)}
+
+
+def deepest_segment(state) -> str:
+    """The current frame's segment farthest out of the image plane (its flip moves most)."""
+    return SEGMENT_NAMES[int(np.argmax(depth_fractions(state.view().pose3d)))]
+
+
+def bench(video: Path, repeats: int, seed: int = 0) -> None:
+    app = create(video, port=0)
+    app.state.start()
+    app.state.ready.wait()
+    receiver = Receiver(app.server.get_port())
+    marker = app.server.scene.add_label("/bench-marker", "", visible=False)
+    measure(app, receiver, marker, lambda: None)                 # the backlog has arrived
+    rng = np.random.default_rng(seed)
+    frames = [int(f) for f in 1 + rng.permutation(app.state.n_frames - 1)[:repeats]]
+    info = app.state.info
+    print(f"{info.width}x{info.height}, {info.frame_count} frames; {len(frames)} repeats, "
+          "one connected websocket client")
+    print(f"{'action':30s} {'queued median':>13s} {'received median':>15s} {'p95':>7s} {'max':>7s}"
+          f" {'budget':>7s}")
+    for name, (make, budget) in plan(app, rng).items():
+        queued, received = np.array([measure(app, receiver, marker, make(f)) for f in frames]).T
+        verdict = "" if budget is None else f"{budget:5.0f} {'ok' if received.max() <= budget else 'OVER'}"
+        print(f"{name:30s} {np.median(queued):11.1f}ms {np.median(received):13.1f}ms "
+              f"{np.percentile(received, 95):5.1f}ms {received.max():5.1f}ms  {verdict}".rstrip())
+    app.server.stop()
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--video", type=Path, default=SAMPLE)
+    parser.add_argument("--seconds", type=float, default=None)
+    parser.add_argument("--repeats", type=int, default=30)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        video = Path(tmp) / "bench.mp4"
+        if args.seconds:
+            render_clip(walk_cycle(args.seconds, 30.0), video, size=(640, 480), fps=30.0,
+                        view="three-quarter", seed=1)
+        else:
+            shutil.copy(args.video, video)           # edits are saved beside it: not the sample's
+        bench(video, args.repeats)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,55 @@
+"""A tiny rendered clip and a running app on it: fixtures of the app's tests
+(import them by name into a test module)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import CLIP, render_walk
+
+from mocap.body import SEGMENT_NAMES
+from mocap.lift import depth_fractions
+
+TINY_FRAMES = 20            # 320x240 at 15 fps: fitted in about half a second
+
+
+@pytest.fixture(scope="module")
+def tiny_video(tmp_path_factory) -> Path:
+    """The walk of helpers.render_walk, TINY_FRAMES long, rendered once per module."""
+    path = tmp_path_factory.mktemp("tiny") / "walk.mp4"
+    render_walk(path, seconds=TINY_FRAMES / CLIP["fps"])
+    return path
+
+
+@pytest.fixture
+def app(tiny_video, tmp_path):
+    """A preprocessed app on port 0 on a fresh copy of the tiny clip (no annotations)."""
+    app = started_app(fresh_copy(tiny_video, tmp_path))
+    yield app
+    if app.player.playing:
+        app.player.stop()
+    app.server.stop()
+
+
+def fresh_copy(video: Path, folder: Path) -> Path:
+    """The video copied into ``folder``, so that its annotations start empty there."""
+    return Path(shutil.copy(video, folder / video.name))
+
+
+def started_app(video: Path, timeout: float = 60.0):
+    """``app.main.create`` on port 0, preprocessed; the caller stops ``app.server``."""
+    from app.main import create
+    app = create(video, port=0)
+    app.state.start()
+    assert app.state.ready.wait(timeout), "preprocessing did not finish"
+    assert app.state.progress.error is None, app.state.progress.error
+    return app
+
+
+def deepest_segment(state, frame: int | None = None) -> str:
+    """The segment of a frame (default: the current one) farthest out of the image
+    plane: flipping its foreshortening moves the 3D pose most."""
+    return SEGMENT_NAMES[int(np.argmax(depth_fractions(state.view(frame).pose3d)))]

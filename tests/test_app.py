@@ -1,0 +1,237 @@
+"""The app without a browser: its streamed preprocessing equals the command line's,
+edits are saved before they are shown and survive a reopening, undo and redo,
+keyframes, the review queue, concurrent edits, the scene geometry, and the views a
+running server pushes after an edit."""
+
+from __future__ import annotations
+
+import json
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
+
+from app.preprocess import iter_fits, iter_silhouettes
+from app.review import broken_limits, likely_swaps, review_queue
+from app.state import AppState, annotations_path, toggled_keyframe
+from app.views import Layout, segment_transforms
+from mocap.annotations import Annotations, load_annotations
+from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
+from mocap.cli import main
+from mocap.errors import MocapError
+from mocap.session import body_heights, fit_video
+from mocap.video import open_video, processing_scale
+
+
+def saved(state: AppState) -> Annotations:
+    return load_annotations(state.path, state.n_frames)
+
+
+# -- preprocessing --------------------------------------------------------------------
+
+def test_streamed_preprocessing_equals_fit_video(tiny_video):
+    info, fits = fit_video(tiny_video)
+    scale = processing_scale(info)
+    silhouettes = list(iter_silhouettes(open_video(tiny_video), scale))
+    streamed = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps))
+    assert len(streamed) == len(fits) == TINY_FRAMES
+    for a, b in zip(streamed, fits):
+        assert a.index == b.index and a.score == b.score
+        np.testing.assert_array_equal(a.joints2d, b.joints2d)
+
+
+def test_page_state_while_preprocessing(tiny_video, tmp_path, monkeypatch):
+    """Frames fitted so far can be looked at; later ones say they are not; edits that
+    need the 3D pose are refused until it exists."""
+    gate, held = threading.Event(), threading.Event()
+
+    def slow(*args):
+        for fit in iter_fits(*args):
+            if fit.index == 5:
+                held.set()
+                gate.wait(30)
+            yield fit
+    monkeypatch.setattr("app.state.iter_fits", slow)
+    state = AppState(fresh_copy(tiny_video, tmp_path))
+    state.start()
+    assert held.wait(30)
+    first, later = state.view(0), state.view(10)
+    assert first.fitted and first.joints2d is not None and first.pose3d is None
+    assert later.silhouette_ready and not later.fitted
+    assert not state.progress.ready and 0 < state.progress.done < state.progress.total
+    with pytest.raises(MocapError, match="still fitting"):
+        state.flip_sign(0, "torso")
+    assert state.set_orientation(0, "right")           # saved now, lifted when ready
+    gate.set()
+    assert state.ready.wait(30) and state.progress.ready
+    assert state.view(0).orientation == "right" and state.view(0).pose3d is not None
+
+
+# -- edits ----------------------------------------------------------------------------
+
+def test_flip_changes_the_pose_and_is_saved_and_restored(app):
+    state = app.state
+    segment = deepest_segment(state, 4)
+    k = SEGMENT_INDEX[segment]
+    before = state.view(4)
+    assert state.flip_sign(4, segment)
+    after = state.view(4)
+    assert after.signs[k] == -before.signs[k] and after.sign_notes[k] == "set here"
+    assert np.abs(after.pose3d - before.pose3d).max() > 0.05
+    value = "toward" if after.signs[k] > 0 else "away"
+    assert saved(state).frames[4].foreshortening == {segment: value}
+    reopened = AppState(state.info.path)
+    assert reopened.annotations == state.annotations
+
+
+def test_edits_undo_redo_and_the_file_follows(app):
+    state = app.state
+    assert state.set_override(3, "wrist_r", (100.0, 120.0))
+    assert state.set_orientation(6, "left")
+    assert not state.set_orientation(6, "left")         # no change, no history entry
+    assert state.undo() == 6 and state.frame == 6
+    assert saved(state).frames[3].joints2d == {"wrist_r": (100.0, 120.0)} and 6 not in saved(state).frames
+    assert state.undo() == 3 and saved(state) == Annotations()
+    assert state.undo() is None
+    assert state.redo() == 3 and saved(state).frames[3].joints2d["wrist_r"] == (100.0, 120.0)
+    assert state.toggle_keyframe(2)                      # a new edit drops the redo stack
+    assert state.redo() is None
+    np.testing.assert_allclose(state.view(3).joints2d[JOINT_INDEX["wrist_r"]], (100.0, 120.0))
+
+
+def test_clearing_every_override_of_a_frame_is_one_edit(app):
+    state = app.state
+    state.set_override(2, "wrist_r", (1.0, 2.0))
+    state.set_override(2, "ankle_l", (3.0, 4.0))
+    with pytest.raises(MocapError, match="no override of knee_l"):
+        state.clear_overrides(2, "knee_l")
+    assert state.clear_overrides(2) and 2 not in saved(state).frames
+    assert state.undo() == 2 and set(saved(state).frames[2].joints2d) == {"wrist_r", "ankle_l"}
+
+
+def test_keyframes_marked_and_unmarked():
+    notes = toggled_keyframe(Annotations(), 2, 4)
+    assert notes.keyframes == (0, 1, 3)
+    assert toggled_keyframe(notes, 2, 4).keyframes is None
+    single = Annotations(keyframes=(1,))
+    with pytest.raises(MocapError, match="last keyframe"):
+        toggled_keyframe(single, 1, 4)
+
+
+def test_unsaveable_edit_is_refused_and_not_applied(app, monkeypatch):
+    def refuse(*_args):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr("app.state.save_annotations", refuse)
+    with pytest.raises(MocapError, match="cannot save annotations"):
+        app.state.set_orientation(0, "left")
+    assert app.state.annotations == Annotations() and not app.state.path.exists()
+
+
+def test_concurrent_edits_never_corrupt_the_state(app):
+    state = app.state
+    barrier = threading.Barrier(8)
+
+    def work(t: int) -> None:
+        barrier.wait()
+        for i in range(6):
+            frame = (t + i) % TINY_FRAMES
+            state.set_override(frame, "ankle_l", (float(t), float(i)))
+            state.flip_sign(frame, "torso")
+            state.go_to(frame)
+    threads = [threading.Thread(target=work, args=(t,)) for t in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert saved(state) == state.annotations
+    assert json.loads(state.path.read_text())["format"] == "mocap-annotations"
+    while state.undo() is not None:
+        pass
+    assert saved(state) == Annotations()
+
+
+def test_annotation_file_lives_beside_the_video():
+    assert annotations_path("/videos/walk.mp4") == Path("/videos/walk.annotations.json")
+
+
+# -- review ---------------------------------------------------------------------------
+
+def test_doubt_signs_on_made_up_joints():
+    joints = np.zeros((3, 16, 2))
+    joints[:, JOINT_INDEX["neck"]] = (0.0, -50.0)                       # torso and head upright
+    joints[:, JOINT_INDEX["head_top"]] = (0.0, -75.0)
+    joints[:, JOINT_INDEX["knee_l"]] = joints[:, JOINT_INDEX["knee_r"]] = (0.0, 40.0)
+    joints[2, JOINT_INDEX["knee_l"]] = (40.0, 0.0)                      # a thigh sideways
+    assert broken_limits(joints).tolist() == [[False] * 4, [False] * 4, [False, False, True, False]]
+    hands = np.zeros((3, 16, 2))
+    hands[:, JOINT_INDEX["wrist_l"]] = [(0, 0), (10, 0), (100, 0)]
+    hands[:, JOINT_INDEX["wrist_r"]] = [(100, 0), (90, 0), (10, 0)]   # frame 2: swapped
+    swaps = likely_swaps(hands, np.ones(3))
+    assert swaps[:, 0].tolist() == [False, False, True]
+
+
+def test_review_queue_ranks_and_cycles(app):
+    queue = review_queue(app.state._session)
+    assert queue == app.state.review_queue()
+    assert [d.value for d in queue] == sorted((d.value for d in queue), reverse=True)
+    frames = [d.frame for d in queue]
+    assert frames, "the tiny walk has doubtful frames"
+    visits = [app.state.next_doubtful() for _ in range(len(frames) + 1)]
+    assert visits == frames + frames[:1]
+
+
+# -- scene geometry and the views a server pushes ---------------------------------------
+
+def test_click_ray_to_video_pixel():
+    layout = Layout.for_video(320, 240)
+    x = layout.video[0] + (100 / 320 - 0.5) * layout.width
+    y = layout.video[1] - (60 / 240 - 0.5) * layout.height
+    origin = np.array([0.3, -0.2, 9.0])
+    at = layout.video_pixel(origin, np.array([x, y, 0.0]) - origin, (320, 240))
+    np.testing.assert_allclose(at, (100, 60), atol=1e-9)
+    assert layout.video_pixel(origin, (0.0, 0.0, -1.0), (320, 240)) is None     # between panels
+
+
+def test_cylinders_join_the_joints(app):
+    from scipy.spatial.transform import Rotation
+    pose = app.state.view(5).pose3d
+    centres, wxyz, lengths = segment_transforms(pose)
+    axis = Rotation.from_quat(wxyz, scalar_first=True).apply([0.0, 0.0, 1.0])
+    ends = pose[SEGMENT_JOINTS]
+    np.testing.assert_allclose(centres - axis * lengths[:, None] / 2, ends[:, 0], atol=1e-9)
+    np.testing.assert_allclose(centres + axis * lengths[:, None] / 2, ends[:, 1], atol=1e-9)
+
+
+def test_server_views_follow_edits_and_frames(app):
+    state, body = app.state, app.scene.bodies[0]
+    state.go_to(7)
+    assert app.controls.frame.value == 7
+    image = app.scene.video.image.copy()
+    segment = deepest_segment(state, 7)
+    handle = body[SEGMENT_INDEX[segment]]
+    before = np.array(handle.position), np.array(handle.wxyz)
+    state.flip_sign(7, segment)
+    assert not np.allclose(np.concatenate(before), np.concatenate([handle.position, handle.wxyz]))
+    button = app.controls.segments[segment]
+    assert "set here" in button.label
+    np.testing.assert_array_equal(app.scene.video.image, image)      # untouched by a flip
+    state.go_to(8)
+    assert not np.array_equal(app.scene.video.image, image)
+    assert "set here" not in button.label
+
+
+def test_exports_parse(app):
+    name, data = app.state.export("json")
+    doc = json.loads(data)
+    assert name == "walk.motion.json" and doc["format"] == "mocap-motion"
+    assert len(doc["frames"]) == TINY_FRAMES
+    assert app.state.export("bvh")[1].startswith(b"HIERARCHY")
+    assert app.state.export("glb")[1][:4] == b"glTF"
+
+
+def test_serve_command_line(capsys):
+    assert main(["serve", "/no/such/video.mp4"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mocap: error: ") and "video.mp4" in err[0]

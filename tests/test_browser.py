@@ -1,0 +1,260 @@
+"""The app in a real browser: Debian's chromium driven by Python playwright.
+
+Each test serves a fresh copy of a tiny rendered clip on port 0 and does what a user
+does: steps frames, flips a foreshortening toggle (button and 3D segment), places a
+joint override by clicking the video frame and undoes it, downloads a BVH, uses
+two tabs at once, watches preprocessing, and kills the server mid-work. Screenshots
+go to artifacts/browser/ (gitignored).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import bvhio
+import numpy as np
+import pytest
+from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
+from scipy.spatial.transform import Rotation
+
+from app.controls import segment_label, sign_button
+from mocap.annotations import Annotations, load_annotations
+from mocap.body import JOINT_INDEX, SEGMENT_INDEX
+
+CHROMIUM = Path("/usr/bin/chromium")
+pytestmark = pytest.mark.skipif(not CHROMIUM.exists(),
+                                reason="Debian's chromium is not installed (apt-get install chromium)")
+sync_api = pytest.importorskip("playwright.sync_api")
+
+ARTIFACTS = Path(__file__).resolve().parents[1] / "artifacts" / "browser"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+VIEWPORT = {"width": 1280, "height": 800}
+TIMEOUT_MS = 20_000
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture
+def browser(chromium):
+    """A fresh browser context per test, closed after it (closed tabs stop drawing)."""
+    context = chromium.new_context(viewport=VIEWPORT, accept_downloads=True)
+    yield context
+    context.close()
+
+
+def open_page(browser, port: int):
+    """A new tab on the app, once its controls are up; the headless WebGL warning closed."""
+    page = browser.new_page()
+    page.set_default_timeout(TIMEOUT_MS)
+    page.goto(f"http://127.0.0.1:{port}/")
+    page.get_by_text(re.compile("frames fitted|Preprocessing")).first.wait_for()
+    warning = page.get_by_text("Software WebGL rendering detected")
+    if warning.count():
+        warning.locator("xpath=../..").get_by_role("button").first.click()
+    return page
+
+
+def shot(page, name: str) -> None:
+    """Save a screenshot of the page as a test artifact."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    page.wait_for_timeout(400)          # let the canvas draw the last update
+    page.screenshot(path=str(ARTIFACTS / f"{name}.png"))
+
+
+def wait_until(condition, timeout: float = TIMEOUT_MS / 1000) -> None:
+    """Poll the server-side ``condition`` until it holds."""
+    end = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < end, "timed out"
+        time.sleep(0.05)
+
+
+def screen_point(page, app, world) -> tuple[float, float]:
+    """Where a scene point appears on the page, from the tab's camera."""
+    box = page.locator("canvas[data-engine]").bounding_box()
+    camera = next(iter(app.server.get_clients().values())).camera
+    local = Rotation.from_quat(camera.wxyz, scalar_first=True).inv().apply(np.asarray(world) - camera.position)
+    focal = box["height"] / 2 / np.tan(camera.fov / 2)
+    return (box["x"] + box["width"] / 2 + focal * local[0] / local[2],
+            box["y"] + box["height"] / 2 + focal * local[1] / local[2])
+
+
+def video_point(app, xy) -> np.ndarray:
+    """The scene point showing video pixel ``xy`` on the video panel."""
+    layout, scale = app.layout, app.state.scale
+    u = (xy[0] + 0.5) * scale / app.size[0] - 0.5
+    v = (xy[1] + 0.5) * scale / app.size[1] - 0.5
+    return np.array([layout.video[0] + u * layout.width, layout.video[1] - v * layout.height, 0.0])
+
+
+def segment_button(page, segment: str):
+    """The foreshortening toggle of a segment (its label also shows its state)."""
+    return page.get_by_role("button", name=re.compile(f"^{segment_label(segment)}:"))
+
+
+def test_step_frames_with_buttons_slider_and_keys(browser, app):
+    page = open_page(browser, app.server.get_port())
+    page.get_by_role("button", name="frame ▶", exact=True).click()
+    wait_until(lambda: app.state.frame == 1)
+    page.mouse.click(5, VIEWPORT["height"] - 5)            # focus the page, not a control
+    page.keyboard.press("l")
+    page.keyboard.press("l")
+    wait_until(lambda: app.state.frame == 3)
+    page.keyboard.press("j")
+    wait_until(lambda: app.state.frame == 2)
+    page.locator(".mantine-NumberInput-input").fill("9")     # the slider's number box
+    page.keyboard.press("Enter")
+    wait_until(lambda: app.state.frame == 9)
+    page.get_by_role("button", name="◀ keyframe").click()  # every frame is a keyframe by default
+    wait_until(lambda: app.state.frame == 8)
+    page.mouse.click(5, VIEWPORT["height"] - 5)
+    for _ in range(5):
+        page.keyboard.press("Shift+J")
+    wait_until(lambda: app.state.frame == 3)
+    page.get_by_role("button", name="Unmark keyframe").click()
+    page.get_by_role("button", name="Mark as keyframe").wait_for()
+    assert load_annotations(app.state.path).keyframes == tuple(k for k in range(TINY_FRAMES) if k != 3)
+    shot(page, "step_frames")
+
+
+def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
+    app.state.go_to(6)
+    page = open_page(browser, app.server.get_port())
+    shot(page, "flip_before")
+    segment = deepest_segment(app.state)
+    handle = app.scene.bodies[0][SEGMENT_INDEX[segment]]
+    pose, placed = app.state.view().pose3d, np.concatenate([handle.position, handle.wxyz])
+    segment_button(page, segment).click()
+    segment_button(page, segment).filter(has_text="(set here)").wait_for()
+    assert np.abs(app.state.view().pose3d - pose).max() > 0.05
+    assert not np.allclose(placed, np.concatenate([handle.position, handle.wxyz]))
+    note = load_annotations(app.state.path).frames[6].foreshortening
+    assert set(note) == {segment}
+    shot(page, "flip_after")
+
+    x, y = screen_point(page, app, np.array(app.layout.front + (0.0,)) + handle.position)
+    page.mouse.click(x, y)                                 # the same segment in 3D flips it back
+    wait_until(lambda: np.allclose(placed, np.concatenate([handle.position, handle.wxyz])))
+    assert load_annotations(app.state.path).frames[6].foreshortening != note
+    np.testing.assert_allclose(app.state.view().pose3d, pose, atol=1e-9)
+
+
+def test_override_by_clicking_the_frame_then_undo(browser, app):
+    app.state.go_to(4)
+    page = open_page(browser, app.server.get_port())
+    page.get_by_role("tab", name="Joints").click()
+    page.get_by_label("Place").click()
+    page.get_by_role("option", name="wrist_r", exact=True).click()
+    wait_until(lambda: app.controls.joint.value == "wrist_r")
+    target = (200.0, 150.0)
+    page.mouse.click(*screen_point(page, app, video_point(app, target)))
+    page.get_by_text(re.compile(r"wrist_r at \(")).wait_for()
+    placed = load_annotations(app.state.path).frames[4].joints2d["wrist_r"]
+    assert np.hypot(*np.subtract(placed, target)) < 2.0, placed
+    np.testing.assert_allclose(app.state.view().joints2d[JOINT_INDEX["wrist_r"]], placed)
+    shot(page, "override_placed")
+    page.get_by_role("button", name="↶ undo").click()
+    page.get_by_text("No override on this frame.").wait_for()
+    assert load_annotations(app.state.path) == Annotations()
+    shot(page, "override_undone")
+
+
+def test_download_bvh_that_parses(browser, app, tmp_path):
+    page = open_page(browser, app.server.get_port())
+    page.get_by_role("tab", name="Export").click()
+    with page.expect_download() as download:
+        page.get_by_role("button", name="BVH").click()
+    path = tmp_path / download.value.suggested_filename
+    download.value.save_as(path)
+    assert path.name == "walk.bvh"
+    bvh = bvhio.readAsBvh(str(path))
+    assert bvh.FrameCount == len(bvh.Root.Keyframes) == TINY_FRAMES
+    page.get_by_role("button", name="Play").click()
+    wait_until(lambda: app.player.playing)
+    page.get_by_role("button", name="Pause").wait_for()
+    shot(page, "playing")
+    page.get_by_role("button", name="Pause").click()
+    wait_until(lambda: not app.player.playing)
+
+
+def test_two_tabs_one_truth(browser, app):
+    port = app.server.get_port()
+    first, second = open_page(browser, port), open_page(browser, port)
+    segment = deepest_segment(app.state)
+    segment_button(first, segment).click()
+    segment_button(second, segment).filter(has_text="(set here)").wait_for()
+    second.get_by_role("button", name="frame ▶", exact=True).click()
+    first.get_by_text("Frame 1 of").wait_for()
+    for _ in range(3):                                     # clicks from both tabs at once
+        segment_button(first, "torso").click(no_wait_after=True)
+        segment_button(second, "torso").click(no_wait_after=True)
+    wait_until(lambda: app.state.undo_depth == 7)          # each click one edit, none lost
+    label = sign_button("torso", app.state.view())["label"]
+    for page in (first, second):
+        page.get_by_role("button", name=label, exact=True).wait_for()
+    assert app.state.annotations == load_annotations(app.state.path)
+    shot(second, "second_tab")
+
+
+def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypatch):
+    """Fitted frames show at once; the others say they are not fitted yet."""
+    import threading
+    from app.main import create
+    from app.state import iter_fits
+    gate = threading.Event()
+
+    def slow(*args):
+        for fit in iter_fits(*args):
+            if fit.index == TINY_FRAMES // 2:
+                gate.wait(60)
+            yield fit
+    monkeypatch.setattr("app.state.iter_fits", slow)
+    app = create(fresh_copy(tiny_video, tmp_path), port=0)
+    try:
+        app.state.start()
+        page = open_page(browser, app.server.get_port())
+        page.get_by_text("Preprocessing: fitting the body model").wait_for()
+        page.get_by_text("Similarity S =").wait_for()            # frame 0 is fitted
+        shot(page, "preprocessing")
+        app.state.go_to(TINY_FRAMES - 1)
+        page.get_by_text("Not fitted yet.").wait_for()
+        gate.set()
+        page.get_by_text(f"{TINY_FRAMES} frames fitted").wait_for()
+    finally:
+        gate.set()
+        app.server.stop()
+
+
+def test_killing_the_server_loses_no_shown_edit(browser, tiny_video, tmp_path):
+    video = fresh_copy(tiny_video, tmp_path)
+    server = subprocess.Popen([sys.executable, "-m", "mocap.cli", "serve", str(video), "--port", "0"],
+                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                              env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        line = next(line for line in server.stdout if line.startswith("mocap: serving"))
+        page = open_page(browser, int(re.search(r":(\d+)/$", line.strip()).group(1)))
+        page.get_by_text(f"{TINY_FRAMES} frames fitted").wait_for()
+        shown = []
+        for segment in ("upper_leg_l", "lower_leg_l", "upper_arm_r"):
+            segment_button(page, segment).click()
+            segment_button(page, segment).filter(has_text="(set here)").wait_for()
+            shown.append(segment)
+        segment_button(page, "torso").click()                  # in flight when killed
+    finally:
+        server.send_signal(signal.SIGKILL)
+        server.wait(10)
+    saved = load_annotations(video.with_suffix(".annotations.json"), TINY_FRAMES)
+    assert set(shown) <= set(saved.frames[0].foreshortening)
