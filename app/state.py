@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from app.preprocess import Progress, Throttle, iter_fits, iter_silhouettes
+from app.preprocess import Progress, Throttle
 from app.review import Doubt, review_queue
 from mocap.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import SEGMENT_INDEX, SEGMENT_NAMES
@@ -31,7 +31,8 @@ from mocap.export.glb import glb_bytes
 from mocap.export.motion_json import motion_dict
 from mocap.lift import depth_fractions
 from mocap.motion import Motion
-from mocap.session import FrameFit, Session, Silhouette, body_heights, video_dict
+from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
+                           iter_silhouettes, video_dict)
 from mocap.video import open_video, processing_scale
 
 EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json"}

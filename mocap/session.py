@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from collections.abc import Iterator
 from typing import Callable
 
 import cv2
@@ -86,15 +87,25 @@ class FrameFit:
     body_px: float | None = None    # video pixels of the model's 175-unit body height
 
 
+def iter_silhouettes(info: VideoInfo, scale: float) -> Iterator[Silhouette | None]:
+    """Pass one (section 3.2): the background, then every frame's silhouette in turn."""
+    background = estimate_background(info, scale=scale)
+    for _, frame in iter_frames(info, scale=scale):
+        yield Silhouette.from_mask(extract_silhouette(frame, background))
+
+
 def extract_silhouettes(info: VideoInfo, scale: float,
                         progress: Progress | None = None) -> list[Silhouette | None]:
-    """Pass one: background (section 3.2) and every frame's silhouette."""
-    background = estimate_background(info, scale=scale)
+    """Pass one as a list, with progress."""
+    return _collect(iter_silhouettes(info, scale), info.frame_count, progress)
+
+
+def _collect(items: Iterator, total: int, progress: Progress | None) -> list:
     out = []
-    for index, frame in iter_frames(info, scale=scale):
-        out.append(Silhouette.from_mask(extract_silhouette(frame, background)))
+    for item in items:
+        out.append(item)
         if progress:
-            progress(index + 1, info.frame_count)
+            progress(len(out), total)
     return out
 
 
@@ -137,25 +148,28 @@ def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
     return out
 
 
-def fit_silhouettes(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
-                    fps: float, progress: Progress | None = None) -> list[FrameFit]:
-    """Pass two: the 2D fit of every frame, each search centred on the previous fit."""
+def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
+              fps: float) -> Iterator[FrameFit]:
+    """Pass two (section 3.3): every frame's 2D fit in turn, each search centred on
+    the previous fit."""
     spreads = torso_spreads(silhouettes, heights, fps)
-    fits: list[FrameFit] = []
     prev: Pose2D | None = None
     for index, sil in enumerate(silhouettes):
         if sil is None:
-            fits.append(FrameFit(index, None, None))
             prev = None
-        else:
-            small, origin, step = normalise(sil, heights[index])
-            fit = fit_frame(small, FIT_SCALE, prev, spreads[index])
-            joints = (origin + (fit.joints + 0.5) * step - 0.5) / scale
-            fits.append(FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale))
-            prev = fit.pose if fit.score >= MIN_TRACK_SCORE else None
-        if progress:
-            progress(index + 1, len(silhouettes))
-    return fits
+            yield FrameFit(index, None, None)
+            continue
+        small, origin, step = normalise(sil, heights[index])
+        fit = fit_frame(small, FIT_SCALE, prev, spreads[index])
+        prev = fit.pose if fit.score >= MIN_TRACK_SCORE else None
+        joints = (origin + (fit.joints + 0.5) * step - 0.5) / scale
+        yield FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale)
+
+
+def fit_silhouettes(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
+                    fps: float, progress: Progress | None = None) -> list[FrameFit]:
+    """Pass two as a list, with progress."""
+    return _collect(iter_fits(silhouettes, heights, scale, fps), len(silhouettes), progress)
 
 
 def fit_video(path: str | os.PathLike, progress: Progress | None = None) -> tuple[VideoInfo, list[FrameFit]]:

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
 
-from app.preprocess import iter_fits, iter_silhouettes
+from mocap.session import iter_fits, iter_silhouettes
 from app.review import broken_limits, likely_swaps, review_queue
 from app.state import AppState, annotations_path, toggled_keyframe
 from app.views import Layout, segment_transforms
