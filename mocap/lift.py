@@ -272,15 +272,17 @@ def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
 
 # -- Eq. 4-5 --------------------------------------------------------------------------
 
-def relative_depths(joints2d: np.ndarray, px_per_unit: float, signs: np.ndarray,
+def relative_depths(joints2d: np.ndarray, px_per_unit, signs: np.ndarray,
                     lengths: np.ndarray = LENGTH) -> np.ndarray:
-    """(10,) dZ of every segment in model units, distal minus proximal (Eq. 5).
+    """(..., 10) dZ of every segment in model units, distal minus proximal (Eq. 5),
+    for joints (..., 16, 2) at px_per_unit (scalar or (...,)).
 
     A segment drawn longer than its model length lies in the image plane (dZ = 0).
     ``signs`` are +1 (toward the camera) or -1 (away); 0 counts as toward.
     """
-    ends = np.asarray(joints2d, float)[SEGMENT_JOINTS]                  # (10, 2, 2)
-    seen = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=-1) / px_per_unit
+    ends = np.asarray(joints2d, float)[..., SEGMENT_JOINTS, :]          # (..., 10, 2, 2)
+    seen = (np.linalg.norm(ends[..., 1, :] - ends[..., 0, :], axis=-1)
+            / np.asarray(px_per_unit, float)[..., None])
     depth = np.sqrt(np.maximum(np.asarray(lengths, float) ** 2 - seen ** 2, 0.0))
     return np.where(np.asarray(signs) < 0, -depth, depth)
 

@@ -59,16 +59,16 @@ def viterbi2(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | Non
     cost = np.where(allowed if allowed is not None else True, emission, np.inf)
     if n == 1:
         return np.array([int(np.argmin(cost[0]))])
+    # acc[t, a, b, c]: the acceleration of states a, b, c at frames t, t+1, t+2
+    acc = np.linalg.norm(values[2:, None, None, :] - 2 * values[1:-1, None, :, None]
+                         + values[:-2, :, None, None], axis=-1)
     # best[a, b]: the cheapest path whose last two states are a (t-1), b (t)
     best = cost[0][:, None] + cost[1][None, :]
     back = []
     for t in range(2, n):
-        acc = np.linalg.norm(values[t][None, None] - 2 * values[t - 1][None, :, None]
-                             + values[t - 2][:, None, None], axis=-1)           # (a, b, c)
-        total = best[:, :, None] + acc
-        arg = np.argmin(total, axis=0)                                          # (b, c)
-        best = np.take_along_axis(total, arg[None], axis=0)[0] + cost[t][None, :]
-        back.append(arg)
+        total = best[:, :, None] + acc[t - 2]
+        back.append(total.argmin(axis=0))                                       # (b, c)
+        best = total.min(axis=0) + cost[t][None, :]
     a, b = np.unravel_index(int(np.argmin(best)), best.shape)
     path = [b, a]
     for arg in reversed(back):
@@ -192,8 +192,7 @@ def segment_vectors(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.n
     """(F, 10, 2) image vectors (x right, y up, model units) and (F, 10) |dZ| (Eq. 5)."""
     ends = joints2d[:, SEGMENT_JOINTS]
     vec = (ends[:, :, 1] - ends[:, :, 0]) * np.array([1.0, -1.0]) / px_per_unit[:, None, None]
-    depth = np.stack([relative_depths(j, p, np.full(10, TOWARD), lengths)
-                      for j, p in zip(joints2d, px_per_unit)])
+    depth = relative_depths(joints2d, px_per_unit, np.full(10, TOWARD), lengths)
     return vec, depth
 
 

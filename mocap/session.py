@@ -228,14 +228,17 @@ def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
-                   annotations: Annotations, lengths: np.ndarray | None = None) -> Inputs:
-    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one;
+                   annotations: Annotations, lengths: np.ndarray | None = None,
+                   guessed: list[str | None] | None = None) -> Inputs:
+    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
+    (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding); the
     overrides put in; segment lengths from the clip (lift.clip_lengths); the signs
     guessed with the user's held signs as constraints (orientation.held_user_signs)."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
-    guessed = guess_orientations(joints_image, body_px, spread, fps)
+    if guessed is None:
+        guessed = guess_orientations(joints_image, body_px, spread, fps)
     said = annotations.orientations(n)
     orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
@@ -288,6 +291,7 @@ class Session:
                  annotations: Annotations | None = None, smooth: float = 0.0):
         self.info, self.fits, self.smooth = info, fits, smooth
         self._arrays = fit_arrays(fits)
+        self._guessed = guess_orientations(*self._arrays, info.fps)   # the fits' alone: once
         self._annotations = annotations or Annotations()
         self._inputs: Inputs | None = None
         self._poses: dict[int, tuple[tuple, np.ndarray]] = {}
@@ -313,7 +317,8 @@ class Session:
     def inputs(self) -> Inputs:
         if self._inputs is None:
             joints, body_px, spread = self._arrays
-            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations)
+            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
+                                          guessed=self._guessed)
         return self._inputs
 
     def pose3d(self, frame: int) -> np.ndarray | None:
