@@ -24,14 +24,12 @@ import cv2
 import numpy as np
 
 from mocap.annotations import Annotations, load_annotations
-from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, JOINTS, SEGMENT_NAMES, Pose2D
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, Pose2D
 from mocap.errors import MocapError
 from mocap.export.motion_json import write_motion
-from mocap.lift import (LENGTH, anatomical_joints, clip_lengths, known_sides, lift_pose, runs,
-                        track_sides)
 from mocap.motion import Motion, build_motion
-from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
-                               segment_vectors, yaws)
+from mocap.inputs import Inputs, resolve_inputs, root_track
+from mocap.orientation import guess_orientations
 from mocap.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
 from mocap.silhouette import estimate_background, extract_silhouette
 from mocap.track import track_video
@@ -45,10 +43,6 @@ MARGIN = 0.25                   # of the body height, around the silhouette's bo
 SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame
 SPREAD_WINDOW_S = 0.5           # half-width of that window, seconds
 MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a search centre
-# Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
-# fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
-# percentile would measure that scatter; clean 2D joints use lift.clip_lengths' 90th.
-FIT_LENGTH_PERCENTILE = 50.0
 
 
 @dataclass(frozen=True)
@@ -191,32 +185,6 @@ def video_dict(info: VideoInfo) -> dict:
             "frame_count": info.frame_count}
 
 
-# -- lifting inputs: the user's annotations over the first guess ----------------------
-
-@dataclass(frozen=True, eq=False)
-class Inputs:
-    """Everything the lifting needs per frame. Frames without a person have
-    orientation None and NaN joints."""
-
-    orientation: list[str | None]
-    yaw: np.ndarray            # (F,) degrees, see lift.facing_yaw
-    swap: np.ndarray           # (F, 2) bool: image-left arms, legs are the right ones
-    joints2d: np.ndarray       # (F, 16, 2) anatomical pixels, joint overrides applied
-    px_per_unit: np.ndarray    # (F,) pixels per model unit (body height / 175)
-    signs: np.ndarray          # (F, 10) +1 toward, -1 away
-    lengths: np.ndarray        # (10,) segment lengths in model units
-
-    def key(self, frame: int) -> tuple:
-        """What a frame's lifted pose depends on (a cache key)."""
-        return (self.yaw[frame], self.px_per_unit[frame], self.joints2d[frame].tobytes(),
-                self.signs[frame].tobytes(), self.lengths.tobytes())
-
-    def lift(self, frame: int) -> np.ndarray:
-        """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
-        return lift_pose(self.joints2d[frame], self.px_per_unit[frame], self.yaw[frame],
-                         self.signs[frame], self.lengths)
-
-
 def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Image-side joints (F, 16, 2), body heights (F,) and torso spreads (F,) of the
     fits, NaN where nobody was found."""
@@ -225,56 +193,6 @@ def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray
     body_px = np.array([np.nan if f.body_px is None else f.body_px for f in fits], float)
     spread = np.array([np.nan if f.fit is None else f.fit.pose.spread for f in fits], float)
     return joints.reshape(len(fits), len(JOINTS), 2), body_px, spread
-
-
-def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
-                   annotations: Annotations, lengths: np.ndarray | None = None,
-                   guessed: list[str | None] | None = None) -> Inputs:
-    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
-    (``guessed``: orientation.guess_orientations of the fits, computed if not given);
-    the sides from it (profiles followed through time, joint overrides deciding); the
-    overrides put in; segment lengths from the clip (lift.clip_lengths); the signs
-    guessed with the user's held signs as constraints (orientation.held_user_signs)."""
-    n = len(joints_image)
-    person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
-    if guessed is None:
-        guessed = guess_orientations(joints_image, body_px, spread, fps)
-    said = annotations.orientations(n)
-    orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
-    overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
-    facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
-    swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x)
-    joints = anatomical_joints(joints_image, swap)
-    for i, points in overrides.items():
-        for joint, xy in points.items():
-            joints[i, JOINT_INDEX[joint]] = xy
-    ppu = body_px / BODY_HEIGHT
-    if lengths is None:
-        lengths = (clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE)
-                   if person.any() else LENGTH.copy())
-    # signs are judged on the longer 90th-percentile lengths: where the fit's noise
-    # makes a segment look unforeshortened they still keep the two depths apart
-    judged = clip_lengths(joints[person], ppu[person]) if person.any() else lengths
-    yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
-    signs = np.ones((n, len(SEGMENT_NAMES)), int)
-    values, since = annotations.held_signs(n)
-    for r in runs(person):
-        _, depth = segment_vectors(joints[r], ppu[r], lengths)
-        fixed = held_user_signs(values[r], since[r] - r.start, depth <= NEGLIGIBLE * lengths)
-        signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed, fps)
-    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
-
-
-def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """(F, 3) pelvis trajectory in metres (NaN where nobody is): x from the image
-    centre, y above the clip's ground (its lowest ankles), z = 0 (orthographic
-    projection says nothing about distance)."""
-    per_m = px_per_unit * BODY_HEIGHT / BODY_HEIGHT_M
-    pelvis = joints2d[:, JOINT_INDEX["pelvis"]]
-    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]], 1]
-    ground = np.nanpercentile(ankles, 98) if np.isfinite(ankles).any() else size[1]
-    return np.stack([(pelvis[:, 0] - size[0] / 2) / per_m, (ground - pelvis[:, 1]) / per_m,
-                     np.zeros(len(pelvis))], axis=-1)
 
 
 # -- the session ----------------------------------------------------------------------
