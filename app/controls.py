@@ -6,7 +6,10 @@ commands; ``HOTKEYS`` lists them once for the commands and the help text.
 
 from __future__ import annotations
 
+import base64
+import re
 from dataclasses import dataclass
+from pathlib import Path
 
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
@@ -17,7 +20,9 @@ NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing
 FRAME_STEPS = ("◀ frame", "frame ▶")
 KEY_STEPS = ("◀ keyframe", "keyframe ▶")
 EDITS = ("↶ undo", "redo ↷")
-DOWNLOADS = {"BVH": "bvh", "GLB": "glb", "motion JSON": "json"}
+DOWNLOADS = {"BVH": "bvh", "GLB": "glb", "motion JSON": "json", "HTML page": "html"}
+STATIC = Path(__file__).resolve().parents[1] / "static"
+HELP_FILE = STATIC / "help.md"           # the Help tab; its pictures sit beside it
 SIGN_COLOURS = {1: "teal", -1: "grape"}
 FLAT = 0.05                         # |dZ| / length below which a segment lies in the image plane
 REVIEW_LINES = 8                    # doubtful frames listed on the page
@@ -46,6 +51,18 @@ HELP = "  \n".join(f"**{'+'.join(filter(None, [mod, key]))}** {label.lower()}"
                    for label, key, mod in HOTKEYS.values())
 
 
+def help_markdown(path: Path = HELP_FILE) -> str:
+    """The help page's markdown with its SVG pictures inlined as data URLs (viser reads
+    raster images from ``image_root`` itself, but not SVG)."""
+    def inline(match: re.Match) -> str:
+        picture = path.parent / match.group(2)
+        if picture.suffix != ".svg" or not picture.is_file():
+            return match.group(0)
+        data = base64.b64encode(picture.read_bytes()).decode()
+        return f"![{match.group(1)}](data:image/svg+xml;base64,{data})"
+    return re.sub(r"!\[([^]]*)\]\(([^)]*)\)", inline, path.read_text(encoding="utf-8"))
+
+
 @dataclass(frozen=True)
 class Controls:
     """Handles of every control on the page."""
@@ -69,6 +86,7 @@ class Controls:
     play: object
     downloads: object
     commands: dict
+    help_page: object
 
 
 def build_controls(gui, n_frames: int) -> Controls:
@@ -105,13 +123,17 @@ def build_controls(gui, n_frames: int) -> Controls:
     with tabs.add_tab("Export", icon="download"):
         play = gui.add_button("Play", icon="player-play", disabled=True)
         downloads = gui.add_button_group("Download", tuple(DOWNLOADS))
+        gui.add_markdown("*HTML page*: the playback page, one HTML file that plays the "
+                         "body in any browser, from disk, with no server.")
+    with tabs.add_tab("Help", icon="help"):
+        help_page = gui.add_markdown(help_markdown(), image_root=STATIC)
     with gui.add_folder("Keys", expand_by_default=False):
         gui.add_markdown(HELP)
     commands = {action: gui.add_command(label, hotkey=key, modifier=mod)
                 for action, (label, key, mod) in HOTKEYS.items()}
     return Controls(progress, status, frame, frame_steps, key_steps, keyframe, frame_info,
                     orientation, orientation_note, segments, joint, clear_override, overrides,
-                    edits, doubtful, review, play, downloads, commands)
+                    edits, doubtful, review, play, downloads, commands, help_page)
 
 
 # -- what the controls say about a frame ------------------------------------------------

@@ -28,6 +28,7 @@ from mocap.body import SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.export.bvh import bvh_text
 from mocap.export.glb import glb_bytes
+from mocap.export.html import motion_html
 from mocap.export.motion_json import motion_dict
 from mocap.lift import depth_fractions
 from mocap.motion import Motion
@@ -35,7 +36,7 @@ from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fit
                            iter_silhouettes, video_dict)
 from mocap.video import open_video, processing_scale
 
-EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json"}
+EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json", "html": ".html"}
 Change = Callable[[Annotations], Annotations]
 
 
@@ -257,7 +258,8 @@ class AppState:
             return self._require_session().motion()
 
     def export(self, kind: str) -> tuple[str, bytes]:
-        """(file name, content) of the motion as ``kind``: 'bvh', 'glb' or 'json'."""
+        """(file name, content) of the motion as ``kind``: 'bvh', 'glb', 'json' or 'html'
+        (the playback page)."""
         with self._lock:
             session = self._require_session()
             motion = session.motion()
@@ -265,6 +267,8 @@ class AppState:
                 data = bvh_text(motion).encode()
             elif kind == "glb":
                 data = glb_bytes(motion)
+            elif kind == "html":
+                data = motion_html(motion, Path(self.info.path).stem).encode()
             else:
                 doc = motion_dict(video_dict(self.info), session.motion_frames(motion))
                 data = (json.dumps(doc, indent=1) + "\n").encode()

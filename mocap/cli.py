@@ -1,4 +1,4 @@
-"""`mocap fit | synth | sheet`: the command line face of the pipeline."""
+"""`mocap fit | synth | sheet | serve | export`: the command line face of the pipeline."""
 
 from __future__ import annotations
 
@@ -68,6 +68,20 @@ def _add_serve(sub) -> None:
     p.set_defaults(run=run)
 
 
+def _add_export(sub) -> None:
+    p = sub.add_parser("export", help="turn a motion file into a playback page (one HTML file, "
+                                      "no server needed)")
+    p.add_argument("motion", help="motion JSON written by `mocap fit` or the app")
+    p.add_argument("--html", metavar="FILE", required=True,
+                   help="the self-contained playback page to write (opens from disk, no network)")
+
+    def run(args) -> None:
+        from mocap.export.html import motion_file_html, write_html
+        print(f"wrote {write_html(args.html, motion_file_html(args.motion))}")
+
+    p.set_defaults(run=run)
+
+
 class _Bar:
     """A progress bar on stderr, redrawn at each whole percent on a terminal (a line
     per 10% otherwise); ``end`` finishes an unfinished line before other output."""
@@ -113,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_synth(sub)
     _add_sheet(sub)
     _add_serve(sub)
+    _add_export(sub)
     return parser
 
 
