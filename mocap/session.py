@@ -280,6 +280,7 @@ class Session:
                 entry["joints2d"] = self.inputs.joints2d[f.index]
             if f.joints2d is not None or keys[0] < f.index < keys[-1]:
                 entry["joints3d"] = motion.joints3d[f.index]
+                entry["root"] = motion.root[f.index]
             frames.append(entry)
         return frames
 
@@ -340,5 +341,6 @@ def track_motion(video: str | os.PathLike, annotations: str | os.PathLike | None
                           root=root, smooth=smooth)
     frames = [{"index": i, "keyframe": bool(motion.keyframes[i]), "person": True,
                "score": float(result.reliability[i].mean()), "joints2d": result.joints2d[i],
-               "joints3d": motion.joints3d[i]} for i in range(info.frame_count)]
+               "joints3d": motion.joints3d[i], "root": motion.root[i]}
+              for i in range(info.frame_count)]
     return info, motion, frames

@@ -69,6 +69,16 @@ def test_page_of_a_motion_uses_the_world_joints():
 
 
 @pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is not installed")
+def test_page_of_a_fitted_motion_file_follows_its_root(fitted_walk, tmp_path):
+    """`mocap fit` writes each frame's root; the page of the file moves the body along it."""
+    clip = fitted_walk("side")
+    out = tmp_path / "walk.html"
+    assert cli(["export", str(clip.motion), "--html", str(out)]) in (0, None)
+    frames = [f for f in page_data(out.read_text(encoding="utf-8"))["frames"] if f is not None]
+    pelvis_x = np.array([f[3][0] for f in frames])
+    assert np.ptp(pelvis_x) > 0.5, "a walk across the frame travels over half a metre"
+
+
 def test_page_plays_from_disk_in_chromium(page_file):
     sync_api = pytest.importorskip("playwright.sync_api")
     with sync_api.sync_playwright() as p:

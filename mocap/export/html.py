@@ -54,13 +54,14 @@ def motion_html(motion: Motion, name: str) -> str:
 
 
 def motion_file_html(path: str | os.PathLike) -> str:
-    """The page of a motion file (joints3d, about the pelvis; frames without one stay empty)."""
+    """The page of a motion file: joints3d moved by the frame's ``root`` (the pelvis
+    path) where the file has one; frames without joints3d stay empty."""
     doc = read_motion(path)
     frames = doc.get("frames", [])
     joints = np.full((len(frames), len(body.JOINTS), 3), np.nan)
     for i, frame in enumerate(frames):
         if "joints3d" in frame:
-            joints[i] = frame["joints3d"]
+            joints[i] = frame["joints3d"] + np.asarray(frame.get("root", np.zeros(3)), float)
     video = doc.get("video", {})
     name = Path(str(video.get("path") or path)).stem
     if name.endswith(".motion"):
