@@ -29,6 +29,7 @@ from scipy.ndimage import median_filter
 
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.lift import LENGTH, TOWARD, facing_yaw, lateral_axis, relative_depths, runs
+from mocap.smoothest import smoothest_states
 
 NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not matter
 PROFILE_SPREAD = 0.5       # torso spread below which the body is in profile (yaw 60..120)
@@ -48,34 +49,6 @@ _SIGN_PAIRS = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
 
 
 # -- second-order Viterbi -------------------------------------------------------------
-
-def viterbi2(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
-    """(F,) state per frame minimising sum(emission) + sum ||x[t+1] - 2 x[t] + x[t-1]||.
-
-    ``values`` (F, S, D) is what each state puts where, ``emission`` (F, S) a cost per
-    state, ``allowed`` (F, S) a hard mask (every frame needs one allowed state).
-    """
-    n, s = emission.shape
-    cost = np.where(allowed if allowed is not None else True, emission, np.inf)
-    if n == 1:
-        return np.array([int(np.argmin(cost[0]))])
-    # acc[t, a, b, c]: the acceleration of states a, b, c at frames t, t+1, t+2
-    acc = np.linalg.norm(values[2:, None, None, :] - 2 * values[1:-1, None, :, None]
-                         + values[:-2, :, None, None], axis=-1)
-    # best[a, b]: the cheapest path whose last two states are a (t-1), b (t)
-    best = cost[0][:, None] + cost[1][None, :]
-    back = []
-    for t in range(2, n):
-        total = best[:, :, None] + acc[t - 2]
-        back.append(total.argmin(axis=0))                                       # (b, c)
-        best = total.min(axis=0) + cost[t][None, :]
-    a, b = np.unravel_index(int(np.argmin(best)), best.shape)
-    path = [b, a]
-    for arg in reversed(back):
-        a, b = arg[a, b], a
-        path.append(a)
-    return np.array(path[::-1])
-
 
 # -- orientation ----------------------------------------------------------------------
 
@@ -202,7 +175,7 @@ def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
     """(F, 10) +1 toward / -1 away for anatomical 2D joints (F, 16, 2), NaN-free frames.
 
     Each limb's (upper, lower) signs, the torso's and the head's are chosen over the
-    clip by ``viterbi2``: per frame, joint-limit penalties (``limb_penalty``, a
+    clip by ``smoothest_states``: per frame, joint-limit penalties (``limb_penalty``, a
     backward or sideways lean for torso and head) and disagreement with
     ``sagittal_depth``; between frames, the acceleration of the depths (Eq. 5's
     |dZ|, a running median over DEPTH_FILTER_S against the 2D fit's noise).
@@ -224,7 +197,7 @@ def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
         cost = (lean_penalty(axis, facing[:, None], left[:, None], back)
                 + SAGITTAL_WEIGHT * np.maximum(0, -states * sagittal[:, [k]]))
         allowed = (fixed[:, [k]] == 0) | (fixed[:, [k]] == states)
-        out[:, k] = states[0, viterbi2(z[..., None], LIMIT_WEIGHT * cost, allowed)]
+        out[:, k] = states[0, smoothest_states(z[..., None], LIMIT_WEIGHT * cost, allowed)]
     for upper, lower, side in _LIMBS.values():
         ku, kl = SEGMENT_INDEX[upper], SEGMENT_INDEX[lower]
         pick = _limb_signs(vec[:, [ku, kl]], depth[:, [ku, kl]], sagittal[:, [ku, kl]],
@@ -244,7 +217,7 @@ def _limb_signs(vec: np.ndarray, depth: np.ndarray, sagittal: np.ndarray, fixed:
     cost = (limb_penalty(u3, l3, facing[:, None], left[:, None], side, leg)
             + SAGITTAL_WEIGHT * (np.maximum(0, -su * sagittal[:, [0]]) + np.maximum(0, -sl * sagittal[:, [1]])))
     allowed = ((fixed[:, [0]] == 0) | (fixed[:, [0]] == su)) & ((fixed[:, [1]] == 0) | (fixed[:, [1]] == sl))
-    return viterbi2(np.stack([zu, zu + zl], axis=-1), LIMIT_WEIGHT * cost, allowed)
+    return smoothest_states(np.stack([zu, zu + zl], axis=-1), LIMIT_WEIGHT * cost, allowed)
 
 
 def sagittal_depth(dx: np.ndarray, yaw: np.ndarray, lengths: np.ndarray) -> np.ndarray:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.smoothest import smoothest_states
 
 # (root, middle, end, bend, side): a knee bends the shank backward (+1), an elbow the
 # forearm forward (-1), about the performer's left axis; side +1 left, -1 right
@@ -79,21 +80,5 @@ def choose_limb(relative: np.ndarray, penalty: np.ndarray) -> np.ndarray:
     """(F,) the candidate index per frame minimising HINGE_WEIGHT * penalty plus the
     squared accelerations of the candidates' joints ``relative`` (F, 4, 2, 3) to the
     limb's root: a Viterbi search over pairs of consecutive choices."""
-    n = len(relative)
-    flat = relative.reshape(n, 4, -1)
-    unary = HINGE_WEIGHT * penalty
-    if n == 1:
-        return np.array([int(np.argmin(unary[0]))])
-    cost = unary[0][:, None] + unary[1][None, :]                          # (prev, cur)
-    back = []
-    for f in range(2, n):
-        acc = flat[f][None, None] - 2 * flat[f - 1][None, :, None] + flat[f - 2][:, None, None]
-        total = cost[:, :, None] + (acc ** 2).sum(-1)                     # (c, a, b)
-        back.append(np.argmin(total, axis=0))                             # best c per (a, b)
-        cost = np.min(total, axis=0) + unary[f][None, :]
-    a, b = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    path = [b, a]
-    for step in reversed(back):
-        a, b = step[a, b], a
-        path.append(a)
-    return np.array(path[::-1])
+    return smoothest_states(relative.reshape(len(relative), 4, -1), HINGE_WEIGHT * penalty,
+                            squared=True)

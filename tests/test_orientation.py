@@ -11,7 +11,8 @@ from mocap import lift, synth
 from mocap.body import BODY_HEIGHT, MIRROR_JOINTS
 from mocap.bvh import contract_joints, read_bvh
 from mocap.lift import known_sides, runs, track_sides
-from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, viterbi2
+from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs
+from mocap.smoothest import smoothest_states
 from mocap.walk import walk_cycle
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
@@ -39,7 +40,7 @@ def test_second_order_viterbi_keeps_crossing_tracks_apart():
     states = np.stack([np.stack([low, high], -1), np.stack([high, low], -1)], axis=1)   # (F, 2, 2)
     allowed = np.ones((11, 2), bool)
     allowed[0, 1] = False
-    path = viterbi2(states, np.zeros((11, 2)), allowed)
+    path = smoothest_states(states, np.zeros((11, 2)), allowed)
     follows = np.where(path[:, None] == 0, states[:, 0], states[:, 1])
     assert np.allclose(follows[:, 0], a) or np.allclose(follows[:, 0], b)
     assert np.allclose(follows[:, 0], a)

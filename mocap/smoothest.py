@@ -1,0 +1,37 @@
+"""The smoothest sequence of discrete choices over a clip: which of a few states each
+frame takes (a foreshortening sign pair, a limb's depth solution) when states cost
+something each and changes of acceleration cost more."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def smoothest_states(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None,
+                     squared: bool = False) -> np.ndarray:
+    """(F,) state per frame minimising sum(emission) + sum ||x[t+1] - 2 x[t] + x[t-1]||
+    (its square with ``squared``): a Viterbi search over pairs of consecutive states.
+
+    ``values`` (F, S, D) is what each state puts where, ``emission`` (F, S) a cost per
+    state, ``allowed`` (F, S) a hard mask (every frame needs one allowed state).
+    """
+    n, s = emission.shape
+    cost = np.where(allowed if allowed is not None else True, emission, np.inf)
+    if n == 1:
+        return np.array([int(np.argmin(cost[0]))])
+    # acc[t, a, b, c]: the acceleration of states a, b, c at frames t, t+1, t+2
+    jerk = values[2:, None, None, :] - 2 * values[1:-1, None, :, None] + values[:-2, :, None, None]
+    acc = (jerk ** 2).sum(-1) if squared else np.linalg.norm(jerk, axis=-1)
+    # best[a, b]: the cheapest path whose last two states are a (t-1), b (t)
+    best = cost[0][:, None] + cost[1][None, :]
+    back = []
+    for t in range(2, n):
+        total = best[:, :, None] + acc[t - 2]
+        back.append(total.argmin(axis=0))                                       # (b, c)
+        best = total.min(axis=0) + cost[t][None, :]
+    a, b = np.unravel_index(int(np.argmin(best)), best.shape)
+    path = [b, a]
+    for arg in reversed(back):
+        a, b = arg[a, b], a
+        path.append(a)
+    return np.array(path[::-1])
