@@ -64,13 +64,19 @@ class Knob:
     segments: tuple[str, ...] = ()
 
     def apply(self, pose: Pose2D, value: float) -> Pose2D:
-        if self.field in ("angle", "ratio"):
-            arr = getattr(pose, self.field).copy()
-            arr[self.indices] = value
-            return replace(pose, **{self.field: arr})
-        if self.field == "x":
-            return replace(pose, pelvis=np.array([pose.pelvis[0] + value, pose.pelvis[1]]))
-        return replace(pose, spread=float(value))
+        """The pose with the knob set to value (built directly: this runs per search)."""
+        pelvis, angle, ratio, spread = pose.pelvis, pose.angle, pose.ratio, pose.spread
+        if self.field == "angle":
+            angle = angle.copy()
+            angle[self.indices] = value
+        elif self.field == "ratio":
+            ratio = ratio.copy()
+            ratio[self.indices] = value
+        elif self.field == "x":
+            pelvis = np.array([pelvis[0] + value, pelvis[1]])
+        else:
+            spread = float(value)
+        return Pose2D(pelvis=pelvis, scale=pose.scale, angle=angle, ratio=ratio, spread=spread)
 
     def batch(self, pose: Pose2D, values: np.ndarray):
         """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""

@@ -92,10 +92,10 @@ def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, i
     """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
     pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32)   # windows keep them >= 0
     planes = np.zeros((len(pts),) + shape, np.uint8)
-    for plane, quads in zip(planes, pts):
-        for quad in quads:  # one by one: fillPoly would make overlaps holes
-            cv2.fillConvexPoly(plane, quad, 1, cv2.LINE_8, _SHIFT)
-    return planes
+    owners = np.repeat(np.arange(len(pts)), pts.shape[1]).tolist()
+    for i, quad in zip(owners, pts.reshape(-1, 4, 2)):
+        cv2.fillConvexPoly(planes[i], quad, 1, cv2.LINE_8, _SHIFT)   # one by one: fillPoly
+    return planes                                                      # would make overlaps holes
 
 
 def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
