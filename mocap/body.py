@@ -12,7 +12,7 @@ side (paper, section 3.3); anatomical sides are decided when lifting to 3D.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -133,16 +133,6 @@ class Pose2D:
     ratio: np.ndarray = field(default_factory=lambda: np.ones(len(SEGMENT_NAMES)))
     spread: float = 1.0
 
-    def with_segment(self, segment: str, *, angle: float | None = None,
-                     ratio: float | None = None) -> "Pose2D":
-        """A copy with one segment's angle and/or foreshortening ratio changed."""
-        i = SEGMENT_INDEX[segment]
-        angles, ratios = self.angle.copy(), self.ratio.copy()
-        if angle is not None:
-            angles[i] = angle
-        if ratio is not None:
-            ratios[i] = ratio
-        return replace(self, angle=angles, ratio=ratios)
 
 
 def default_angles() -> np.ndarray:

@@ -8,7 +8,6 @@ and the fit's silhouette similarity S (Eq. 3), or "no person".
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
@@ -36,13 +35,6 @@ def sheet_indices(frame_count: int, n: int) -> list[int]:
 def tile_width(info: VideoInfo, height: int = TILE_HEIGHT) -> int:
     """Width of one half of a tile (frame or silhouette) `height` px tall."""
     return max(1, round(info.width * height / info.height))
-
-
-def sheet_size(info: VideoInfo, n: int, height: int = TILE_HEIGHT) -> tuple[int, int]:
-    """(width, height) in pixels of the sheet of `n` tiles."""
-    tiles = len(sheet_indices(info.frame_count, n))
-    columns = min(COLUMNS, tiles)
-    return columns * 2 * tile_width(info, height), math.ceil(tiles / columns) * height
 
 
 def frame_tile(frame: np.ndarray, background: Background, scale: float,

@@ -52,7 +52,6 @@ class Fit2D:
     pose: Pose2D
     joints: np.ndarray
     score: float
-    legs_crossed: bool
 
 
 @dataclass(frozen=True)
@@ -243,7 +242,7 @@ def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
     return search(pose, Search(canvas, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0))
 
 
-def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D, bool]:
+def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5),
     upper legs by Algorithm 1 with the lower legs attached (Fig. 3b-c), each lower
     leg refined by Algorithm 1, then ratios (Algorithm 6)."""
@@ -259,7 +258,7 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> tuple[Pose2D,
     pose = _best_leg_pairing(canvas, pose)
     for side in "lr":
         pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
-    return pose, crossed
+    return pose
 
 
 def _swap_lower_legs(pose: Pose2D) -> Pose2D:
@@ -388,10 +387,9 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
         pose = replace(prev, pelvis=pose.pelvis, scale=scale)
     pose = fit_torso_head(canvas, pose, prev, spread)
     canvas.commit(pose_quads(pose, TORSO_HEAD))
-    pose, crossed = fit_legs(canvas, pose, prev)
+    pose = fit_legs(canvas, pose, prev)
     canvas.commit(pose_quads(pose, LEG["l"] + LEG["r"]))
     for side in ("l", "r"):
         pose = fit_arm(canvas, pose, side, prev)
         canvas.commit(pose_quads(pose, ARM[side]))
-    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=canvas.score_model(),
-                 legs_crossed=crossed)
+    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=canvas.score_model())

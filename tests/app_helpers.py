@@ -53,3 +53,13 @@ def deepest_segment(state, frame: int | None = None) -> str:
     """The segment of a frame (default: the current one) farthest out of the image
     plane: flipping its foreshortening moves the 3D pose most."""
     return SEGMENT_NAMES[int(np.argmax(depth_fractions(state.view(frame).pose3d)))]
+
+
+def download_export(page, button: str, folder: Path) -> Path:
+    """Click an Export-tab button of the app's page and save the file it sends."""
+    page.get_by_role("tab", name="Export").click()
+    with page.expect_download() as download:
+        page.get_by_role("button", name=button).click()
+    path = folder / download.value.suggested_filename
+    download.value.save_as(path)
+    return path

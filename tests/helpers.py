@@ -8,6 +8,7 @@ estimate (a temporal median) see the empty scene at every pixel.
 from __future__ import annotations
 
 import dataclasses
+import json
 import shutil
 from pathlib import Path
 
@@ -72,3 +73,9 @@ def png_avi(folder: Path) -> Path:
     """A still image renamed like a video."""
     cv2.imwrite(str(folder / "still.png"), np.zeros((48, 64, 3), np.uint8))
     return shutil.move(folder / "still.png", folder / "still.avi")
+
+
+def page_data(text: str) -> dict:
+    """The clip a playback page carries (the JSON of its `const DATA = ...;` line)."""
+    line = next(line for line in text.splitlines() if line.startswith("const DATA = "))
+    return json.loads(line[len("const DATA = "):].rstrip(";"))

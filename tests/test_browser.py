@@ -20,7 +20,8 @@ from pathlib import Path
 import bvhio
 import numpy as np
 import pytest
-from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
+from app_helpers import (TINY_FRAMES, app, deepest_segment, download_export,  # noqa: F401
+                         fresh_copy, tiny_video)
 from scipy.spatial.transform import Rotation
 
 from app.controls import segment_label, sign_button
@@ -174,11 +175,7 @@ def test_override_by_clicking_the_frame_then_undo(browser, app):
 
 def test_download_bvh_that_parses(browser, app, tmp_path):
     page = open_page(browser, app.server.get_port())
-    page.get_by_role("tab", name="Export").click()
-    with page.expect_download() as download:
-        page.get_by_role("button", name="BVH").click()
-    path = tmp_path / download.value.suggested_filename
-    download.value.save_as(path)
+    path = download_export(page, "BVH", tmp_path)
     assert path.name == "walk.bvh"
     bvh = bvhio.readAsBvh(str(path))
     assert bvh.FrameCount == len(bvh.Root.Keyframes) == TINY_FRAMES

@@ -6,13 +6,13 @@ Screenshots go to artifacts/help/ (gitignored)."""
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
 import pytest
 import viser
-from app_helpers import TINY_FRAMES, app, tiny_video  # noqa: F401
+from app_helpers import TINY_FRAMES, app, download_export, tiny_video  # noqa: F401
+from helpers import page_data
 
 from app.controls import HELP_FILE, build_controls, help_markdown
 from mocap.lift import ORIENTATIONS
@@ -107,14 +107,9 @@ def test_help_tab_and_playback_download_in_chromium(app, tmp_path):
             page.wait_for_timeout(300)
             page.screenshot(path=str(ARTIFACTS / "help_tab.png"))
             # the playback page: the export button
-            page.get_by_role("tab", name="Export").click()
-            with page.expect_download() as download:
-                page.get_by_role("button", name="HTML page").click()
-            path = tmp_path / download.value.suggested_filename
-            download.value.save_as(path)
+            path = download_export(page, "HTML page", tmp_path)
             assert path.name == "walk.html"
-            line = next(s for s in path.read_text().splitlines() if s.startswith("const DATA = "))
-            data = json.loads(line[len("const DATA = "):].rstrip(";"))
+            data = page_data(path.read_text())
             assert data["n_frames"] == len(data["frames"]) == TINY_FRAMES
             assert data["name"] == "walk"
         finally:

@@ -4,12 +4,12 @@ draws the body and plays. The screenshot goes to artifacts/playback/ (gitignored
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import page_data
 
 from mocap.cli import main as cli
 from mocap.export.html import DATA_SLOT, TEMPLATE, motion_html
@@ -39,11 +39,6 @@ def page_file(tmp_path_factory) -> Path:
     out = folder / "walk.html"
     assert cli(["export", str(folder / "walk.motion.json"), "--html", str(out)]) in (0, None)
     return out
-
-
-def page_data(text: str) -> dict:
-    line = next(line for line in text.splitlines() if line.startswith("const DATA = "))
-    return json.loads(line[len("const DATA = "):].rstrip(";"))
 
 
 def test_page_is_small_self_contained_and_counts_the_frames(page_file):
