@@ -166,9 +166,10 @@ def fit_silhouettes(silhouettes: list[Silhouette | None], heights: np.ndarray, s
     return _collect(iter_fits(silhouettes, heights, scale, fps), len(silhouettes), progress)
 
 
-def fit_video(path: str | os.PathLike, progress: Progress | None = None) -> tuple[VideoInfo, list[FrameFit]]:
-    """Silhouettes and 2D fits for every frame of a video."""
-    info = open_video(path)
+def fit_video(video: str | os.PathLike | VideoInfo,
+              progress: Progress | None = None) -> tuple[VideoInfo, list[FrameFit]]:
+    """Silhouettes and 2D fits for every frame of a video (a path or an opened one)."""
+    info = video if isinstance(video, VideoInfo) else open_video(video)
     scale = processing_scale(info)
     total = 2 * info.frame_count
     first = (lambda d, _t: progress(d, total)) if progress else None
@@ -220,7 +221,7 @@ class Session:
         """Fit a video; annotations (a file) are checked before the fit starts."""
         info = open_video(video)
         notes = load_annotations(annotations, info.frame_count) if annotations else None
-        info, fits = fit_video(video, progress)
+        info, fits = fit_video(info, progress)
         return cls(info, fits, notes, smooth)
 
     @property
@@ -330,7 +331,7 @@ def track_motion(video: str | os.PathLike, annotations: str | os.PathLike | None
                          '(frames["0"].joints2d)')
     notes = load_annotations(annotations, info.frame_count)
     first = notes.frames.get(0)
-    result = track_video(video, first.joints2d if first else {}, progress,
+    result = track_video(info, first.joints2d if first else {}, progress,
                          orientation=notes.orientations(1)[0])
     heights = np.linalg.norm(result.joints2d[:, JOINT_INDEX["head_top"]] - result.joints2d[
         :, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1), axis=-1)

@@ -120,9 +120,10 @@ def _turn(orientation: str | None) -> str | None:
     return side
 
 
-def track_video(video: str | os.PathLike, marks, progress: Progress | None = None, *,
+def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None, *,
                 focal_px: float | None = None, orientation: str | None = None) -> TrackResult:
-    """Track a video from the 16 joints marked on its frame 0 and reconstruct 3D.
+    """Track a video (a path or an opened one) from the 16 joints marked on its frame 0
+    and reconstruct 3D.
 
     ``marks``: (16, 2) pixels in JOINTS order or a mapping joint -> (x, y) (frame 0's
     ``joints2d`` of an annotations file); bad marks raise a MocapError naming the
@@ -132,7 +133,7 @@ def track_video(video: str | os.PathLike, marks, progress: Progress | None = Non
     which way the body is turned, which the key triangle alone cannot.
     ``progress(done, total)`` is called after every frame.
     """
-    info = open_video(video)
+    info = video if isinstance(video, VideoInfo) else open_video(video)
     marks = check_marks(marks, info.width, info.height)
     turn = _turn(orientation)
     scale = processing_scale(info)
