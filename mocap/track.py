@@ -120,8 +120,8 @@ def _turn(orientation: str | None) -> str | None:
     return side
 
 
-def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None, *,
-                focal_px: float | None = None, orientation: str | None = None) -> TrackResult:
+def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None,
+                *, focal_px: float | None = None, orientation: str | None = None) -> TrackResult:
     """Track a video (a path or an opened one) from the 16 joints marked on its frame 0
     and reconstruct 3D.
 
