@@ -116,7 +116,10 @@ def test_step_frames_with_buttons_slider_and_keys(browser, app):
     wait_until(lambda: app.state.frame == 3)
     page.keyboard.press("j")
     wait_until(lambda: app.state.frame == 2)
-    page.locator(".mantine-NumberInput-input").fill("9")     # the slider's number box
+    box = page.locator(".mantine-NumberInput-input")         # the slider's number box
+    # the page shows frame 2 before typing: a late update would overwrite what is typed
+    sync_api.expect(box).to_have_value("2", timeout=TIMEOUT_MS)
+    box.fill("9")
     page.keyboard.press("Enter")
     wait_until(lambda: app.state.frame == 9)
     page.get_by_role("button", name="◀ keyframe").click()  # every frame is a keyframe by default
