@@ -72,7 +72,7 @@ def likely_swaps(joints2d: np.ndarray, px_per_unit: np.ndarray) -> np.ndarray:
 def review_queue(session: Session) -> list[Doubt]:
     """Every doubtful frame with a person, most doubtful first."""
     inputs = session.inputs
-    scores = np.array([np.nan if f.score is None else f.score for f in session.fits])
+    scores = session.scores
     signs = (scores < LOW_SCORE,
              end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
              broken_limits(inputs.joints2d),

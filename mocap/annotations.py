@@ -25,7 +25,8 @@ from mocap.lift import FORESHORTENING, ORIENTATIONS
 
 FORMAT, VERSION = "mocap-annotations", 1
 _FRAME_KEY = re.compile(r"0|[1-9][0-9]*")
-_TOP_KEYS = ("format", "version", "keyframes", "frames")
+_TOP_KEYS = ("format", "version", "method", "keyframes", "frames")
+METHODS = ("silhouette", "track")       # the two methods: mocap fit --method
 _FRAME_KEYS = ("orientation", "foreshortening", "joints2d")
 
 
@@ -53,10 +54,14 @@ class FrameNote:
 
 @dataclass(frozen=True)
 class Annotations:
-    """All the user's inputs: frame index -> FrameNote, and the keyframes (None: all)."""
+    """All the user's inputs: frame index -> FrameNote, the keyframes (None: all) and
+    the method the user chose (None: not said, the silhouette method). ``method`` is a
+    field beyond CONTRACT.md's: "track" makes frame 0's joints2d the tracking
+    method's marks."""
 
     frames: dict[int, FrameNote] = field(default_factory=dict)
     keyframes: tuple[int, ...] | None = None
+    method: str | None = None
 
     # -- editing (each returns a new, checked Annotations) --------------------------
 
@@ -92,6 +97,12 @@ class Annotations:
                   joint: None if xy is None else (float(xy[0]), float(xy[1]))}
         return self._with_note(frame, joints2d={k: v for k, v in joints.items() if v is not None})
 
+    def with_method(self, method: str | None) -> "Annotations":
+        """Choose the method (METHODS), or with None leave it unsaid."""
+        if method is not None and method not in METHODS:
+            raise MocapError(f"unknown method {method!r} (choose {', '.join(METHODS)})")
+        return replace(self, method=method)
+
     # -- sticky resolution ----------------------------------------------------------
 
     def orientations(self, n_frames: int) -> list[str | None]:
@@ -125,6 +136,8 @@ class Annotations:
 
     def to_dict(self) -> dict:
         out: dict = {"format": FORMAT, "version": VERSION}
+        if self.method is not None:
+            out["method"] = self.method
         if self.keyframes is not None:
             out["keyframes"] = list(self.keyframes)
         out["frames"] = {str(k): v.to_dict() for k, v in self.frames.items()}
@@ -226,13 +239,17 @@ def parse_annotations(data, frame_count: int | None = None) -> Annotations:
     version = data.get("version")
     if not (isinstance(version, int) and not isinstance(version, bool) and version == VERSION):
         raise _Bad("version", f"expected {VERSION}, got {json.dumps(version)[:40]}")
+    method = data.get("method")
+    if method is not None and method not in METHODS:
+        raise _Bad("method", f"expected one of {', '.join(METHODS)}, got {json.dumps(method)[:40]}")
     keyframes = _keyframes(data["keyframes"], frame_count) if "keyframes" in data else None
     frames = _expect(data.get("frames", {}), dict, "frames", "an object")
     notes = {}
     for key, value in frames.items():
         place = f"frames[{json.dumps(key)[:40]}]"
         notes[_frame_index(key, frame_count, place)] = _note(value, place)
-    return Annotations({k: v for k, v in sorted(notes.items()) if not v.is_empty()}, keyframes)
+    return Annotations({k: v for k, v in sorted(notes.items()) if not v.is_empty()}, keyframes,
+                       method)
 
 
 def annotations_from_text(text: str, frame_count: int | None = None,

@@ -12,10 +12,11 @@ from mocap.errors import MocapError
 def _add_fit(sub) -> None:
     p = sub.add_parser("fit", help="fit the body model to every frame of a video and lift it to 3D")
     p.add_argument("video", help="input video (any container/codec OpenCV reads)")
-    p.add_argument("--method", choices=("silhouette", "track"), default="silhouette",
+    p.add_argument("--method", choices=("silhouette", "track"), default=None,
                    help="silhouette: fit the cylinder body to each frame's silhouette (static "
                         "background); track: follow the joints marked on frame 0 (any background; "
-                        "needs --annotations)")
+                        "needs --annotations). Default: the annotations' method (the app saves "
+                        "it), else silhouette")
     p.add_argument("--annotations", metavar="FILE",
                    help="mocap-annotations JSON: orientation, foreshortening, joint overrides, keyframes")
     p.add_argument("--out", default=None, help="motion JSON to write (default: VIDEO.motion.json)")

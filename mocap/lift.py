@@ -330,16 +330,18 @@ def yaw_of(joints3d: np.ndarray) -> float:
 
 
 def signs_of(joints3d: np.ndarray) -> np.ndarray:
-    """(10,) foreshortening of each segment of a 3D pose: +1 toward, -1 away."""
-    ends = np.asarray(joints3d, float)[SEGMENT_JOINTS]
-    return np.where(ends[:, 1, 2] >= ends[:, 0, 2], TOWARD, AWAY)
+    """(..., 10) foreshortening of each segment of 3D poses (..., 16, 3): +1 toward,
+    -1 away."""
+    ends = np.asarray(joints3d, float)[..., SEGMENT_JOINTS, :]
+    return np.where(ends[..., 1, 2] >= ends[..., 0, 2], TOWARD, AWAY)
 
 
 def depth_fractions(joints3d: np.ndarray) -> np.ndarray:
-    """(10,) |dZ| / length of each segment of a 3D pose (0 in the image plane)."""
-    ends = np.asarray(joints3d, float)[SEGMENT_JOINTS]
-    vec = ends[:, 1] - ends[:, 0]
-    return np.abs(vec[:, 2]) / np.maximum(np.linalg.norm(vec, axis=-1), 1e-12)
+    """(..., 10) |dZ| / length of each segment of 3D poses (..., 16, 3) (0 in the
+    image plane)."""
+    ends = np.asarray(joints3d, float)[..., SEGMENT_JOINTS, :]
+    vec = ends[..., 1, :] - ends[..., 0, :]
+    return np.abs(vec[..., 2]) / np.maximum(np.linalg.norm(vec, axis=-1), 1e-12)
 
 
 # -- lengths seen in a clip -----------------------------------------------------------

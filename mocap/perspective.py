@@ -35,9 +35,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from mocap import body
-from mocap.body import JOINT_INDEX, JOINTS
+from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.errors import MocapError
-from mocap.rays import LIMBS, choose_limb, limb_candidates, limb_penalty, nearer_root
+from mocap.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots,
+                        signs_allowed, toward_signs)
 
 UNIT_M = body.BODY_HEIGHT_M / body.BODY_HEIGHT
 KEY_JOINTS = ("shoulder_l", "shoulder_r", "chest")
@@ -58,6 +59,11 @@ BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
 BONE_INDEX = {bone: n for n, bone in enumerate(BONES)}
 BONE_PAIRS = ((0,), (1,), (2,), (3, 4), (5, 7), (6, 8), (9, 11), (10, 12))   # pooled left/right
 TORSO_BONES = 5                 # the first five bones move with the key triangle
+SEGMENT_OF = {(int(a), int(b)): k for k, (a, b) in enumerate(SEGMENT_JOINTS)}
+# trunk joints whose root choice decides a segment's sign: joint -> (segment, its other
+# end, already placed; whether the joint is the segment's distal end)
+TRUNK_SIGNS = {JOINT_INDEX["head_top"]: (SEGMENT_INDEX["head"], JOINT_INDEX["neck"], True),
+               JOINT_INDEX["pelvis"]: (SEGMENT_INDEX["torso"], JOINT_INDEX["neck"], False)}
 LENGTH_PERCENTILE = 50          # of a bone's seen lengths over the clip (measured_lengths)
 NEWTON_STEPS = 30
 # body frame -> pinhole frame for a performer facing the camera (left to image right,
@@ -299,27 +305,47 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     return out
 
 
-def trunk_joints(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+def trunk_joints(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
+                 fixed: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) the key joints and the trunk's (neck, head top, pelvis, hips), each
-    on its ray at the root nearer the model trunk carried rigidly by the key triangle."""
+    on its ray at the root nearer the model trunk carried rigidly by the key
+    triangle, or at the other root where that gives the head or the torso the
+    user's foreshortening ``fixed`` (F, 10) (+1 toward, -1 away, 0 not said)."""
     joints = np.zeros(rays.shape)
     joints[:, KEY] = key
     axes = body_axes(key)
+    frames = np.arange(len(key))
     for (a, b), length in list(zip(BONES, lengths))[:TORSO_BONES]:
+        roots = ray_roots(joints[:, a], rays[:, b], length)                    # (F, 2, 3)
         guess = joints[:, a] + axes @ (MODEL[b] - MODEL[a])
-        joints[:, b] = nearer_root(joints[:, a], rays[:, b], length, guess)
+        miss = np.linalg.norm(roots - guess[:, None], axis=-1)
+        allowed = np.ones(miss.shape, bool)
+        if fixed is not None and b in TRUNK_SIGNS:
+            segment, other, distal = TRUNK_SIGNS[b]
+            depths = np.stack([roots[..., 2], np.repeat(joints[:, other, None, 2], 2, axis=1)], -1)
+            signs = toward_signs(depths if not distal else depths[..., ::-1])
+            allowed = signs_allowed(signs, fixed[:, [segment]])
+        joints[:, b] = roots[frames, np.where(allowed, miss, np.inf).argmin(axis=1)]
     return joints
 
 
-def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """Fill in elbows, wrists, knees and ankles on their rays (rays.choose_limb)."""
+def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
+              fixed: np.ndarray | None = None) -> np.ndarray:
+    """Fill in elbows, wrists, knees and ankles on their rays (rays.choose_limb), with
+    the user's foreshortening ``fixed`` (F, 10) where given."""
     left = body_axes(joints[:, KEY])[..., 0]
     frames = np.arange(len(joints))
     for root, middle, end, bend, side in LIMBS:
         pair = (BONE_INDEX[root, middle], BONE_INDEX[middle, end])
         cands = limb_candidates(joints[:, root], rays[:, [middle, end]], tuple(lengths[list(pair)]))
+        allowed = None
+        if fixed is not None:
+            depths = np.concatenate([np.repeat(joints[:, root, None, None, 2], 4, axis=1),
+                                     cands[..., 2]], axis=2)                  # (F, 4, 3)
+            said = fixed[:, [SEGMENT_OF[root, middle], SEGMENT_OF[middle, end]]]
+            allowed = signs_allowed(toward_signs(depths), said)
         pick = choose_limb(cands - joints[:, root, None, None],
-                           limb_penalty(joints[:, root], cands, left, bend, side))
+                           limb_penalty(joints[:, root], cands, left, bend, side), allowed)
         joints[:, middle], joints[:, end] = cands[frames, pick, 0], cands[frames, pick, 1]
     return joints
 
@@ -327,13 +353,20 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray) -> np.n
 def reconstruct(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
                 lengths: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) joints in the pinhole frame (metres) from 2D joints (F, 16, 2): the
-    key joints (``key_joints``), then the others centre to fringe at their bone
-    ``lengths`` (default: ``measured_lengths``)."""
-    key = key_joints(joints2d, camera, turn)
+    key joints (``key_joints``), then the others (``place_joints``)."""
+    return place_joints(joints2d, key_joints(joints2d, camera, turn), camera, lengths)
+
+
+def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,
+                 lengths: np.ndarray | None = None, fixed: np.ndarray | None = None) -> np.ndarray:
+    """(F, 16, 3) every joint from the key joints ``key`` (F, 3, 3) centre to fringe at
+    their bone ``lengths`` (default: ``measured_lengths``), each limb's and the
+    trunk's depth choices kept to the user's foreshortening ``fixed`` (F, 10) where
+    given (+1 toward, -1 away, 0 not said)."""
     if lengths is None:
         lengths = measured_lengths(joints2d, key[:, :, 2].mean(axis=1), camera)
     rays = camera.rays(joints2d)
-    return add_limbs(trunk_joints(key, rays, lengths), rays, lengths)
+    return add_limbs(trunk_joints(key, rays, lengths, fixed), rays, lengths, fixed)
 
 
 def to_contract(points: np.ndarray) -> np.ndarray:

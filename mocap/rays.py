@@ -14,7 +14,8 @@ elbows bent the wrong way, an upper arm or thigh pointing through the trunk). A
 greedy frame-to-frame choice cannot tell, where a bone passes through the image
 plane (the two roots meet), whether it goes on or turns back; acceleration can.
 Where a whole limb's mirror image is as smooth and as possible as the limb (a limb
-that never crosses the image plane, within its ranges), the choice stays a guess.
+that never crosses the image plane, within its ranges), the choice stays a guess:
+the user's foreshortening directions (CONTRACT.md), where given, settle it.
 """
 
 from __future__ import annotations
@@ -44,12 +45,20 @@ def ray_roots(known: np.ndarray, rays: np.ndarray, length: float) -> np.ndarray:
     return np.stack([(along - half)[..., None] * u, (along + half)[..., None] * u], axis=-2)
 
 
-def nearer_root(known: np.ndarray, rays: np.ndarray, length: float,
-                guess: np.ndarray) -> np.ndarray:
-    """(..., 3) of the two roots (``ray_roots``) the one nearer ``guess`` (..., 3)."""
-    roots = ray_roots(known, rays, length)
-    miss = np.linalg.norm(roots - guess[..., None, :], axis=-1)
-    return np.where((miss[..., 1] < miss[..., 0])[..., None], roots[..., 1, :], roots[..., 0, :])
+def toward_signs(depths: np.ndarray) -> np.ndarray:
+    """(..., n-1) foreshortening of the segments of a chain of joints from the depths
+    (pinhole Z) of its joints (..., n), proximal first: +1 toward (the distal joint
+    nearer the camera), -1 away (CONTRACT.md's words)."""
+    return np.where(depths[..., 1:] < depths[..., :-1], 1, -1)
+
+
+def signs_allowed(signs: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """(F, C) bool: the candidates whose segments' signs (F, C, S) are the user's
+    ``fixed`` (F, S) (+1, -1; 0 where the user said nothing). A frame where no
+    candidate has them (the roots coincide: the segment crosses the image plane)
+    allows all."""
+    ok = ((fixed[:, None, :] == 0) | (signs == fixed[:, None, :])).all(axis=-1)
+    return ok | ~ok.any(axis=1, keepdims=True)
 
 
 def limb_candidates(root: np.ndarray, rays: np.ndarray, lengths: tuple[float, float]) -> np.ndarray:
@@ -76,9 +85,11 @@ def limb_penalty(root: np.ndarray, cands: np.ndarray, left: np.ndarray, bend: fl
     return np.maximum(0.0, hinge) + np.maximum(0.0, inward - INWARD_FREE)
 
 
-def choose_limb(relative: np.ndarray, penalty: np.ndarray) -> np.ndarray:
+def choose_limb(relative: np.ndarray, penalty: np.ndarray,
+                allowed: np.ndarray | None = None) -> np.ndarray:
     """(F,) the candidate index per frame minimising HINGE_WEIGHT * penalty plus the
     squared accelerations of the candidates' joints ``relative`` (F, 4, 2, 3) to the
-    limb's root: a Viterbi search over pairs of consecutive choices."""
+    limb's root, among the ``allowed`` ones (F, 4) (the user's foreshortening, see
+    ``signs_allowed``): a Viterbi search over pairs of consecutive choices."""
     return smoothest_states(relative.reshape(len(relative), 4, -1), HINGE_WEIGHT * penalty,
-                            squared=True)
+                            allowed, squared=True)

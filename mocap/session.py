@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from collections.abc import Iterator
 from typing import Callable
@@ -24,7 +25,7 @@ import cv2
 import numpy as np
 
 from mocap.annotations import Annotations, load_annotations
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, Pose2D
+from mocap.body import JOINTS, Pose2D
 from mocap.errors import MocapError
 from mocap.export.motion_json import write_motion
 from mocap.motion import Motion, build_motion
@@ -32,7 +33,6 @@ from mocap.inputs import Inputs, resolve_inputs, root_track
 from mocap.orientation import guess_orientations
 from mocap.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
 from mocap.silhouette import estimate_background, extract_silhouette
-from mocap.track import track_video
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
 
 Progress = Callable[[int, int], None]
@@ -209,24 +209,27 @@ class Session:
     def __init__(self, info: VideoInfo, fits: list[FrameFit],
                  annotations: Annotations | None = None, smooth: float = 0.0):
         self.info, self.fits, self.smooth = info, fits, smooth
-        self._arrays = fit_arrays(fits)
-        self._guessed = guess_orientations(*self._arrays, info.fps)   # the fits' alone: once
         self._annotations = annotations or Annotations()
         self._inputs: Inputs | None = None
         self._poses: dict[int, tuple[tuple, np.ndarray]] = {}
 
-    @classmethod
-    def from_video(cls, video: str | os.PathLike, annotations: str | os.PathLike | None = None, *,
-                   smooth: float = 0.0, progress: Progress | None = None) -> "Session":
-        """Fit a video; annotations (a file) are checked before the fit starts."""
-        info = open_video(video)
-        notes = load_annotations(annotations, info.frame_count) if annotations else None
-        info, fits = fit_video(info, progress)
-        return cls(info, fits, notes, smooth)
-
     @property
     def annotations(self) -> Annotations:
         return self._annotations
+
+    @cached_property
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return fit_arrays(self.fits)
+
+    @cached_property
+    def _guessed(self) -> list[str | None]:
+        """The orientations the fits alone suggest (once per session)."""
+        return guess_orientations(*self._arrays, self.info.fps)
+
+    @property
+    def scores(self) -> np.ndarray:
+        """(F,) each frame's fit score (Eq. 3's S), NaN where nobody was found."""
+        return np.array([np.nan if f.score is None else f.score for f in self.fits], float)
 
     def annotate(self, annotations: Annotations) -> None:
         """Take new annotations; lifting inputs are resolved again when next needed."""
@@ -307,41 +310,18 @@ def write_outputs(info: VideoInfo, motion: Motion, frames: list[dict], out, *, b
 
 
 def fit_video_to_file(video: str | os.PathLike, out: str | os.PathLike | None, *,
-                      annotations: str | os.PathLike | None = None, method: str = "silhouette",
+                      annotations: str | os.PathLike | None = None, method: str | None = None,
                       bvh=None, glb=None, csv=None, smooth: float = 0.0,
                       progress: Progress | None = None) -> list[Path]:
     """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
-    interpolate and write the motion file and exports."""
-    out = Path(out) if out else Path(video).with_suffix(".motion.json")
-    if method == "track":
-        info, motion, frames = track_motion(video, annotations, smooth, progress)
-        return write_outputs(info, motion, frames, out, bvh=bvh, glb=glb, csv=csv)
-    session = Session.from_video(video, annotations, smooth=smooth, progress=progress)
-    return session.write(out, bvh=bvh, glb=glb, csv=csv)
-
-
-def track_motion(video: str | os.PathLike, annotations: str | os.PathLike | None, smooth: float,
-                 progress: Progress | None) -> tuple[VideoInfo, Motion, list[dict]]:
-    """The tracking method (mocap.track) from the 16 joints marked in the annotations'
-    frame 0, its keyframes interpolated like the silhouette method's. A frame's
-    score is the mean reliability of its joints' block matches."""
+    interpolate and write the motion file and exports. ``method`` None: the
+    annotations' method, else the silhouette method."""
+    from mocap.tracksession import TrackSession
     info = open_video(video)
-    if annotations is None:
-        raise MocapError("the tracking method needs --annotations with frame 0's 16 joints "
-                         '(frames["0"].joints2d)')
-    notes = load_annotations(annotations, info.frame_count)
-    first = notes.frames.get(0)
-    result = track_video(info, first.joints2d if first else {}, progress,
-                         orientation=notes.orientations(1)[0])
-    heights = np.linalg.norm(result.joints2d[:, JOINT_INDEX["head_top"]] - result.joints2d[
-        :, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1), axis=-1)
-    ppu = np.full(info.frame_count, np.percentile(heights, SCALE_PERCENTILE) / BODY_HEIGHT)
-    root = root_track(result.joints2d, ppu, (info.width, info.height))
-    keys = notes.keyframe_indices(info.frame_count)
-    motion = build_motion({k: result.joints3d[k] for k in keys}, info.frame_count, info.fps,
-                          root=root, smooth=smooth)
-    frames = [{"index": i, "keyframe": bool(motion.keyframes[i]), "person": True,
-               "score": float(result.reliability[i].mean()), "joints2d": result.joints2d[i],
-               "joints3d": motion.joints3d[i], "root": motion.root[i]}
-              for i in range(info.frame_count)]
-    return info, motion, frames
+    notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
+    out = Path(out) if out else Path(video).with_suffix(".motion.json")
+    if (method or notes.method) == "track":
+        session = TrackSession.from_video(info, notes, smooth=smooth, progress=progress)
+    else:
+        session = Session(*fit_video(info, progress), notes, smooth)
+    return session.write(out, bvh=bvh, glb=glb, csv=csv)

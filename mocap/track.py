@@ -110,7 +110,7 @@ def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray,
     return out
 
 
-def _turn(orientation: str | None) -> str | None:
+def turn_of(orientation: str | None) -> str | None:
     """'left' or 'right' from a CONTRACT.md orientation (e.g. forward_right)."""
     if orientation is None:
         return None
@@ -135,7 +135,7 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     """
     info = video if isinstance(video, VideoInfo) else open_video(video)
     marks = check_marks(marks, info.width, info.height)
-    turn = _turn(orientation)
+    turn = turn_of(orientation)
     scale = processing_scale(info)
     step = (lambda done: progress(done, info.frame_count)) if progress else None
     frames = (frame for _, frame in iter_frames(info, scale=scale))
@@ -144,6 +144,10 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     reliability = joint_reliability(similarity)
     joints2d = fill_unreliable(joints, reliability)
     camera = default_camera(info.width, info.height, focal_px)
-    steady = gaussian_filter1d(joints2d, SMOOTH_S * info.fps, axis=0, mode="nearest")
-    joints3d = to_contract(reconstruct(steady, camera, turn))
+    joints3d = to_contract(reconstruct(steady_joints(joints2d, info.fps), camera, turn))
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal)
+
+
+def steady_joints(joints2d: np.ndarray, fps: float) -> np.ndarray:
+    """The 2D joints (F, 16, 2) the 3D is reconstructed from: smoothed over SMOOTH_S."""
+    return gaussian_filter1d(joints2d, SMOOTH_S * fps, axis=0, mode="nearest")

@@ -43,6 +43,15 @@ def test_the_contract_example_resolves_sticky():
     assert notes.overrides() == {10: {"wrist_r": (312.5, 140.0)}}
 
 
+def test_the_method_is_kept_through_a_save():
+    notes = parse({**CONTRACT_EXAMPLE, "method": "track"})
+    assert notes.method == "track" and parse(notes.to_dict()) == notes
+    assert parse(CONTRACT_EXAMPLE).method is None and "method" not in parse(CONTRACT_EXAMPLE).to_dict()
+    assert notes.with_method(None).to_dict() == parse(CONTRACT_EXAMPLE).to_dict()
+    with pytest.raises(MocapError, match="unknown method 'optical'"):
+        notes.with_method("optical")
+
+
 def test_keyframes_default_to_every_frame_and_orientation_holds_until_changed():
     notes = parse({"format": "mocap-annotations", "version": 1,
                    "frames": {"3": {"orientation": "left"}, "7": {"orientation": "backward_right"}}})
@@ -82,6 +91,8 @@ def test_a_held_sign_ends_where_its_segment_passes_the_image_plane():
     ({"format": "mocap-annotations", "version": 1, "frames": {"2": {"joint2d": {}}}},
      'A.json: frames["2"]: unknown key "joint2d"'),
     ([1, 2], "A.json: expected a JSON object, got a list"),
+    ({"format": "mocap-annotations", "version": 1, "method": "optical"},
+     "A.json: method: expected one of silhouette, track, got \"optical\""),
 ])
 def test_bad_annotations_name_the_place(doc, message):
     with pytest.raises(MocapError) as err:

@@ -1,5 +1,6 @@
 """`mocap fit --method track`: marks from the annotations' frame 0, the motion file
-and exports, and the messages for missing marks."""
+and exports, the messages for missing marks; the tracking session following the
+user's foreshortening and joint overrides."""
 
 from __future__ import annotations
 
@@ -8,10 +9,14 @@ import json
 import numpy as np
 import pytest
 
-from mocap import synth
-from mocap.body import JOINTS
+from mocap import lift, synth
+from mocap.annotations import Annotations
+from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.cli import main
 from mocap.export.motion_json import read_motion
+from mocap.orientation import NEGLIGIBLE
+from mocap.tracksession import TrackSession
+from mocap.video import open_video
 from mocap.walk import walk_cycle
 
 
@@ -49,7 +54,66 @@ def test_tracking_writes_motion_and_bvh(clip, tmp_path):
 def test_tracking_needs_the_marks(clip, tmp_path, capsys):
     video, truth = clip
     assert main(["fit", "--method", "track", str(video), "--quiet"]) == 2
-    assert "needs --annotations" in capsys.readouterr().err
+    assert "needs the 16 joints marked on frame 0 (--annotations" in capsys.readouterr().err
     notes = write_marks(tmp_path / "marks.json", truth, drop="wrist_r")
     assert main(["fit", "--method", "track", str(video), "--annotations", str(notes), "--quiet"]) == 2
     assert "wrist_r" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def session(clip):
+    video, truth = clip
+    info = open_video(video)
+    notes = Annotations().with_method("track").with_orientation(0, "forward_right")
+    for j, xy in zip(JOINTS, truth.joints2d[0]):
+        notes = notes.with_joint(0, j, tuple(xy))
+    return TrackSession.from_video(info, notes), truth
+
+
+def test_the_annotations_method_chooses_tracking(clip, tmp_path):
+    """`mocap fit` without --method follows the method the annotations name."""
+    video, truth = clip
+    notes = write_marks(tmp_path / "marks.json", truth)
+    doc = json.loads(notes.read_text())
+    notes.write_text(json.dumps({**doc, "method": "track"}))
+    out = tmp_path / "walk.motion.json"
+    assert main(["fit", str(video), "--annotations", str(notes), "--out", str(out), "--quiet"]) == 0
+    joints2d = np.array([f["joints2d"] for f in read_motion(out)["frames"]])
+    assert np.allclose(joints2d[0], truth.joints2d[0])      # the marks, not a silhouette fit
+
+
+def test_a_held_foreshortening_fixes_the_limb_depths(session):
+    """A user's sign on a frame holds on the frames after it, until the segment
+    passes through the image plane; the 3D follows it, nothing else changes in 2D."""
+    tracked, _ = session
+    before = tracked.inputs
+    pose_before = np.array([tracked.pose3d(i) for i in range(len(tracked.fits))])
+    k = SEGMENT_INDEX["lower_leg_r"]
+    depth = lift.depth_fractions(pose_before)[:, k]
+    frame = int(np.argmax(depth))
+    wanted = -int(before.signs[frame, k])
+    tracked.annotate(tracked.annotations.with_foreshortening(
+        frame, "lower_leg_r", "toward" if wanted > 0 else "away"))
+    after = tracked.inputs
+    assert after.signs[frame, k] == wanted
+    assert np.array_equal(after.joints2d, before.joints2d)
+    held = frame + 1
+    while held < len(depth) and depth[held] > NEGLIGIBLE:
+        assert after.signs[held, k] == wanted
+        held += 1
+    others = [s for s in range(10) if s not in (k, SEGMENT_INDEX["upper_leg_r"])]
+    assert np.array_equal(after.signs[:, others], before.signs[:, others])
+    tracked.annotate(tracked.annotations.with_foreshortening(frame, "lower_leg_r", None))
+    assert np.array_equal(tracked.inputs.signs, before.signs)
+
+
+def test_a_joint_override_moves_the_tracked_joint(session):
+    tracked, truth = session
+    notes = tracked.annotations
+    frame, joint = 7, JOINTS.index("wrist_l")
+    moved = tuple(tracked.tracked.joints2d[frame, joint] + [25.0, -10.0])
+    tracked.annotate(notes.with_joint(frame, "wrist_l", moved))
+    assert np.allclose(tracked.inputs.joints2d[frame, joint], moved)
+    assert not np.allclose(tracked.pose3d(frame)[joint], tracked.tracked.joints3d[frame, joint])
+    tracked.annotate(notes)
+    assert np.allclose(tracked.inputs.joints2d, tracked.tracked.joints2d)

@@ -1,0 +1,118 @@
+"""The tracking method's session: the counterpart of mocap.session.Session for a
+video whose joints the user marked on frame 0 (mocap.track).
+
+The 2D joints are tracked once; everything the user says afterwards reshapes the 3D
+without tracking again: joint overrides replace tracked joints on their frame,
+frame 0's orientation tells which way the body is turned (the calibration's two
+mirror fits), and held foreshortening directions fix the depth choices of the
+trunk and the limbs (mocap.perspective.place_joints) while they hold. The key
+joints' depths (Eq. 10-11, the slow part) are kept until the 2D joints change, so a
+foreshortening toggle only re-chooses depths.
+
+The same motion file, exports and review as the silhouette method follow from the
+Session it extends: ``inputs`` holds the tracked joints and what the 3D shows
+(orientation and signs read back from it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mocap.annotations import Annotations
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_JOINTS
+from mocap.errors import MocapError
+from mocap.inputs import Inputs
+from mocap.lift import depth_fractions, orientation_of_yaw, signs_of, yaw_of
+from mocap.orientation import NEGLIGIBLE, held_user_signs
+from mocap.perspective import UNIT_M, default_camera, key_joints, place_joints, to_contract
+from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
+from mocap.track import TrackResult, steady_joints, track_video, turn_of
+from mocap.video import VideoInfo
+
+MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
+                'with frames["0"].joints2d, or mark them in the app)')
+
+
+def marks_of(notes: Annotations) -> dict[str, tuple[float, float]]:
+    """Frame 0's joint positions in the annotations: the tracking method's marks."""
+    first = notes.frames.get(0)
+    if first is None or not first.joints2d:
+        raise MocapError(MARKS_NEEDED)
+    return dict(first.joints2d)
+
+
+def track_annotated(info: VideoInfo, notes: Annotations,
+                    progress: Progress | None = None) -> TrackResult:
+    """Track a video from the marks and frame 0's orientation in ``notes``."""
+    return track_video(info, marks_of(notes), progress, orientation=notes.orientations(1)[0])
+
+
+class TrackSession(Session):
+    """A tracked video and the user's annotations; reconstructs on demand."""
+
+    def __init__(self, info: VideoInfo, tracked: TrackResult,
+                 annotations: Annotations | None = None, smooth: float = 0.0):
+        fits = [FrameFit(i, joints, float(rel.mean()))
+                for i, (joints, rel) in enumerate(zip(tracked.joints2d, tracked.reliability))]
+        super().__init__(info, fits, annotations, smooth)
+        self.tracked = tracked
+        self.camera = default_camera(info.width, info.height, tracked.focal_px)
+        self._key: tuple[bytes, str | None, np.ndarray] | None = None
+        self._joints3d: np.ndarray | None = None
+
+    @classmethod
+    def from_video(cls, info: VideoInfo, notes: Annotations, *, smooth: float = 0.0,
+                   progress: Progress | None = None) -> "TrackSession":
+        """Track a video from the marks in its annotations (``marks_of``)."""
+        return cls(info, track_annotated(info, notes, progress), notes, smooth)
+
+    def annotate(self, annotations: Annotations) -> None:
+        super().annotate(annotations)
+        self._joints3d = None
+
+    @property
+    def inputs(self) -> Inputs:
+        if self._inputs is None:
+            self._inputs, self._joints3d = self._resolve()
+        return self._inputs
+
+    def pose3d(self, frame: int) -> np.ndarray:
+        """(16, 3) the reconstructed joints of a frame (metres, contract frame)."""
+        self.inputs
+        return self._joints3d[frame]
+
+    def _resolve(self) -> tuple[Inputs, np.ndarray]:
+        """The joints (overrides in), their 3D under the held signs, and what it shows."""
+        n, notes = len(self.fits), self._annotations
+        joints = self.tracked.joints2d.copy()
+        for i, points in notes.overrides().items():
+            for joint, xy in points.items():
+                joints[i, JOINT_INDEX[joint]] = xy
+        steady = steady_joints(joints, self.info.fps)
+        key = self._key_joints(steady, turn_of(notes.orientations(1)[0]))
+        free = to_contract(place_joints(steady, key, self.camera))
+        values, since = notes.held_signs(n)
+        fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
+        joints3d = to_contract(place_joints(steady, key, self.camera, fixed=fixed)) if fixed.any() else free
+        yaw = np.array([yaw_of(pose) for pose in joints3d])
+        ends = joints3d[:, SEGMENT_JOINTS]
+        lengths = np.median(np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1), axis=0) / UNIT_M
+        inputs = Inputs([orientation_of_yaw(y) for y in yaw], yaw, np.zeros((n, 2), bool), joints,
+                        np.full(n, body_px(joints) / BODY_HEIGHT), signs_of(joints3d), lengths)
+        return inputs, joints3d
+
+    def _key_joints(self, steady: np.ndarray, turn: str | None) -> np.ndarray:
+        """The key joints of every frame (Eq. 6-11), kept while the 2D joints and the
+        turn stay the same."""
+        stamp = steady.tobytes()
+        if self._key is None or self._key[:2] != (stamp, turn):
+            self._key = (stamp, turn, key_joints(steady, self.camera, turn))
+        return self._key[2]
+
+
+def body_px(joints2d: np.ndarray) -> float:
+    """The body's standing height in pixels over a clip: a high percentile of the
+    head-top-to-ankles distance (SCALE_PERCENTILE, as the silhouettes' heights)."""
+    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
+    heights = np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
+    return float(np.percentile(heights, SCALE_PERCENTILE))
