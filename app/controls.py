@@ -21,6 +21,10 @@ FRAME_STEPS = ("◀ frame", "frame ▶")
 KEY_STEPS = ("◀ keyframe", "keyframe ▶")
 EDITS = ("↶ undo", "redo ↷")
 DOWNLOADS = {"BVH": "bvh", "GLB": "glb", "motion JSON": "json", "HTML page": "html"}
+METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}    # shown -> annotations'
+MARKING_HELP = ("The tracking method follows the 16 joints you mark on frame 0, over any "
+                "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "
+                "click where it is on the video frame. Then press **Track**.")
 STATIC = Path(__file__).resolve().parents[1] / "static"
 HELP_FILE = STATIC / "help.md"           # the Help tab; its pictures sit beside it
 SIGN_COLOURS = {1: "teal", -1: "grape"}
@@ -69,6 +73,7 @@ class Controls:
 
     progress: object
     status: object
+    method: object
     frame: object
     frame_steps: object
     key_steps: object
@@ -87,6 +92,10 @@ class Controls:
     downloads: object
     commands: dict
     help_page: object
+    track_info: object
+    mark: object
+    marks_from_fit: object
+    track: object
 
 
 def build_controls(gui, n_frames: int) -> Controls:
@@ -96,6 +105,9 @@ def build_controls(gui, n_frames: int) -> Controls:
     gui.main_panel.dock_right()
     progress = gui.add_progress_bar(0.0, animated=True)
     status = gui.add_markdown("Preprocessing…")
+    method = gui.add_dropdown("Method", tuple(METHOD_CHOICES), initial_value="silhouette",
+                              hint="silhouette: static camera and background, nothing to mark; "
+                                   "tracking: follows joints marked on frame 0")
     frame = gui.add_slider("Frame", 0, max(n_frames - 1, 0), 1, 0)
     frame_steps = gui.add_button_group("Step", FRAME_STEPS)
     key_steps = gui.add_button_group("Jump", KEY_STEPS)
@@ -117,6 +129,15 @@ def build_controls(gui, n_frames: int) -> Controls:
         clear_override = gui.add_button("Clear override", icon="eraser",
                                         hint="the chosen joint's, or every one on this frame")
         overrides = gui.add_markdown("")
+    with tabs.add_tab("Tracking", icon="route"):
+        gui.add_markdown(MARKING_HELP)
+        mark = gui.add_button("Mark joints", icon="pointer",
+                              hint="go to frame 0 and place each joint not yet marked")
+        marks_from_fit = gui.add_button("Marks from the silhouette fit", icon="wand",
+                                        hint="place all 16 marks where frame 0's fit has them")
+        track = gui.add_button("Track", icon="player-track-next",
+                               hint="track the marked joints through the video")
+        track_info = gui.add_markdown("")
     with tabs.add_tab("Review", icon="alert-triangle"):
         doubtful = gui.add_button("Next doubtful frame", icon="alert-triangle")
         review = gui.add_markdown("")
@@ -131,9 +152,10 @@ def build_controls(gui, n_frames: int) -> Controls:
         gui.add_markdown(HELP)
     commands = {action: gui.add_command(label, hotkey=key, modifier=mod)
                 for action, (label, key, mod) in HOTKEYS.items()}
-    return Controls(progress, status, frame, frame_steps, key_steps, keyframe, frame_info,
+    return Controls(progress, status, method, frame, frame_steps, key_steps, keyframe, frame_info,
                     orientation, orientation_note, segments, joint, clear_override, overrides,
-                    edits, doubtful, review, play, downloads, commands, help_page)
+                    edits, doubtful, review, play, downloads, commands, help_page, track_info,
+                    mark, marks_from_fit, track)
 
 
 # -- what the controls say about a frame ------------------------------------------------
@@ -159,7 +181,8 @@ def frame_text(view: FrameView) -> str:
     elif view.score is None:
         body = "Nobody found on this frame."
     else:
-        body = f"Similarity S = **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
+        score = "Tracking reliability" if view.method == "track" else "Similarity S ="
+        body = f"{score} **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
     return f"{head}  \n{body}"
 
 
@@ -179,3 +202,23 @@ def review_text(state: AppState) -> str:
         return "No doubtful frame."
     lines = [f"- **{d.frame}**: {'; '.join(d.reasons)}" for d in queue[:REVIEW_LINES]]
     return f"{len(queue)} doubtful frames, most doubtful first:\n" + "\n".join(lines)
+
+
+def tracking_text(state: AppState) -> str:
+    """The Tracking tab's state: the marks, whether they were tracked, the tracking."""
+    missing = state.unmarked()
+    if missing:
+        marks = f"**{16 - len(missing)} of 16** joints marked on frame 0; next: {', '.join(missing[:4])}" + (
+            "…" if len(missing) > 4 else "")
+    else:
+        marks = "All 16 joints marked on frame 0."
+    if state.method != "track":
+        return marks + "  \nChoose *tracking* as the method to see the tracked motion."
+    p = state.progress
+    if p.error is not None:
+        return f"{marks}  \n**Stopped:** {p.error}"
+    if not p.ready:
+        return marks + (f"  \nTracking… {100 * p.done // max(p.total, 1)}%" if state.tracking
+                        else "  \nPress **Track** when the marks are right.")
+    return marks + "  \n" + ("**The marks changed since the tracking: press Track again.**"
+                             if state.marks_changed else f"{p.total} frames tracked.")

@@ -17,10 +17,12 @@ from typing import Callable
 import numpy as np
 import viser
 
-from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, NO_JOINT, Controls,
-                          build_controls, frame_text, orientation_text, review_text, sign_button)
+from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD_CHOICES, NO_JOINT,
+                          Controls, build_controls, frame_text, orientation_text, review_text,
+                          sign_button, tracking_text)
 from app.state import AppState, FrameView
-from app.views import FrameCache, Layout, SceneView, caption_image, silhouette_image, video_image
+from app.views import (FrameCache, Layout, SceneView, caption_image, silhouette_image, tracked_image,
+                       video_image)
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 
@@ -131,6 +133,10 @@ class App:
         c.orientation.on_update(self._from_client(lambda: state.set_orientation(
             state.frame, None if c.orientation.value == AUTO else c.orientation.value)))
         c.joint.on_update(lambda _e: self.refresh())
+        c.method.on_update(self._from_client(lambda: state.set_method(METHOD_CHOICES[c.method.value])))
+        c.mark.on_click(self._on(self._start_marking))
+        c.marks_from_fit.on_click(self._on(state.marks_from_fit))
+        c.track.on_click(self._on(state.start_tracking))
         c.clear_override.on_click(self._on(self._clear_override))
         c.downloads.on_click(lambda e: self._run(e.client, lambda: self._download(e)))
         for segment, button in c.segments.items():
@@ -152,12 +158,29 @@ class App:
         joint = self.controls.joint.value
         def place() -> None:
             if joint == NO_JOINT:
-                raise MocapError("choose a joint under 'Joint override' first, then click where it is")
+                raise MocapError("choose a joint under Joints > Place first (or press Mark joints "
+                                 "on the Tracking tab), then click where it is")
             at = self.layout.video_pixel(event.ray_origin, event.ray_direction, self.size)
             if at is not None:
                 xy = (at[0] / self.state.scale - 0.5, at[1] / self.state.scale - 0.5)
                 self.state.set_override(self.state.frame, joint, xy)
+                if self.state.frame == 0 and self.state.method == "track":
+                    self._next_mark()
         self._run(event.client, place)
+
+    def _start_marking(self) -> None:
+        """Go to frame 0 and ask for the first joint not marked there."""
+        if not self.state.unmarked():
+            raise MocapError("all 16 joints are marked; to move one, choose it under Joints > "
+                             "Place and click on frame 0")
+        self.state.go_to(0)
+        self._next_mark()
+
+    def _next_mark(self) -> None:
+        """Ask for the next joint not marked on frame 0 (none once all are)."""
+        missing = self.state.unmarked()
+        self.controls.joint.value = missing[0] if missing else NO_JOINT
+        self.refresh()
 
     def _clear_override(self) -> None:
         joint = self.controls.joint.value
@@ -199,14 +222,25 @@ class App:
         if self._changed("video", (view.index, sorted(marks.items()))):
             self.scene.show_video(video_image(self.frames.get(view.index), marks, self.state.scale))
         joints = None if view.joints2d is None else view.joints2d.tobytes()
-        if self._changed("silhouette", (view.index, view.silhouette_ready, joints, view.sides_known,
-                                        sorted(view.overrides.items()))):
+        if self._changed("silhouette", (view.index, view.method, view.silhouette_ready, joints,
+                                        view.sides_known, sorted(view.overrides.items()))):
             self.scene.show_silhouette(self._silhouette_image(view))
-        self.scene.caption("video", f"video frame {view.index}")
-        self.scene.caption("silhouette", "silhouette and fit" + (
-            f" · S = {view.score:.2f}" if view.score is not None else ""))
+        joint = self.controls.joint.value
+        self.scene.caption("video", f"video frame {view.index}"
+                           + (f" · click to place {joint}" if joint != NO_JOINT else ""))
+        if view.method == "track":
+            self.scene.caption("silhouette", "tracked joints" + (
+                f" · reliability {view.score:.2f}" if view.score is not None else ""))
+        else:
+            self.scene.caption("silhouette", "silhouette and fit" + (
+                f" · S = {view.score:.2f}" if view.score is not None else ""))
 
     def _silhouette_image(self, view: FrameView) -> np.ndarray:
+        if view.method == "track":
+            if view.joints2d is None:
+                return caption_image(self.size, "not tracked yet: mark frame 0, press Track")
+            return tracked_image(self.frames.get(view.index), view.joints2d, view.overrides,
+                                 self.state.scale)
         if not view.silhouette_ready:
             return caption_image(self.size, "silhouette not found yet")
         if view.silhouette is None:
@@ -250,16 +284,23 @@ class App:
              label="Pause" if self.player.playing else "Play",
              icon="player-pause" if self.player.playing else "player-play")
         _set(c.review, content=review_text(self.state))
+        _set(c.method, value=next(k for k, v in METHOD_CHOICES.items() if v == view.method))
+        _set(c.track_info, content=tracking_text(self.state))
+        _set(c.track, disabled=self.state.tracking)
 
     def _show_progress(self, view: FrameView) -> None:
         p, c = view.progress, self.controls
         _set(c.progress, value=100.0 * p.done / max(p.total, 1), visible=not p.ready)
+        done = "tracked" if view.method == "track" else "fitted"
         if p.error is not None:
             text = f"**Stopped:** {p.error}"
         elif p.ready:
-            text = f"{view.n_frames} frames fitted. Edits are saved to `{self.state.path.name}`."
+            text = f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`."
+        elif view.method == "track" and not self.state.tracking:
+            text = "Tracking: mark the 16 joints on frame 0 (Tracking tab), then press Track."
         else:
-            text = f"Preprocessing: {p.stage}… {100 * p.done // max(p.total, 1)}%"
+            work = "Tracking" if view.method == "track" else "Preprocessing"
+            text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%"
         _set(c.status, content=text)
 
     def _place_camera(self) -> None:

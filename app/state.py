@@ -6,6 +6,11 @@ is saved atomically to the annotation file beside the video *before* it is appli
 and shown, so a page never shows an edit that a crash could lose. Preprocessing runs
 in a background thread (``start``); each frame's silhouette and fit can be looked at
 as soon as it exists, the 3D lifting once every frame is fitted.
+
+The annotations' method chooses what the page shows and exports: the silhouette
+method's session, or the tracking method's (mocap.tracksession), tracked in a
+background thread (``start_tracking``) from the 16 joints marked on frame 0, which
+are frame 0's joint overrides. Both sessions take every edit.
 """
 
 from __future__ import annotations
@@ -24,16 +29,20 @@ import numpy as np
 from app.preprocess import Progress, Throttle
 from app.review import Doubt, review_queue
 from mocap.annotations import Annotations, FrameNote, load_annotations, save_annotations
-from mocap.body import SEGMENT_INDEX, SEGMENT_NAMES
+from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.export.bvh import bvh_text
 from mocap.export.glb import glb_bytes
 from mocap.export.html import motion_html
 from mocap.export.motion_json import motion_dict
 from mocap.lift import depth_fractions
+from mocap.marks import check_marks
 from mocap.motion import Motion
+from mocap.perspective import calibrate, default_camera
 from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
                            iter_silhouettes, video_dict)
+from mocap.track import turn_of
+from mocap.tracksession import TrackSession, marks_of, track_annotated
 from mocap.video import open_video, processing_scale
 
 EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json", "html": ".html"}
@@ -98,6 +107,7 @@ class FrameView:
     orientation: str | None = None
     orientation_note: str = ""
     doubts: tuple[str, ...] = ()
+    method: str = "silhouette"          # whose joints and 3D these are ("track": tracking's)
 
 
 @dataclass
@@ -122,7 +132,11 @@ class AppState:
         self._silhouettes_done = 0
         self._fits: list[FrameFit | None] = [None] * n
         self._progress = Progress(0, 2 * n, "waiting")
-        self._session: Session | None = None
+        self._fitted: Session | None = None          # the silhouette method's
+        self._tracked: TrackSession | None = None    # the tracking method's, once tracked
+        self._tracked_from: dict | None = None       # the marks it was tracked from
+        self._track_progress = Progress(0, n, "waiting for the 16 marks on frame 0")
+        self._tracking = False
         self._queue: list[Doubt] | None = None
         self._history = _History()
         self._frame = 0
@@ -144,8 +158,31 @@ class AppState:
         return self._annotations
 
     @property
+    def method(self) -> str:
+        """The method the page shows: "silhouette" or "track" (the annotations')."""
+        return self._annotations.method or "silhouette"
+
+    @property
     def progress(self) -> Progress:
-        return self._progress
+        """How far the shown method's work is (the fit, or the tracking)."""
+        return self._track_progress if self.method == "track" else self._progress
+
+    @property
+    def _session(self) -> Session | None:
+        """The shown method's session (None until fitted, or tracked)."""
+        return self._tracked if self.method == "track" else self._fitted
+
+    @property
+    def tracking(self) -> bool:
+        """Whether a tracking runs now."""
+        return self._tracking
+
+    @property
+    def marks_changed(self) -> bool:
+        """Whether frame 0's marks differ from those the tracking used."""
+        with self._lock:
+            first = self._annotations.frames.get(0, FrameNote())
+            return self._tracked is not None and dict(first.joints2d) != self._tracked_from
 
     @property
     def undo_depth(self) -> int:
@@ -165,10 +202,16 @@ class AppState:
     # -- preprocessing ------------------------------------------------------------
 
     def start(self, progress: Callable[[int, int], None] | None = None) -> threading.Thread:
-        """Preprocess in a daemon thread; ``progress(done, total)`` reports each step."""
+        """Preprocess in a daemon thread; ``progress(done, total)`` reports each step.
+        With the tracking method chosen and frame 0 marked, tracking starts too."""
         thread = threading.Thread(target=self._preprocess, args=(progress,), daemon=True,
                                   name="mocap-preprocess")
         thread.start()
+        if self.method == "track":
+            try:
+                self.start_tracking()
+            except MocapError:
+                pass    # the marks are not complete: the page says what is missing
         return thread
 
     def _preprocess(self, progress: Callable[[int, int], None] | None) -> None:
@@ -199,7 +242,7 @@ class AppState:
             progress(n + fit.index + 1, total)
             report(n + fit.index + 1, "fitting the body model")
         with self._lock:
-            self._session = Session(self.info, list(self._fits), self._annotations)
+            self._fitted = Session(self.info, list(self._fits), self._annotations)
             self._progress = Progress(total, total, "ready")
         self._changed()
 
@@ -213,6 +256,56 @@ class AppState:
             self._progress = replace(self._progress, stage="stopped", error=message)
         self._changed()
 
+    # -- tracking -----------------------------------------------------------------
+
+    def start_tracking(self) -> threading.Thread:
+        """Track from frame 0's marks in a daemon thread. Refused at once (a
+        MocapError naming the joint) while a mark is missing or outside the frame, or
+        when the shoulders, chest and hips fit no view of a trunk."""
+        with self._lock:
+            if self._tracking:
+                raise MocapError("already tracking; wait for it to finish")
+            notes = self._annotations
+            marks = marks_of(notes)
+            checked = check_marks(marks, self.info.width, self.info.height)
+            calibrate(checked, default_camera(self.info.width, self.info.height),
+                      turn_of(notes.orientations(1)[0]))
+            self._tracking = True
+            self._track_progress = Progress(0, self.n_frames, "following the marked joints")
+        thread = threading.Thread(target=self._track, args=(notes, marks), daemon=True,
+                                  name="mocap-track")
+        thread.start()
+        self._changed()
+        return thread
+
+    def _track(self, notes: Annotations, marks: dict) -> None:
+        report = Throttle(lambda done, stage: self._track_step(done), self.n_frames)
+        try:
+            result = track_annotated(self.info, notes, lambda done, total: report(done, "tracking"))
+            session = TrackSession(self.info, result, notes)
+            session.inputs      # the 3D, before the lock
+            with self._lock:
+                if self._annotations != notes:      # edits made while tracking
+                    session.annotate(self._annotations)
+                self._tracked, self._tracked_from, self._queue = session, marks, None
+                self._track_progress = Progress(self.n_frames, self.n_frames, "tracked")
+        except Exception as exc:  # the page must say so; the terminal gets the traceback
+            if not isinstance(exc, MocapError):
+                traceback.print_exc(file=sys.stderr)
+            with self._lock:
+                self._track_progress = replace(self._track_progress, stage="stopped",
+                                               error=f"tracking failed: {exc}")
+        finally:
+            with self._lock:
+                self._tracking = False
+            self._changed()
+
+    def _track_step(self, done: int) -> None:
+        with self._lock:
+            self._track_progress = Progress(min(done, self.n_frames - 1), self.n_frames,
+                                            "following the marked joints")
+        self._changed()
+
     # -- reading ------------------------------------------------------------------
 
     def view(self, frame: int | None = None) -> FrameView:
@@ -220,10 +313,16 @@ class AppState:
         with self._lock:
             i = self._frame if frame is None else frame
             fit = self._fits[i]
-            base = FrameView(i, self.n_frames, self._version, self._progress, self._silhouettes[i],
+            base = FrameView(i, self.n_frames, self._version, self.progress, self._silhouettes[i],
                              self._silhouettes_done > i, fit is not None,
                              dict(self._annotations.frames.get(i, FrameNote()).joints2d),
-                             i in self._annotations.keyframe_indices(self.n_frames))
+                             i in self._annotations.keyframe_indices(self.n_frames),
+                             method=self.method)
+            if self.method == "track":
+                if self._tracked is None:
+                    return replace(base, fitted=False)
+                return self._lifted_view(replace(base, fitted=True,
+                                                 score=float(self._tracked.scores[i])))
             if fit is None or fit.joints2d is None:
                 return base
             if self._session is None:
@@ -236,12 +335,12 @@ class AppState:
         sign_notes = tuple(sign_note(notes, i, s, sign) for s, sign in zip(SEGMENT_NAMES, signs))
         doubt = next((d.reasons for d in self.review_queue() if d.frame == i), ())
         pose = self._session.pose3d(i).copy()
+        said = ("seen in the tracked 3D" if base.method == "track"
+                else source_note(entry_frame(notes, i, lambda n: n.orientation), i))
         return replace(base, joints2d=inputs.joints2d[i].copy(), sides_known=True, pose3d=pose,
                        signs=signs, sign_notes=sign_notes,
                        depths=tuple(float(d) for d in depth_fractions(pose)),
-                       orientation=inputs.orientation[i],
-                       orientation_note=source_note(entry_frame(notes, i, lambda n: n.orientation), i),
-                       doubts=doubt)
+                       orientation=inputs.orientation[i], orientation_note=said, doubts=doubt)
 
     def review_queue(self) -> list[Doubt]:
         """Doubtful frames, most doubtful first (empty until the fit is done)."""
@@ -275,9 +374,13 @@ class AppState:
         return Path(self.info.path).stem + EXPORTS[kind], data
 
     def _require_session(self) -> Session:
-        if self._session is None:
+        if self._session is not None:
+            return self._session
+        if self.method == "silhouette":
             raise MocapError("the video is still being fitted; this needs every frame fitted")
-        return self._session
+        if self._tracking:
+            raise MocapError("the video is still being tracked; this needs every frame tracked")
+        raise MocapError("nothing tracked yet: mark the 16 joints on frame 0, then press Track")
 
     # -- navigation ---------------------------------------------------------------
 
@@ -333,8 +436,9 @@ class AppState:
         except OSError as exc:
             raise MocapError(f"cannot save annotations to {self.path}: {exc.strerror or exc}") from None
         self._annotations, self._queue = notes, None
-        if self._session is not None:
-            self._session.annotate(notes)
+        for session in (self._fitted, self._tracked):
+            if session is not None:
+                session.annotate(notes)
 
     def undo(self) -> int | None:
         """Undo the last edit; returns its frame (now current), None if nothing to undo."""
@@ -364,10 +468,9 @@ class AppState:
         return self.edit(frame, change)
 
     def _session_signs(self, frame: int) -> np.ndarray:
-        session = self._session
-        if session is None or self._fits[frame] is None or self._fits[frame].joints2d is None:
-            raise MocapError("foreshortening needs the fitted 3D pose of this frame"
-                             + (" (still fitting)" if session is None else " (nobody found)"))
+        session = self._require_session()
+        if session.fits[frame].joints2d is None:
+            raise MocapError("foreshortening needs the 3D pose of this frame (nobody found)")
         return session.inputs.signs[frame]
 
     def set_orientation(self, frame: int, orientation: str | None) -> bool:
@@ -388,6 +491,29 @@ class AppState:
                 notes = notes.with_joint(frame, name, None)
             return notes
         return self.edit(frame, change)
+
+    def set_method(self, method: str) -> bool:
+        """Choose the silhouette ("silhouette") or the tracking ("track") method."""
+        return self.edit(self._frame, lambda n: n.with_method(method))
+
+    def marks_from_fit(self) -> bool:
+        """Place all 16 marks on frame 0 where the silhouette method's fit has them
+        (sides resolved, overrides kept): a start for the user to correct."""
+        with self._lock:
+            if self._fitted is None or self._fits[0].joints2d is None:
+                raise MocapError("frame 0 has no silhouette fit to take the marks from"
+                                 + (" yet" if self._fitted is None else ""))
+            joints = self._fitted.inputs.joints2d[0]
+        def change(notes: Annotations) -> Annotations:
+            for name, (x, y) in zip(JOINTS, joints):
+                notes = notes.with_joint(0, name, (round(float(x), 1), round(float(y), 1)))
+            return notes
+        return self.edit(0, change)
+
+    def unmarked(self) -> list[str]:
+        """The joints not yet marked on frame 0, in JOINTS order."""
+        placed = self._annotations.frames.get(0, FrameNote()).joints2d
+        return [j for j in JOINTS if j not in placed]
 
     def toggle_keyframe(self, frame: int) -> bool:
         """Mark ``frame`` as a keyframe, or unmark it."""

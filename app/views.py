@@ -137,6 +137,14 @@ def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None,
     return cv2.cvtColor(view, cv2.COLOR_BGR2RGB)
 
 
+def tracked_image(frame_bgr: np.ndarray, joints2d: np.ndarray,
+                  overrides: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
+    """The video frame dimmed with the tracked joints (anatomical sides) over it (RGB)."""
+    view = (frame_bgr * 0.55).astype(np.uint8)
+    draw_skeleton(view, joints2d * scale, max(2, view.shape[0] // 240))
+    return cv2.cvtColor(mark_joints(view, overrides, scale), cv2.COLOR_BGR2RGB)
+
+
 class FrameCache:
     """Decoded video frames at the processing scale; the most recent few are kept."""
 

@@ -63,3 +63,13 @@ def download_export(page, button: str, folder: Path) -> Path:
     path = folder / download.value.suggested_filename
     download.value.save_as(path)
     return path
+
+
+@pytest.fixture(scope="module")
+def panning_clip(tmp_path_factory):
+    """(path, truth): the walk turned toward the camera, through a perspective camera
+    over a panning cluttered background (the tracking method's case), TINY_FRAMES long."""
+    path = tmp_path_factory.mktemp("panning") / "walk.mp4"
+    truth = render_walk(path, yaw=45.0, perspective=400.0, moving_background=True,
+                        seed=3, seconds=TINY_FRAMES / CLIP["fps"])
+    return path, truth

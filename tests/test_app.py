@@ -61,7 +61,7 @@ def test_page_state_while_preprocessing(tiny_video, tmp_path, monkeypatch):
     assert first.fitted and first.joints2d is not None and first.pose3d is None
     assert later.silhouette_ready and not later.fitted
     assert not state.progress.ready and 0 < state.progress.done < state.progress.total
-    with pytest.raises(MocapError, match="still fitting"):
+    with pytest.raises(MocapError, match="still being fitted"):
         state.flip_sign(0, "torso")
     assert state.set_orientation(0, "right")           # saved now, lifted when ready
     gate.set()

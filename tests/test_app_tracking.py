@@ -1,0 +1,125 @@
+"""The tracking method in the app, without a browser: marks are frame 0's joint
+overrides, tracking runs in the background, the page then shows the tracked joints
+and their 3D, edits reshape it, the method and marks survive a reopening."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+import pytest
+from app_helpers import TINY_FRAMES, fresh_copy, panning_clip, tiny_video  # noqa: F401
+
+from app.state import AppState
+from mocap.annotations import load_annotations
+from mocap.body import JOINTS, SEGMENT_INDEX
+from mocap.errors import MocapError
+
+
+def mark(state: AppState, truth, joints=JOINTS) -> None:
+    for name in joints:
+        state.set_override(0, name, tuple(truth.joints2d[0, JOINTS.index(name)]))
+
+
+@pytest.fixture
+def tracked(panning_clip, tmp_path):
+    """An app state in tracking mode on a fresh copy of the panning clip, marked from
+    the truth and tracked."""
+    video, truth = panning_clip
+    state = AppState(fresh_copy(video, tmp_path))
+    state.start().join()
+    state.set_method("track")
+    mark(state, truth)
+    state.start_tracking().join()
+    assert state.progress.ready, state.progress.error
+    return state, truth
+
+
+def test_tracking_needs_every_mark_and_names_the_missing_one(panning_clip, tmp_path):
+    video, truth = panning_clip
+    state = AppState(fresh_copy(video, tmp_path))
+    assert state.set_method("track") and state.method == "track"
+    view = state.view(3)
+    assert not view.fitted and view.pose3d is None and not state.progress.ready
+    with pytest.raises(MocapError, match="nothing tracked yet"):
+        state.export("bvh")
+    with pytest.raises(MocapError, match="needs the 16 joints marked on frame 0"):
+        state.start_tracking()
+    mark(state, truth, [j for j in JOINTS if j != "knee_r"])
+    assert state.unmarked() == ["knee_r"]
+    with pytest.raises(MocapError, match="joint knee_r is not marked on frame 0"):
+        state.start_tracking()
+    state.set_override(0, "knee_r", (1.0, 1.0))
+    state.set_override(0, "shoulder_r", tuple(truth.joints2d[0, JOINTS.index("shoulder_l")]))
+    with pytest.raises(MocapError, match="degenerate key triangle"):
+        state.start_tracking()
+    assert not state.tracking
+
+
+def test_the_page_shows_the_tracked_joints_and_their_3d(tracked):
+    state, truth = tracked
+    errors = [np.linalg.norm(state.view(i).joints2d - truth.joints2d[i], axis=-1)
+              for i in range(TINY_FRAMES)]
+    assert np.median(errors) < 0.04 * truth.body_height_px
+    view = state.view(TINY_FRAMES // 2)
+    assert view.method == "track" and view.fitted and view.pose3d.shape == (16, 3)
+    assert 0.0 < view.score <= 1.0 and view.orientation == "forward_right"
+    name, data = state.export("json")
+    frames = json.loads(data)["frames"]
+    assert len(frames) == TINY_FRAMES and np.allclose(frames[0]["joints2d"], truth.joints2d[0])
+    assert load_annotations(state.path).method == "track"
+
+
+def test_a_flip_and_an_override_reshape_the_tracked_3d(tracked):
+    state, truth = tracked
+    frame = TINY_FRAMES // 2
+    before = state.view(frame)
+    segment = ("lower_leg_r", "lower_leg_l")[int(np.argmax(
+        [before.depths[SEGMENT_INDEX[s]] for s in ("lower_leg_r", "lower_leg_l")]))]
+    k = SEGMENT_INDEX[segment]
+    assert state.flip_sign(frame, segment)
+    after = state.view(frame)
+    assert after.signs[k] == -before.signs[k] and after.sign_notes[k] == "set here"
+    assert np.array_equal(after.joints2d, before.joints2d)
+    moved = tuple(before.joints2d[JOINTS.index("wrist_l")] + [8.0, 0.0])
+    state.set_override(frame, "wrist_l", moved)
+    assert np.allclose(state.view(frame).joints2d[JOINTS.index("wrist_l")], moved)
+    assert state.undo() == frame and state.undo() == frame
+    assert state.view(frame).signs == before.signs
+
+
+def test_moving_a_mark_asks_for_a_new_tracking(tracked):
+    state, truth = tracked
+    assert not state.marks_changed
+    state.set_override(0, "wrist_r", tuple(truth.joints2d[0, JOINTS.index("wrist_r")] + 3.0))
+    assert state.marks_changed
+    state.start_tracking().join()
+    assert state.progress.ready and not state.marks_changed
+
+
+def test_a_reopened_app_tracks_again_and_the_switch_back_shows_the_fit(tracked):
+    state, truth = tracked
+    reopened = AppState(state.info.path)
+    assert reopened.method == "track" and not reopened.unmarked()
+    reopened.start().join()
+    end = time.monotonic() + 30
+    while not reopened.progress.ready and time.monotonic() < end:
+        time.sleep(0.05)
+    assert reopened.progress.ready
+    assert np.allclose(reopened.view(5).joints2d, state.view(5).joints2d)
+    assert reopened.set_method("silhouette")
+    view = reopened.view(5)
+    assert view.method == "silhouette" and view.score is not None and view.pose3d is not None
+
+
+def test_marks_from_the_silhouette_fit(tiny_video, tmp_path):
+    state = AppState(fresh_copy(tiny_video, tmp_path))
+    with pytest.raises(MocapError, match="no silhouette fit"):
+        state.marks_from_fit()
+    state.start().join()
+    fitted = state.view(0).joints2d
+    assert state.marks_from_fit() and state.unmarked() == []
+    marks = state.annotations.frames[0].joints2d
+    assert np.allclose([marks[j] for j in JOINTS], fitted, atol=0.06)
+    assert state.undo() == 0 and state.unmarked() == list(JOINTS)
