@@ -177,7 +177,8 @@ def frame_text(view: FrameView) -> str:
     head = f"**Frame {view.index}** of 0–{view.n_frames - 1} · " + (
         "keyframe" if view.keyframe else "not a keyframe (interpolated in the export)")
     if not view.fitted:
-        body = "Not fitted yet." if view.progress.error is None else "Not fitted."
+        done = "tracked" if view.method == "track" else "fitted"
+        body = f"Not {done} yet." if view.progress.error is None else f"Not {done}."
     elif view.score is None:
         body = "Nobody found on this frame."
     else:

@@ -238,7 +238,7 @@ class App:
     def _silhouette_image(self, view: FrameView) -> np.ndarray:
         if view.method == "track":
             if view.joints2d is None:
-                return caption_image(self.size, "not tracked yet: mark frame 0, press Track")
+                return caption_image(self.size, "not tracked yet")
             return tracked_image(self.frames.get(view.index), view.joints2d, view.overrides,
                                  self.state.scale)
         if not view.silhouette_ready:
@@ -254,7 +254,8 @@ class App:
         if view.pose3d is not None:
             note = ""
         elif not view.progress.ready:
-            note = " · after the fit" if view.progress.error is None else " · none"
+            work = "tracking" if view.method == "track" else "the fit"
+            note = f" · after {work}" if view.progress.error is None else " · none"
         else:
             note = " · nobody found"
         self.scene.caption("front", "3D, seen from the camera" + note)

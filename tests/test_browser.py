@@ -3,7 +3,8 @@
 Each test serves a fresh copy of a tiny rendered clip on port 0 and does what a user
 does: steps frames, flips a foreshortening toggle (button and 3D segment), places a
 joint override by clicking the video frame and undoes it, downloads a BVH, uses
-two tabs at once, watches preprocessing, and kills the server mid-work. Screenshots
+two tabs at once, watches preprocessing, kills the server mid-work, and switches to
+the tracking method, marks the 16 joints by clicking and tracks them. Screenshots
 go to artifacts/browser/ (gitignored).
 """
 
@@ -21,12 +22,12 @@ import bvhio
 import numpy as np
 import pytest
 from app_helpers import (TINY_FRAMES, app, deepest_segment, download_export,  # noqa: F401
-                         fresh_copy, tiny_video)
+                         fresh_copy, panning_clip, started_app, tiny_video)
 from scipy.spatial.transform import Rotation
 
 from app.controls import segment_label, sign_button
 from mocap.annotations import Annotations, load_annotations
-from mocap.body import JOINT_INDEX, SEGMENT_INDEX
+from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 
 CHROMIUM = Path("/usr/bin/chromium")
 pytestmark = pytest.mark.skipif(not CHROMIUM.exists(),
@@ -188,6 +189,37 @@ def test_download_bvh_that_parses(browser, app, tmp_path):
     shot(page, "playing")
     page.get_by_role("button", name="Pause").click()
     wait_until(lambda: not app.player.playing)
+
+
+def test_switch_to_tracking_mark_by_clicking_and_track(browser, panning_clip, tmp_path):
+    video, truth = panning_clip
+    app = started_app(fresh_copy(video, tmp_path))
+    try:
+        page = open_page(browser, app.server.get_port())
+        page.get_by_label("Method").click()
+        page.get_by_role("option", name="tracking").click()
+        page.get_by_text("mark the 16 joints on frame 0").wait_for()
+        page.get_by_role("tab", name="Tracking").click()
+        page.get_by_role("button", name="Mark joints").click()
+        for name in JOINTS:
+            wait_until(lambda: app.controls.joint.value == name)
+            xy = truth.joints2d[0, JOINT_INDEX[name]]
+            page.mouse.click(*screen_point(page, app, video_point(app, xy)))
+        page.get_by_text("All 16 joints marked on frame 0.").wait_for()
+        marks = load_annotations(app.state.path).frames[0].joints2d
+        assert np.abs(np.array([marks[j] for j in JOINTS]) - truth.joints2d[0]).max() < 2.0
+        shot(page, "tracking_marked")
+        page.get_by_role("button", name="Track", exact=True).click()
+        page.get_by_text(f"{TINY_FRAMES} frames tracked.").first.wait_for()
+        page.get_by_role("button", name="frame ▶", exact=True).click()
+        page.get_by_text("Tracking reliability").wait_for()
+        view = app.state.view()
+        assert view.method == "track" and view.index == 1 and view.pose3d is not None
+        err = np.linalg.norm(view.joints2d - truth.joints2d[1], axis=-1)
+        assert np.median(err) < 0.04 * truth.body_height_px
+        shot(page, "tracking_tracked")
+    finally:
+        app.server.stop()
 
 
 def test_two_tabs_one_truth(browser, app):
