@@ -8,11 +8,15 @@ queued every message of the update; "received" is when a connected websocket cli
 (what a browser tab's socket gets, without a browser) has received all of it: a
 marker label queued after the update says when.
 
-    python benchmarks/bench_app.py [--video VIDEO] [--seconds S] [--repeats N]
+    python benchmarks/bench_app.py [--video VIDEO] [--seconds S] [--repeats N] [--track]
 
 Default video: the bundled sample (640x480, 99 frames). ``--seconds`` renders the
 procedural walk at 640x480 and 30 fps for that long instead (how latency grows with
-the clip: each edit re-resolves the lifting inputs of the whole clip).
+the clip: each edit re-resolves the lifting inputs of the whole clip). ``--track``
+(with ``--seconds``) renders it walking in place turned toward the camera, through a
+perspective camera over a panning background, marks frame 0 with the true joints and times the tracking
+method's page (each edit reshapes the whole clip's tracked 3D); the time tracking
+itself takes is printed too.
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import zstandard
 from websockets.sync.client import connect
 
 from app.main import SAMPLE, create
-from mocap.body import SEGMENT_NAMES
+from mocap.body import JOINTS, SEGMENT_NAMES
 from mocap.lift import depth_fractions
 from mocap.synth import render_clip
 from mocap.walk import walk_cycle
@@ -97,10 +101,22 @@ def deepest_segment(state) -> str:
     return SEGMENT_NAMES[int(np.argmax(depth_fractions(state.view().pose3d)))]
 
 
-def bench(video: Path, repeats: int, seed: int = 0) -> None:
+def switch_to_tracking(state, marks: np.ndarray) -> None:
+    """Choose the tracking method, mark frame 0, track; print how long tracking took."""
+    state.set_method("track")
+    for name, xy in zip(JOINTS, marks):
+        state.set_override(0, name, tuple(xy))
+    t0 = time.perf_counter()
+    state.start_tracking().join()
+    print(f"tracking {state.n_frames} frames in the app: {time.perf_counter() - t0:.1f} s")
+
+
+def bench(video: Path, repeats: int, seed: int = 0, marks: np.ndarray | None = None) -> None:
     app = create(video, port=0)
     app.state.start()
     app.state.ready.wait()
+    if marks is not None:
+        switch_to_tracking(app.state, marks)
     receiver = Receiver(app.server.get_port())
     marker = app.server.scene.add_label("/bench-marker", "", visible=False)
     measure(app, receiver, marker, lambda: None)                 # the backlog has arrived
@@ -124,15 +140,22 @@ def main() -> int:
     parser.add_argument("--video", type=Path, default=SAMPLE)
     parser.add_argument("--seconds", type=float, default=None)
     parser.add_argument("--repeats", type=int, default=30)
+    parser.add_argument("--track", action="store_true", help="the tracking method (needs --seconds)")
     args = parser.parse_args()
+    if args.track and not args.seconds:
+        parser.error("--track renders its clip: give --seconds")
     with tempfile.TemporaryDirectory() as tmp:
-        video = Path(tmp) / "bench.mp4"
-        if args.seconds:
+        video, marks = Path(tmp) / "bench.mp4", None
+        if args.track:
+            truth = render_clip(walk_cycle(args.seconds, 30.0, in_place=True), video,
+                                size=(640, 480), fps=30.0, yaw=45.0, perspective=800.0, moving_background=True, seed=1)
+            marks = truth.joints2d[0]
+        elif args.seconds:
             render_clip(walk_cycle(args.seconds, 30.0), video, size=(640, 480), fps=30.0,
                         view="three-quarter", seed=1)
         else:
             shutil.copy(args.video, video)           # edits are saved beside it: not the sample's
-        bench(video, args.repeats)
+        bench(video, args.repeats, marks=marks)
     return 0
 
 

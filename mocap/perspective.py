@@ -271,19 +271,33 @@ def body_axes(key: np.ndarray) -> np.ndarray:
     return np.stack([left, up, np.cross(left, up)], axis=-1)
 
 
-def key_joints(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None) -> np.ndarray:
+def key_joints(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
+               before: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(F, 3, 3) the key joints of every frame: calibration on frame 0 (Eq. 6-9), then
-    each frame's depths from the previous frame's (Eq. 10-11)."""
+    each frame's depths from the previous frame's (Eq. 10-11).
+
+    ``before``: (2D joints, key joints) of an earlier call on the same clip with the
+    same ``turn``; only the frames whose key joints moved in 2D are solved again (all
+    of them when frame 0's did), each from the frame before it, as a full solve
+    would start them."""
     rays = camera.rays(joints2d[:, KEY])
     cal = calibrate(joints2d[0], camera, turn)
     triangle = cal.model()[KEY]
     depths = cal.to_camera(triangle)[:, 2]
     sides = np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in KEY_LINES])
-    out = []
-    for frame_rays in rays:
-        depths = key_depths(frame_rays, depths, sides)
-        out.append(depths[:, None] * frame_rays)
-    return np.array(out)
+    redo = np.ones(len(rays), bool)
+    if before is not None and before[0].shape == joints2d.shape:
+        redo = (before[0][:, KEY] != joints2d[:, KEY]).any(axis=(1, 2))
+        redo[:] |= redo[0]
+    out = np.empty((len(rays), 3, 3))
+    for f, frame_rays in enumerate(rays):
+        if redo[f]:
+            depths = key_depths(frame_rays, depths, sides)
+            out[f] = depths[:, None] * frame_rays
+        else:
+            out[f] = before[1][f]
+            depths = out[f, :, 2]
+    return out
 
 
 def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -> np.ndarray:

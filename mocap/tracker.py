@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap import blocks
-from mocap.blocks import M, N, THETA, block_end, from_block, to_block
+from mocap.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
 from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HALF_SPAN, WIDTH,
                         torso_width)
 from mocap.headmotion import P_START, adapt_threshold, head_displacement
@@ -50,6 +50,7 @@ ANCHOR = 0.5               # weight of frame 0's colours in every updated model
 HISTORY = 150              # frames of S that the median looks back on
 AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
 USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
+ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's) scale stays in it
 
 
 @dataclass(frozen=True)
@@ -174,6 +175,8 @@ class BodyTracker:
         self.longest = MAX_STRETCH * np.maximum(
             scale * LENGTH[[SEGMENT_INDEX[p.segment] for p in PARTS]], self.blocks[:, M])
         self.head_width = self.blocks[HEAD, N]
+        self.head_lengths = np.array(ZOOM_RANGE) * self.blocks[HEAD, M]
+        self.widths = np.outer(self.blocks[:, N], ZOOM_RANGE)
         # usual lengths (around_root): as marked, unless marked much foreshortened
         self.lengths = np.maximum(self.blocks[:, M], USUAL_MIN * self.longest / MAX_STRETCH)
         self.velocity = np.zeros_like(self.blocks)
@@ -196,14 +199,27 @@ class BodyTracker:
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
         for k in LIMBS:
             self._track_limb(frame, new, s, predicted, k)
+        new = self._bounded(new, frame.shape)
         self._update(frame, new, s)
         return skeleton(new, self.chest), s
 
+    def _bounded(self, new: np.ndarray, shape: tuple) -> np.ndarray:
+        """The blocks kept sane where the match ran off (a body too small or lost):
+        starts inside the frame, widths and lengths within ZOOM_RANGE of the marked
+        ones, the last frame's block where a value is not finite."""
+        new = np.where(np.isfinite(new), new, self.blocks)
+        new[:, X] = np.clip(new[:, X], 0, shape[1] - 1)
+        new[:, Y] = np.clip(new[:, Y], 0, shape[0] - 1)
+        new[:, N] = np.clip(new[:, N], self.widths[:, 0], self.widths[:, 1])
+        new[:, M] = np.clip(new[:, M], 2.0, ZOOM_RANGE[1] * self.longest)
+        return new
+
     def _predicted(self) -> np.ndarray:
         """Every block changed as over the last frame; widths follow the head's zoom
-        (the whole body nears or recedes)."""
+        (the whole body nears or recedes), which stays within ZOOM_RANGE of the marks."""
         predicted = self.blocks + self.velocity
         predicted[:, M] = np.maximum(predicted[:, M], 2.0)
+        predicted[HEAD, M] = np.clip(predicted[HEAD, M], *self.head_lengths)
         predicted[1:, N] = self.blocks[1:, N] * predicted[HEAD, M] / self.blocks[HEAD, M]
         return predicted
 
@@ -221,6 +237,7 @@ class BodyTracker:
         scores = blocks.score(frame, self.models[HEAD], self.grids[HEAD], starts)
         start = starts[int(np.argmax(scores))]
         found, s = self._search(frame, HEAD, start, self.blocks)
+        found[M] = np.clip(found[M], *self.head_lengths)
         self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
         return found, s
 

@@ -57,7 +57,8 @@ class TrackSession(Session):
         super().__init__(info, fits, annotations, smooth)
         self.tracked = tracked
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
-        self._key: tuple[bytes, str | None, np.ndarray] | None = None
+        # (steady 2D joints, turn, key joints, their placement free of user signs)
+        self._placed: tuple[np.ndarray, str | None, np.ndarray, np.ndarray] | None = None
         self._joints3d: np.ndarray | None = None
 
     @classmethod
@@ -89,8 +90,7 @@ class TrackSession(Session):
             for joint, xy in points.items():
                 joints[i, JOINT_INDEX[joint]] = xy
         steady = steady_joints(joints, self.info.fps)
-        key = self._key_joints(steady, turn_of(notes.orientations(1)[0]))
-        free = to_contract(place_joints(steady, key, self.camera))
+        key, free = self._free_placement(steady, turn_of(notes.orientations(1)[0]))
         values, since = notes.held_signs(n)
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
         joints3d = to_contract(place_joints(steady, key, self.camera, fixed=fixed)) if fixed.any() else free
@@ -101,13 +101,16 @@ class TrackSession(Session):
                         np.full(n, body_px(joints) / BODY_HEIGHT), signs_of(joints3d), lengths)
         return inputs, joints3d
 
-    def _key_joints(self, steady: np.ndarray, turn: str | None) -> np.ndarray:
-        """The key joints of every frame (Eq. 6-11), kept while the 2D joints and the
-        turn stay the same."""
-        stamp = steady.tobytes()
-        if self._key is None or self._key[:2] != (stamp, turn):
-            self._key = (stamp, turn, key_joints(steady, self.camera, turn))
-        return self._key[2]
+    def _free_placement(self, steady: np.ndarray, turn: str | None) -> tuple[np.ndarray, np.ndarray]:
+        """The key joints of every frame (Eq. 6-11) and every joint placed without the
+        user's signs (contract frame): kept while the 2D joints and the turn stay the
+        same; after a joint override only the frames it moved are solved again."""
+        last = self._placed
+        if last is None or last[1] != turn or not np.array_equal(last[0], steady):
+            before = (last[0], last[2]) if last is not None and last[1] == turn else None
+            key = key_joints(steady, self.camera, turn, before)
+            self._placed = (steady, turn, key, to_contract(place_joints(steady, key, self.camera)))
+        return self._placed[2], self._placed[3]
 
 
 def body_px(joints2d: np.ndarray) -> float:

@@ -65,6 +65,24 @@ def test_key_depths_follow_the_moving_triangle():
     assert np.allclose(depths, moved[:, 2], atol=1e-7)
 
 
+def test_key_joints_solve_again_only_the_frames_that_moved(monkeypatch):
+    """After a joint override the key joints equal a full solve, with only the
+    moved frames solved again."""
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
+                                                           yaw=50.0))
+    joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
+    camera = P.default_camera(320, 240)
+    first = P.key_joints(joints2d, camera, "right")
+    moved = joints2d.copy()
+    moved[12:15, P.JOINT_INDEX["chest"]] += [3.0, -2.0]
+    calls, solve = [], P.key_depths
+    monkeypatch.setattr(P, "key_depths", lambda *args: calls.append(1) or solve(*args))
+    again = P.key_joints(moved, camera, "right", before=(joints2d, first))
+    assert len(calls) == 3
+    assert np.allclose(again, P.key_joints(moved, camera, "right"), atol=1e-6)
+    assert np.array_equal(again[:12], first[:12])
+
+
 def test_ray_roots_lie_on_the_ray_at_the_bone_length():
     known, ray = np.array([0.1, -0.2, 5.0]), np.array([0.05, 0.01, 1.0])
     roots = ray_roots(known, ray, 0.4)
