@@ -176,8 +176,8 @@ def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
 
     Each limb's (upper, lower) signs, the torso's and the head's are chosen over the
     clip by ``smoothest_states``: per frame, joint-limit penalties (``limb_penalty``, a
-    backward or sideways lean for torso and head) and disagreement with
-    ``sagittal_depth``; between frames, the acceleration of the depths (Eq. 5's
+    backward or sideways lean for torso and head) and, for the legs, torso and head,
+    disagreement with ``sagittal_depth``; between frames, the acceleration of the depths (Eq. 5's
     |dZ|, a running median over DEPTH_FILTER_S against the 2D fit's noise).
     ``fixed`` (F, 10) holds the user's signs (+1/-1) where given, 0 elsewhere.
     """
@@ -214,8 +214,10 @@ def _limb_signs(vec: np.ndarray, depth: np.ndarray, sagittal: np.ndarray, fixed:
     zu, zl = su * depth[:, [0]], sl * depth[:, [1]]                                # (F, 4)
     u3 = np.concatenate([np.repeat(vec[:, None, 0], 4, 1), zu[..., None]], axis=-1)
     l3 = np.concatenate([np.repeat(vec[:, None, 1], 4, 1), zl[..., None]], axis=-1)
-    cost = (limb_penalty(u3, l3, facing[:, None], left[:, None], side, leg)
-            + SAGITTAL_WEIGHT * (np.maximum(0, -su * sagittal[:, [0]]) + np.maximum(0, -sl * sagittal[:, [1]])))
+    cost = limb_penalty(u3, l3, facing[:, None], left[:, None], side, leg)
+    if leg:     # arms swing out of the sagittal plane too (and their 2D x is the fit's worst)
+        cost = cost + SAGITTAL_WEIGHT * (np.maximum(0, -su * sagittal[:, [0]])
+                                         + np.maximum(0, -sl * sagittal[:, [1]]))
     allowed = ((fixed[:, [0]] == 0) | (fixed[:, [0]] == su)) & ((fixed[:, [1]] == 0) | (fixed[:, [1]] == sl))
     return smoothest_states(np.stack([zu, zu + zl], axis=-1), LIMIT_WEIGHT * cost, allowed)
 
