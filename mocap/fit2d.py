@@ -41,6 +41,8 @@ ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first g
 ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
 RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
 SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
+CROSSED_GAIN = 0.02              # S by which crossed thighs must explain more to be kept
+UNCROSS_SPREAD = 0.3             # torso spread below which (near profile) thighs may cross
 FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
 
@@ -255,10 +257,40 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     for side in "lr":
         pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side],
                             *_around(prev, LEG[side][0], *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
-    pose = _best_leg_pairing(canvas, pose)
+    pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose))
     for side in "lr":
         pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
     return pose
+
+
+def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> bool:
+    """Whether the segments a-b and c-d (2D points) intersect."""
+    def turn(p, q, r):
+        return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+    return turn(a, b, c) * turn(a, b, d) < 0 and turn(c, d, a) * turn(c, d, b) < 0
+
+
+def _uncrossed_thighs(canvas: Canvas, pose: Pose2D) -> Pose2D:
+    """Beyond the paper: two thighs searched one at a time can cross in the image,
+    each hip reaching for the other's knee, where the legs overlap and either way
+    explains the same silhouette. Thighs seldom cross (it takes a leg swung across
+    the other), so the knees are given back to their own hips, each lower leg
+    staying under its knee, unless the crossed pair explains clearly more (CROSSED_GAIN)."""
+    j = forward_kinematics_2d(pose)
+    hips = [j[JOINT_INDEX["hip_l"]], j[JOINT_INDEX["hip_r"]]]
+    knees = [j[JOINT_INDEX["knee_l"]], j[JOINT_INDEX["knee_r"]]]
+    if pose.spread < UNCROSS_SPREAD or not _segments_cross(hips[0], knees[0], hips[1], knees[1]):
+        return pose
+    angle, ratio = pose.angle.copy(), pose.ratio.copy()
+    for hip, knee, side in ((hips[0], knees[1], "l"), (hips[1], knees[0], "r")):
+        k = SEGMENT_INDEX[LEG[side][0]]
+        d = knee - hip
+        angle[k] = np.degrees(np.arctan2(-d[1], d[0])) % 360.0
+        ratio[k] = np.clip(np.hypot(*d) / (LENGTH[k] * pose.scale), *RATIO_RANGE)
+    uncrossed = _swap_lower_legs(replace(pose, angle=angle, ratio=ratio))
+    legs = LEG["l"] + LEG["r"]
+    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(pose, legs), pose_quads(uncrossed, legs)]))
+    return pose if scores[0] > scores[1] + CROSSED_GAIN else uncrossed
 
 
 def _swap_lower_legs(pose: Pose2D) -> Pose2D:
