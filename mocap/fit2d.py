@@ -42,6 +42,7 @@ ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a sear
 RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
 SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
 CROSSED_GAIN = 0.02              # S by which crossed thighs must explain more to be kept
+CROSSED_TURN = 30.0              # degrees less thigh turn since the last frame that keeps a crossing
 UNCROSS_SPREAD = 0.3             # torso spread below which (near profile) thighs may cross
 FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
@@ -257,7 +258,7 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     for side in "lr":
         pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side],
                             *_around(prev, LEG[side][0], *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
-    pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose))
+    pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose), prev)
     for side in "lr":
         pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
     return pose
@@ -270,12 +271,14 @@ def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) 
     return turn(a, b, c) * turn(a, b, d) < 0 and turn(c, d, a) * turn(c, d, b) < 0
 
 
-def _uncrossed_thighs(canvas: Canvas, pose: Pose2D) -> Pose2D:
+def _uncrossed_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     """Beyond the paper: two thighs searched one at a time can cross in the image,
     each hip reaching for the other's knee, where the legs overlap and either way
-    explains the same silhouette. Thighs seldom cross (it takes a leg swung across
-    the other), so the knees are given back to their own hips, each lower leg
-    staying under its knee, unless the crossed pair explains clearly more (CROSSED_GAIN)."""
+    explains the same silhouette. Then the knees are given back to their own hips,
+    each lower leg staying under its knee, unless the crossed pair explains clearly
+    more (CROSSED_GAIN) or continues the previous frame's thighs clearly better
+    (CROSSED_TURN: a leg swinging past the other, as in a walk seen turned, crosses
+    for real)."""
     j = forward_kinematics_2d(pose)
     hips = [j[JOINT_INDEX["hip_l"]], j[JOINT_INDEX["hip_r"]]]
     knees = [j[JOINT_INDEX["knee_l"]], j[JOINT_INDEX["knee_r"]]]
@@ -288,9 +291,17 @@ def _uncrossed_thighs(canvas: Canvas, pose: Pose2D) -> Pose2D:
         angle[k] = np.degrees(np.arctan2(-d[1], d[0])) % 360.0
         ratio[k] = np.clip(np.hypot(*d) / (LENGTH[k] * pose.scale), *RATIO_RANGE)
     uncrossed = _swap_lower_legs(replace(pose, angle=angle, ratio=ratio))
+    if prev is not None and _thigh_turn(pose, prev) + CROSSED_TURN < _thigh_turn(uncrossed, prev):
+        return pose
     legs = LEG["l"] + LEG["r"]
     scores, _ = sweep_scorer(canvas, np.stack([pose_quads(pose, legs), pose_quads(uncrossed, legs)]))
     return pose if scores[0] > scores[1] + CROSSED_GAIN else uncrossed
+
+
+def _thigh_turn(pose: Pose2D, prev: Pose2D) -> float:
+    """Degrees both thighs turned since ``prev``."""
+    k = [SEGMENT_INDEX[LEG[side][0]] for side in "lr"]
+    return float(np.sum(np.abs((pose.angle[k] - prev.angle[k] + 180.0) % 360.0 - 180.0)))
 
 
 def _swap_lower_legs(pose: Pose2D) -> Pose2D:
