@@ -62,6 +62,12 @@ def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> n
     return 2.0 * walk + np.clip(10.0 * knees, -1.0, 1.0)
 
 
+def knee_facing(joints2d: np.ndarray) -> str:
+    """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward
+    over the frames given (knees bend forward)."""
+    return "right" if sum(_knee_bend(joints2d, side) for side in "lr").sum() >= 0 else "left"
+
+
 def _knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
     """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
     hip, knee, ankle = (joints2d[:, _J[f"{n}_{side}"]] for n in ("hip", "knee", "ankle"))

@@ -24,6 +24,7 @@ from scipy.ndimage import gaussian_filter1d
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.marks import check_marks
+from mocap.orientation import knee_facing
 from mocap.perspective import default_camera, reconstruct, to_contract
 from mocap.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
@@ -34,6 +35,7 @@ LOW_RELIABILITY = 0.5      # a part matched this much worse than usual is taken 
 # pixel of tracking jitter moves a joint on its ray by centimetres where its bone is
 # nearly in the image plane (depth sqrt(l^2 - d^2) is steep there)
 SMOOTH_S = 0.05
+TURN_CUE_S = 1.0           # seconds from frame 0 whose knee bends tell an unsaid turn
 
 
 def _joint_parts() -> list[tuple[int, ...]]:
@@ -130,7 +132,8 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     joint. ``focal_px``: the camera's focal length in pixels if known (default: the
     frame width, see mocap.perspective). ``orientation``: the performer's orientation
     on frame 0 in CONTRACT.md's words; its side ("right" of forward_right) tells
-    which way the body is turned, which the key triangle alone cannot.
+    which way the body is turned, which the key triangle alone cannot (None: the
+    knees tell, ``guessed_turn``).
     ``progress(done, total)`` is called after every frame.
     """
     info = video if isinstance(video, VideoInfo) else open_video(video)
@@ -144,8 +147,17 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     reliability = joint_reliability(similarity)
     joints2d = fill_unreliable(joints, reliability)
     camera = default_camera(info.width, info.height, focal_px)
+    turn = turn or guessed_turn(joints2d, info.fps)
     joints3d = to_contract(reconstruct(steady_joints(joints2d, info.fps), camera, turn))
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal)
+
+
+def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
+    """Which way the body is turned ("left" or "right", as the side of an orientation)
+    where the user did not say: the way the knees bend over the first TURN_CUE_S
+    (orientation.knee_facing). Beyond the paper: the key triangle and hips fit two
+    mirror-image turns about equally well (mocap.perspective.calibrate)."""
+    return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 
 def steady_joints(joints2d: np.ndarray, fps: float) -> np.ndarray:

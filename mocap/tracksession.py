@@ -26,7 +26,7 @@ from mocap.lift import depth_fractions, orientation_of_yaw, signs_of, yaw_of
 from mocap.orientation import NEGLIGIBLE, held_user_signs
 from mocap.perspective import UNIT_M, default_camera, key_joints, place_joints, to_contract
 from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
-from mocap.track import TrackResult, steady_joints, track_video, turn_of
+from mocap.track import TrackResult, guessed_turn, steady_joints, track_video, turn_of
 from mocap.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
@@ -90,7 +90,8 @@ class TrackSession(Session):
             for joint, xy in points.items():
                 joints[i, JOINT_INDEX[joint]] = xy
         steady = steady_joints(joints, self.info.fps)
-        key, free = self._free_placement(steady, turn_of(notes.orientations(1)[0]))
+        turn = turn_of(notes.orientations(1)[0]) or guessed_turn(joints, self.info.fps)
+        key, free = self._free_placement(steady, turn)
         values, since = notes.held_signs(n)
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
         joints3d = to_contract(place_joints(steady, key, self.camera, fixed=fixed)) if fixed.any() else free

@@ -15,6 +15,7 @@ from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.cli import main
 from mocap.export.motion_json import read_motion
 from mocap.orientation import NEGLIGIBLE
+from mocap.track import guessed_turn
 from mocap.tracksession import TrackSession
 from mocap.video import open_video
 from mocap.walk import walk_cycle
@@ -117,3 +118,13 @@ def test_a_joint_override_moves_the_tracked_joint(session):
     assert not np.allclose(tracked.pose3d(frame)[joint], tracked.tracked.joints3d[frame, joint])
     tracked.annotate(notes)
     assert np.allclose(tracked.inputs.joints2d, tracked.tracked.joints2d)
+
+
+def test_an_unsaid_turn_is_read_from_the_knees(clip):
+    """The calibration's two mirror-image fits are told apart by the way the knees
+    bend when the user gives no orientation: the clip turns to the image right, its
+    mirror image to the left."""
+    _, truth = clip
+    assert guessed_turn(truth.joints2d, 15.0) == "right"
+    mirrored = truth.joints2d * [-1.0, 1.0] + [truth.width, 0.0]
+    assert guessed_turn(mirrored, 15.0) == "left"
