@@ -3,7 +3,8 @@
 Four signs of a doubtful frame, each a short function over a session's resolved
 lifting inputs (anatomical 2D joints, overrides applied) and fits:
 
-- a low silhouette similarity S (Eq. 3) of the fit;
+- a low score: the silhouette similarity S (Eq. 3) of the fit, or the tracking
+  method's reliability;
 - a segment seen nearly end-on (foreshortening ratio near zero), where its image
   direction and its depth (Eq. 5) are least sure;
 - a joint limit of Table 1 broken (waist, neck, hips);
@@ -73,22 +74,22 @@ def review_queue(session: Session) -> list[Doubt]:
     """Every doubtful frame with a person, most doubtful first."""
     inputs = session.inputs
     scores = session.scores
-    signs = (scores < LOW_SCORE,
-             end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
+    signs = (end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
              broken_limits(inputs.joints2d),
              likely_swaps(inputs.joints2d, inputs.px_per_unit))
     queue = []
     for i in np.flatnonzero(np.isfinite(scores)):
-        reasons = _reasons(scores[i], *(sign[i] for sign in signs))
+        reasons = _reasons(f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE,
+                           *(sign[i] for sign in signs))
         if reasons:
             queue.append(Doubt(int(i), float(1.0 - scores[i] + REASON_WEIGHT * len(reasons)), reasons))
     return sorted(queue, key=lambda d: (-d.value, d.frame))
 
 
-def _reasons(score: float, low: bool, end_on: np.ndarray, limits: np.ndarray,
+def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray,
              swaps: np.ndarray) -> tuple[str, ...]:
-    """One frame's doubts in words."""
-    return ((f"low similarity S={score:.2f}",) * bool(low)
+    """One frame's doubts in words (``score``: the frame's score, named)."""
+    return ((f"low {score}",) * bool(low)
             + tuple(f"{SEGMENT_NAMES[k]} seen end-on" for k in np.flatnonzero(end_on))
             + tuple(f"{name} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
             + tuple(f"{('hands', 'feet')[p]} may have swapped sides" for p in np.flatnonzero(swaps)))

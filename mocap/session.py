@@ -226,6 +226,8 @@ class Session:
         """The orientations the fits alone suggest (once per session)."""
         return guess_orientations(*self._arrays, self.info.fps)
 
+    score_name = "similarity S"     # what ``scores`` are, for the page
+
     @property
     def scores(self) -> np.ndarray:
         """(F,) each frame's fit score (Eq. 3's S), NaN where nobody was found."""

@@ -50,6 +50,8 @@ def track_annotated(info: VideoInfo, notes: Annotations,
 class TrackSession(Session):
     """A tracked video and the user's annotations; reconstructs on demand."""
 
+    score_name = "tracking reliability"
+
     def __init__(self, info: VideoInfo, tracked: TrackResult,
                  annotations: Annotations | None = None, smooth: float = 0.0):
         fits = [FrameFit(i, joints, float(rel.mean()))
