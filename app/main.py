@@ -298,7 +298,10 @@ class App:
         elif p.ready:
             text = f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`."
         elif view.method == "track" and not self.state.tracking:
-            text = "Tracking: mark the 16 joints on frame 0 (Tracking tab), then press Track."
+            missing = len(self.state.unmarked())
+            text = ("Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."
+                    if not missing else f"Tracking: mark the 16 joints on frame 0 ({missing} to go; "
+                    "Tracking tab), then press Track.")
         else:
             work = "Tracking" if view.method == "track" else "Preprocessing"
             text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%"
