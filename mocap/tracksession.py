@@ -61,7 +61,7 @@ class TrackSession(Session):
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
         # (steady 2D joints, turn, key joints, their placement free of user signs)
         self._placed: tuple[np.ndarray, str | None, np.ndarray, np.ndarray] | None = None
-        self._joints3d: np.ndarray | None = None
+        self._resolution: tuple[Inputs, np.ndarray] | None = None
 
     @classmethod
     def from_video(cls, info: VideoInfo, notes: Annotations, *, smooth: float = 0.0,
@@ -71,32 +71,49 @@ class TrackSession(Session):
 
     def annotate(self, annotations: Annotations) -> None:
         super().annotate(annotations)
-        self._joints3d = None
+        self._resolution = None
 
     @property
     def inputs(self) -> Inputs:
-        if self._inputs is None:
-            self._inputs, self._joints3d = self._resolve()
-        return self._inputs
+        return self._resolved()[0]
 
     def pose3d(self, frame: int) -> np.ndarray:
         """(16, 3) the reconstructed joints of a frame (metres, contract frame)."""
-        self.inputs
-        return self._joints3d[frame]
+        return self._resolved()[1][frame]
 
-    def _resolve(self) -> tuple[Inputs, np.ndarray]:
-        """The joints (overrides in), their 3D under the held signs, and what it shows."""
-        n, notes = len(self.fits), self._annotations
+    def _resolved(self) -> tuple[Inputs, np.ndarray]:
+        """The shown inputs and the 3D joints (F, 16, 3) of the current annotations."""
+        if self._resolution is None:
+            joints = self._joints2d()
+            self._resolution = self._shown(joints, self._reconstructed(joints))
+        return self._resolution
+
+    def _joints2d(self) -> np.ndarray:
+        """The tracked joints with the user's overrides put in."""
         joints = self.tracked.joints2d.copy()
-        for i, points in notes.overrides().items():
+        for i, points in self._annotations.overrides().items():
             for joint, xy in points.items():
                 joints[i, JOINT_INDEX[joint]] = xy
+        return joints
+
+    def _reconstructed(self, joints: np.ndarray) -> np.ndarray:
+        """(F, 16, 3) contract-frame joints: the turn said on frame 0 (else the knees'),
+        the depth choices kept to the held foreshortening while it holds."""
+        notes = self._annotations
         steady = steady_joints(joints, self.info.fps)
         turn = turn_of(notes.orientations(1)[0]) or guessed_turn(joints, self.info.fps)
         key, free = self._free_placement(steady, turn)
-        values, since = notes.held_signs(n)
+        values, since = notes.held_signs(len(joints))
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
-        joints3d = to_contract(place_joints(steady, key, self.camera, fixed=fixed)) if fixed.any() else free
+        if not fixed.any():
+            return free
+        return to_contract(place_joints(steady, key, self.camera, fixed=fixed))
+
+    @staticmethod
+    def _shown(joints: np.ndarray, joints3d: np.ndarray) -> tuple[Inputs, np.ndarray]:
+        """What the page and the motion file show: the 2D joints, and the orientation,
+        signs and segment lengths read back from the 3D."""
+        n = len(joints)
         yaw = np.array([yaw_of(pose) for pose in joints3d])
         ends = joints3d[:, SEGMENT_JOINTS]
         lengths = np.median(np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1), axis=0) / UNIT_M
