@@ -17,7 +17,9 @@ model. Every later frame is tracked head to feet:
 3. each limb from its root: the upper part's angle and length, the lower part's
    position, angle and length, all started where constant velocity predicts them
    (the paper's motion prediction); beyond the paper, the limb is also looked for
-   all around its root (``around_root``), which finds a lost limb again;
+   all around its root (``around_root``), which finds a lost limb again, and its
+   lower part is kept off the places it cannot be (``keep_off``: its own upper
+   part, the head for an arm, its twin limb's lower part, ``_part_twins``);
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -51,6 +53,11 @@ HISTORY = 150              # frames of S that the median looks back on
 AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
 USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
 ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's) scale stays in it
+FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block,
+HEAD_COST = 40.0           # ... an arm's lower block on the head,
+TWIN_COST = 25.0           # ... a lower block on its twin's
+TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
+OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
 
 
 @dataclass(frozen=True)
@@ -98,6 +105,7 @@ PARTS = (Part("head", "head_top", "neck"), Part("torso", "neck", "pelvis"),
                               ("upper_leg", "hip", "knee"), ("lower_leg", "knee", "ankle"))))
 PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
 LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
+ARMS, LEGS = TWINS = ((2, 6), (4, 8))
 HEAD, TORSO = 0, 1
 
 
@@ -124,16 +132,18 @@ def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
 
 
 def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: np.ndarray,
-                part: Part, longest: float) -> tuple[np.ndarray, float]:
+                part: Part, longest: float,
+                penalty: blocks.Penalty | None = None) -> tuple[np.ndarray, float]:
     """The part's block and S in ``image``, searched coarse to fine from the predicted
-    ``start``; every part but the head kept between SHORTEST and 1 times ``longest``
-    pixels and finally lengthened to its end (blocks.lengthen)."""
+    ``start`` (candidates charged ``penalty``, blocks.search); every part but the head
+    kept between SHORTEST and 1 times ``longest`` pixels and finally lengthened to its
+    end (blocks.lengthen)."""
     best, s = start.copy(), 0.0
     for stage in part.schedule:
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
         best, s = blocks.search(image, model, grid, best, np.radians(stage.d_theta_deg),
                                 best[M] * np.asarray(stage.d_m), zoom=part.segment == "head",
-                                max_ring=stage.rings, step=stage.step)
+                                max_ring=stage.rings, step=stage.step, penalty=penalty)
     if part.segment != "head":
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
         extra = LENGTHEN_STEPS * longest
@@ -142,13 +152,56 @@ def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: 
     return best, s
 
 
-def around_root(image: np.ndarray, root: np.ndarray, upper: tuple,
-                lower: tuple) -> tuple[np.ndarray, float]:
+def overlap(lowers: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Beyond the paper: how much each of the blocks ``lowers`` (K, 5) lies on the
+    block ``other`` (5,) (or each on its own of K blocks), in [0, 1]: the mean over
+    OVERLAP_POINTS points along its middle line of 1 - d / n, d the point's distance
+    to other's middle line (a segment) and n other's width, at least 0."""
+    t = (np.arange(OVERLAP_POINTS) + 0.5) / OVERLAP_POINTS
+    points = lowers[:, None, :2] + t[:, None] * (block_end(lowers) - lowers[:, :2])[:, None]
+    other = np.broadcast_to(other, lowers.shape)
+    axis = np.stack([np.cos(other[:, THETA]), np.sin(other[:, THETA])], axis=-1)[:, None]
+    d = points - other[:, None, :2]
+    along = np.clip((d * axis).sum(axis=-1), 0.0, other[:, M, None])
+    distance = np.linalg.norm(d - along[..., None] * axis, axis=-1)
+    return np.maximum(1.0 - distance / other[:, N, None], 0.0).mean(axis=1)
+
+
+def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
+    """How much two twin limbs' lower blocks lie on one another (``overlap`` both ways)."""
+    return float(overlap(lower_a[None], lower_b)[0] + overlap(lower_b[None], lower_a)[0]) / 2
+
+
+def keep_off(root: np.ndarray, width: float, avoid: tuple = ()) -> blocks.Penalty:
+    """Beyond the paper: the penalty (grey levels) of candidate lower blocks of a limb
+    whose upper part, ``width`` wide, runs from ``root`` to the lower block's start:
+    FOLD_COST per unit of overlap with that upper part, and ``cost`` per unit of
+    overlap with each ``(cost, block)`` of ``avoid``. Limbs look alike along their
+    length (one colour of sleeve or trousers) and alike to their twins, so that a
+    lower part folded back onto its own upper part, or lying on its twin, matches at
+    little cost where the limb itself is hidden or hard to see."""
+    def penalty(lowers: np.ndarray) -> np.ndarray:
+        uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
+        return FOLD_COST * overlap(lowers, uppers) + sum(
+            cost * overlap(lowers, block) for cost, block in avoid)
+    return penalty
+
+
+def limb_cost(new: np.ndarray, s: np.ndarray, k: int,
+              penalty: blocks.Penalty | None = None) -> float:
+    """The cost of limb k's placement in ``new``: its two parts' 1/S and the lower
+    block's ``penalty``."""
+    extra = 0.0 if penalty is None else float(penalty(new[k + 1, None])[0])
+    return 1.0 / s[k] + 1.0 / s[k + 1] + extra
+
+
+def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
+                penalty: blocks.Penalty) -> tuple[np.ndarray, float]:
     """Beyond the paper: the best lower block of a limb hanging from ``root`` over
     every pair of directions of its two parts, AROUND_STEP degrees apart, each part
-    at its usual length, and the pair's cost (the sum of the two 1/S). A limb lost
-    to clutter or to its twin is found again where it shows. ``upper`` and ``lower``
-    are each (colour model, grid, width, length)."""
+    at its usual length, and the pair's cost (the sum of the two 1/S and the lower
+    block's ``penalty``). A limb lost to clutter or to its twin is found again where
+    it shows. ``upper`` and ``lower`` are each (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
     uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
@@ -157,7 +210,8 @@ def around_root(image: np.ndarray, root: np.ndarray, upper: tuple,
     turns = np.tile(np.c_[np.cos(angles), np.sin(angles)], (len(angles), 1))
     lowers = blocks.between(starts, starts + m_l * turns, n_l)
     cost = (1.0 / blocks.score(image, model_u, grid_u, uppers))[:, None] \
-        + (1.0 / blocks.score(image, model_l, grid_l, lowers)).reshape(len(angles), -1)
+        + (1.0 / blocks.score(image, model_l, grid_l, lowers)
+           + penalty(lowers)).reshape(len(angles), -1)
     best = int(np.argmin(cost))
     return lowers[best], float(cost.flat[best])
 
@@ -198,7 +252,9 @@ class BodyTracker:
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
         for k in LIMBS:
-            self._track_limb(frame, new, s, predicted, k)
+            self._track_limb(frame, new, s, predicted, k, self._avoided(k, new))
+        for twins in TWINS:
+            self._part_twins(frame, new, s, predicted, twins)
         new = self._bounded(new, frame.shape)
         self._update(frame, new, s)
         return skeleton(new, self.chest), s
@@ -223,10 +279,11 @@ class BodyTracker:
         predicted[1:, N] = self.blocks[1:, N] * predicted[HEAD, M] / self.blocks[HEAD, M]
         return predicted
 
-    def _search(self, image: np.ndarray, k: int, start: np.ndarray, new: np.ndarray):
+    def _search(self, image: np.ndarray, k: int, start: np.ndarray, new: np.ndarray,
+                penalty: blocks.Penalty | None = None):
         """Part k's block and S searched from ``start`` (search_part)."""
         return search_part(image, self.models[k], self.grids[k], start, PARTS[k],
-                           self.longest[k] * new[HEAD, N] / self.head_width)
+                           self.longest[k] * new[HEAD, N] / self.head_width, penalty)
 
     def _track_head(self, frame: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, float]:
         """The head block, searched from the better of the image difference's and
@@ -242,29 +299,57 @@ class BodyTracker:
         return found, s
 
     def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    predicted: np.ndarray, k: int) -> None:
+                    predicted: np.ndarray, k: int, avoid: tuple) -> None:
         """A limb (parts k, k + 1): its root carried by the trunk's motion, the upper
         part's direction and length searched from their prediction, the lower part
         from its prediction hanging there; beyond the paper, where it fits better,
-        from the best pair of directions all around the root (``around_root``)."""
+        from the best pair of directions all around the root (``around_root``), the
+        lower part kept off its upper part and the blocks to ``avoid`` (keep_off)."""
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
         start = predicted[k].copy()
         start[:2] = root
         upper, _ = self._search(image, k, start, new)
+        penalty = keep_off(root, new[k, N], avoid)
         start = predicted[k + 1].copy()
         start[:2] = block_end(upper)
-        self._hang(image, new, s, k, root, start)
+        self._hang(image, new, s, k, root, start, penalty)
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
-        lower, cost = around_root(image, root, *parts)
-        if cost < 1.0 / s[k] + 1.0 / s[k + 1]:
-            self._hang(image, new, s, k, root, lower)
+        lower, cost = around_root(image, root, *parts, penalty)
+        if cost < limb_cost(new, s, k, penalty):
+            self._hang(image, new, s, k, root, lower, penalty)
+
+    def _avoided(self, k: int, new: np.ndarray) -> tuple:
+        """The (cost, block) pairs limb k's lower part keeps off: the head for an arm
+        (a forearm's skin matches the face and neck)."""
+        return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
+
+    def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
+                    predicted: np.ndarray, twins: tuple[int, int]) -> None:
+        """Beyond the paper: twin limbs (both arms, both legs) look alike, and a limb
+        that lost its own place follows its twin's. Where their lower blocks lie on
+        one another (TWIN_OVERLAP), each twin in turn is tracked again keeping off
+        the other's lower block (TWIN_COST); the placement of least joint cost (both
+        limbs' 1/S and TWIN_COST times their overlap) stays."""
+        a, b = twins
+        if twin_overlap(new[a + 1], new[b + 1]) < TWIN_OVERLAP:
+            return
+        options = [(new.copy(), s.copy())]
+        for moved, kept in ((a, b), (b, a)):
+            placed, similarity = new.copy(), s.copy()
+            avoid = (*self._avoided(moved, new), (TWIN_COST, new[kept + 1].copy()))
+            self._track_limb(image, placed, similarity, predicted, moved, avoid)
+            options.append((placed, similarity))
+        costs = [limb_cost(n, sim, a) + limb_cost(n, sim, b)
+                 + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options]
+        new[:], s[:] = options[int(np.argmin(costs))]
 
     def _hang(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
-              root: np.ndarray, lower: np.ndarray) -> None:
-        """Limb k from its ``root`` and the lower part searched from ``lower``: the
-        upper part then runs from the root to where the lower part begins."""
-        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new)
+              root: np.ndarray, lower: np.ndarray, penalty: blocks.Penalty) -> None:
+        """Limb k from its ``root`` and the lower part searched from ``lower`` (its
+        candidates charged ``penalty``): the upper part then runs from the root to
+        where the lower part begins."""
+        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new, penalty)
         new[k] = blocks.between(root[None], new[k + 1, None, :2], new[k, N])[0]
         s[k] = blocks.score(image, self.models[k], self.grids[k], new[k])[0]
 
