@@ -14,12 +14,15 @@ model. Every later frame is tracked head to feet:
    position, angle and scale along the search path (Fig. 6);
 2. the trunk hanging from the neck (angle and length); the chest keeps its marked
    place in the trunk's frame; shoulders and hips move with the trunk;
-3. each limb from its root: the upper part's angle and length, the lower part's
-   position, angle and length, all started where constant velocity predicts them
-   (the paper's motion prediction); beyond the paper, the limb is also looked for
-   all around its root (``around_root``), which finds a lost limb again, and its
-   lower part is kept off the places it cannot be (``keep_off``: its own upper
-   part, the head for an arm, its twin limb's lower part, ``_part_twins``);
+3. each limb from its root, carried by the trunk: beyond the paper, found afresh on
+   every frame as the best pair of directions of its parts all around the root
+   (``around_root``), then its lower part's position, angle and length searched
+   from there, with the upper part from the root to the lower part's start. The
+   paper starts every part where constant velocity predicts it; a limb, which
+   swings back and forth, is badly predicted that way and once lost (to clutter,
+   to its twin) is not found again. The lower part is kept off the places where
+   it cannot be (``keep_off``: its own upper part, the head for an arm, its twin
+   limb's lower part, ``_part_twins``);
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -81,7 +84,6 @@ _SWING = Stage(_span(30, 5), _span(0.2, 0.1))
 SCHEDULES = {  # coarse to fine, by the kind of part
     "head": (Stage(_span(6, 3), _span(0.06, 0.06), 8), _FREE),
     "torso": (Stage(_span(12, 3), _span(0.1, 0.05)), _HELD),
-    "upper": (_SWING, _HELD),
     "lower": (_SWING, Stage(_span(4, 2), (0.0,), 3), _FREE),
 }
 
@@ -187,12 +189,9 @@ def keep_off(root: np.ndarray, width: float, avoid: tuple = ()) -> blocks.Penalt
     return penalty
 
 
-def limb_cost(new: np.ndarray, s: np.ndarray, k: int,
-              penalty: blocks.Penalty | None = None) -> float:
-    """The cost of limb k's placement in ``new``: its two parts' 1/S and the lower
-    block's ``penalty``."""
-    extra = 0.0 if penalty is None else float(penalty(new[k + 1, None])[0])
-    return 1.0 / s[k] + 1.0 / s[k + 1] + extra
+def limb_cost(s: np.ndarray, k: int) -> float:
+    """The cost of limb k's placement: its two parts' 1/S."""
+    return 1.0 / s[k] + 1.0 / s[k + 1]
 
 
 def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
@@ -252,9 +251,9 @@ class BodyTracker:
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
         for k in LIMBS:
-            self._track_limb(frame, new, s, predicted, k, self._avoided(k, new))
+            self._track_limb(frame, new, s, k, self._avoided(k, new))
         for twins in TWINS:
-            self._part_twins(frame, new, s, predicted, twins)
+            self._part_twins(frame, new, s, twins)
         new = self._bounded(new, frame.shape)
         self._update(frame, new, s)
         return skeleton(new, self.chest), s
@@ -298,26 +297,18 @@ class BodyTracker:
         self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
         return found, s
 
-    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    predicted: np.ndarray, k: int, avoid: tuple) -> None:
-        """A limb (parts k, k + 1): its root carried by the trunk's motion, the upper
-        part's direction and length searched from their prediction, the lower part
-        from its prediction hanging there; beyond the paper, where it fits better,
-        from the best pair of directions all around the root (``around_root``), the
-        lower part kept off its upper part and the blocks to ``avoid`` (keep_off)."""
+    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
+                    avoid: tuple) -> None:
+        """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
+        best pair of directions all around the root (``around_root``), then the
+        lower part searched from there (``_hang``), kept off its upper part and the
+        blocks to ``avoid`` (keep_off)."""
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
-        start = predicted[k].copy()
-        start[:2] = root
-        upper, _ = self._search(image, k, start, new)
         penalty = keep_off(root, new[k, N], avoid)
-        start = predicted[k + 1].copy()
-        start[:2] = block_end(upper)
-        self._hang(image, new, s, k, root, start, penalty)
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
-        lower, cost = around_root(image, root, *parts, penalty)
-        if cost < limb_cost(new, s, k, penalty):
-            self._hang(image, new, s, k, root, lower, penalty)
+        lower, _ = around_root(image, root, *parts, penalty)
+        self._hang(image, new, s, k, root, lower, penalty)
 
     def _avoided(self, k: int, new: np.ndarray) -> tuple:
         """The (cost, block) pairs limb k's lower part keeps off: the head for an arm
@@ -325,7 +316,7 @@ class BodyTracker:
         return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
 
     def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    predicted: np.ndarray, twins: tuple[int, int]) -> None:
+                    twins: tuple[int, int]) -> None:
         """Beyond the paper: twin limbs (both arms, both legs) look alike, and a limb
         that lost its own place follows its twin's. Where their lower blocks lie on
         one another (TWIN_OVERLAP), each twin in turn is tracked again keeping off
@@ -338,9 +329,9 @@ class BodyTracker:
         for moved, kept in ((a, b), (b, a)):
             placed, similarity = new.copy(), s.copy()
             avoid = (*self._avoided(moved, new), (TWIN_COST, new[kept + 1].copy()))
-            self._track_limb(image, placed, similarity, predicted, moved, avoid)
+            self._track_limb(image, placed, similarity, moved, avoid)
             options.append((placed, similarity))
-        costs = [limb_cost(n, sim, a) + limb_cost(n, sim, b)
+        costs = [limb_cost(sim, a) + limb_cost(sim, b)
                  + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options]
         new[:], s[:] = options[int(np.argmin(costs))]
 

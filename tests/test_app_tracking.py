@@ -75,8 +75,8 @@ def test_a_flip_and_an_override_reshape_the_tracked_3d(tracked):
     state, truth = tracked
     frame = TINY_FRAMES // 2
     before = state.view(frame)
-    segment = ("lower_leg_r", "lower_leg_l")[int(np.argmax(
-        [before.depths[SEGMENT_INDEX[s]] for s in ("lower_leg_r", "lower_leg_l")]))]
+    legs = ("upper_leg_r", "upper_leg_l", "lower_leg_r", "lower_leg_l")
+    segment = legs[int(np.argmax([before.depths[SEGMENT_INDEX[s]] for s in legs]))]
     k = SEGMENT_INDEX[segment]
     assert state.flip_sign(frame, segment)
     after = state.view(frame)
