@@ -21,8 +21,8 @@ model. Every later frame is tracked head to feet:
    paper starts every part where constant velocity predicts it; a limb, which
    swings back and forth, is badly predicted that way and once lost (to clutter,
    to its twin) is not found again. The lower part is kept off the places where
-   it cannot be (``keep_off``: its own upper part, the head for an arm, its twin
-   limb's lower part, ``_part_twins``);
+   it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
+   limb's lower part, ``_part_twins``) and near where it was on the last frame;
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -59,6 +59,7 @@ ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's
 FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block,
 HEAD_COST = 40.0           # ... an arm's lower block on the head,
 TWIN_COST = 25.0           # ... a lower block on its twin's
+JUMP_COST = 8.0            # grey levels per usual length that a lower block's end moved
 TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
 OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
 
@@ -174,17 +175,24 @@ def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
     return float(overlap(lower_a[None], lower_b)[0] + overlap(lower_b[None], lower_a)[0]) / 2
 
 
-def keep_off(root: np.ndarray, width: float, avoid: tuple = ()) -> blocks.Penalty:
+def limb_penalty(root: np.ndarray, width: float, last_end: np.ndarray, length: float,
+                 avoid: tuple = ()) -> blocks.Penalty:
     """Beyond the paper: the penalty (grey levels) of candidate lower blocks of a limb
     whose upper part, ``width`` wide, runs from ``root`` to the lower block's start:
-    FOLD_COST per unit of overlap with that upper part, and ``cost`` per unit of
-    overlap with each ``(cost, block)`` of ``avoid``. Limbs look alike along their
-    length (one colour of sleeve or trousers) and alike to their twins, so that a
-    lower part folded back onto its own upper part, or lying on its twin, matches at
-    little cost where the limb itself is hidden or hard to see."""
+
+    - FOLD_COST per unit of overlap with that upper part and ``cost`` per unit of
+      overlap with each ``(cost, block)`` of ``avoid``: limbs look alike along their
+      length (one colour of sleeve or trousers) and alike to their twins, so that a
+      lower part folded back onto its own upper part, or lying on its twin, matches
+      at little cost where the limb itself is hidden or hard to see;
+    - JUMP_COST per ``length`` (the part's usual length) that the block's end lies
+      from ``last_end``, the last frame's: a limb hidden on a frame stays near where
+      it was rather than jump to clutter that matches it as well.
+    """
     def penalty(lowers: np.ndarray) -> np.ndarray:
         uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
-        return FOLD_COST * overlap(lowers, uppers) + sum(
+        jump = np.linalg.norm(block_end(lowers) - last_end, axis=-1) / length
+        return FOLD_COST * overlap(lowers, uppers) + JUMP_COST * jump + sum(
             cost * overlap(lowers, block) for cost, block in avoid)
     return penalty
 
@@ -302,11 +310,11 @@ class BodyTracker:
         """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
         best pair of directions all around the root (``around_root``), then the
         lower part searched from there (``_hang``), kept off its upper part and the
-        blocks to ``avoid`` (keep_off)."""
+        blocks to ``avoid`` and near its last place (limb_penalty)."""
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
-        penalty = keep_off(root, new[k, N], avoid)
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
+        penalty = limb_penalty(root, new[k, N], block_end(self.blocks[k + 1]), parts[1][3], avoid)
         lower, _ = around_root(image, root, *parts, penalty)
         self._hang(image, new, s, k, root, lower, penalty)
 

@@ -14,7 +14,7 @@ from mocap.errors import MocapError
 from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
 from mocap.marks import check_marks
 from mocap.track import LOW_RELIABILITY, fill_unreliable, joint_reliability, track_video
-from mocap.tracker import FOLD_COST, keep_off, overlap, twin_overlap
+from mocap.tracker import FOLD_COST, JUMP_COST, limb_penalty, overlap, twin_overlap
 from mocap.walk import walk_cycle
 
 
@@ -137,9 +137,9 @@ def test_overlap_of_blocks_and_the_limbs_kept_off():
     assert twin_overlap(lowers[0], lowers[2]) == 0.0
     folded = np.array([[40.0, 0.0, np.pi, 40.0, 10.0],      # back along its upper part
                        [40.0, 0.0, np.pi / 2, 40.0, 10.0]])  # bent at a right angle
-    penalty = keep_off(np.zeros(2), 10.0, ((7.0, other),))
-    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)
-    assert penalty(folded)[1] < 0.2 * FOLD_COST
+    penalty = limb_penalty(np.zeros(2), 10.0, np.zeros(2), 40.0, ((7.0, other),))
+    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)          # ends where it was
+    assert penalty(folded)[1] == pytest.approx((FOLD_COST + 7.0) / 8 + JUMP_COST * np.sqrt(2))
 
 
 # -- the head's image difference ------------------------------------------------------------
