@@ -59,7 +59,7 @@ ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's
 FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block,
 HEAD_COST = 40.0           # ... an arm's lower block on the head,
 TWIN_COST = 25.0           # ... a lower block on its twin's
-JUMP_COST = 8.0            # grey levels per usual length that a lower block's end moved
+JUMP_COST = 8.0            # grey levels per usual length that a lower block's ends moved
 TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
 OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
 
@@ -175,7 +175,7 @@ def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
     return float(overlap(lower_a[None], lower_b)[0] + overlap(lower_b[None], lower_a)[0]) / 2
 
 
-def limb_penalty(root: np.ndarray, width: float, last_end: np.ndarray, length: float,
+def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float,
                  avoid: tuple = ()) -> blocks.Penalty:
     """Beyond the paper: the penalty (grey levels) of candidate lower blocks of a limb
     whose upper part, ``width`` wide, runs from ``root`` to the lower block's start:
@@ -185,13 +185,15 @@ def limb_penalty(root: np.ndarray, width: float, last_end: np.ndarray, length: f
       length (one colour of sleeve or trousers) and alike to their twins, so that a
       lower part folded back onto its own upper part, or lying on its twin, matches
       at little cost where the limb itself is hidden or hard to see;
-    - JUMP_COST per ``length`` (the part's usual length) that the block's end lies
-      from ``last_end``, the last frame's: a limb hidden on a frame stays near where
-      it was rather than jump to clutter that matches it as well.
+    - JUMP_COST per ``length`` (the part's usual length) that the block's two ends
+      (the limb's middle and end joints) moved from those of ``last``, the last
+      frame's block: a limb hidden on a frame stays near where it was rather than
+      jump to clutter that matches it as well.
     """
     def penalty(lowers: np.ndarray) -> np.ndarray:
         uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
-        jump = np.linalg.norm(block_end(lowers) - last_end, axis=-1) / length
+        jump = (np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
+                + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)) / length
         return FOLD_COST * overlap(lowers, uppers) + JUMP_COST * jump + sum(
             cost * overlap(lowers, block) for cost, block in avoid)
     return penalty
@@ -314,7 +316,7 @@ class BodyTracker:
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
-        penalty = limb_penalty(root, new[k, N], block_end(self.blocks[k + 1]), parts[1][3], avoid)
+        penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
         lower, _ = around_root(image, root, *parts, penalty)
         self._hang(image, new, s, k, root, lower, penalty)
 

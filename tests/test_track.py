@@ -137,8 +137,8 @@ def test_overlap_of_blocks_and_the_limbs_kept_off():
     assert twin_overlap(lowers[0], lowers[2]) == 0.0
     folded = np.array([[40.0, 0.0, np.pi, 40.0, 10.0],      # back along its upper part
                        [40.0, 0.0, np.pi / 2, 40.0, 10.0]])  # bent at a right angle
-    penalty = limb_penalty(np.zeros(2), 10.0, np.zeros(2), 40.0, ((7.0, other),))
-    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)          # ends where it was
+    penalty = limb_penalty(np.zeros(2), 10.0, folded[0], 40.0, ((7.0, other),))
+    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)          # where it was
     assert penalty(folded)[1] == pytest.approx((FOLD_COST + 7.0) / 8 + JUMP_COST * np.sqrt(2))
 
 
