@@ -108,7 +108,8 @@ PARTS = (Part("head", "head_top", "neck"), Part("torso", "neck", "pelvis"),
                               ("upper_leg", "hip", "knee"), ("lower_leg", "knee", "ankle"))))
 PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
 LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
-ARMS, LEGS = TWINS = ((2, 6), (4, 8))
+ARMS = (2, 6)
+TWINS = (ARMS, (4, 8))     # the arms, the legs
 HEAD, TORSO = 0, 1
 
 
@@ -205,12 +206,12 @@ def limb_cost(s: np.ndarray, k: int) -> float:
 
 
 def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
-                penalty: blocks.Penalty) -> tuple[np.ndarray, float]:
-    """Beyond the paper: the best lower block of a limb hanging from ``root`` over
-    every pair of directions of its two parts, AROUND_STEP degrees apart, each part
-    at its usual length, and the pair's cost (the sum of the two 1/S and the lower
-    block's ``penalty``). A limb lost to clutter or to its twin is found again where
-    it shows. ``upper`` and ``lower`` are each (colour model, grid, width, length)."""
+                penalty: blocks.Penalty) -> np.ndarray:
+    """Beyond the paper: the lower block of a limb hanging from ``root`` of the pair
+    of directions of its two parts, AROUND_STEP degrees apart, each part at its
+    usual length, of least cost (the sum of the two 1/S and the lower block's
+    ``penalty``). A limb lost to clutter or to its twin is found again where it
+    shows. ``upper`` and ``lower`` are each (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
     uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
@@ -221,8 +222,7 @@ def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
     cost = (1.0 / blocks.score(image, model_u, grid_u, uppers))[:, None] \
         + (1.0 / blocks.score(image, model_l, grid_l, lowers)
            + penalty(lowers)).reshape(len(angles), -1)
-    best = int(np.argmin(cost))
-    return lowers[best], float(cost.flat[best])
+    return lowers[int(np.argmin(cost))]
 
 
 class BodyTracker:
@@ -317,7 +317,7 @@ class BodyTracker:
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
-        lower, _ = around_root(image, root, *parts, penalty)
+        lower = around_root(image, root, *parts, penalty)
         self._hang(image, new, s, k, root, lower, penalty)
 
     def _avoided(self, k: int, new: np.ndarray) -> tuple:
