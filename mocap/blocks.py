@@ -17,6 +17,7 @@ one array per part whatever the block's size and bounds the cost of a candidate.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -26,6 +27,7 @@ X, Y, THETA, M, N = range(5)
 ROWS, COLS = 14, 7                 # largest sub-pixel grid of a block
 CHANNEL_WEIGHTS = np.full(3, 1 / 3, np.float32)   # W_R, W_G, W_B of Eq. 3
 CENTRE_WEIGHT, MARGIN_WEIGHT = 2.0, 1.0           # W_1 > W_2 of Eq. 4
+Penalty = Callable[[np.ndarray], np.ndarray]   # blocks (K, 5) -> grey levels (K,)
 MIN_DIFF = 1.0                     # grey levels: keeps S = 1/D finite for a perfect match
 
 
@@ -152,15 +154,24 @@ def morphs(block: np.ndarray, d_theta: np.ndarray, d_m: np.ndarray, zoom: bool) 
     return out
 
 
+def penalised(s: np.ndarray, cands: np.ndarray, penalty: Penalty | None) -> np.ndarray:
+    """S (K,) of blocks (K, 5) with ``penalty(cands)`` grey levels added to their 1/S
+    (beyond the paper); S itself without a penalty."""
+    return s if penalty is None else 1.0 / (1.0 / s + penalty(cands))
+
+
 def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
            d_theta: np.ndarray, d_m: np.ndarray, *, zoom: bool = False,
-           max_ring: int = 0, step: float = 1.0) -> tuple[np.ndarray, float]:
+           max_ring: int = 0, step: float = 1.0,
+           penalty: Penalty | None = None) -> tuple[np.ndarray, float]:
     """The best block and its S, searched along the path of Fig. 6.
 
     Every point of a circle of the path gets every morph (theta' in theta +- d_theta,
     m' in m +- d_m); the search goes on to the next circle while the circle just done
     held a better block than all before it, up to ``max_ring`` circles of ``step``
     pixels (max_ring 0: the position is fixed, e.g. a limb hanging from its parent).
+    Beyond the paper, ``penalty`` (blocks (K, 5) -> grey levels (K,)) is added to
+    every candidate's 1/S (``penalised``).
     """
     shapes = morphs(start, d_theta, d_m, zoom)
     best, best_s = start, -1.0
@@ -169,7 +180,7 @@ def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
         cands = np.repeat(shapes[None], len(offsets), axis=0)
         cands[..., :2] += offsets[:, None, :]
         cands = cands.reshape(-1, 5)
-        s = score(image, model, grid, cands)
+        s = penalised(score(image, model, grid, cands), cands, penalty)
         k = int(np.argmax(s))
         if s[k] <= best_s:
             break

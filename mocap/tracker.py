@@ -14,10 +14,15 @@ model. Every later frame is tracked head to feet:
    position, angle and scale along the search path (Fig. 6);
 2. the trunk hanging from the neck (angle and length); the chest keeps its marked
    place in the trunk's frame; shoulders and hips move with the trunk;
-3. each limb from its root: the upper part's angle and length, the lower part's
-   position, angle and length, all started where constant velocity predicts them
-   (the paper's motion prediction); beyond the paper, the limb is also looked for
-   all around its root (``around_root``), which finds a lost limb again;
+3. each limb from its root, carried by the trunk: beyond the paper, found afresh on
+   every frame as the best pair of directions of its parts all around the root
+   (``around_root``), then its lower part's position, angle and length searched
+   from there, with the upper part from the root to the lower part's start. The
+   paper starts every part where constant velocity predicts it; a limb, which
+   swings back and forth, is badly predicted that way and once lost (to clutter,
+   to its twin) is not found again. The lower part is kept off the places where
+   it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
+   limb's lower part, ``_part_twins``) and near where it was on the last frame;
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -51,6 +56,12 @@ HISTORY = 150              # frames of S that the median looks back on
 AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
 USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
 ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's) scale stays in it
+FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block,
+HEAD_COST = 40.0           # ... an arm's lower block on the head,
+TWIN_COST = 25.0           # ... a lower block on its twin's
+JUMP_COST = 8.0            # grey levels per usual length that a lower block's ends moved
+TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
+OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
 
 
 @dataclass(frozen=True)
@@ -74,7 +85,6 @@ _SWING = Stage(_span(30, 5), _span(0.2, 0.1))
 SCHEDULES = {  # coarse to fine, by the kind of part
     "head": (Stage(_span(6, 3), _span(0.06, 0.06), 8), _FREE),
     "torso": (Stage(_span(12, 3), _span(0.1, 0.05)), _HELD),
-    "upper": (_SWING, _HELD),
     "lower": (_SWING, Stage(_span(4, 2), (0.0,), 3), _FREE),
 }
 
@@ -98,6 +108,8 @@ PARTS = (Part("head", "head_top", "neck"), Part("torso", "neck", "pelvis"),
                               ("upper_leg", "hip", "knee"), ("lower_leg", "knee", "ankle"))))
 PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
 LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
+ARMS = (2, 6)
+TWINS = (ARMS, (4, 8))     # the arms, the legs
 HEAD, TORSO = 0, 1
 
 
@@ -124,16 +136,18 @@ def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
 
 
 def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: np.ndarray,
-                part: Part, longest: float) -> tuple[np.ndarray, float]:
+                part: Part, longest: float,
+                penalty: blocks.Penalty | None = None) -> tuple[np.ndarray, float]:
     """The part's block and S in ``image``, searched coarse to fine from the predicted
-    ``start``; every part but the head kept between SHORTEST and 1 times ``longest``
-    pixels and finally lengthened to its end (blocks.lengthen)."""
+    ``start`` (candidates charged ``penalty``, blocks.search); every part but the head
+    kept between SHORTEST and 1 times ``longest`` pixels and finally lengthened to its
+    end (blocks.lengthen)."""
     best, s = start.copy(), 0.0
     for stage in part.schedule:
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
         best, s = blocks.search(image, model, grid, best, np.radians(stage.d_theta_deg),
                                 best[M] * np.asarray(stage.d_m), zoom=part.segment == "head",
-                                max_ring=stage.rings, step=stage.step)
+                                max_ring=stage.rings, step=stage.step, penalty=penalty)
     if part.segment != "head":
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
         extra = LENGTHEN_STEPS * longest
@@ -142,13 +156,62 @@ def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: 
     return best, s
 
 
-def around_root(image: np.ndarray, root: np.ndarray, upper: tuple,
-                lower: tuple) -> tuple[np.ndarray, float]:
-    """Beyond the paper: the best lower block of a limb hanging from ``root`` over
-    every pair of directions of its two parts, AROUND_STEP degrees apart, each part
-    at its usual length, and the pair's cost (the sum of the two 1/S). A limb lost
-    to clutter or to its twin is found again where it shows. ``upper`` and ``lower``
-    are each (colour model, grid, width, length)."""
+def overlap(lowers: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Beyond the paper: how much each of the blocks ``lowers`` (K, 5) lies on the
+    block ``other`` (5,) (or each on its own of K blocks), in [0, 1]: the mean over
+    OVERLAP_POINTS points along its middle line of 1 - d / n, d the point's distance
+    to other's middle line (a segment) and n other's width, at least 0."""
+    t = (np.arange(OVERLAP_POINTS) + 0.5) / OVERLAP_POINTS
+    points = lowers[:, None, :2] + t[:, None] * (block_end(lowers) - lowers[:, :2])[:, None]
+    other = np.broadcast_to(other, lowers.shape)
+    axis = np.stack([np.cos(other[:, THETA]), np.sin(other[:, THETA])], axis=-1)[:, None]
+    d = points - other[:, None, :2]
+    along = np.clip((d * axis).sum(axis=-1), 0.0, other[:, M, None])
+    distance = np.linalg.norm(d - along[..., None] * axis, axis=-1)
+    return np.maximum(1.0 - distance / other[:, N, None], 0.0).mean(axis=1)
+
+
+def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
+    """How much two twin limbs' lower blocks lie on one another (``overlap`` both ways)."""
+    return float(overlap(lower_a[None], lower_b)[0] + overlap(lower_b[None], lower_a)[0]) / 2
+
+
+def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float,
+                 avoid: tuple = ()) -> blocks.Penalty:
+    """Beyond the paper: the penalty (grey levels) of candidate lower blocks of a limb
+    whose upper part, ``width`` wide, runs from ``root`` to the lower block's start:
+
+    - FOLD_COST per unit of overlap with that upper part and ``cost`` per unit of
+      overlap with each ``(cost, block)`` of ``avoid``: limbs look alike along their
+      length (one colour of sleeve or trousers) and alike to their twins, so that a
+      lower part folded back onto its own upper part, or lying on its twin, matches
+      at little cost where the limb itself is hidden or hard to see;
+    - JUMP_COST per ``length`` (the part's usual length) that the block's two ends
+      (the limb's middle and end joints) moved from those of ``last``, the last
+      frame's block: a limb hidden on a frame stays near where it was rather than
+      jump to clutter that matches it as well.
+    """
+    def penalty(lowers: np.ndarray) -> np.ndarray:
+        uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
+        jump = (np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
+                + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)) / length
+        return FOLD_COST * overlap(lowers, uppers) + JUMP_COST * jump + sum(
+            cost * overlap(lowers, block) for cost, block in avoid)
+    return penalty
+
+
+def limb_cost(s: np.ndarray, k: int) -> float:
+    """The cost of limb k's placement: its two parts' 1/S."""
+    return 1.0 / s[k] + 1.0 / s[k + 1]
+
+
+def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
+                penalty: blocks.Penalty) -> np.ndarray:
+    """Beyond the paper: the lower block of a limb hanging from ``root`` of the pair
+    of directions of its two parts, AROUND_STEP degrees apart, each part at its
+    usual length, of least cost (the sum of the two 1/S and the lower block's
+    ``penalty``). A limb lost to clutter or to its twin is found again where it
+    shows. ``upper`` and ``lower`` are each (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
     uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
@@ -157,9 +220,9 @@ def around_root(image: np.ndarray, root: np.ndarray, upper: tuple,
     turns = np.tile(np.c_[np.cos(angles), np.sin(angles)], (len(angles), 1))
     lowers = blocks.between(starts, starts + m_l * turns, n_l)
     cost = (1.0 / blocks.score(image, model_u, grid_u, uppers))[:, None] \
-        + (1.0 / blocks.score(image, model_l, grid_l, lowers)).reshape(len(angles), -1)
-    best = int(np.argmin(cost))
-    return lowers[best], float(cost.flat[best])
+        + (1.0 / blocks.score(image, model_l, grid_l, lowers)
+           + penalty(lowers)).reshape(len(angles), -1)
+    return lowers[int(np.argmin(cost))]
 
 
 class BodyTracker:
@@ -198,7 +261,9 @@ class BodyTracker:
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
         for k in LIMBS:
-            self._track_limb(frame, new, s, predicted, k)
+            self._track_limb(frame, new, s, k, self._avoided(k, new))
+        for twins in TWINS:
+            self._part_twins(frame, new, s, twins)
         new = self._bounded(new, frame.shape)
         self._update(frame, new, s)
         return skeleton(new, self.chest), s
@@ -223,10 +288,11 @@ class BodyTracker:
         predicted[1:, N] = self.blocks[1:, N] * predicted[HEAD, M] / self.blocks[HEAD, M]
         return predicted
 
-    def _search(self, image: np.ndarray, k: int, start: np.ndarray, new: np.ndarray):
+    def _search(self, image: np.ndarray, k: int, start: np.ndarray, new: np.ndarray,
+                penalty: blocks.Penalty | None = None):
         """Part k's block and S searched from ``start`` (search_part)."""
         return search_part(image, self.models[k], self.grids[k], start, PARTS[k],
-                           self.longest[k] * new[HEAD, N] / self.head_width)
+                           self.longest[k] * new[HEAD, N] / self.head_width, penalty)
 
     def _track_head(self, frame: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, float]:
         """The head block, searched from the better of the image difference's and
@@ -241,30 +307,50 @@ class BodyTracker:
         self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
         return found, s
 
-    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    predicted: np.ndarray, k: int) -> None:
-        """A limb (parts k, k + 1): its root carried by the trunk's motion, the upper
-        part's direction and length searched from their prediction, the lower part
-        from its prediction hanging there; beyond the paper, where it fits better,
-        from the best pair of directions all around the root (``around_root``)."""
+    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
+                    avoid: tuple) -> None:
+        """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
+        best pair of directions all around the root (``around_root``), then the
+        lower part searched from there (``_hang``), kept off its upper part and the
+        blocks to ``avoid`` and near its last place (limb_penalty)."""
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
-        start = predicted[k].copy()
-        start[:2] = root
-        upper, _ = self._search(image, k, start, new)
-        start = predicted[k + 1].copy()
-        start[:2] = block_end(upper)
-        self._hang(image, new, s, k, root, start)
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
-        lower, cost = around_root(image, root, *parts)
-        if cost < 1.0 / s[k] + 1.0 / s[k + 1]:
-            self._hang(image, new, s, k, root, lower)
+        penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
+        lower = around_root(image, root, *parts, penalty)
+        self._hang(image, new, s, k, root, lower, penalty)
+
+    def _avoided(self, k: int, new: np.ndarray) -> tuple:
+        """The (cost, block) pairs limb k's lower part keeps off: the head for an arm
+        (a forearm's skin matches the face and neck)."""
+        return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
+
+    def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
+                    twins: tuple[int, int]) -> None:
+        """Beyond the paper: twin limbs (both arms, both legs) look alike, and a limb
+        that lost its own place follows its twin's. Where their lower blocks lie on
+        one another (TWIN_OVERLAP), each twin in turn is tracked again keeping off
+        the other's lower block (TWIN_COST); the placement of least joint cost (both
+        limbs' 1/S and TWIN_COST times their overlap) stays."""
+        a, b = twins
+        if twin_overlap(new[a + 1], new[b + 1]) < TWIN_OVERLAP:
+            return
+        options = [(new.copy(), s.copy())]
+        for moved, kept in ((a, b), (b, a)):
+            placed, similarity = new.copy(), s.copy()
+            avoid = (*self._avoided(moved, new), (TWIN_COST, new[kept + 1].copy()))
+            self._track_limb(image, placed, similarity, moved, avoid)
+            options.append((placed, similarity))
+        costs = [limb_cost(sim, a) + limb_cost(sim, b)
+                 + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options]
+        new[:], s[:] = options[int(np.argmin(costs))]
 
     def _hang(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
-              root: np.ndarray, lower: np.ndarray) -> None:
-        """Limb k from its ``root`` and the lower part searched from ``lower``: the
-        upper part then runs from the root to where the lower part begins."""
-        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new)
+              root: np.ndarray, lower: np.ndarray, penalty: blocks.Penalty) -> None:
+        """Limb k from its ``root`` and the lower part searched from ``lower`` (its
+        candidates charged ``penalty``): the upper part then runs from the root to
+        where the lower part begins."""
+        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new, penalty)
         new[k] = blocks.between(root[None], new[k + 1, None, :2], new[k, N])[0]
         s[k] = blocks.score(image, self.models[k], self.grids[k], new[k])[0]
 

@@ -13,7 +13,7 @@ from app_helpers import TINY_FRAMES, fresh_copy, panning_clip, tiny_video  # noq
 
 from app.state import AppState
 from mocap.annotations import load_annotations
-from mocap.body import JOINTS, SEGMENT_INDEX
+from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 
 
@@ -73,11 +73,11 @@ def test_the_page_shows_the_tracked_joints_and_their_3d(tracked):
 
 def test_a_flip_and_an_override_reshape_the_tracked_3d(tracked):
     state, truth = tracked
-    frame = TINY_FRAMES // 2
-    before = state.view(frame)
-    segment = ("lower_leg_r", "lower_leg_l")[int(np.argmax(
-        [before.depths[SEGMENT_INDEX[s]] for s in ("lower_leg_r", "lower_leg_l")]))]
-    k = SEGMENT_INDEX[segment]
+    legs = [SEGMENT_INDEX[s] for s in ("upper_leg_r", "upper_leg_l", "lower_leg_r", "lower_leg_l")]
+    depths = np.array([state.view(i).depths for i in range(TINY_FRAMES)])[:, legs]
+    frame, leg = np.unravel_index(np.argmax(depths[1:]), depths[1:].shape)  # the leg most in depth
+    frame, k = int(frame) + 1, legs[leg]
+    segment, before = SEGMENT_NAMES[k], state.view(frame)
     assert state.flip_sign(frame, segment)
     after = state.view(frame)
     assert after.signs[k] == -before.signs[k] and after.sign_notes[k] == "set here"

@@ -14,6 +14,7 @@ from mocap.errors import MocapError
 from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
 from mocap.marks import check_marks
 from mocap.track import LOW_RELIABILITY, fill_unreliable, joint_reliability, track_video
+from mocap.tracker import FOLD_COST, JUMP_COST, limb_penalty, overlap, twin_overlap
 from mocap.walk import walk_cycle
 
 
@@ -108,6 +109,37 @@ def test_search_finds_a_moved_turned_block():
     assert np.hypot(*(found[:2] - true[:2])) <= 1.0
     assert abs(np.degrees(found[2] - true[2])) <= 1.0
     assert s == pytest.approx(1.0)                         # exact match: 1 / MIN_DIFF
+
+
+def test_a_penalty_moves_the_search_off_the_best_match():
+    image = np.zeros((80, 80, 3), np.uint8)
+    root = np.array([20.0, 10.0])
+    for angle, grey in ((45.0, 150), (90.0, 200)):           # two like bars from one root
+        end = root + 50 * np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle))])
+        cv2.line(image, tuple(np.int32(root)), tuple(np.int32(end)), (grey,) * 3, 5)
+    start = np.array([*root, np.radians(90.0), 40.0, 5.0])
+    grid = blocks.make_grid(40, 5)
+    model = blocks.sample_blocks(image, start, grid)[0]
+    turns = np.radians(np.arange(-60.0, 61.0, 5.0))
+    down = lambda cands: 100.0 * (np.abs(cands[:, 2] - np.pi / 2) < 0.2)  # noqa: E731
+    found, _ = blocks.search(image, model, grid, start, turns, np.array([0.0]))
+    kept_off, _ = blocks.search(image, model, grid, start, turns, np.array([0.0]), penalty=down)
+    assert np.degrees(found[2]) == pytest.approx(90.0)
+    assert np.degrees(kept_off[2]) == pytest.approx(45.0)
+
+
+def test_overlap_of_blocks_and_the_limbs_kept_off():
+    other = np.array([0.0, 0.0, 0.0, 40.0, 10.0])             # along x, 10 px wide
+    lowers = np.array([[0.0, 0.0, 0.0, 40.0, 10.0],          # on it
+                       [0.0, 5.0, 0.0, 40.0, 10.0],          # half a width beside it
+                       [0.0, 30.0, 0.0, 40.0, 10.0]])        # clear of it
+    assert np.allclose(overlap(lowers, other), [1.0, 0.5, 0.0])
+    assert twin_overlap(lowers[0], lowers[2]) == 0.0
+    folded = np.array([[40.0, 0.0, np.pi, 40.0, 10.0],      # back along its upper part
+                       [40.0, 0.0, np.pi / 2, 40.0, 10.0]])  # bent at a right angle
+    penalty = limb_penalty(np.zeros(2), 10.0, folded[0], 40.0, ((7.0, other),))
+    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)          # where it was
+    assert penalty(folded)[1] == pytest.approx((FOLD_COST + 7.0) / 8 + JUMP_COST * np.sqrt(2))
 
 
 # -- the head's image difference ------------------------------------------------------------

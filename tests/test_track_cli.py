@@ -98,9 +98,13 @@ def test_a_held_foreshortening_fixes_the_limb_depths(session):
     after = tracked.inputs
     assert after.signs[frame, k] == wanted
     assert np.array_equal(after.joints2d, before.joints2d)
+    # held while the segment stays out of the image plane; where the held sign's
+    # best placement lies in the plane, its sign no longer shows
+    in_plane = lift.depth_fractions(np.array([tracked.pose3d(i) for i in range(len(depth))]
+                                             ))[:, k] <= NEGLIGIBLE
     held = frame + 1
     while held < len(depth) and depth[held] > NEGLIGIBLE:
-        assert after.signs[held, k] == wanted
+        assert after.signs[held, k] == wanted or in_plane[held]
         held += 1
     others = [s for s in range(10) if s not in (k, SEGMENT_INDEX["upper_leg_r"])]
     assert np.array_equal(after.signs[:, others], before.signs[:, others])
