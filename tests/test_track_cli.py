@@ -20,6 +20,8 @@ from mocap.tracksession import TrackSession
 from mocap.video import open_video
 from mocap.walk import walk_cycle
 
+IN_PLANE = 0.1      # |dZ| / length: a segment this flat shows no sign
+
 
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory):
@@ -100,8 +102,8 @@ def test_a_held_foreshortening_fixes_the_limb_depths(session):
     assert np.array_equal(after.joints2d, before.joints2d)
     # held while the segment stays out of the image plane; where the held sign's
     # best placement lies in the plane, its sign no longer shows
-    in_plane = lift.depth_fractions(np.array([tracked.pose3d(i) for i in range(len(depth))]
-                                             ))[:, k] <= NEGLIGIBLE
+    poses = np.array([tracked.pose3d(i) for i in range(len(depth))])
+    in_plane = lift.depth_fractions(poses)[:, k] < IN_PLANE
     held = frame + 1
     while held < len(depth) and depth[held] > NEGLIGIBLE:
         assert after.signs[held, k] == wanted or in_plane[held]
