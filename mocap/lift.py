@@ -166,7 +166,7 @@ def bridge_parity(pair: np.ndarray, limb_px: float) -> np.ndarray:
     current = 0
     for k, piece in enumerate(pieces):
         if k:
-            current ^= int(_crosses(pair, pieces[k - 1], piece, parity))
+            current = int(_crosses(pair, pieces[k - 1], piece, parity))
             middle = (pieces[k - 1].stop + piece.start + 1) // 2
             parity[middle:piece.start] = current
         for t in range(piece.start, piece.stop):
@@ -181,16 +181,17 @@ def bridge_parity(pair: np.ndarray, limb_px: float) -> np.ndarray:
 
 
 def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray) -> bool:
-    """Whether the limbs swapped places between two stretches where they are apart
-    (``parity`` so far puts the limbs of ``before`` in one order)."""
+    """Whether the limbs of ``after``'s first frame, as labelled, are in the other
+    order than ``before``'s limbs put in one order by ``parity`` so far (the limbs
+    followed across the stretch between by constant velocity, from either side)."""
     flat = pair.reshape(len(pair), 2, -1).copy()
     flat[parity == 1] = flat[parity == 1, ::-1]
     t0, t1 = before.stop - 1, after.start
     a0, a1 = max(before.start, t0 - 2), min(after.stop - 1, t1 + 2)
     v0 = (flat[t0] - flat[a0]) / max(1, t0 - a0)
     after_flat = pair.reshape(len(pair), 2, -1)
-    v1 = (after_flat[a1] - after_flat[t1]) / max(1, a1 - t1) if _same_order(after_flat, t1, a1) \
-        else np.zeros_like(v0)
+    later = after_flat[a1] if _same_order(after_flat, t1, a1) else after_flat[a1, ::-1]
+    v1 = (later - after_flat[t1]) / max(1, a1 - t1)
     ahead, back = flat[t0] + v0 * (t1 - t0), after_flat[t1] - v1 * (t1 - t0)
     keep = np.linalg.norm(ahead - after_flat[t1], axis=-1).sum() + np.linalg.norm(back - flat[t0], axis=-1).sum()
     swap = (np.linalg.norm(ahead - after_flat[t1, ::-1], axis=-1).sum()

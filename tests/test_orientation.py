@@ -8,7 +8,7 @@ import pytest
 from helpers import SHARED_DATA
 
 from mocap import lift, synth
-from mocap.body import BODY_HEIGHT, MIRROR_JOINTS
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, MIRROR_JOINTS
 from mocap.bvh import contract_joints, read_bvh
 from mocap.lift import known_sides, runs, track_sides
 from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs
@@ -113,3 +113,22 @@ def test_a_joint_override_decides_the_sides_in_a_profile():
     assert (known[frame] == 0).all() and (np.delete(known, frame, axis=0) == -1).all()
     swap = track_sides(joints, known, np.ones(len(joints)))
     assert not swap[frame].any()
+
+
+def test_legs_keep_their_sides_through_every_crossing_of_a_profile_walk():
+    """In a profile the fit names the legs by their image order, which changes at
+    every step; the sides are followed through the moments the legs pass each other
+    from a single joint override."""
+    truth = seen(walk_cycle(3.0, 30.0), "side")
+    legs = [[JOINT_INDEX[f"{n}_{s}"] for n in ("hip", "knee", "ankle")] for s in "lr"]
+    image_side = truth.joints2d.copy()
+    swapped = truth.joints2d[:, legs[0], 0].mean(1) > truth.joints2d[:, legs[1], 0].mean(1)
+    image_side[np.ix_(swapped, legs[0])] = truth.joints2d[np.ix_(swapped, legs[1])]
+    image_side[np.ix_(swapped, legs[1])] = truth.joints2d[np.ix_(swapped, legs[0])]
+    assert 0.2 < swapped.mean() < 0.8                      # the image order changes
+    ankles = truth.joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]]
+    frame = int(np.argmax(np.abs(ankles[:, 0, 0] - ankles[:, 1, 0])))     # widest apart
+    says = {frame: {"ankle_l": tuple(ankles[frame, 0])}}
+    known = known_sides(["right"] * len(image_side), says, image_side)
+    swap = track_sides(image_side, known, np.ones(len(image_side)))
+    assert np.mean(swap[:, 1] == swapped) > 0.9      # the rest: legs level, either order
