@@ -288,7 +288,7 @@ def _uncrossed_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose
     for hip, knee, side in ((hips[0], knees[1], "l"), (hips[1], knees[0], "r")):
         k = SEGMENT_INDEX[LEG[side][0]]
         d = knee - hip
-        angle[k] = np.degrees(np.arctan2(-d[1], d[0])) % 360.0
+        angle[k] = image_angle(d) % 360.0
         ratio[k] = np.clip(np.hypot(*d) / (LENGTH[k] * pose.scale), *RATIO_RANGE)
     uncrossed = _swap_lower_legs(replace(pose, angle=angle, ratio=ratio))
     if prev is not None and _thigh_turn(pose, prev) + CROSSED_TURN < _thigh_turn(uncrossed, prev):
@@ -337,12 +337,18 @@ def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[fl
     return find_angle(points[: corner + 1], default[0]), find_angle(points[corner:], default[1])
 
 
+def image_angle(d: np.ndarray) -> float:
+    """The model's angle (degrees, counter-clockwise from image right) of an image
+    vector ``d`` (x right, y down)."""
+    return float(np.degrees(np.arctan2(-d[1], d[0])))
+
+
 def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) -> list[tuple[float, float]]:
     """Angles of a two-segment limb from start whose tip reaches end (both elbow
     bends); a straight limb pointing at end when it is out of reach."""
     d = end - start
     dist = float(np.hypot(*d))
-    toward = float(np.degrees(np.arctan2(-d[1], d[0])))
+    toward = image_angle(d)
     if dist >= l1 + l2 or dist < 1e-6:
         return [(toward, toward)]
     alpha = float(np.degrees(np.arccos(np.clip((l1 ** 2 + dist ** 2 - l2 ** 2) / (2 * l1 * dist), -1, 1))))
@@ -350,7 +356,7 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
     for upper in (toward + alpha, toward - alpha):
         elbow = start + l1 * np.array([np.cos(np.radians(upper)), -np.sin(np.radians(upper))])
         e = end - elbow
-        out.append((upper, float(np.degrees(np.arctan2(-e[1], e[0])))))
+        out.append((upper, image_angle(e)))
     return out
 
 
