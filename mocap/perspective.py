@@ -287,8 +287,8 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
     sides = np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in KEY_LINES])
     redo = np.ones(len(rays), bool)
     if before is not None and before[0].shape == joints2d.shape:
-        redo = (before[0][:, KEY] != joints2d[:, KEY]).any(axis=(1, 2))
-        redo[:] |= redo[0]
+        moved = (before[0][:, KEY] != joints2d[:, KEY]).any(axis=(1, 2))
+        redo = redo if moved[0] else moved
     out = np.empty((len(rays), 3, 3))
     for f, frame_rays in enumerate(rays):
         if redo[f]:
