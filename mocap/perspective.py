@@ -347,9 +347,9 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
               fixed: np.ndarray | None = None) -> np.ndarray:
     """Fill in elbows, wrists, knees and ankles on their rays (rays.choose_limb), with
     the user's foreshortening ``fixed`` (F, 10) where given."""
-    left = body_axes(joints[:, KEY])[..., 0]
+    axes = body_axes(joints[:, KEY])
     frames = np.arange(len(joints))
-    for root, middle, end, bend, side in LIMBS:
+    for root, middle, end, leg, side in LIMBS:
         pair = (BONE_INDEX[root, middle], BONE_INDEX[middle, end])
         cands = limb_candidates(joints[:, root], rays[:, [middle, end]], tuple(lengths[list(pair)]))
         allowed = None
@@ -359,7 +359,7 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
             said = fixed[:, [SEGMENT_OF[root, middle], SEGMENT_OF[middle, end]]]
             allowed = signs_allowed(toward_signs(depths), said)
         pick = choose_limb(cands - joints[:, root, None, None],
-                           limb_penalty(joints[:, root], cands, left, bend, side), allowed)
+                           limb_penalty(joints[:, root], cands, axes, leg, side), allowed)
         joints[:, middle], joints[:, end] = cands[frames, pick, 0], cands[frames, pick, 1]
     return joints
 

@@ -9,8 +9,9 @@ root nearer the rigid trunk carried by the key triangle. The paper settles the l
 choice by continuity from frame to frame; here the choice for each limb (two bones,
 four combinations per frame) is made for the whole clip at once by dynamic
 programming: the sequence with the smallest sum of squared accelerations of the
-middle and end joints, plus a penalty for leaving the joints' ranges (knees and
-elbows bent the wrong way, an upper arm or thigh pointing through the trunk). A
+middle and end joints, plus a penalty for leaving the joints' ranges, the same joint limits as
+the silhouette method's sign guess (knees and elbows bent the wrong way, an upper
+arm or thigh pointing through the trunk, limbs out of the sagittal plane). A
 greedy frame-to-frame choice cannot tell, where a bone passes through the image
 plane (the two roots meet), whether it goes on or turns back; acceleration can.
 Where a whole limb's mirror image is as smooth and as possible as the limb (a limb
@@ -23,16 +24,15 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.orientation import limb_penalty as joint_limits
 from mocap.smoothest import smoothest_states
 
-# (root, middle, end, bend, side): a knee bends the shank backward (+1), an elbow the
-# forearm forward (-1), about the performer's left axis; side +1 left, -1 right
-LIMBS = tuple((*(JOINT_INDEX[f"{name}_{s}"] for name in (a, b, c)), bend, side)
+# (root, middle, end, leg, side): side +1 left, -1 right
+LIMBS = tuple((*(JOINT_INDEX[f"{name}_{s}"] for name in (a, b, c)), leg, side)
               for s, side in (("l", 1.0), ("r", -1.0))
-              for a, b, c, bend in (("shoulder", "elbow", "wrist", -1.0),
-                                    ("hip", "knee", "ankle", 1.0)))
-HINGE_WEIGHT = 0.02     # m^2 of squared acceleration that a fully reversed hinge costs
-INWARD_FREE = 0.2       # sine of the angle an upper arm or thigh may point toward the midline
+              for a, b, c, leg in (("shoulder", "elbow", "wrist", False),
+                                   ("hip", "knee", "ankle", True)))
+LIMIT_WEIGHT = 0.02     # m^2 of squared acceleration that a unit of joint-limit penalty costs
 
 
 def ray_roots(known: np.ndarray, rays: np.ndarray, length: float) -> np.ndarray:
@@ -70,26 +70,22 @@ def limb_candidates(root: np.ndarray, rays: np.ndarray, lengths: tuple[float, fl
     return np.stack([np.repeat(middle, 2, axis=1), end.reshape(-1, 4, 3)], axis=2)
 
 
-def limb_penalty(root: np.ndarray, cands: np.ndarray, left: np.ndarray, bend: float,
+def limb_penalty(root: np.ndarray, cands: np.ndarray, axes: np.ndarray, leg: bool,
                  side: float) -> np.ndarray:
-    """(F, 4) how far each candidate leaves the joints' ranges (0 inside): a hinge
-    (knee, elbow) bent the wrong way about the performer's left axis ``left`` (F, 3)
-    (up to 1, reversed), plus an upper arm or thigh pointing toward the body's
-    midline beyond INWARD_FREE (through the trunk)."""
+    """(F, 4) how far each candidate leaves the joints' ranges (0 inside): the
+    silhouette method's joint limits (orientation.limb_penalty: hinges bent the right
+    way, an upper arm or thigh not through the trunk, limbs near the sagittal plane)
+    in the body frame ``axes`` (F, 3, 3) (columns: the performer's left, up, forward)."""
     upper = cands[:, :, 0] - root[:, None]
     lower = cands[:, :, 1] - cands[:, :, 0]
-    turn = (np.cross(upper, lower) * left[:, None]).sum(-1)
-    length = np.linalg.norm(upper, axis=-1)
-    hinge = -bend * turn / np.maximum(length * np.linalg.norm(lower, axis=-1), 1e-12)
-    inward = -side * (upper * left[:, None]).sum(-1) / np.maximum(length, 1e-12)
-    return np.maximum(0.0, hinge) + np.maximum(0.0, inward - INWARD_FREE)
+    return joint_limits(upper, lower, axes[:, None, :, 2], axes[:, None, :, 0], side, leg)
 
 
 def choose_limb(relative: np.ndarray, penalty: np.ndarray,
                 allowed: np.ndarray | None = None) -> np.ndarray:
-    """(F,) the candidate index per frame minimising HINGE_WEIGHT * penalty plus the
+    """(F,) the candidate index per frame minimising LIMIT_WEIGHT * penalty plus the
     squared accelerations of the candidates' joints ``relative`` (F, 4, 2, 3) to the
     limb's root, among the ``allowed`` ones (F, 4) (the user's foreshortening, see
     ``signs_allowed``): a Viterbi search over pairs of consecutive choices."""
-    return smoothest_states(relative.reshape(len(relative), 4, -1), HINGE_WEIGHT * penalty,
+    return smoothest_states(relative.reshape(len(relative), 4, -1), LIMIT_WEIGHT * penalty,
                             allowed, squared=True)
