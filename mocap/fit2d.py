@@ -11,7 +11,9 @@ contour analysis with elbow detection (Algorithms 2-4), and every segment's
 foreshortening ratio (Algorithm 6). Beyond the paper: each search may be centred on
 the previous frame's pose (temporal coherence, the paper's future work), contour
 estimates are refined by Algorithm 1 on the similarity, and both ways of joining
-lower to upper legs are scored so that a wrong crossing verdict is undone.
+lower to upper legs are scored so that a wrong crossing verdict is undone. The legs
+are fitted as a few hypotheses scored together (``leg_hypotheses``), among which
+``mocap.legchain`` chooses over time.
 """
 
 from __future__ import annotations
@@ -24,10 +26,13 @@ from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
                         forward_kinematics_2d, forward_kinematics_2d_batch, spread_for_width)
 from mocap.contour import (arm_curve, find_angle, find_elbow_corner, lower_leg_curves,
                            lower_legs_cross, row_runs)
-from mocap.raster import Canvas, joint_quads, pose_quads, sweep_scorer
+from mocap.raster import Canvas, draw_model, joint_quads, pose_quads, similarity, sweep_scorer
 
 TORSO_HEAD = ("torso", "head")
 LEG = {"l": ("upper_leg_l", "lower_leg_l"), "r": ("upper_leg_r", "lower_leg_r")}
+LEGS = LEG["l"] + LEG["r"]
+UPPER_LEGS = ("upper_leg_l", "upper_leg_r")
+LOWER_LEGS = ("lower_leg_l", "lower_leg_r")
 ARM = {"l": ("upper_arm_l", "lower_arm_l"), "r": ("upper_arm_r", "lower_arm_r")}
 WAIST_RANGE = (45.0, 135.0)      # Table 1
 NECK_RANGE = (45.0, 135.0)       # Table 1
@@ -46,15 +51,19 @@ CROSSED_TURN = 30.0              # degrees less thigh turn since the last frame 
 UNCROSS_SPREAD = 0.3             # torso spread below which (near profile) thighs may cross
 FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
+DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this close are one
 
 
 @dataclass(frozen=True)
 class Fit2D:
-    """A fitted 2D pose, its joints (pixels of the fitted silhouette) and its S."""
+    """A fitted 2D pose, its joints (pixels of the fitted silhouette) and its S;
+    ``alternatives``: the same fit with the other leg hypotheses, for a choice over
+    time (``mocap.legchain``)."""
 
     pose: Pose2D
     joints: np.ndarray
     score: float
+    alternatives: tuple["Fit2D", ...] = ()
 
 
 @dataclass(frozen=True)
@@ -256,12 +265,69 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
         pose = Knob("angle", (LEG[side][1],)).apply(
             pose, find_angle(curves[other if crossed else side], default))
     for side in "lr":
-        pose = search_angle(canvas, pose, (LEG[side][0],), LEG[side],
-                            *_around(prev, LEG[side][0], *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
+        pose = search_thigh(canvas, pose, side, prev)
     pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose), prev)
     for side in "lr":
         pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
     return pose
+
+
+def search_thigh(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
+    """One upper leg by Algorithm 1 with its lower leg attached (Fig. 3b-c), near the
+    previous frame's when there is one."""
+    thigh = LEG[side][0]
+    return search_angle(canvas, pose, (thigh,), LEG[side],
+                        *_around(prev, thigh, *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
+
+
+def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Pose2D]:
+    """Beyond the paper: distinct leg fits, best first by S of both legs together.
+
+    ``fit_legs`` searches the two legs one at a time, so both can take the same leg
+    of the silhouette (in profile, where the legs pass each other, the other leg is
+    left unexplained). So each leg is also fitted again beside the other
+    (``refit_leg_beside``); near profile, each fit also enters with its legs'
+    names exchanged, since there the two legs look alike and only their motion over
+    time tells which is which (``mocap.legchain`` chooses)."""
+    first = fit_legs(canvas, pose, prev)
+    poses = [first] + [refit_leg_beside(canvas, first, side, prev) for side in "lr"]
+    if pose.spread < UNCROSS_SPREAD:
+        poses += [_exchange_legs(p) for p in poses]
+    poses = _distinct(poses)
+    order = np.argsort(-leg_scores(canvas, poses), kind="stable")
+    return [poses[i] for i in order]
+
+
+def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
+    """One leg's angles fitted again with the other leg taken as fitted, so that it
+    explains what the other leaves unexplained: the thigh by Algorithm 1 from the
+    previous frame's lower leg angle, then the lower leg. Its lengths stay: where the
+    other leg explains everything, Algorithm 6 beside it would shrink this one."""
+    other = LEG["r" if side == "l" else "l"]
+    beside = canvas.fork(pose_quads(pose, other))
+    lower = LEG[side][1]
+    pose = Knob("angle", (lower,)).apply(pose, (prev or pose).angle[SEGMENT_INDEX[lower]])
+    pose = search_thigh(beside, pose, side, prev)
+    return search_angle(beside, pose, (lower,), (lower,),
+                        *_span(pose.angle[SEGMENT_INDEX[lower]], TRACK_HALF_RANGE))
+
+
+def leg_scores(canvas: Canvas, poses: list[Pose2D]) -> np.ndarray:
+    """S (Eq. 1-3) of both legs of each pose, on the partial silhouette they outline together."""
+    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(p, LEGS) for p in poses]))
+    return scores
+
+
+def _distinct(poses: list[Pose2D]) -> list[Pose2D]:
+    """The poses less those whose leg joints all lie within DISTINCT_PX of an earlier one's."""
+    legs = [JOINT_INDEX[f"{j}_{s}"] for j in ("hip", "knee", "ankle") for s in "lr"]
+    out, seen = [], []
+    for pose in poses:
+        joints = forward_kinematics_2d(pose)[legs]
+        if all(np.abs(joints - other).max() > DISTINCT_PX for other in seen):
+            out.append(pose)
+            seen.append(joints)
+    return out
 
 
 def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> bool:
@@ -290,11 +356,10 @@ def _uncrossed_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose
         d = knee - hip
         angle[k] = image_angle(d) % 360.0
         ratio[k] = np.clip(np.hypot(*d) / (LENGTH[k] * pose.scale), *RATIO_RANGE)
-    uncrossed = _swap_lower_legs(replace(pose, angle=angle, ratio=ratio))
+    uncrossed = _swap_segments(replace(pose, angle=angle, ratio=ratio), [LOWER_LEGS])
     if prev is not None and _thigh_turn(pose, prev) + CROSSED_TURN < _thigh_turn(uncrossed, prev):
         return pose
-    legs = LEG["l"] + LEG["r"]
-    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(pose, legs), pose_quads(uncrossed, legs)]))
+    scores = leg_scores(canvas, [pose, uncrossed])
     return pose if scores[0] > scores[1] + CROSSED_GAIN else uncrossed
 
 
@@ -304,19 +369,25 @@ def _thigh_turn(pose: Pose2D, prev: Pose2D) -> float:
     return float(np.sum(np.abs((pose.angle[k] - prev.angle[k] + 180.0) % 360.0 - 180.0)))
 
 
-def _swap_lower_legs(pose: Pose2D) -> Pose2D:
-    i, j = SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]
+def _swap_segments(pose: Pose2D, pairs: list[tuple[str, str]]) -> Pose2D:
+    """The pose with the angles and ratios of each pair of segments exchanged."""
     angle, ratio = pose.angle.copy(), pose.ratio.copy()
-    angle[[i, j]], ratio[[i, j]] = angle[[j, i]], ratio[[j, i]]
+    for a, b in pairs:
+        i, j = SEGMENT_INDEX[a], SEGMENT_INDEX[b]
+        angle[[i, j]], ratio[[i, j]] = angle[[j, i]], ratio[[j, i]]
     return replace(pose, angle=angle, ratio=ratio)
+
+
+def _exchange_legs(pose: Pose2D) -> Pose2D:
+    """The pose with its two legs' names exchanged."""
+    return _swap_segments(pose, [UPPER_LEGS, LOWER_LEGS])
 
 
 def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
     """Score both ways of joining the lower legs to the knees; keep the better
     (a check on Algorithm 5's verdict, which scan lines alone can get wrong)."""
-    legs = LEG["l"] + LEG["r"]
-    swapped = _swap_lower_legs(pose)
-    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(pose, legs), pose_quads(swapped, legs)]))
+    swapped = _swap_segments(pose, [LOWER_LEGS])
+    scores = leg_scores(canvas, [pose, swapped])
     return swapped if scores[1] > scores[0] else pose
 
 
@@ -361,9 +432,11 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 
 
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
-    """First guesses for one arm's (upper, lower) angles: contour analysis
-    (Algorithms 2-4), the arm reaching the curve's farthest point, hanging down,
-    and the previous frame's arm."""
+    """First guesses for one arm's (upper, lower) angles and foreshortening ratios:
+    contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point,
+    hanging down, all at Table 1's lengths, and the previous frame's arm as it was.
+    (An arm hidden in front of the trunk scores alike at any length, so a length
+    carried over from frame to frame could only shrink.)"""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
     guesses = [(270.0, 270.0)]
     if prev is not None:
@@ -375,7 +448,10 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
         shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
         tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
         guesses += two_link_angles(shoulder, tip, LENGTH[upper] * pose.scale, LENGTH[lower] * pose.scale)
-    return guesses
+    ratios = [(1.0, 1.0)] * len(guesses)
+    if prev is not None:
+        ratios[1] = (prev.ratio[upper], prev.ratio[lower])
+    return [angles + r for angles, r in zip(guesses, ratios)]
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
@@ -408,10 +484,11 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
     both = Knob("angle", ARM[side])
     pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
     angle[:, both.indices[1]] = guesses[:, 1]
+    ratio[:, both.indices] = guesses[:, 2:]
     joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
     scores, _ = sweep_scorer(canvas, joint_quads(joints, pose.scale, both.indices, spread))
-    upper, lower = guesses[int(np.argmax(scores))]
-    return Knob("angle", (ARM[side][1],)).apply(both.apply(pose, upper), lower)
+    best = int(np.argmax(scores))
+    return replace(pose, angle=angle[best], ratio=ratio[best])
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
@@ -428,17 +505,29 @@ def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
 
 def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
               spread: float | None = None) -> Fit2D:
-    """Fit the 10-cylinder model to one normalised silhouette (section 3.3); with
-    ``spread`` the torso's horizontal foreshortening is taken as given."""
+    """Fit the 10-cylinder model to one normalised silhouette (section 3.3) with the
+    best leg hypothesis, the others as ``alternatives``; with ``spread`` the torso's
+    horizontal foreshortening is taken as given."""
     canvas = Canvas(silhouette)
     pose = initial_pose(canvas.sil, scale)
     if prev is not None:
         pose = replace(prev, pelvis=pose.pelvis, scale=scale)
     pose = fit_torso_head(canvas, pose, prev, spread)
     canvas.commit(pose_quads(pose, TORSO_HEAD))
-    pose = fit_legs(canvas, pose, prev)
-    canvas.commit(pose_quads(pose, LEG["l"] + LEG["r"]))
+    legs = leg_hypotheses(canvas, pose, prev)
+    pose = legs[0]
+    canvas.commit(pose_quads(pose, LEGS))
     for side in ("l", "r"):
         pose = fit_arm(canvas, pose, side, prev)
         canvas.commit(pose_quads(pose, ARM[side]))
-    return Fit2D(pose=pose, joints=forward_kinematics_2d(pose), score=canvas.score_model())
+    others = tuple(with_legs(canvas.sil, pose, other) for other in legs[1:])
+    return Fit2D(pose, forward_kinematics_2d(pose), canvas.score_model(), others)
+
+
+def with_legs(silhouette: np.ndarray, pose: Pose2D, legs: Pose2D) -> Fit2D:
+    """The fit of pose with the legs of ``legs``, scored on the whole silhouette (Eq. 3)."""
+    k = [SEGMENT_INDEX[s] for s in LEGS]
+    angle, ratio = pose.angle.copy(), pose.ratio.copy()
+    angle[k], ratio[k] = legs.angle[k], legs.ratio[k]
+    pose = replace(pose, angle=angle, ratio=ratio)
+    return Fit2D(pose, forward_kinematics_2d(pose), similarity(silhouette, draw_model(pose, silhouette.shape)))

@@ -30,6 +30,7 @@ from mocap.errors import MocapError
 from mocap.export.motion_json import write_motion
 from mocap.motion import Motion, build_motion
 from mocap.inputs import Inputs, resolve_inputs, root_track
+from mocap.legchain import LAG_S, LegChain
 from mocap.orientation import guess_orientations
 from mocap.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
 from mocap.silhouette import estimate_background, extract_silhouette
@@ -145,17 +146,30 @@ def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
 def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
               fps: float) -> Iterator[FrameFit]:
     """Pass two (section 3.3): every frame's 2D fit in turn, each search centred on
-    the previous fit."""
+    the previous fit; each frame's legs are chosen among its hypotheses over time
+    (``mocap.legchain``), so a fit comes out LAG_S later than its frame is fitted."""
     spreads = torso_spreads(silhouettes, heights, fps)
-    prev: Pose2D | None = None
+    chain = LegChain(max(1, int(round(LAG_S * fps))))
     for index, sil in enumerate(silhouettes):
         if sil is None:
-            prev = None
-            yield FrameFit(index, None, None)
+            yield from _frame_fits(chain.push(index, None), scale)
             continue
         small, origin, step = normalise(sil, heights[index])
+        best = chain.current
+        prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
         fit = fit_frame(small, FIT_SCALE, prev, spreads[index])
-        prev = fit.pose if fit.score >= MIN_TRACK_SCORE else None
+        yield from _frame_fits(chain.push((index, origin, step), fit), scale)
+    yield from _frame_fits(chain.flush(), scale)
+
+
+def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
+    """FrameFits of (item, fit) pairs from ``LegChain``: the item is (index, crop
+    origin, crop step) of a fitted frame, the index of one without a person."""
+    for item, fit in decided:
+        if fit is None:
+            yield FrameFit(item, None, None)
+            continue
+        index, origin, step = item
         joints = (origin + (fit.joints + 0.5) * step - 0.5) / scale
         yield FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale)
 

@@ -1,0 +1,94 @@
+"""Choosing each frame's legs over time (beyond the paper, whose fit is per frame).
+
+Each frame's fit comes with a few leg hypotheses (``fit2d.leg_hypotheses``): the
+legs apart or stacked, their names exchanged. Where the two legs pass each other
+in profile, the similarity S (Eq. 3) tells these apart badly, and a fit that
+follows the previous frame alone keeps its first mistake. So the hypotheses are
+chosen over the frames by dynamic programming (Viterbi): the path of hypotheses
+that maximises the frames' S less SMOOTH_WEIGHT times how far the knees and ankles
+move between frames (each by its name, so a path keeps each leg's identity). The
+choice for a frame is made once LAG frames after it are in (fixed-lag smoothing),
+so fits stream out with that delay; a frame without a person ends the path.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from mocap.body import JOINT_INDEX
+from mocap.fit2d import FIT_BODY_PX, Fit2D
+
+LAG_S = 0.5                 # seconds of later frames seen before a frame's legs are chosen
+SMOOTH_WEIGHT = 1.0         # S given up per body height that knees and ankles move (mean)
+_LEG_JOINTS = [JOINT_INDEX[f"{j}_{s}"] for s in "lr" for j in ("knee", "ankle")]
+
+
+def leg_offsets(fit: Fit2D) -> np.ndarray:
+    """(4, 2) knees and ankles about the pelvis, in body heights."""
+    return (fit.joints[_LEG_JOINTS] - fit.joints[JOINT_INDEX["pelvis"]]) / FIT_BODY_PX
+
+
+def motion_cost(before: list[Fit2D], after: list[Fit2D]) -> np.ndarray:
+    """(len(before), len(after)): SMOOTH_WEIGHT times the mean distance the knees
+    and ankles move from each hypothesis to each next one."""
+    a = np.stack([leg_offsets(f) for f in before])[:, None]
+    b = np.stack([leg_offsets(f) for f in after])[None]
+    return SMOOTH_WEIGHT * np.linalg.norm(a - b, axis=-1).mean(-1)
+
+
+@dataclass
+class _Frame:
+    item: Any
+    options: list[Fit2D]
+    back: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+
+
+class LegChain:
+    """Fixed-lag Viterbi over the frames' leg hypotheses. ``push`` a frame's item
+    (anything the caller needs back) with its fit, or None where nobody is; it
+    returns the (item, chosen fit) pairs now decided, in frame order."""
+
+    def __init__(self, lag: int):
+        self.lag = lag
+        self.frames: list[_Frame] = []
+        self.cost = np.zeros(0)
+
+    def push(self, item, fit: Fit2D | None) -> list[tuple[Any, Fit2D | None]]:
+        if fit is None:
+            return self.flush() + [(item, None)]
+        options = [replace(fit, alternatives=())] + list(fit.alternatives)
+        gain = -np.array([f.score for f in options])
+        frame = _Frame(item, options)
+        if self.frames:
+            total = self.cost[:, None] + motion_cost(self.frames[-1].options, options)
+            frame.back = np.argmin(total, axis=0)
+            gain = gain + total[frame.back, np.arange(len(options))]
+        self.frames.append(frame)
+        self.cost = gain
+        return self._decided(len(self.frames) - self.lag)
+
+    @property
+    def current(self) -> Fit2D | None:
+        """The newest frame's hypothesis on the best path so far (None before any)."""
+        return self.frames[-1].options[int(np.argmin(self.cost))] if self.frames else None
+
+    def flush(self) -> list[tuple[Any, Fit2D | None]]:
+        """Decide every frame still held; the next push starts a new path."""
+        out = self._decided(len(self.frames))
+        self.cost = np.zeros(0)
+        return out
+
+    def _decided(self, count: int) -> list[tuple[Any, Fit2D | None]]:
+        """The first ``count`` held frames on the best path, released."""
+        if count <= 0:
+            return []
+        path = [int(np.argmin(self.cost))]
+        for frame in reversed(self.frames[1:]):
+            path.append(int(frame.back[path[-1]]))
+        path.reverse()
+        out = [(f.item, f.options[k]) for f, k in zip(self.frames[:count], path)]
+        self.frames = self.frames[count:]
+        return out
