@@ -26,6 +26,7 @@ from app_helpers import (TINY_FRAMES, app, deepest_segment, download_export,  # 
 from scipy.spatial.transform import Rotation
 
 from app.controls import segment_label, sign_button
+from app.views import SIDE
 from mocap.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 
@@ -140,7 +141,7 @@ def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
     page = open_page(browser, app.server.get_port())
     shot(page, "flip_before")
     segment = deepest_segment(app.state)
-    handle = app.scene.bodies[0][SEGMENT_INDEX[segment]]
+    handle = app.scene.bodies[1][SEGMENT_INDEX[segment]]     # the side view, where it shows
     pose, placed = app.state.view().pose3d, np.concatenate([handle.position, handle.wxyz])
     segment_button(page, segment).click()
     segment_button(page, segment).filter(has_text="(set here)").wait_for()
@@ -150,7 +151,8 @@ def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
     assert set(note) == {segment}
     shot(page, "flip_after")
 
-    x, y = screen_point(page, app, np.array(app.layout.front + (0.0,)) + handle.position)
+    side = Rotation.from_quat(SIDE, scalar_first=True).apply(handle.position)
+    x, y = screen_point(page, app, np.array(app.layout.side + (0.0,)) + side)
     page.mouse.click(x, y)                                 # the same segment in 3D flips it back
     wait_until(lambda: np.allclose(placed, np.concatenate([handle.position, handle.wxyz])))
     assert load_annotations(app.state.path).frames[6].foreshortening != note
