@@ -365,7 +365,7 @@ def _uncrossed_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose
 
 def _thigh_turn(pose: Pose2D, prev: Pose2D) -> float:
     """Degrees both thighs turned since ``prev``."""
-    k = [SEGMENT_INDEX[LEG[side][0]] for side in "lr"]
+    k = [SEGMENT_INDEX[s] for s in UPPER_LEGS]
     return float(np.sum(np.abs((pose.angle[k] - prev.angle[k] + 180.0) % 360.0 - 180.0)))
 
 
