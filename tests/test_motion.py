@@ -118,8 +118,9 @@ def test_degenerate_bones():
     flat[body.JOINT_INDEX["wrist_l"]] = flat[body.JOINT_INDEX["elbow_l"]]      # zero length
     up = pose.copy()   # an arm straight up: opposite its rest direction
     shoulder = up[body.JOINT_INDEX["shoulder_r"]]
-    up[body.JOINT_INDEX["elbow_r"]] = shoulder + [0.0, 0.25, 0.0]
-    up[body.JOINT_INDEX["wrist_r"]] = shoulder + [0.0, 0.6, 0.0]
+    upper, lower = (body.LENGTH[body.SEGMENT_INDEX[s]] / 100.0 for s in ("upper_arm_r", "lower_arm_r"))
+    up[body.JOINT_INDEX["elbow_r"]] = shoulder + [0.0, upper, 0.0]
+    up[body.JOINT_INDEX["wrist_r"]] = shoulder + [0.0, upper + lower, 0.0]
     motion = build_motion({0: pose, 2: flat, 4: up, 6: np.zeros((16, 3))}, 7, FPS)
     assert np.isfinite(motion.joints3d).all() and np.isfinite(motion.rotations).all()
     assert np.abs(motion.world_joints[4] - up).max() < 1e-9
