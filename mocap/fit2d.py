@@ -11,8 +11,9 @@ contour analysis with elbow detection (Algorithms 2-4), and every segment's
 foreshortening ratio (Algorithm 6). Beyond the paper: each search may be centred on
 the previous frame's pose (temporal coherence, the paper's future work), contour
 estimates are refined by Algorithm 1 on the similarity, and both ways of joining
-lower to upper legs are scored so that a wrong crossing verdict is undone. The legs
-are fitted as a few hypotheses scored together (``leg_hypotheses``), among which
+lower to upper legs are scored so that a wrong crossing verdict is undone; arm
+guesses whose elbow bends backward (the knees tell which way the performer faces)
+are dropped. The legs are fitted as a few hypotheses scored together (``leg_hypotheses``), among which
 ``mocap.legchain`` chooses over time.
 """
 
@@ -26,6 +27,7 @@ from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
                         forward_kinematics_2d, forward_kinematics_2d_batch, spread_for_width)
 from mocap.contour import (arm_curve, find_angle, find_elbow_corner, lower_leg_curves,
                            lower_legs_cross, row_runs)
+from mocap.orientation import knee_bend
 from mocap.raster import Canvas, draw_model, joint_quads, pose_quads, similarity, sweep_scorer
 
 TORSO_HEAD = ("torso", "head")
@@ -51,6 +53,9 @@ CROSSED_TURN = 30.0              # degrees less thigh turn since the last frame 
 UNCROSS_SPREAD = 0.3             # torso spread below which (near profile) thighs may cross
 FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
+KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
+ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
+ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend shows in the image
 DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this close are one
 
 
@@ -466,21 +471,28 @@ def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
     return cross < 0 if side == "l" else cross > 0
 
 
-def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
-    """One arm, on its image side: the best-scoring first guess, refined by
-    Algorithm 1 (upper arm with the lower arm attached, then the lower arm) and
-    Algorithm 6."""
+def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
+            facing: int = 0) -> Pose2D:
+    """One arm, on its image side: the best-scoring first guess (among those whose
+    elbow bends the way the performer faces, ``facing`` +1 image right, -1 left, 0
+    unknown), refined by Algorithm 1 (upper arm with the lower arm attached, then the
+    lower arm) and Algorithm 6."""
     own = canvas.fork(keep=image_side(canvas.sil.shape, pose, side))
-    pose = best_arm_guess(own, pose, side, prev)
+    pose = best_arm_guess(own, pose, side, prev, facing)
     upper = ARM[side][0]
     pose = search_angle(own, pose, (upper,), ARM[side],
                         *_span(pose.angle[SEGMENT_INDEX[upper]], ARM_REFINE_HALF_RANGE))
     return refine_limb(pose, ARM[side], own, ARM_REFINE_HALF_RANGE)
 
 
-def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
-    """The arm_candidates guess with the highest S."""
+def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
+                   facing: int = 0) -> Pose2D:
+    """The arm_candidates guess with the highest S, among those that do not bend the
+    elbow backward (``elbow_bends_back``) where that can be told."""
     guesses = np.array(arm_candidates(canvas, pose, side, prev))
+    backward = elbow_bends_back(guesses[:, 1] - guesses[:, 0], pose.spread, facing)
+    if not backward.all():
+        guesses = guesses[~backward]
     both = Knob("angle", ARM[side])
     pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
     angle[:, both.indices[1]] = guesses[:, 1]
@@ -489,6 +501,25 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
     scores, _ = sweep_scorer(canvas, joint_quads(joints, pose.scale, both.indices, spread))
     best = int(np.argmax(scores))
     return replace(pose, angle=angle[best], ratio=ratio[best])
+
+
+def facing_of_knees(pose: Pose2D) -> int:
+    """+1 if the knees of a 2D pose bend toward image right (knees bend forward, so
+    the performer faces that way), -1 toward image left, 0 if both legs are straight
+    (less than KNEE_FACING of body height from their hip-ankle lines)."""
+    joints = forward_kinematics_2d(pose)[None]
+    bend = sum(float(knee_bend(joints, side)[0]) for side in "lr") / (BODY_HEIGHT * pose.scale)
+    return 0 if abs(bend) < KNEE_FACING else int(np.sign(bend))
+
+
+def elbow_bends_back(bend: np.ndarray, spread: float, facing: int) -> np.ndarray:
+    """Whether arms whose lower arm turns ``bend`` degrees (counter-clockwise, y up)
+    from the upper arm bend the elbow backward by more than ELBOW_BACK: elbows flex
+    toward the front, which the image shows when the body is seen near profile
+    (torso spread below ELBOW_SHOWS_SPREAD) and the facing side is known."""
+    if not facing or spread >= ELBOW_SHOWS_SPREAD:
+        return np.zeros(np.shape(bend), bool)
+    return facing * ((np.asarray(bend) + 180.0) % 360.0 - 180.0) < -ELBOW_BACK
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
@@ -517,8 +548,9 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
     legs = leg_hypotheses(canvas, pose, prev)
     pose = legs[0]
     canvas.commit(pose_quads(pose, LEGS))
+    facing = facing_of_knees(pose)
     for side in ("l", "r"):
-        pose = fit_arm(canvas, pose, side, prev)
+        pose = fit_arm(canvas, pose, side, prev, facing)
         canvas.commit(pose_quads(pose, ARM[side]))
     others = tuple(with_legs(canvas.sil, pose, other) for other in legs[1:])
     return Fit2D(pose, forward_kinematics_2d(pose), canvas.score_model(), others)

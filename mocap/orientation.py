@@ -58,17 +58,17 @@ def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> n
     pelvis = joints2d[:, _J["pelvis"], 0] / body_px
     speed = np.gradient(pelvis) * fps if len(pelvis) > 1 else np.zeros(1)
     walk = np.where(np.abs(speed) > WALK_SPEED, np.sign(speed), 0.0)
-    knees = sum(_knee_bend(joints2d, side) for side in "lr") / body_px
+    knees = sum(knee_bend(joints2d, side) for side in "lr") / body_px
     return 2.0 * walk + np.clip(10.0 * knees, -1.0, 1.0)
 
 
 def knee_facing(joints2d: np.ndarray) -> str:
     """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward
     over the frames given (knees bend forward)."""
-    return "right" if sum(_knee_bend(joints2d, side) for side in "lr").sum() >= 0 else "left"
+    return "right" if sum(knee_bend(joints2d, side) for side in "lr").sum() >= 0 else "left"
 
 
-def _knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
+def knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
     """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
     hip, knee, ankle = (joints2d[:, _J[f"{n}_{side}"]] for n in ("hip", "knee", "ankle"))
     along = ankle - hip

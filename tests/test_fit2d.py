@@ -133,3 +133,20 @@ def test_leg_chain_keeps_each_leg_through_a_slightly_better_exchange():
     out += chain.flush()
     assert [item for item, _ in out] == list(range(6))
     assert all(fit.joints[JOINT_INDEX["knee_l"], 0] > 0 for _, fit in out)
+
+
+def test_profile_elbow_bends_the_way_the_knees_point():
+    """Seen in profile, facing image right (knees bent forward): an upper arm hanging
+    down with the lower arm held forward outlines the same silhouette as an upper arm
+    reaching forward with the lower arm folded back into the trunk, an elbow bent
+    backward. The fit takes the elbow that bends forward."""
+    angle = default_angles()
+    for name, a in (("upper_leg_l", 290), ("lower_leg_l", 255), ("upper_leg_r", 285), ("lower_leg_r", 250),
+                    ("upper_arm_l", 260), ("lower_arm_l", 265), ("upper_arm_r", 272), ("lower_arm_r", 5)):
+        angle[SEGMENT_INDEX[name]] = a
+    truth = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.2)
+    fit = fit_frame(draw_model(truth, (160, 200)) * 255, FIT_SCALE)
+    want = forward_kinematics_2d(truth)
+    err = {j: np.linalg.norm(fit.joints[JOINT_INDEX[j]] - want[JOINT_INDEX[j]]) / (175 * FIT_SCALE)
+           for j in ("elbow_r", "wrist_r")}
+    assert max(err.values()) < 0.03, err
