@@ -9,10 +9,10 @@ import numpy as np
 
 from mocap.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_NAMES
-from mocap.lift import (LENGTH, anatomical_joints, clip_lengths, known_sides, lift_pose, runs,
-                        track_sides)
+from mocap.lift import (LENGTH, anatomical_joints, clip_lengths, exchange_legs, known_sides, lift_pose,
+                        runs, track_sides)
 from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
-                               segment_vectors, yaws)
+                               legs_crossed, segment_vectors, yaws)
 
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
 # fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
@@ -49,7 +49,8 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
                    guessed: list[str | None] | None = None) -> Inputs:
     """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
-    the sides from it (profiles followed through time, joint overrides deciding); the
+    the sides from it (profiles followed through time, joint overrides deciding, the
+    user's leg signs telling where the legs cross: orientation.legs_crossed); the
     overrides put in; segment lengths from the clip (lift.clip_lengths); the signs
     guessed with the user's held signs as constraints (orientation.held_user_signs)."""
     n = len(joints_image)
@@ -61,25 +62,43 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
     swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x)
+    ppu = body_px / BODY_HEIGHT
+    yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
+    values, since = annotations.held_signs(n)
     joints = anatomical_joints(joints_image, swap)
+    if person.any():
+        seen = clip_lengths(joints_image[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
+        held = _held_signs(joints, ppu, seen, values, since, person)
+        placed = np.array([any(j.startswith(("knee", "ankle")) for j in overrides.get(i, ()))
+                           for i in range(n)], bool)
+        legs = person & np.isfinite(yaw)
+        crossed = np.zeros(n, bool)
+        crossed[legs] = legs_crossed(joints[legs], held[legs], yaw[legs], ppu[legs], seen, placed[legs])
+        joints = exchange_legs(joints, crossed)
     for i, points in overrides.items():
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
-    ppu = body_px / BODY_HEIGHT
     if lengths is None:
         lengths = (clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE)
                    if person.any() else LENGTH.copy())
     # signs are judged on the longer 90th-percentile lengths: where the fit's noise
     # makes a segment look unforeshortened they still keep the two depths apart
     judged = clip_lengths(joints[person], ppu[person]) if person.any() else lengths
-    yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
     signs = np.ones((n, len(SEGMENT_NAMES)), int)
-    values, since = annotations.held_signs(n)
+    fixed = _held_signs(joints, ppu, lengths, values, since, person)
+    for r in runs(person):
+        signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed[r], fps)
+    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
+
+
+def _held_signs(joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values: np.ndarray,
+                since: np.ndarray, person: np.ndarray) -> np.ndarray:
+    """(F, 10) the user's signs where they hold (orientation.held_user_signs), 0 elsewhere."""
+    held = np.zeros(values.shape, int)
     for r in runs(person):
         _, depth = segment_vectors(joints[r], ppu[r], lengths)
-        fixed = held_user_signs(values[r], since[r] - r.start, depth <= NEGLIGIBLE * lengths)
-        signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed, fps)
-    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
+        held[r] = held_user_signs(values[r], since[r] - r.start, depth <= NEGLIGIBLE * lengths)
+    return held
 
 
 def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int]) -> np.ndarray:

@@ -271,6 +271,16 @@ def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
     return out
 
 
+def exchange_legs(joints2d: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(F, 16, 2) with the knees and ankles of the ``rows`` (F,) bool frames exchanged
+    between the hips: legs crossed in the image, the hips where they were."""
+    out = joints2d.copy()
+    for name in ("knee", "ankle"):
+        left, right = _J[f"{name}_l"], _J[f"{name}_r"]
+        out[rows, left], out[rows, right] = joints2d[rows, right], joints2d[rows, left]
+    return out
+
+
 # -- Eq. 4-5 --------------------------------------------------------------------------
 
 def relative_depths(joints2d: np.ndarray, px_per_unit, signs: np.ndarray,

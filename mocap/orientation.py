@@ -2,7 +2,9 @@
 the orientation and every foreshortening direction): orientation, which image-side
 limb is which in a profile, and every segment's sign.
 
-Which image-side limb is which is decided in ``mocap.lift`` (``track_sides``).
+Which image-side limb is which is decided in ``mocap.lift`` (``track_sides``) from the
+orientation; where the legs cross in a turned view, the user's signs on them revise it
+(``legs_crossed``).
 Three cues, each a short function:
 
 - **walking direction** (pelvis track) and **knee bends** (knees point the way the
@@ -28,7 +30,8 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
-from mocap.lift import LENGTH, TOWARD, facing_yaw, lateral_axis, relative_depths, runs
+from mocap.lift import (LENGTH, TOWARD, exchange_legs, facing_yaw, lateral_axis, relative_depths,
+                        runs)
 from mocap.smoothest import smoothest_states
 
 NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not matter
@@ -45,6 +48,10 @@ _J = JOINT_INDEX
 _LIMBS = {  # limb -> (upper segment, lower segment, side sign: +1 left, -1 right)
     "arm_l": ("upper_arm_l", "lower_arm_l", 1.0), "arm_r": ("upper_arm_r", "lower_arm_r", -1.0),
     "leg_l": ("upper_leg_l", "lower_leg_l", 1.0), "leg_r": ("upper_leg_r", "lower_leg_r", -1.0)}
+SWITCH_WEIGHT = 2.0        # per leg length apart: exchanging the legs' names between frames
+SAGITTAL_SHOWS = 0.5       # |sin yaw| from which image x shows the legs' swing (yaw 30-150)
+KEEP_RULE = 0.1            # per frame: overruling the image-side rule without a sign against it
+_LEG_SEGMENTS = [SEGMENT_INDEX[s] for s in ("upper_leg_l", "lower_leg_l", "upper_leg_r", "lower_leg_r")]
 _SIGN_PAIRS = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
 
 
@@ -254,3 +261,64 @@ def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarra
     at_entry = np.take_along_axis(passes, np.clip(since, 0, len(values) - 1), axis=0)
     holds = (since >= 0) & (since <= frames) & (passes == at_entry)
     return np.where(holds, values, 0)
+
+
+# -- which leg is which, from the user's signs ---------------------------------------
+
+def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
+                 px_per_unit: np.ndarray, lengths: np.ndarray, pinned: np.ndarray) -> np.ndarray:
+    """(F,) bool: frames of anatomical 2D joints (F, 16, 2), named by the orientation's
+    image-side rule (``lift.track_sides``), whose knees and ankles belong to the other
+    hip, by the user's foreshortening directions on the thighs and shins.
+
+    Turned toward or away from the camera, the legs cross in the image as they
+    swing, and a silhouette cannot show which is in front (the 2D fit names legs by
+    image side). But a leg swings in its sagittal plane, so the side its segment
+    points to in the image says whether it comes toward the camera
+    (``sagittal_depth``): a user's "toward" on the right thigh names the leg whose
+    thigh points forward. Each frame costs the disagreement of the held user signs
+    (``user_signs`` (F, 10), 0 where none) with either naming; exchanging the legs
+    between frames costs SWITCH_WEIGHT times how far apart they are (they can only be
+    confused where they pass each other); crossing without a sign for it costs
+    KEEP_RULE, and ``pinned`` frames (a leg joint the user placed) do not cross.
+    Without user signs nothing crosses.
+    """
+    crossed = np.ones(len(joints), bool)
+    costs = np.stack([_leg_sign_cost(joints, user_signs, yaw, px_per_unit, lengths),
+                      _leg_sign_cost(exchange_legs(joints, crossed), user_signs, yaw, px_per_unit, lengths)],
+                     axis=1)                                                     # (F, 2)
+    if not costs.any():
+        return ~crossed
+    costs[:, 1] += KEEP_RULE
+    costs[pinned, 1] = np.inf
+    legs = joints[:, [[_J[f"{n}_{s}"] for n in ("knee", "ankle")] for s in "lr"]]
+    apart = np.linalg.norm(legs[:, 0] - legs[:, 1], axis=-1).sum(-1) / (
+        px_per_unit * (lengths[SEGMENT_INDEX["upper_leg_l"]] + lengths[SEGMENT_INDEX["lower_leg_l"]]))
+    switch = SWITCH_WEIGHT * np.minimum(apart[1:], apart[:-1])
+    return _two_state_path(costs, switch).astype(bool)
+
+
+def _leg_sign_cost(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
+                   px_per_unit: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(F,) how far the legs' sagittal depths point against the user's signs (0 near
+    frontal, where a leg's image x is mostly sideways motion)."""
+    vec, _ = segment_vectors(joints, px_per_unit, lengths)
+    sagittal = sagittal_depth(vec[..., 0], yaw, lengths)[:, _LEG_SEGMENTS]
+    turned = np.abs(np.sin(np.radians(yaw))) >= SAGITTAL_SHOWS
+    return turned * np.maximum(0.0, -user_signs[:, _LEG_SEGMENTS] * sagittal).sum(-1)
+
+
+def _two_state_path(costs: np.ndarray, switch: np.ndarray) -> np.ndarray:
+    """(F,) 0/1 minimising sum(costs[t, state]) + sum(switch[t - 1] where the state
+    changes between t - 1 and t): a two-state Viterbi search."""
+    best, back = costs[0].copy(), []
+    for t in range(1, len(costs)):
+        stay, move = best, best[::-1] + switch[t - 1]
+        back.append(move < stay)
+        best = np.minimum(stay, move) + costs[t]
+    state = int(np.argmin(best))
+    path = [state]
+    for moved in reversed(back):
+        state = state ^ int(moved[state])
+        path.append(state)
+    return np.array(path[::-1])

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from helpers import SHARED_DATA
 
-from mocap import lift, synth
+from mocap import body, lift, synth
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, MIRROR_JOINTS
 from mocap.bvh import contract_joints, read_bvh
 from mocap.lift import known_sides, runs, track_sides
-from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs
+from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, legs_crossed
 from mocap.smoothest import smoothest_states
 from mocap.walk import walk_cycle
 
@@ -132,3 +132,21 @@ def test_legs_keep_their_sides_through_every_crossing_of_a_profile_walk():
     known = known_sides(["right"] * len(image_side), says, image_side)
     swap = track_sides(image_side, known, np.ones(len(image_side)))
     assert np.mean(swap[:, 1] == swapped) > 0.9      # the rest: legs level, either order
+
+
+def test_users_leg_signs_tell_which_leg_is_which_where_the_legs_cross():
+    """Turned toward the camera the legs cross in the image at every step, and a fit
+    that names the legs by image side hands each hip the other's knee and ankle
+    there. The user's thigh and shin signs name the legs back; with no signs
+    nothing is exchanged."""
+    truth = seen(walk_cycle(3.0, 30.0), "three-quarter", fps=30.0)
+    ppu, yaw, _, signs, _ = true_inputs(truth)
+    lower = [[JOINT_INDEX[f"{n}_{s}"] for n in ("knee", "ankle")] for s in "lr"]
+    # the left hip is on the image right: a fit by image side crosses where the left leg is left of the right
+    crossed = truth.joints2d[:, lower[0], 0].mean(1) < truth.joints2d[:, lower[1], 0].mean(1)
+    assert 0.1 < crossed.mean() < 0.9
+    by_image_side = lift.exchange_legs(truth.joints2d, crossed)
+    none = np.zeros(len(crossed), bool)
+    found = legs_crossed(by_image_side, signs, yaw, ppu, body.LENGTH, none)
+    assert np.mean(found == crossed) > 0.9
+    assert not legs_crossed(by_image_side, np.zeros_like(signs), yaw, ppu, body.LENGTH, none).any()
