@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 from mocap.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_NAMES
@@ -18,6 +19,9 @@ from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held
 # fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
 # percentile would measure that scatter; clean 2D joints use lift.clip_lengths' 90th.
 FIT_LENGTH_PERCENTILE = 50.0
+# The fit's arms slip on single frames (an arm in front of the trunk fits anywhere
+# inside it); the lifting reads their elbows and wrists through a running median.
+ARM_MEDIAN_S = 0.2
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,7 +51,8 @@ class Inputs:
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
                    annotations: Annotations, lengths: np.ndarray | None = None,
                    guessed: list[str | None] | None = None) -> Inputs:
-    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
+    """Per-frame lifting inputs: the fit's arms steadied (``steadied_arms``); the
+    user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding, the
     user's leg signs telling where the legs cross: orientation.legs_crossed); the
@@ -55,6 +60,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     guessed with the user's held signs as constraints (orientation.held_user_signs)."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
+    joints_image = steadied_arms(joints_image, person, fps)
     if guessed is None:
         guessed = guess_orientations(joints_image, body_px, spread, fps)
     said = annotations.orientations(n)
@@ -89,6 +95,17 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     for r in runs(person):
         signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed[r], fps)
     return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
+
+
+def steadied_arms(joints_image: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 16, 2) with each elbow and wrist a running median over ARM_MEDIAN_S within
+    each stretch of frames with a person (image sides, as the fit names the arms)."""
+    out = joints_image.copy()
+    width = 2 * int(round(ARM_MEDIAN_S * fps / 2)) + 1
+    arms = [JOINT_INDEX[f"{n}_{s}"] for n in ("elbow", "wrist") for s in "lr"]
+    for r in runs(person):
+        out[r, arms] = median_filter(joints_image[r, arms], size=(width, 1, 1), mode="nearest")
+    return out
 
 
 def _held_signs(joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values: np.ndarray,

@@ -92,3 +92,23 @@ def test_lifting_real_motion_capture_from_true_2d_within_30_mm(view):
     truth = seen(contract_joints(motion)[::4], view)
     lengths = lift.clip_lengths(truth.joints2d, np.full(len(truth.joints2d), truth.body_height_px / BODY_HEIGHT))
     assert pa_mpjpe(lift_truth(truth, lengths), truth.joints3d) < 0.030
+
+
+def test_a_wrist_that_slips_on_one_frame_is_steadied_and_a_swing_is_kept():
+    from mocap.inputs import steadied_arms
+    n, fps = 30, 30.0
+    joints = np.zeros((n, 16, 2))
+    joints[:, JOINT_INDEX["wrist_l"], 0] = np.linspace(100.0, 160.0, n)       # a steady swing
+    joints[12, JOINT_INDEX["wrist_l"]] = (40.0, 300.0)                         # one frame's slip
+    joints[20:, JOINT_INDEX["knee_l"], 1] = 50.0                                # legs are left alone
+    person = np.ones(n, bool)
+    person[25] = False                                                          # nobody on one frame
+    joints[25] = np.nan
+    out = steadied_arms(joints, person, fps)
+    wrist = out[:, JOINT_INDEX["wrist_l"]]
+    swing = np.linspace(100.0, 160.0, n)
+    assert np.abs(wrist[12] - [swing[12], 0.0]).max() < 5.0
+    keep = np.r_[3:9, 16:22]                                 # windows clear of the slip, the gap and the ends
+    assert np.abs(wrist[keep, 0] - swing[keep]).max() < 1e-9
+    assert np.array_equal(out[:, JOINT_INDEX["knee_l"]], joints[:, JOINT_INDEX["knee_l"]], equal_nan=True)
+    assert np.isnan(out[25]).all()
