@@ -18,7 +18,9 @@ from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
 # fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
 # percentile would measure that scatter; clean 2D joints use lift.clip_lengths' 90th.
-FIT_LENGTH_PERCENTILE = 50.0
+# The torso and head stand upright most of the time, where Eq. 5 turns a length
+# measured 5% long into a lean of 18 degrees: theirs is the 25th percentile.
+FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0, 50.0)
 # The fit's arms slip on single frames (an arm in front of the trunk fits anywhere
 # inside it); the lifting reads their elbows and wrists through a running median.
 ARM_MEDIAN_S = 0.2

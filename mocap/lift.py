@@ -357,10 +357,11 @@ def depth_fractions(joints3d: np.ndarray) -> np.ndarray:
 
 # -- lengths seen in a clip -----------------------------------------------------------
 
-def clip_lengths(joints2d: np.ndarray, px_per_unit: np.ndarray, q: float = 90.0,
+def clip_lengths(joints2d: np.ndarray, px_per_unit: np.ndarray, q=90.0,
                  pool: bool = False) -> np.ndarray:
-    """(10,) segment lengths (model units) as seen over a clip: the q-th percentile of
-    each segment's projected length, both sides of a pair pooled.
+    """(10,) segment lengths (model units) as seen over a clip: the q-th percentile
+    (one for all, or one per segment) of each segment's projected length, both sides
+    of a pair pooled with ``pool``.
 
     Beyond the paper: real bodies differ from Table 1 (forearms of motion-capture
     skeletons are ~25% shorter), and Eq. 5 with a too long l invents depth. A segment
@@ -371,10 +372,11 @@ def clip_lengths(joints2d: np.ndarray, px_per_unit: np.ndarray, q: float = 90.0,
     ends = j[:, SEGMENT_JOINTS]                                             # (F, 10, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) / np.asarray(px_per_unit, float)[:, None]
     out = LENGTH.astype(float).copy()
+    q = np.broadcast_to(np.asarray(q, float), out.shape)
     for k, name in enumerate(SEGMENT_NAMES):
         pair = [k] if name in ("torso", "head") or not pool else [SEGMENT_INDEX[name[:-1] + s] for s in "lr"]
         values = seen[:, pair].ravel()
         values = values[np.isfinite(values)]
         if len(values):
-            out[k] = np.percentile(values, q)
+            out[k] = np.percentile(values, q[k])
     return out
