@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import median_filter
+from scipy.ndimage import gaussian_filter1d, median_filter
 
 from mocap.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_NAMES
@@ -24,6 +24,7 @@ FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0
 # The fit's arms slip on single frames (an arm in front of the trunk fits anywhere
 # inside it); the lifting reads their elbows and wrists through a running median.
 ARM_MEDIAN_S = 0.2
+DEPTH_SMOOTH_S = 0.1       # seconds: Gaussian sigma of the lifted depths over time (Inputs.lift_clip)
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,15 +40,24 @@ class Inputs:
     signs: np.ndarray          # (F, 10) +1 toward, -1 away
     lengths: np.ndarray        # (10,) segment lengths in model units
 
-    def key(self, frame: int) -> tuple:
-        """What a frame's lifted pose depends on (a cache key)."""
-        return (self.yaw[frame], self.px_per_unit[frame], self.joints2d[frame].tobytes(),
-                self.signs[frame].tobytes(), self.lengths.tobytes())
-
     def lift(self, frame: int) -> np.ndarray:
         """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
         return lift_pose(self.joints2d[frame], self.px_per_unit[frame], self.yaw[frame],
                          self.signs[frame], self.lengths)
+
+    def lift_clip(self, fps: float) -> np.ndarray:
+        """(F, 16, 3) metres: every frame lifted (NaN where nobody is), each joint's
+        depth smoothed over time by a Gaussian of DEPTH_SMOOTH_S within each stretch
+        of frames with a person. Eq. 5 turns the fit's frame-to-frame scatter of
+        segment lengths into depth jitter (a segment measured 5% short of its length
+        gets 18 degrees of depth), while real depths change smoothly."""
+        person = np.array([o is not None for o in self.orientation])
+        out = np.full(self.joints2d.shape[:2] + (3,), np.nan)
+        for r in runs(person):
+            poses = np.array([self.lift(i) for i in range(r.start, r.stop)])
+            poses[..., 2] = gaussian_filter1d(poses[..., 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
+            out[r] = poses
+        return out
 
 
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,

@@ -9,7 +9,7 @@ Then ``Session`` owns the video's per-frame fits and the user's annotations: it
 resolves the lifting inputs (orientation, sides, overrides, signs: the user's over
 the first guess of ``mocap.orientation``), lifts the keyframes (section 3.4), and
 interpolates the other frames (``mocap.motion``). An edit of the annotations
-re-resolves the inputs (fast) and re-lifts only the frames whose inputs changed.
+re-resolves the inputs and re-lifts the clip (milliseconds both).
 """
 
 from __future__ import annotations
@@ -216,8 +216,8 @@ class Session:
     """A video's per-frame 2D fits and the user's annotations; lifts on demand.
 
     ``annotate`` replaces the annotations (already checked; see
-    mocap.annotations); the lifting inputs are re-resolved and only frames whose
-    inputs changed are lifted again.
+    mocap.annotations); the lifting inputs are re-resolved and the clip lifted again
+    when next needed.
     """
 
     def __init__(self, info: VideoInfo, fits: list[FrameFit],
@@ -225,7 +225,7 @@ class Session:
         self.info, self.fits, self.smooth = info, fits, smooth
         self._annotations = annotations or Annotations()
         self._inputs: Inputs | None = None
-        self._poses: dict[int, tuple[tuple, np.ndarray]] = {}
+        self._lifted: tuple[Inputs, np.ndarray] | None = None
 
     @property
     def annotations(self) -> Annotations:
@@ -260,15 +260,14 @@ class Session:
         return self._inputs
 
     def pose3d(self, frame: int) -> np.ndarray | None:
-        """(16, 3) lifted joints of a frame (metres, contract frame), None without a person;
-        cached until the frame's inputs change."""
+        """(16, 3) lifted joints of a frame (metres, contract frame), None without a
+        person; the clip is lifted again (milliseconds) when the inputs change."""
         if self.fits[frame].joints2d is None:
             return None
-        key = self.inputs.key(frame)
-        cached = self._poses.get(frame)
-        if cached is None or cached[0] != key:
-            cached = self._poses[frame] = (key, self.inputs.lift(frame))
-        return cached[1]
+        inputs = self.inputs
+        if self._lifted is None or self._lifted[0] is not inputs:
+            self._lifted = (inputs, inputs.lift_clip(self.info.fps))
+        return self._lifted[1][frame]
 
     def keyframes(self) -> list[int]:
         """The annotations' keyframes (default every frame) where a person was found."""
