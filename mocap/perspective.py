@@ -32,11 +32,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 from scipy.spatial.transform import Rotation
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.errors import MocapError
+from mocap.inputs import DEPTH_SMOOTH_S
 from mocap.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots,
                         signs_allowed, toward_signs)
 
@@ -381,6 +383,15 @@ def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,
         lengths = measured_lengths(joints2d, key[:, :, 2].mean(axis=1), camera)
     rays = camera.rays(joints2d)
     return add_limbs(trunk_joints(key, rays, lengths, fixed), rays, lengths, fixed)
+
+
+def steady_depths(points: np.ndarray, fps: float) -> np.ndarray:
+    """Pinhole-frame joints (F, 16, 3), each moved along its viewing ray to its depth
+    smoothed over time (a Gaussian of inputs.DEPTH_SMOOTH_S, as the silhouette
+    method's lifted depths): the ray-sphere roots carry the 2D tracking's jitter
+    into depth, which real motion does not have."""
+    z = gaussian_filter1d(points[..., 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
+    return points * (z / points[..., 2])[..., None]
 
 
 def to_contract(points: np.ndarray) -> np.ndarray:

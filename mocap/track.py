@@ -25,7 +25,7 @@ from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.marks import check_marks
 from mocap.orientation import knee_facing
-from mocap.perspective import default_camera, reconstruct, to_contract
+from mocap.perspective import default_camera, reconstruct, steady_depths, to_contract
 from mocap.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
 
@@ -148,7 +148,8 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     joints2d = fill_unreliable(joints, reliability)
     camera = default_camera(info.width, info.height, focal_px)
     turn = turn or guessed_turn(joints2d, info.fps)
-    joints3d = to_contract(reconstruct(steady_joints(joints2d, info.fps), camera, turn))
+    joints3d = to_contract(steady_depths(reconstruct(steady_joints(joints2d, info.fps), camera, turn),
+                                         info.fps))
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal)
 
 

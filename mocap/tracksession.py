@@ -24,7 +24,8 @@ from mocap.errors import MocapError
 from mocap.inputs import Inputs
 from mocap.lift import depth_fractions, orientation_of_yaw, signs_of, yaw_of
 from mocap.orientation import NEGLIGIBLE, held_user_signs
-from mocap.perspective import UNIT_M, default_camera, key_joints, place_joints, to_contract
+from mocap.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
+                               to_contract)
 from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
 from mocap.track import TrackResult, guessed_turn, steady_joints, track_video, turn_of
 from mocap.video import VideoInfo
@@ -107,7 +108,7 @@ class TrackSession(Session):
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
         if not fixed.any():
             return free
-        return to_contract(place_joints(steady, key, self.camera, fixed=fixed))
+        return to_contract(steady_depths(place_joints(steady, key, self.camera, fixed=fixed), self.info.fps))
 
     @staticmethod
     def _shown(joints: np.ndarray, joints3d: np.ndarray) -> tuple[Inputs, np.ndarray]:
@@ -129,7 +130,8 @@ class TrackSession(Session):
         if last is None or last[1] != turn or not np.array_equal(last[0], steady):
             before = (last[0], last[2]) if last is not None and last[1] == turn else None
             key = key_joints(steady, self.camera, turn, before)
-            self._placed = (steady, turn, key, to_contract(place_joints(steady, key, self.camera)))
+            free = steady_depths(place_joints(steady, key, self.camera), self.info.fps)
+            self._placed = (steady, turn, key, to_contract(free))
         return self._placed[2], self._placed[3]
 
 

@@ -137,3 +137,18 @@ def test_measured_lengths_read_bones_seen_side_on():
     trunk = [P.BONE_INDEX[P.JOINT_INDEX["chest"], P.JOINT_INDEX["pelvis"]]]
     assert found[trunk] == pytest.approx(true[trunk], rel=0.05)
     assert np.all(found <= true * 1.05)
+
+
+def test_steady_depths_keep_joints_on_their_rays_and_take_out_jitter():
+    n, fps = 60, 30.0
+    depth = -4.0 + 0.01 * np.arange(n)                          # walking away slowly
+    jitter = 0.05 * (-1.0) ** np.arange(n)                      # the ray roots' frame-to-frame noise
+    points = np.zeros((n, 16, 3))
+    points[..., 0], points[..., 1] = 0.3, -0.2
+    points[..., 2] = (depth + jitter)[:, None]
+    points[..., :2] *= -points[..., 2:] / 4.0                   # on fixed rays through the centre
+    out = P.steady_depths(points, fps)
+    rays = points / np.linalg.norm(points, axis=-1, keepdims=True)
+    assert np.allclose(np.cross(out, rays), 0.0, atol=1e-12)
+    inner = slice(10, -10)
+    assert np.abs(out[inner, 0, 2] - depth[inner]).max() < 0.1 * np.abs(jitter).max()
