@@ -74,6 +74,13 @@ HIP_HALF_SPAN = 10.0
 # The shoulder joints sit this far below the neck (the base of the neck, the torso's
 # top), about 31 units under the crown as in people and in motion-capture skeletons.
 SHOULDER_DROP = 6.0
+# The hip joints lie this far (model units) below where the model's thighs attach, along
+# the trunk: Table 1 puts the thighs' tops 77 units under the crown; hip joints sit
+# 86-89 units under it in people (anthropometric tables: 0.49-0.51 of body height
+# above the ankles) and 74-86 in motion-capture skeletons (2D fits placed them 2.5-5%
+# of body height too high on walks and runs). The fit keeps Table 1; the joints it
+# reports are moved (``reported_joints``).
+HIP_BELOW_THIGH_TOPS = 4.0
 # chest: the point on the pelvis->neck axis at this fraction (apex of the key triangle)
 CHEST_FRACTION = 0.6
 
@@ -95,6 +102,16 @@ for _l, _r in LEFT_RIGHT_PAIRS:
 
 # neck = pelvis + NECK_PER_SHOULDER * (shoulder midpoint - pelvis)
 NECK_PER_SHOULDER = LENGTH[0] / (LENGTH[0] - SHOULDER_DROP)
+
+
+def reported_joints(joints: np.ndarray, px_per_unit: float) -> np.ndarray:
+    """(16, 2) a fitted model's joints as the fit reports them: the pelvis and hips
+    moved HIP_BELOW_THIGH_TOPS units from the neck's side, along the trunk's axis."""
+    out = np.array(joints, float)
+    pelvis, neck = out[JOINT_INDEX["pelvis"]], out[JOINT_INDEX["neck"]]
+    down = (pelvis - neck) / max(float(np.linalg.norm(pelvis - neck)), 1e-9)
+    out[[JOINT_INDEX[j] for j in ("pelvis", "hip_l", "hip_r")]] += HIP_BELOW_THIGH_TOPS * px_per_unit * down
+    return out
 
 
 def torso_width(spread):

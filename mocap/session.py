@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 
 from mocap.annotations import Annotations, load_annotations
-from mocap.body import JOINTS, Pose2D
+from mocap.body import JOINTS, Pose2D, reported_joints
 from mocap.errors import MocapError
 from mocap.export.motion_json import write_motion
 from mocap.motion import Motion, build_motion
@@ -170,7 +170,7 @@ def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
             yield FrameFit(item, None, None)
             continue
         index, origin, step = item
-        joints = (origin + (fit.joints + 0.5) * step - 0.5) / scale
+        joints = (origin + (reported_joints(fit.joints, FIT_SCALE) + 0.5) * step - 0.5) / scale
         yield FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale)
 
 

@@ -150,3 +150,18 @@ def test_profile_elbow_bends_the_way_the_knees_point():
     err = {j: np.linalg.norm(fit.joints[JOINT_INDEX[j]] - want[JOINT_INDEX[j]]) / (175 * FIT_SCALE)
            for j in ("elbow_r", "wrist_r")}
     assert max(err.values()) < 0.03, err
+
+
+def test_reported_hips_lie_below_where_the_thighs_attach_along_the_trunk():
+    from mocap.body import HIP_BELOW_THIGH_TOPS, reported_joints
+    angle = default_angles()
+    angle[SEGMENT_INDEX["torso"]] = 60.0                       # leaning toward image right
+    pose = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.8)
+    model = forward_kinematics_2d(pose)
+    out = reported_joints(model, FIT_SCALE)
+    moved = [JOINT_INDEX[j] for j in ("pelvis", "hip_l", "hip_r")]
+    trunk = model[JOINT_INDEX["neck"]] - model[JOINT_INDEX["pelvis"]]
+    shift = out[moved] - model[moved]
+    assert np.allclose(np.linalg.norm(shift, axis=1), HIP_BELOW_THIGH_TOPS * FIT_SCALE)
+    assert np.allclose(shift @ trunk / np.linalg.norm(trunk), -HIP_BELOW_THIGH_TOPS * FIT_SCALE)
+    assert np.array_equal(np.delete(out, moved, axis=0), np.delete(model, moved, axis=0))
