@@ -97,7 +97,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
     if lengths is None:
-        lengths = (clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE)
+        lengths = (clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
                    if person.any() else LENGTH.copy())
     # signs are judged on the longer 90th-percentile lengths: where the fit's noise
     # makes a segment look unforeshortened they still keep the two depths apart
