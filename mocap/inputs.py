@@ -63,16 +63,15 @@ class Inputs:
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
                    annotations: Annotations, lengths: np.ndarray | None = None,
                    guessed: list[str | None] | None = None) -> Inputs:
-    """Per-frame lifting inputs: the fit's arms steadied (``steadied_arms``); the
-    user's orientation (sticky) over the guessed one
+    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding, the
     user's leg signs telling where the legs cross: orientation.legs_crossed); the
-    overrides put in; segment lengths from the clip (lift.clip_lengths); the signs
-    guessed with the user's held signs as constraints (orientation.held_user_signs)."""
+    arms steadied (``steadied_arms``); the overrides put in; segment lengths from the
+    clip (lift.clip_lengths); the signs guessed with the user's held signs as
+    constraints (orientation.held_user_signs)."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
-    joints_image = steadied_arms(joints_image, person, fps)
     if guessed is None:
         guessed = guess_orientations(joints_image, body_px, spread, fps)
     said = annotations.orientations(n)
@@ -93,6 +92,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
         crossed = np.zeros(n, bool)
         crossed[legs] = legs_crossed(joints[legs], held[legs], yaw[legs], ppu[legs], seen, placed[legs])
         joints = exchange_legs(joints, crossed)
+    joints = steadied_arms(joints, person, fps)
     for i, points in overrides.items():
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
@@ -109,14 +109,15 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
 
 
-def steadied_arms(joints_image: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
+def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
     """(F, 16, 2) with each elbow and wrist a running median over ARM_MEDIAN_S within
-    each stretch of frames with a person (image sides, as the fit names the arms)."""
-    out = joints_image.copy()
+    each stretch of frames with a person (anatomical sides: in a profile the fit's
+    image sides change as the arms pass the trunk's axis)."""
+    out = joints.copy()
     width = 2 * int(round(ARM_MEDIAN_S * fps / 2)) + 1
     arms = [JOINT_INDEX[f"{n}_{s}"] for n in ("elbow", "wrist") for s in "lr"]
     for r in runs(person):
-        out[r, arms] = median_filter(joints_image[r, arms], size=(width, 1, 1), mode="nearest")
+        out[r, arms] = median_filter(joints[r, arms], size=(width, 1, 1), mode="nearest")
     return out
 
 
