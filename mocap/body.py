@@ -43,12 +43,14 @@ SEGMENT_INDEX: dict[str, int] = {name: i for i, name in enumerate(SEGMENT_NAMES)
 BODY_HEIGHT = 175.0
 BODY_HEIGHT_M = 1.75
 
-# Table 1's lengths, but for the elbow: Table 1 has the upper arm 25 and the lower arm
-# 35 (its lower arm reaches into the hand); people (anthropometric tables: shoulder to
-# elbow 0.19 of body height, elbow to wrist 0.15) and motion-capture skeletons (28-35
-# and 23-27 units) bend further down, so the arm's 60 units are split 30/30. With 25/35
-# the fitted elbow sat 4-5% of body height too high (bench_fit2d).
-_KIND_LENGTH = {"head": 25.0, "torso": 52.0, "upper_arm": 30.0, "lower_arm": 30.0,
+# Table 1's lengths, but for the arm: Table 1 has the upper arm 25 and the lower arm 35
+# (its lower arm reaches into the hand); people (anthropometric tables: shoulder to
+# elbow 0.19 of body height, elbow to wrist 0.15, i.e. 33 and 26 units) and
+# motion-capture skeletons (28-35 and 23-27 units) bend further down and end at the
+# wrist, so the arm is 31 + 27 units (Algorithm 6's ratios up to RATIO_RANGE's 1.15
+# still reach into a hand). With 25/35 the fitted elbow sat 4-5% of body height too
+# high and the wrist 3-5% too low (bench_fit2d).
+_KIND_LENGTH = {"head": 25.0, "torso": 52.0, "upper_arm": 31.0, "lower_arm": 27.0,
                 "upper_leg": 46.0, "lower_leg": 52.0}
 _KIND_WIDTH = {"head": 20.0, "torso": 40.0, "upper_arm": 10.0, "lower_arm": 10.0,
                "upper_leg": 20.0, "lower_leg": 20.0}

@@ -95,6 +95,38 @@ def screen_point(page, app, world) -> tuple[float, float]:
             box["y"] + box["height"] / 2 + focal * local[1] / local[2])
 
 
+def unhidden_point(app, segment: str) -> np.ndarray:
+    """A scene point on a segment's cylinder, in the camera or the side view, that no
+    other cylinder hides from the tab's camera (points along the axis, middle first)."""
+    eye = next(iter(app.server.get_clients().values())).camera.position
+    bodies = []
+    for body, at, frame in zip(app.scene.bodies, (app.layout.front, app.layout.side),
+                               ((1.0, 0.0, 0.0, 0.0), SIDE)):
+        turn, origin = Rotation.from_quat(frame, scalar_first=True), np.array(at + (0.0,))
+        axes = [(origin + turn.apply(h.position), turn.apply(Rotation.from_quat(h.wxyz, scalar_first=True)
+                                                               .apply([0.0, 0.0, 1.0])), h.scale) for h in body]
+        bodies.append(axes)
+    k = SEGMENT_INDEX[segment]
+    for axes in bodies:
+        centre, axis, scale = axes[k]
+        for t in (0.0, -0.2, 0.2, -0.35, 0.35):
+            point = centre + t * scale[2] * axis
+            ray = (point - eye) / np.linalg.norm(point - eye)
+            if not any(_hides(eye, ray, np.linalg.norm(point - eye), other)
+                       for j, other in enumerate(axes) if j != k):
+                return point
+    raise AssertionError(f"{segment} is hidden in both 3D views")
+
+
+def _hides(eye, ray, depth: float, cylinder) -> bool:
+    """Whether a cylinder (centre, axis, scale) crosses the ray before ``depth``."""
+    centre, axis, scale = cylinder
+    samples = centre + np.linspace(-0.5, 0.5, 21)[:, None] * scale[2] * axis
+    along = (samples - eye) @ ray
+    off = np.linalg.norm(samples - eye - along[:, None] * ray, axis=1)
+    return bool(np.any((off < max(scale[0], scale[1])) & (along < depth - max(scale[0], scale[1]))))
+
+
 def video_point(app, xy) -> np.ndarray:
     """The scene point showing video pixel ``xy`` on the video panel."""
     layout, scale = app.layout, app.state.scale
@@ -151,8 +183,7 @@ def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
     assert set(note) == {segment}
     shot(page, "flip_after")
 
-    side = Rotation.from_quat(SIDE, scalar_first=True).apply(handle.position)
-    x, y = screen_point(page, app, np.array(app.layout.side + (0.0,)) + side)
+    x, y = screen_point(page, app, unhidden_point(app, segment))
     page.mouse.click(x, y)                                 # the same segment in 3D flips it back
     wait_until(lambda: np.allclose(placed, np.concatenate([handle.position, handle.wxyz])))
     assert load_annotations(app.state.path).frames[6].foreshortening != note
