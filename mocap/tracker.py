@@ -225,6 +225,17 @@ def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
     return lowers[int(np.argmin(cost))]
 
 
+def part_lengths() -> np.ndarray:
+    """(parts,) model lengths the parts' blocks are measured against; an arm's two
+    parts each take the longer of the two (where the elbow sits along the arm
+    differs from body to body)."""
+    def length(segment: str) -> float:
+        if "_arm_" not in segment:
+            return float(LENGTH[SEGMENT_INDEX[segment]])
+        return float(max(LENGTH[SEGMENT_INDEX[f"{kind}_arm{segment[-2:]}"]] for kind in ("upper", "lower")))
+    return np.array([length(p.segment) for p in PARTS])
+
+
 class BodyTracker:
     """The state carried from frame to frame: every part's block and its change over
     the last frame (constant-velocity prediction), the colour models and the
@@ -235,8 +246,7 @@ class BodyTracker:
         scale = body_scale(marks)
         self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]],
                                      part_widths(marks, scale))
-        self.longest = MAX_STRETCH * np.maximum(
-            scale * LENGTH[[SEGMENT_INDEX[p.segment] for p in PARTS]], self.blocks[:, M])
+        self.longest = MAX_STRETCH * np.maximum(scale * part_lengths(), self.blocks[:, M])
         self.head_width = self.blocks[HEAD, N]
         self.head_lengths = np.array(ZOOM_RANGE) * self.blocks[HEAD, M]
         self.widths = np.outer(self.blocks[:, N], ZOOM_RANGE)
