@@ -159,7 +159,6 @@ class Pose2D:
     spread: float = 1.0
 
 
-
 def default_angles() -> np.ndarray:
     """Standing upright, arms and legs hanging straight down."""
     return np.array([90.0 if s in ("torso", "head") else 270.0 for s in SEGMENT_NAMES])

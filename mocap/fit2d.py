@@ -13,8 +13,8 @@ the previous frame's pose (temporal coherence, the paper's future work), contour
 estimates are refined by Algorithm 1 on the similarity, and both ways of joining
 lower to upper legs are scored so that a wrong crossing verdict is undone; arm
 guesses whose elbow bends backward (the knees tell which way the performer faces)
-are dropped. The legs are fitted as a few hypotheses scored together (``leg_hypotheses``), among which
-``mocap.legchain`` chooses over time.
+are dropped. The legs are fitted as a few hypotheses scored together
+(``leg_hypotheses``), among which ``mocap.legchain`` chooses over time.
 """
 
 from __future__ import annotations
@@ -439,7 +439,7 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
     """First guesses for one arm's (upper, lower) angles and foreshortening ratios:
     contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point,
-    hanging down, all at Table 1's lengths, and the previous frame's arm as it was.
+    hanging down, all at the model's lengths, and the previous frame's arm as it was.
     (An arm hidden in front of the trunk scores alike at any length, so a length
     carried over from frame to frame could only shrink.)"""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])

@@ -88,9 +88,9 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
         held = _held_signs(joints, ppu, seen, values, since, person)
         placed = np.array([any(j.startswith(("knee", "ankle")) for j in overrides.get(i, ()))
                            for i in range(n)], bool)
-        legs = person & np.isfinite(yaw)
         crossed = np.zeros(n, bool)
-        crossed[legs] = legs_crossed(joints[legs], held[legs], yaw[legs], ppu[legs], seen, placed[legs])
+        crossed[person] = legs_crossed(joints[person], held[person], yaw[person], ppu[person], seen,
+                                       placed[person])
         joints = exchange_legs(joints, crossed)
     joints = steadied_arms(joints, person, fps)
     for i, points in overrides.items():

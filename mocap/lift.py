@@ -261,23 +261,22 @@ def known_sides(orientations: list[str | None], overrides: dict[int, dict[str, t
 
 def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
     """(F, 16, 2) image-side joints with each frame's arms and legs swapped as told."""
-    out = joints_image.copy()
-    for p, names in enumerate((("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle"))):
-        left = [_J[f"{n}_l"] for n in names]
-        right = [_J[f"{n}_r"] for n in names]
-        rows = np.flatnonzero(swap[:, p])
-        out[np.ix_(rows, left)], out[np.ix_(rows, right)] = (joints_image[np.ix_(rows, right)],
-                                                             joints_image[np.ix_(rows, left)])
-    return out
+    out = _exchanged(joints_image, swap[:, 0], ("shoulder", "elbow", "wrist"))
+    return _exchanged(out, swap[:, 1], ("hip", "knee", "ankle"))
 
 
 def exchange_legs(joints2d: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """(F, 16, 2) with the knees and ankles of the ``rows`` (F,) bool frames exchanged
     between the hips: legs crossed in the image, the hips where they were."""
+    return _exchanged(joints2d, rows, ("knee", "ankle"))
+
+
+def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """(F, 16, 2) with the left and right joints ``names`` exchanged on the ``rows`` (F,)
+    bool frames."""
+    left, right = [_J[f"{n}_l"] for n in names], [_J[f"{n}_r"] for n in names]
     out = joints2d.copy()
-    for name in ("knee", "ankle"):
-        left, right = _J[f"{name}_l"], _J[f"{name}_r"]
-        out[rows, left], out[rows, right] = joints2d[rows, right], joints2d[rows, left]
+    out[np.ix_(rows, left)], out[np.ix_(rows, right)] = joints2d[np.ix_(rows, right)], joints2d[np.ix_(rows, left)]
     return out
 
 

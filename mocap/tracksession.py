@@ -106,8 +106,12 @@ class TrackSession(Session):
         key, free = self._free_placement(steady, turn)
         values, since = notes.held_signs(len(joints))
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
-        if not fixed.any():
-            return free
+        return free if not fixed.any() else self._placed_joints(steady, key, fixed)
+
+    def _placed_joints(self, steady: np.ndarray, key: np.ndarray,
+                       fixed: np.ndarray | None = None) -> np.ndarray:
+        """(F, 16, 3) contract-frame joints placed from the key joints (place_joints),
+        their depths smoothed along their rays (steady_depths)."""
         return to_contract(steady_depths(place_joints(steady, key, self.camera, fixed=fixed), self.info.fps))
 
     @staticmethod
@@ -130,8 +134,7 @@ class TrackSession(Session):
         if last is None or last[1] != turn or not np.array_equal(last[0], steady):
             before = (last[0], last[2]) if last is not None and last[1] == turn else None
             key = key_joints(steady, self.camera, turn, before)
-            free = steady_depths(place_joints(steady, key, self.camera), self.info.fps)
-            self._placed = (steady, turn, key, to_contract(free))
+            self._placed = (steady, turn, key, self._placed_joints(steady, key))
         return self._placed[2], self._placed[3]
 
 
