@@ -27,7 +27,8 @@ cv2.setNumThreads(1)
 from mocap.body import JOINTS  # noqa: E402
 from mocap.fit2d import FIT_SCALE, fit_frame, torso_spread  # noqa: E402
 from mocap.metrics import side_matched_errors  # noqa: E402
-from mocap.session import body_heights, extract_silhouettes, fit_silhouettes, normalise  # noqa: E402
+from mocap.session import (body_heights, extract_silhouettes, fit_silhouettes, normalise,  # noqa: E402
+                           normalised_grey)
 from mocap.synth import render_motion  # noqa: E402
 from mocap.video import open_video, processing_scale  # noqa: E402
 
@@ -67,7 +68,7 @@ def time_fits(sils, heights, spreads, repeats: int = 3) -> np.ndarray:
             t = time.process_time()
             small, _, _ = normalise(sil, h)
             torso_spread(small, FIT_SCALE)
-            fit = fit_frame(small, FIT_SCALE, prev, spread)
+            fit = fit_frame(small, FIT_SCALE, prev, spread, normalised_grey(sil, h))
             best = min(best, time.process_time() - t)
         out.append(best * 1000)
         prev = fit.pose if fit.score >= 0.5 else None

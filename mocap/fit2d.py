@@ -56,6 +56,9 @@ FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
 KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
 ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
 ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend shows in the image
+# (upper, lower) angles every 30 degrees all around the shoulder: arm guesses that the
+# frame's edges may pick inside the silhouette
+ARM_GRID = [(float(u), float(u + b)) for u in range(0, 360, 30) for b in range(-150, 151, 30)]
 DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this close are one
 
 
@@ -168,8 +171,11 @@ def search(pose: Pose2D, job: Search) -> Pose2D:
     every = max(1, int(round(job.sweep_step / step)))
     start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
     opening = sorted({*range(0, n, every), n - 1, start})
+    drawn = [SEGMENT_INDEX[d] for d in job.drawn]
     first, score = sweep_scorer(job.canvas, quads[opening])
-    best = coarse_to_fine(lambda i: score(quads[i]), n, opening, first, start, 2 * every)
+    first = first + job.canvas.edge_scores(joints[opening], drawn, pose.scale)
+    best = coarse_to_fine(lambda i: score(quads[i]) + job.canvas.edge_scores(joints[i], drawn, pose.scale),
+                          n, opening, first, start, 2 * every)
     return job.knob.apply(pose, float(values[best]))
 
 
@@ -439,24 +445,27 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
     """First guesses for one arm's (upper, lower) angles and foreshortening ratios:
     contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point,
-    hanging down, all at the model's lengths, and the previous frame's arm as it was.
-    (An arm hidden in front of the trunk scores alike at any length, so a length
-    carried over from frame to frame could only shrink.)"""
+    hanging down, all at the model's lengths, the previous frame's arm as it was and,
+    where the frame's edges can tell arms inside the silhouette apart, a grid of
+    arms all around the shoulder (ARM_GRID). (An arm hidden in front of the trunk
+    scores alike at any length, so a length carried over from frame to frame could
+    only shrink.)"""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
-    guesses = [(270.0, 270.0)]
+    guesses = [((270.0, 270.0), (1.0, 1.0))]
     if prev is not None:
-        guesses.append((prev.angle[upper], prev.angle[lower]))
+        guesses.append(((prev.angle[upper], prev.angle[lower]), (prev.ratio[upper], prev.ratio[lower])))
+    angles = [guesses[-1][0]]
     joints = forward_kinematics_2d(pose)
     points = arm_curve(canvas, joints, side, pose.scale)
     if len(points) >= 3:
-        guesses.append(_contour_guess(points, guesses[-1]))
+        angles.append(_contour_guess(points, angles[0]))
         shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
         tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
-        guesses += two_link_angles(shoulder, tip, LENGTH[upper] * pose.scale, LENGTH[lower] * pose.scale)
-    ratios = [(1.0, 1.0)] * len(guesses)
-    if prev is not None:
-        ratios[1] = (prev.ratio[upper], prev.ratio[lower])
-    return [angles + r for angles, r in zip(guesses, ratios)]
+        angles += two_link_angles(shoulder, tip, LENGTH[upper] * pose.scale, LENGTH[lower] * pose.scale)
+    if canvas.by_edges:
+        angles += ARM_GRID
+    guesses += [(a, (1.0, 1.0)) for a in angles[1:]]
+    return [(*a, *r) for a, r in guesses]
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
@@ -477,7 +486,7 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
     elbow bends the way the performer faces, ``facing`` +1 image right, -1 left, 0
     unknown), refined by Algorithm 1 (upper arm with the lower arm attached, then the
     lower arm) and Algorithm 6."""
-    own = canvas.fork(keep=image_side(canvas.sil.shape, pose, side))
+    own = canvas.fork(keep=image_side(canvas.sil.shape, pose, side), by_edges=True)
     pose = best_arm_guess(own, pose, side, prev, facing)
     upper = ARM[side][0]
     pose = search_angle(own, pose, (upper,), ARM[side],
@@ -499,6 +508,7 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
     ratio[:, both.indices] = guesses[:, 2:]
     joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
     scores, _ = sweep_scorer(canvas, joint_quads(joints, pose.scale, both.indices, spread))
+    scores = scores + canvas.edge_scores(joints, both.indices, pose.scale)
     best = int(np.argmax(scores))
     return replace(pose, angle=angle[best], ratio=ratio[best])
 
@@ -535,11 +545,12 @@ def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
 
 
 def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
-              spread: float | None = None) -> Fit2D:
+              spread: float | None = None, grey: np.ndarray | None = None) -> Fit2D:
     """Fit the 10-cylinder model to one normalised silhouette (section 3.3) with the
     best leg hypothesis, the others as ``alternatives``; with ``spread`` the torso's
-    horizontal foreshortening is taken as given."""
-    canvas = Canvas(silhouette)
+    horizontal foreshortening is taken as given; with the frame's ``grey`` levels
+    (same size) the arms also follow the edges inside the silhouette."""
+    canvas = Canvas(silhouette, grey)
     pose = initial_pose(canvas.sil, scale)
     if prev is not None:
         pose = replace(prev, pelvis=pose.pelvis, scale=scale)

@@ -15,6 +15,7 @@ import numpy as np
 
 from mocap.body import (SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH, Pose2D,
                         forward_kinematics_2d, torso_width)
+from mocap.edges import EDGE_WEIGHT, InnerEdges
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
@@ -103,24 +104,35 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
     returns (their S (B,) of Eq. 1-3, a function scoring further candidates).
 
     The partial silhouette is the silhouette inside the swept area that the canvas's
-    fitted part does not already explain. Candidates are drawn into planes of one
-    array and weighed in one product: a pixel weighs 1 if free plus ``base`` (more
-    than the window's pixel count) if in the partial silhouette, so one sum tells
-    both counts of Eq. 1-2.
+    fitted part does not already explain. On a canvas that follows edges
+    (``Canvas.fork``), a candidate's pixels on the silhouette already explained count
+    as silhouette it covers: they are inside the silhouette, so an arm over the trunk
+    scores as well as one that explains a sliver of the trunk's outline, and the
+    frame's edges tell them apart (``Canvas.edge_scores``); this holds on either
+    side of the body's axis (``Canvas.whole``), so a forearm may cross the chest. Candidates are drawn into
+    planes of one array and weighed in one product: a pixel weighs 1 if free, plus
+    ``base`` (more than the window's pixel count) if in the partial silhouette, or
+    ``base`` squared if explained silhouette counts, so one sum tells every count.
     """
     x0, y0, x1, y1 = bounding_window(sweep, canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
     planes = _draw_planes(sweep, offset, shape)
     free = canvas.fixed[y0:y1, x0:x1] == 0
-    target = free & planes.any(axis=0) & canvas.sil[y0:y1, x0:x1].astype(bool)
+    sil = canvas.sil[y0:y1, x0:x1].astype(bool)
+    target = free & planes.any(axis=0) & sil
     sil_area = np.count_nonzero(target)
     base = float(free.size + 1)
     weights = free.ravel() + base * target.ravel()
+    if canvas.by_edges:
+        weights = weights + base ** 2 * (~free & canvas.whole[y0:y1, x0:x1].astype(bool)).ravel()
 
     def weigh(planes_: np.ndarray) -> np.ndarray:
         totals = planes_.reshape(len(planes_), -1) @ weights
+        explained = np.floor(totals / base ** 2)
+        totals = totals - base ** 2 * explained
         overlap = np.floor(totals / base)
-        return similarity_from_counts(sil_area, totals - base * overlap, overlap)
+        model = totals - base * overlap
+        return similarity_from_counts(sil_area + explained, model + explained, overlap + explained)
     return weigh(planes), lambda candidates: weigh(_draw_planes(candidates, offset, shape))
 
 
@@ -144,20 +156,36 @@ class Canvas:
     (Eq. 1 divides by the union, so unexplained pixels elsewhere lower p).
     """
 
-    def __init__(self, silhouette: np.ndarray):
+    def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None):
         self.sil = (silhouette > 0).astype(np.uint8)
+        self.whole = self.sil
         self.fixed = np.zeros_like(self.sil)
+        self.edges = None if grey is None else InnerEdges(grey, self.sil)
+        self.by_edges = False
 
-    def fork(self, quads=(), keep: np.ndarray | None = None) -> "Canvas":
+    def fork(self, quads=(), keep: np.ndarray | None = None, by_edges: bool = False) -> "Canvas":
         """A copy whose fitted part also holds quads, and whose silhouette is only
-        the pixels where keep is true (for a part that may explain only those)."""
+        the pixels where keep is true (for a part that may explain only those);
+        ``by_edges``: the copy follows the frame's inner edges, where it has them
+        (``sweep_scorer``, ``edge_scores``)."""
         other = Canvas.__new__(Canvas)
         other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
+        other.whole = self.whole
         other.fixed = self.fixed.copy()
+        other.edges = self.edges
+        other.by_edges = by_edges and self.edges is not None
         if len(quads):
             other.commit(quads)
         return other
 
+    def edge_scores(self, joints: np.ndarray, segments: list[int], scale: float) -> np.ndarray:
+        """(B,) what the inner edges along the given segments of posed joints
+        (B, 16, 2) add to S: EDGE_WEIGHT times their support (mocap.edges), 0 on a
+        canvas that does not follow edges."""
+        if not self.by_edges:
+            return np.zeros(len(joints))
+        ends = joints[:, SEGMENT_JOINTS[segments]]
+        return EDGE_WEIGHT * self.edges.support(ends[:, :, 0], ends[:, :, 1], WIDTH[segments] * scale)
 
     def commit(self, quads) -> None:
         """Make quads part of the fitted model."""

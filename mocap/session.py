@@ -48,17 +48,20 @@ MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a sea
 
 @dataclass(frozen=True)
 class Silhouette:
-    """A frame's silhouette as its bounding box and the packed mask inside it."""
+    """A frame's silhouette as its bounding box and the packed mask inside it, with
+    the frame's grey levels in the box (the inner edges' source, mocap.edges)."""
 
     box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
     bits: np.ndarray
+    grey: np.ndarray | None = None
 
     @classmethod
-    def from_mask(cls, mask: np.ndarray) -> "Silhouette | None":
+    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None) -> "Silhouette | None":
         x, y, w, h = cv2.boundingRect((mask > 0).astype(np.uint8))
         if w * h == 0 or np.count_nonzero(mask) < MIN_PERSON_FRACTION * mask.size:
             return None
-        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0))
+        grey = None if frame is None else cv2.cvtColor(frame[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
+        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey)
 
     @property
     def height(self) -> int:
@@ -86,7 +89,7 @@ def iter_silhouettes(info: VideoInfo, scale: float) -> Iterator[Silhouette | Non
     """Pass one (section 3.2): the background, then every frame's silhouette in turn."""
     background = estimate_background(info, scale=scale)
     for _, frame in iter_frames(info, scale=scale):
-        yield Silhouette.from_mask(extract_silhouette(frame, background))
+        yield Silhouette.from_mask(extract_silhouette(frame, background), frame)
 
 
 def extract_silhouettes(info: VideoInfo, scale: float,
@@ -114,15 +117,25 @@ def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray
 def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:
     """The silhouette cropped with a margin and resized to FIT_BODY_PX body height;
     returns (mask, origin in processing pixels, pixels of processing per fit pixel)."""
-    factor = FIT_BODY_PX / body_px
     pad = int(np.ceil(MARGIN * body_px))
-    mask = cv2.copyMakeBorder(sil.mask() * 255, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
-    h, w = mask.shape
-    size = (max(1, round(w * factor)), max(1, round(h * factor)))
-    interp = cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR
-    small = cv2.resize(mask, size, interpolation=interp) > 127
+    small = _fit_sized(sil.mask() * 255, pad, FIT_BODY_PX / body_px) > 127
     origin = np.array([sil.box[0] - pad, sil.box[1] - pad], float)
-    return small.astype(np.uint8), origin, w / size[0]
+    return small.astype(np.uint8), origin, (sil.box[2] - sil.box[0] + 2 * pad) / small.shape[1]
+
+
+def normalised_grey(sil: Silhouette, body_px: float) -> np.ndarray | None:
+    """The silhouette's grey levels cropped and resized as ``normalise`` does its mask."""
+    if sil.grey is None:
+        return None
+    return _fit_sized(sil.grey, int(np.ceil(MARGIN * body_px)), FIT_BODY_PX / body_px)
+
+
+def _fit_sized(image: np.ndarray, pad: int, factor: float) -> np.ndarray:
+    """An image with a black margin of ``pad`` pixels, resized by ``factor``."""
+    padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
+    h, w = padded.shape
+    size = (max(1, round(w * factor)), max(1, round(h * factor)))
+    return cv2.resize(padded, size, interpolation=cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR)
 
 
 def torso_spreads(silhouettes: list[Silhouette | None], heights: np.ndarray, fps: float) -> np.ndarray:
@@ -157,7 +170,7 @@ def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: 
         small, origin, step = normalise(sil, heights[index])
         best = chain.current
         prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
-        fit = fit_frame(small, FIT_SCALE, prev, spreads[index])
+        fit = fit_frame(small, FIT_SCALE, prev, spreads[index], normalised_grey(sil, heights[index]))
         yield from _frame_fits(chain.push((index, origin, step), fit), scale)
     yield from _frame_fits(chain.flush(), scale)
 
