@@ -13,7 +13,9 @@ the previous frame's pose (temporal coherence, the paper's future work), contour
 estimates are refined by Algorithm 1 on the similarity, and both ways of joining
 lower to upper legs are scored so that a wrong crossing verdict is undone; arm
 guesses whose elbow bends backward (the knees tell which way the performer faces)
-are dropped. The legs are fitted as a few hypotheses scored together
+are dropped; with the frame's grey levels, an arm over the trunk counts as inside
+the silhouette and the edges inside the silhouette along its sides add to S
+(mocap.edges), so that an arm in front of the trunk is found where it shows. The legs are fitted as a few hypotheses scored together
 (``leg_hypotheses``), among which ``mocap.legchain`` chooses over time.
 """
 
