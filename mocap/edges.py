@@ -1,12 +1,15 @@
-"""Edges inside the silhouette: the frame's cue where the silhouette has none.
+"""Edges of a frame along a limb's sides: the cue where colour and silhouette have none.
 
-Beyond the paper. An arm in front of the trunk lies wholly inside the silhouette,
+Beyond both papers. An arm in front of the trunk lies wholly inside the silhouette,
 where the similarity of Eq. 1-3 cannot tell one placement from another, and the fit
 hangs it wherever it explains a sliver of the silhouette's edge. The frame still shows
 the arm: its outline (a sleeve over a shirt, a forearm over the chest) is an edge
 inside the silhouette, running along the arm. A candidate segment is scored by how
 strongly the image changes across its two long sides (the gradient along the side's
 normal), inside the silhouette only: the silhouette's own outline is Eq. 1-3's.
+The tracking method's arm blocks use the whole frame's edges the same way
+(mocap.tracker.outline_cost): a sleeve over a shirt of its colour matches the shirt
+anywhere, and only its outline tells where it is.
 """
 
 from __future__ import annotations
@@ -21,21 +24,33 @@ EDGE_WEIGHT = 0.3                  # S that a segment outlined by full-strength 
 STRONG_PERCENTILE = 90             # of gradient magnitudes inside: an edge of full strength
 
 
-class InnerEdges:
-    """The frame's grey-level gradient inside a silhouette, both at the fit's scale,
-    in units of a strong edge of this frame (its STRONG_PERCENTILE magnitude), so
-    that the support of a segment is about 1 on a clear outline, 0 on flat colour."""
+class Edges:
+    """A frame's grey-level gradient in units of a strong edge of it (its
+    STRONG_PERCENTILE magnitude where edges count), so that the support of a segment
+    is about 1 on a clear outline, 0 on flat colour."""
 
-    def __init__(self, grey: np.ndarray, silhouette: np.ndarray):
+    def __init__(self, grey: np.ndarray, where: np.ndarray | None = None):
         smooth = cv2.GaussianBlur(grey.astype(np.float32), (3, 3), 0)
         gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3)
         gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)
+        magnitude = np.hypot(gx, gy)
+        magnitude = magnitude if where is None else magnitude[where]
+        strong = float(np.percentile(magnitude, STRONG_PERCENTILE)) if magnitude.size else 0.0
+        unit = (1.0 if where is None else where) / strong if strong > 0 else np.zeros(grey.shape)
+        self.gx, self.gy = gx * unit, gy * unit
+
+    @classmethod
+    def inside(cls, grey: np.ndarray, silhouette: np.ndarray) -> "Edges":
+        """The edges of a frame inside a silhouette (both at the fit's scale), INNER_PX
+        from its outline."""
         size = 2 * INNER_PX + 1
         inner = cv2.erode((silhouette > 0).astype(np.uint8), np.ones((size, size), np.uint8)) > 0
-        magnitude = np.hypot(gx, gy)[inner]
-        strong = float(np.percentile(magnitude, STRONG_PERCENTILE)) if magnitude.size else 0.0
-        unit = inner / strong if strong > 0 else np.zeros(inner.shape)
-        self.gx, self.gy = gx * unit, gy * unit
+        return cls(grey, inner)
+
+    @classmethod
+    def of_frame(cls, frame: np.ndarray) -> "Edges":
+        """The edges of a whole BGR frame."""
+        return cls(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
 
     def support(self, starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
         """(B,) the mean edge strength (each point's capped at 1) across the long sides

@@ -59,7 +59,8 @@ BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
     ("shoulder_r", "elbow_r"), ("elbow_r", "wrist_r"),
     ("hip_l", "knee_l"), ("knee_l", "ankle_l"), ("hip_r", "knee_r"), ("knee_r", "ankle_r")))
 BONE_INDEX = {bone: n for n, bone in enumerate(BONES)}
-BONE_PAIRS = ((0,), (1,), (2,), (3, 4), (5, 7), (6, 8), (9, 11), (10, 12))   # pooled left/right
+BONE_PAIRS = ((0,), (1,), (2,), (5, 7), (6, 8), (9, 11), (10, 12))   # measured, left/right pooled
+HIP_BONES = (3, 4)              # pelvis to hips: the model's, not measured
 TORSO_BONES = 5                 # the first five bones move with the key triangle
 SEGMENT_OF = {(int(a), int(b)): k for k, (a, b) in enumerate(SEGMENT_JOINTS)}
 # trunk joints whose root choice decides a segment's sign: joint -> (segment, its other
@@ -305,7 +306,10 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
 def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -> np.ndarray:
     """(13,) bone lengths (metres) measured over a clip: the median (LENGTH_PERCENTILE)
     of each bone's image length at the body's depth ``depth`` (F,), both sides of a
-    pair pooled; the metric scale is the model key triangle's.
+    pair pooled; the metric scale is the model key triangle's. The hips keep the
+    model's span: a body turned from the camera never shows it (turned 45 degrees the
+    median reads it a third short, and each hip then sinks to the pelvis' depth), and
+    hip spans differ little from body to body (see ``calibrate``).
 
     Beyond the paper, which takes lengths from anatomy: real bodies differ from the
     model (the forearms of the CMU skeletons are about 30% shorter), and a bone taken
@@ -316,6 +320,7 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     ends = joints2d[:, np.array(BONES)]                                     # (F, 13, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) * depth[:, None] / camera.focal
     out = np.empty(len(BONES))
+    out[list(HIP_BONES)] = body.HIP_HALF_SPAN * UNIT_M
     for group in BONE_PAIRS:
         out[list(group)] = np.percentile(seen[:, list(group)], LENGTH_PERCENTILE)
     return out

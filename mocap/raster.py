@@ -15,7 +15,7 @@ import numpy as np
 
 from mocap.body import (SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH, Pose2D,
                         forward_kinematics_2d, torso_width)
-from mocap.edges import EDGE_WEIGHT, InnerEdges
+from mocap.edges import EDGE_WEIGHT, Edges
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
@@ -160,7 +160,7 @@ class Canvas:
         self.sil = (silhouette > 0).astype(np.uint8)
         self.whole = self.sil
         self.fixed = np.zeros_like(self.sil)
-        self.edges = None if grey is None else InnerEdges(grey, self.sil)
+        self.edges = None if grey is None else Edges.inside(grey, self.sil)
         self.by_edges = False
 
     def fork(self, quads=(), keep: np.ndarray | None = None, by_edges: bool = False) -> "Canvas":

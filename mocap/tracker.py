@@ -23,6 +23,7 @@ model. Every later frame is tracked head to feet:
    to its twin) is not found again. The lower part is kept off the places where
    it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
    limb's lower part, ``_part_twins``) and near where it was on the last frame;
+   an arm's blocks pay for sides the frame shows no edge along (``outline_cost``);
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -41,6 +42,7 @@ from mocap import blocks
 from mocap.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
 from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HALF_SPAN, WIDTH,
                         torso_width)
+from mocap.edges import Edges
 from mocap.headmotion import P_START, adapt_threshold, head_displacement
 from mocap.marks import body_scale
 
@@ -62,6 +64,7 @@ TWIN_COST = 25.0           # ... a lower block on its twin's
 JUMP_COST = 8.0            # grey levels per usual length that a lower block's ends moved
 TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
 OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
+OUTLINE_COST = 20.0        # grey levels an arm block pays for long sides without an edge
 
 
 @dataclass(frozen=True)
@@ -200,18 +203,37 @@ def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float
     return penalty
 
 
+def outline_cost(edges: Edges, cost: float = OUTLINE_COST) -> blocks.Penalty:
+    """Beyond the paper: the penalty (grey levels) of blocks (K, 5) for the edges
+    their two long sides lack, ``cost`` times one less the mean edge strength there
+    (edges.Edges.support). An arm over the trunk or a sleeve over a shirt matches the
+    colours under it as well as its own place does (an arm hidden behind the trunk
+    matches the trunk), and a forearm matches skin-coloured clutter; the arm's own
+    place shows its outline."""
+    def penalty(candidates: np.ndarray) -> np.ndarray:
+        return cost * (1.0 - edges.support(candidates[:, None, :2], block_end(candidates)[:, None],
+                                           candidates[:, None, N]))
+    return penalty
+
+
+def added(*penalties: blocks.Penalty) -> blocks.Penalty:
+    """The sum of penalties."""
+    return lambda candidates: sum(penalty(candidates) for penalty in penalties)
+
+
 def limb_cost(s: np.ndarray, k: int) -> float:
     """The cost of limb k's placement: its two parts' 1/S."""
     return 1.0 / s[k] + 1.0 / s[k + 1]
 
 
 def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
-                penalty: blocks.Penalty) -> np.ndarray:
+                penalty: blocks.Penalty, upper_penalty: blocks.Penalty | None = None) -> np.ndarray:
     """Beyond the paper: the lower block of a limb hanging from ``root`` of the pair
     of directions of its two parts, AROUND_STEP degrees apart, each part at its
-    usual length, of least cost (the sum of the two 1/S and the lower block's
-    ``penalty``). A limb lost to clutter or to its twin is found again where it
-    shows. ``upper`` and ``lower`` are each (colour model, grid, width, length)."""
+    usual length, of least cost (the sum of the two 1/S, the lower block's
+    ``penalty`` and the upper block's ``upper_penalty``). A limb lost to clutter or
+    to its twin is found again where it shows. ``upper`` and ``lower`` are each
+    (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
     uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
@@ -219,8 +241,10 @@ def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
     starts = np.repeat(block_end(uppers), len(angles), axis=0)
     turns = np.tile(np.c_[np.cos(angles), np.sin(angles)], (len(angles), 1))
     lowers = blocks.between(starts, starts + m_l * turns, n_l)
-    cost = (1.0 / blocks.score(image, model_u, grid_u, uppers))[:, None] \
-        + (1.0 / blocks.score(image, model_l, grid_l, lowers)
+    upper_cost = 1.0 / blocks.score(image, model_u, grid_u, uppers)
+    if upper_penalty is not None:
+        upper_cost += upper_penalty(uppers)
+    cost = upper_cost[:, None] + (1.0 / blocks.score(image, model_l, grid_l, lowers)
            + penalty(lowers)).reshape(len(angles), -1)
     return lowers[int(np.argmin(cost))]
 
@@ -239,8 +263,8 @@ def part_lengths() -> np.ndarray:
 class BodyTracker:
     """The state carried from frame to frame: every part's block and its change over
     the last frame (constant-velocity prediction), the colour models and the
-    similarities of the last HISTORY frames, the head's adaptive threshold p and the
-    last frame."""
+    similarities of the last HISTORY frames, the head's adaptive threshold p, the
+    last frame and, while a frame is tracked, its edges."""
 
     def __init__(self, frame0: np.ndarray, marks: np.ndarray):
         scale = body_scale(marks)
@@ -262,10 +286,12 @@ class BodyTracker:
         self.chest = to_block(marks[JOINT_INDEX["chest"]], self.blocks[TORSO])
         self.p = P_START
         self.frame = frame0
+        self.edges = Edges.of_frame(frame0)
 
     def step(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Track the next frame: its (16, 2) joints and the (10,) similarities S."""
         predicted = self._predicted()
+        self.edges = Edges.of_frame(frame)
         new, s = predicted.copy(), np.zeros(len(PARTS))
         new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
         predicted[TORSO, :2] = block_end(new[HEAD])
@@ -322,12 +348,16 @@ class BodyTracker:
         """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
         best pair of directions all around the root (``around_root``), then the
         lower part searched from there (``_hang``), kept off its upper part and the
-        blocks to ``avoid`` and near its last place (limb_penalty)."""
+        blocks to ``avoid`` and near its last place (limb_penalty); an arm's blocks
+        along the frame's edges (outline_cost)."""
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
-        lower = around_root(image, root, *parts, penalty)
+        outline = outline_cost(self.edges) if k in ARMS else None
+        if outline is not None:
+            penalty = added(penalty, outline)
+        lower = around_root(image, root, *parts, penalty, outline)
         self._hang(image, new, s, k, root, lower, penalty)
 
     def _avoided(self, k: int, new: np.ndarray) -> tuple:

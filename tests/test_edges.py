@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap.edges import InnerEdges
+from mocap.edges import Edges
 from mocap.raster import Canvas, segment_quads, sweep_scorer
 
 BAR = 6.0      # px: the width of the bar drawn over the trunk
@@ -25,7 +25,7 @@ def vertical(x: float, top: float = 28.0, bottom: float = 72.0) -> tuple[np.ndar
 
 
 def test_a_segment_on_an_outline_inside_the_silhouette_is_supported_flat_colour_and_the_silhouettes_own_outline_are_not():
-    edges = InnerEdges(*trunk_with_bar()[::-1])
+    edges = Edges.inside(*trunk_with_bar()[::-1])
     on_bar = edges.support(*vertical(47.0), np.array([BAR]))[0]
     beside = edges.support(*vertical(58.0), np.array([BAR]))[0]
     on_outline = edges.support(*vertical(30.0 + BAR / 2), np.array([BAR]))[0]

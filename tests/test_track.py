@@ -14,7 +14,9 @@ from mocap.errors import MocapError
 from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
 from mocap.marks import check_marks
 from mocap.track import LOW_RELIABILITY, fill_unreliable, joint_reliability, track_video
-from mocap.tracker import FOLD_COST, JUMP_COST, limb_penalty, overlap, twin_overlap
+from mocap.edges import Edges
+from mocap.tracker import (FOLD_COST, JUMP_COST, OUTLINE_COST, added, around_root, limb_penalty,
+                           outline_cost, overlap, twin_overlap)
 from mocap.walk import walk_cycle
 
 
@@ -140,6 +142,35 @@ def test_overlap_of_blocks_and_the_limbs_kept_off():
     penalty = limb_penalty(np.zeros(2), 10.0, folded[0], 40.0, ((7.0, other),))
     assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)          # where it was
     assert penalty(folded)[1] == pytest.approx((FOLD_COST + 7.0) / 8 + JUMP_COST * np.sqrt(2))
+
+
+def arm_over_trunk() -> tuple[np.ndarray, np.ndarray]:
+    """A frame whose trunk (grey 150) has an arm of nearly its colour (156) over it,
+    from the shoulder (60, 20) down at 60 degrees, outlined by its shadow; and the
+    arm's colour model, the trunk's colour."""
+    image = np.full((120, 120, 3), 60, np.uint8)
+    image[10:110, 30:90] = 150
+    end = np.int32(np.array([60.0, 20.0]) + 60 * np.array([np.cos(np.radians(60)), np.sin(np.radians(60))]))
+    cv2.line(image, (60, 20), tuple(end), (90,) * 3, 15)                     # the shadow
+    cv2.line(image, (60, 20), tuple(end), (156,) * 3, 8)                     # the arm
+    return image, np.full((blocks.ROWS, 4, 3), 150.0, np.float32)
+
+
+def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
+    """Colour alone rates any placement over the flat trunk above the arm itself
+    (a shade off its model); the arm's outline decides it."""
+    image, model = arm_over_trunk()
+    root, part = np.array([60.0, 20.0]), (model, blocks.make_grid(30, 4), 8.0, 30.0)
+    outline = outline_cost(Edges.of_frame(image))
+    nothing = lambda candidates: np.zeros(len(candidates))  # noqa: E731
+    by_colour = around_root(image, root, part, part, nothing)
+    by_outline = around_root(image, root, part, part, added(nothing, outline), outline)
+    assert abs(np.degrees(by_colour[2]) - 60.0) > 10.0
+    assert np.degrees(by_outline[2]) == pytest.approx(60.0)
+    on_arm, on_trunk = outline(np.array([[60.0, 20.0, np.radians(60), 50.0, 8.0],
+                                         [45.0, 20.0, np.radians(90), 50.0, 8.0]]))
+    assert on_arm < 0.2 * OUTLINE_COST
+    assert on_trunk == pytest.approx(OUTLINE_COST)
 
 
 # -- the head's image difference ------------------------------------------------------------
