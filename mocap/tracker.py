@@ -263,8 +263,8 @@ def part_lengths() -> np.ndarray:
 class BodyTracker:
     """The state carried from frame to frame: every part's block and its change over
     the last frame (constant-velocity prediction), the colour models and the
-    similarities of the last HISTORY frames, the head's adaptive threshold p, the
-    last frame and, while a frame is tracked, its edges."""
+    similarities of the last HISTORY frames, the head's adaptive threshold p and the
+    last frame."""
 
     def __init__(self, frame0: np.ndarray, marks: np.ndarray):
         scale = body_scale(marks)
@@ -286,20 +286,19 @@ class BodyTracker:
         self.chest = to_block(marks[JOINT_INDEX["chest"]], self.blocks[TORSO])
         self.p = P_START
         self.frame = frame0
-        self.edges = Edges.of_frame(frame0)
 
     def step(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Track the next frame: its (16, 2) joints and the (10,) similarities S."""
         predicted = self._predicted()
-        self.edges = Edges.of_frame(frame)
+        outline = outline_cost(Edges.of_frame(frame))
         new, s = predicted.copy(), np.zeros(len(PARTS))
         new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
         for k in LIMBS:
-            self._track_limb(frame, new, s, k, self._avoided(k, new))
+            self._track_limb(frame, new, s, k, self._avoided(k, new), outline)
         for twins in TWINS:
-            self._part_twins(frame, new, s, twins)
+            self._part_twins(frame, new, s, twins, outline)
         new = self._bounded(new, frame.shape)
         self._update(frame, new, s)
         return skeleton(new, self.chest), s
@@ -344,18 +343,19 @@ class BodyTracker:
         return found, s
 
     def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
-                    avoid: tuple) -> None:
+                    avoid: tuple, outline: blocks.Penalty) -> None:
         """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
         best pair of directions all around the root (``around_root``), then the
         lower part searched from there (``_hang``), kept off its upper part and the
         blocks to ``avoid`` and near its last place (limb_penalty); an arm's blocks
-        along the frame's edges (outline_cost)."""
+        along the frame's edges (``outline``, the frame's outline_cost)."""
         root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
-        outline = outline_cost(self.edges) if k in ARMS else None
-        if outline is not None:
+        if k not in ARMS:
+            outline = None
+        else:
             penalty = added(penalty, outline)
         lower = around_root(image, root, *parts, penalty, outline)
         self._hang(image, new, s, k, root, lower, penalty)
@@ -366,7 +366,7 @@ class BodyTracker:
         return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
 
     def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    twins: tuple[int, int]) -> None:
+                    twins: tuple[int, int], outline: blocks.Penalty) -> None:
         """Beyond the paper: twin limbs (both arms, both legs) look alike, and a limb
         that lost its own place follows its twin's. Where their lower blocks lie on
         one another (TWIN_OVERLAP), each twin in turn is tracked again keeping off
@@ -379,7 +379,7 @@ class BodyTracker:
         for moved, kept in ((a, b), (b, a)):
             placed, similarity = new.copy(), s.copy()
             avoid = (*self._avoided(moved, new), (TWIN_COST, new[kept + 1].copy()))
-            self._track_limb(image, placed, similarity, moved, avoid)
+            self._track_limb(image, placed, similarity, moved, avoid, outline)
             options.append((placed, similarity))
         costs = [limb_cost(sim, a) + limb_cost(sim, b)
                  + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options]
