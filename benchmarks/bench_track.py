@@ -31,6 +31,7 @@ import os
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -127,20 +128,21 @@ def print_table(rows: list[dict]) -> None:
           "(640x480, one thread); PA mm of 'all' is the mean over clips")
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__)
+def bench_main(doc: str, run_clip: Callable, print_table: Callable[[list], None]) -> int:
+    """A benchmark over the clips: ``run_clip(bvh, frames, fps, yaw, tmp)`` on every clip
+    from every view (one view per motion with --quick), then ``print_table`` of what it
+    returned; skipped, said so, when the motion capture is absent."""
+    parser = argparse.ArgumentParser(description=doc)
     parser.add_argument("--quick", action="store_true", help="one view per motion")
-    args = parser.parse_args()
+    yaws = YAWS[:1] if parser.parse_args().quick else YAWS
     if not DATA.is_dir():
         print(f"skipped: {DATA} is absent (real motion capture is needed to render the clips)")
         return 0
-    yaws = YAWS[:1] if args.quick else YAWS
     with tempfile.TemporaryDirectory() as tmp:
-        rows = [run_clip(bvh, frames, fps, yaw, Path(tmp))
-                for bvh, frames, fps in CLIPS for yaw in yaws]
-    print_table(rows)
+        print_table([run_clip(bvh, frames, fps, yaw, Path(tmp))
+                     for bvh, frames, fps in CLIPS for yaw in yaws])
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(bench_main(__doc__, run_clip, print_table))

@@ -25,7 +25,7 @@ from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.marks import check_marks
 from mocap.orientation import knee_facing
-from mocap.perspective import default_camera, reconstruct, steady_depths, to_contract
+from mocap.perspective import Pinhole, default_camera, reconstruct, steady_depths, to_contract
 from mocap.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
 
@@ -148,8 +148,7 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     joints2d = fill_unreliable(joints, reliability)
     camera = default_camera(info.width, info.height, focal_px)
     turn = turn or guessed_turn(joints2d, info.fps)
-    joints3d = to_contract(steady_depths(reconstruct(steady_joints(joints2d, info.fps), camera, turn),
-                                         info.fps))
+    joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps))
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal)
 
 
@@ -159,6 +158,14 @@ def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
     (orientation.knee_facing). Beyond the paper: the key triangle and hips fit two
     mirror-image turns about equally well (mocap.perspective.calibrate)."""
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
+
+
+def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turn: str | None,
+                          fps: float) -> np.ndarray:
+    """(F, 16, 3) pinhole-frame joints (metres) of tracked 2D joints (F, 16, 2): the
+    perspective reconstruction of the joints lightly smoothed (``steady_joints``),
+    every joint's depth then smoothed along its ray (``steady_depths``)."""
+    return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turn), fps)
 
 
 def steady_joints(joints2d: np.ndarray, fps: float) -> np.ndarray:

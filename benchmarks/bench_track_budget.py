@@ -1,0 +1,109 @@
+"""Where the tracking method's 3D error comes from: PA-MPJPE (mm) of bench_track's
+clips with parts of the tracked input replaced by the truth.
+
+Every row runs the 3D of mocap.track (mocap.track.steady_reconstruction) on 2D
+joints of the bench_track clips (real motion capture rendered with a pinhole camera
+over a panning, cluttered background; the tracker given the true joints of frame 0):
+
+- tracked: the tracked 2D joints, as ``mocap fit --method track`` reconstructs them;
+- exact 2D: the true 2D joints (the 3D stage's own floor);
+- tracked rays, exact depths: each tracked joint at the depth the exact 2D gives it
+  (what the 2D errors cost across the image); exact rays, tracked depths: the other
+  way round (what they cost in depth);
+- far arm / far leg exact: the elbow and wrist (knee and ankle) of the side farther
+  from the camera on each frame replaced by the truth;
+- limbs exact where > x%: every elbow, wrist, knee and ankle tracked more than x% of
+  body height off replaced by the truth on those frames (the gross failures).
+
+    python benchmarks/bench_track_budget.py [--quick]
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from bench_track import DATA, FOCAL, bench_main, orientation_of
+from mocap.body import JOINT_INDEX
+from mocap.metrics import pa_mpjpe
+from mocap.perspective import default_camera, to_contract
+from mocap.synth import render_motion
+from mocap.track import steady_reconstruction, track_video, turn_of
+from mocap.truth import Truth
+
+LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
+               for side in "lr" for kind, a, b in (("arm", "elbow", "wrist"), ("leg", "knee", "ankle"))}
+GROSS = (8.0, 4.0)      # % of body height: limb joints off by more are "gross failures"
+
+
+def far_side(joints3d: np.ndarray) -> np.ndarray:
+    """(F,) "l" or "r": the side whose shoulder and hip are farther from the camera
+    (contract frame: z toward the camera)."""
+    j = JOINT_INDEX
+    left = joints3d[:, [j["shoulder_l"], j["hip_l"]], 2].mean(axis=1)
+    right = joints3d[:, [j["shoulder_r"], j["hip_r"]], 2].mean(axis=1)
+    return np.where(left < right, "l", "r")
+
+
+def with_far(tracked: np.ndarray, truth: Truth, kind: str) -> np.ndarray:
+    """The tracked joints with the far side's arm or leg (``kind``) from the truth."""
+    out = tracked.copy()
+    for f, side in enumerate(far_side(truth.joints3d)):
+        joints = LIMB_JOINTS[side, kind]
+        out[f, joints] = truth.joints2d[f, joints]
+    return out
+
+
+def with_gross_fixed(tracked: np.ndarray, truth: Truth, percent: float) -> np.ndarray:
+    """The tracked joints with every limb joint more than ``percent`` of body height off
+    replaced by the truth."""
+    limbs = np.concatenate(list(LIMB_JOINTS.values()))
+    err = np.linalg.norm(tracked - truth.joints2d, axis=-1) / truth.body_height_px * 100
+    gross = np.zeros(err.shape, bool)
+    gross[:, limbs] = err[:, limbs] > percent
+    return np.where(gross[..., None], truth.joints2d, tracked)
+
+
+def budget(tracked: np.ndarray, truth: Truth, turn: str) -> dict[str, float]:
+    """PA-MPJPE (mm) of every row of the table for one clip."""
+    camera = default_camera(truth.width, truth.height)
+
+    def pinhole(joints2d: np.ndarray) -> np.ndarray:
+        return steady_reconstruction(joints2d, camera, turn, truth.fps)
+    mine, exact = pinhole(tracked), pinhole(truth.joints2d)
+    rows: dict[str, Callable[[], np.ndarray]] = {
+        "tracked": lambda: mine,
+        "exact 2D": lambda: exact,
+        "tracked rays, exact depths": lambda: mine * (exact[..., 2] / mine[..., 2])[..., None],
+        "exact rays, tracked depths": lambda: exact * (mine[..., 2] / exact[..., 2])[..., None],
+        "far arm exact": lambda: pinhole(with_far(tracked, truth, "arm")),
+        "far leg exact": lambda: pinhole(with_far(tracked, truth, "leg")),
+        **{f"limbs exact where > {p:g}%": (lambda p=p: pinhole(with_gross_fixed(tracked, truth, p)))
+           for p in GROSS}}
+    return {name: pa_mpjpe(to_contract(points()), truth.joints3d) * 1000 for name, points in rows.items()}
+
+
+def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, dict[str, float]]:
+    video = tmp / f"{Path(bvh).stem}_{yaw:.0f}.mp4"
+    truth = render_motion(DATA / bvh, video, frames=frames, fps=fps, yaw=yaw,
+                          perspective=FOCAL, moving_background=True)
+    orientation = orientation_of(truth.joints3d[0])
+    result = track_video(video, truth.joints2d[0], orientation=orientation)
+    name = Path(bvh).stem.replace("cmu_01_01_", "cmu_")
+    return f"{name} {yaw:.0f}", budget(result.joints2d, truth, turn_of(orientation))
+
+
+def print_table(columns: list[tuple[str, dict[str, float]]]) -> None:
+    names = [name for name, _ in columns]
+    print(f"{'PA-MPJPE mm':30s} " + " ".join(f"{n[:13]:>13s}" for n in names) + f" {'mean':>6s}")
+    for row in columns[0][1]:
+        values = [pa[row] for _, pa in columns]
+        print(f"{row:30s} " + " ".join(f"{v:13.0f}" for v in values) + f" {np.mean(values):6.1f}")
+    print("target: PA-MPJPE <= 60 mm from the tracked 2D")
+
+
+if __name__ == "__main__":
+    sys.exit(bench_main(__doc__, run_clip, print_table))
