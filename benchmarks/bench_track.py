@@ -44,10 +44,10 @@ cv2.setNumThreads(1)
 from mocap.body import JOINT_INDEX  # noqa: E402
 from mocap.marks import check_marks  # noqa: E402
 from mocap.metrics import pa_mpjpe, side_matched_errors  # noqa: E402
-from mocap.perspective import default_camera, reconstruct, to_contract  # noqa: E402
+from mocap.perspective import default_camera, to_contract  # noqa: E402
 from mocap.session import fit_video  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402
-from mocap.track import track_frames, track_video  # noqa: E402
+from mocap.track import steady_reconstruction, track_frames, track_video, turn_of  # noqa: E402
 from mocap.video import iter_frames, open_video  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
@@ -95,8 +95,8 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> dict:
     result = track_video(video, truth.joints2d[0], orientation=orientation)
     total = (time.process_time() - t) / len(truth.joints2d)
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px * 100
-    exact = to_contract(reconstruct(truth.joints2d, default_camera(truth.width, truth.height),
-                                    orientation.rsplit("_", 1)[1]))
+    exact = to_contract(steady_reconstruction(truth.joints2d, default_camera(truth.width, truth.height),
+                                              turn_of(orientation), truth.fps))
     twin = tmp / f"{Path(bvh).stem}_{yaw:.0f}_static.mp4"
     render_motion(DATA / bvh, twin, frames=frames, fps=fps, yaw=yaw, perspective=FOCAL)
     return {"clip": f"{Path(bvh).stem} yaw {yaw:.0f}", "frames": len(err), "fps": fps,

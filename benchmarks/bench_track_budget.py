@@ -21,7 +21,6 @@ over a panning, cluttered background; the tracker given the true joints of frame
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -74,16 +73,15 @@ def budget(tracked: np.ndarray, truth: Truth, turn: str) -> dict[str, float]:
     def pinhole(joints2d: np.ndarray) -> np.ndarray:
         return steady_reconstruction(joints2d, camera, turn, truth.fps)
     mine, exact = pinhole(tracked), pinhole(truth.joints2d)
-    rows: dict[str, Callable[[], np.ndarray]] = {
-        "tracked": lambda: mine,
-        "exact 2D": lambda: exact,
-        "tracked rays, exact depths": lambda: mine * (exact[..., 2] / mine[..., 2])[..., None],
-        "exact rays, tracked depths": lambda: exact * (mine[..., 2] / exact[..., 2])[..., None],
-        "far arm exact": lambda: pinhole(with_far(tracked, truth, "arm")),
-        "far leg exact": lambda: pinhole(with_far(tracked, truth, "leg")),
-        **{f"limbs exact where > {p:g}%": (lambda p=p: pinhole(with_gross_fixed(tracked, truth, p)))
-           for p in GROSS}}
-    return {name: pa_mpjpe(to_contract(points()), truth.joints3d) * 1000 for name, points in rows.items()}
+    rows = {
+        "tracked": mine,
+        "exact 2D": exact,
+        "tracked rays, exact depths": mine * (exact[..., 2] / mine[..., 2])[..., None],
+        "exact rays, tracked depths": exact * (mine[..., 2] / exact[..., 2])[..., None],
+        "far arm exact": pinhole(with_far(tracked, truth, "arm")),
+        "far leg exact": pinhole(with_far(tracked, truth, "leg")),
+        **{f"limbs exact where > {p:g}%": pinhole(with_gross_fixed(tracked, truth, p)) for p in GROSS}}
+    return {name: pa_mpjpe(to_contract(points), truth.joints3d) * 1000 for name, points in rows.items()}
 
 
 def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, dict[str, float]]:
