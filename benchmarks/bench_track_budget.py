@@ -13,7 +13,11 @@ over a panning, cluttered background; the tracker given the true joints of frame
 - far arm / far leg exact: the elbow and wrist (knee and ankle) of the side farther
   from the camera on each frame replaced by the truth;
 - limbs exact where > x%: every elbow, wrist, knee and ankle tracked more than x% of
-  body height off replaced by the truth on those frames (the gross failures).
+  body height off replaced by the truth on those frames (the gross failures);
+- pins 1 frame in 10: a simulated user who visits every REVIEW_EVERY-th
+  frame and puts every joint more than GROSS[-1]% off where it really is (joint
+  overrides), on that frame only, then as the app applies them, carried to the frames
+  around it (mocap.track.spread_corrections).
 
     python benchmarks/bench_track_budget.py [--quick]
 """
@@ -26,16 +30,17 @@ from pathlib import Path
 import numpy as np
 
 from bench_track import DATA, FOCAL, bench_main, orientation_of
-from mocap.body import JOINT_INDEX
+from mocap.body import JOINT_INDEX, JOINTS
 from mocap.metrics import pa_mpjpe
 from mocap.perspective import default_camera, to_contract
 from mocap.synth import render_motion
-from mocap.track import steady_reconstruction, track_video, turn_of
+from mocap.track import SPREAD_S, spread_corrections, steady_reconstruction, track_video, turn_of
 from mocap.truth import Truth
 
 LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
                for side in "lr" for kind, a, b in (("arm", "elbow", "wrist"), ("leg", "knee", "ankle"))}
 GROSS = (8.0, 4.0)      # % of body height: limb joints off by more are "gross failures"
+REVIEW_EVERY = 10       # frames: the simulated user corrects one frame in this many
 
 
 def far_side(joints3d: np.ndarray) -> np.ndarray:
@@ -66,6 +71,14 @@ def with_gross_fixed(tracked: np.ndarray, truth: Truth, percent: float) -> np.nd
     return np.where(gross[..., None], truth.joints2d, tracked)
 
 
+def user_corrections(tracked: np.ndarray, truth: Truth) -> dict[int, dict[str, tuple]]:
+    """Joint overrides of a user who corrects, on every REVIEW_EVERY-th frame, every
+    joint more than GROSS[-1]% of body height off."""
+    err = np.linalg.norm(tracked - truth.joints2d, axis=-1) / truth.body_height_px * 100
+    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in np.flatnonzero(err[f] > GROSS[-1])}
+            for f in range(0, len(tracked), REVIEW_EVERY)}
+
+
 def budget(tracked: np.ndarray, truth: Truth, turn: str) -> dict[str, float]:
     """PA-MPJPE (mm) of every row of the table for one clip."""
     camera = default_camera(truth.width, truth.height)
@@ -80,7 +93,10 @@ def budget(tracked: np.ndarray, truth: Truth, turn: str) -> dict[str, float]:
         "exact rays, tracked depths": exact * (mine[..., 2] / exact[..., 2])[..., None],
         "far arm exact": pinhole(with_far(tracked, truth, "arm")),
         "far leg exact": pinhole(with_far(tracked, truth, "leg")),
-        **{f"limbs exact where > {p:g}%": pinhole(with_gross_fixed(tracked, truth, p)) for p in GROSS}}
+        **{f"limbs exact where > {p:g}%": pinhole(with_gross_fixed(tracked, truth, p)) for p in GROSS},
+        **{f"pins 1 frame in {REVIEW_EVERY}, {name}": pinhole(spread_corrections(
+            tracked, user_corrections(tracked, truth), truth.fps, spread_s))
+           for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))}}
     return {name: pa_mpjpe(to_contract(points), truth.joints3d) * 1000 for name, points in rows.items()}
 
 

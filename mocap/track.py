@@ -36,6 +36,10 @@ LOW_RELIABILITY = 0.5      # a part matched this much worse than usual is taken 
 # nearly in the image plane (depth sqrt(l^2 - d^2) is steep there)
 SMOOTH_S = 0.05
 TURN_CUE_S = 1.0           # seconds from frame 0 whose knee bends tell an unsaid turn
+# seconds over which a user's correction of a tracked joint fades out on the frames
+# around it (spread_corrections): a tracker that is off on one frame was off the same
+# way on the frames around it
+SPREAD_S = 0.2
 
 
 def _joint_parts() -> list[tuple[int, ...]]:
@@ -109,6 +113,40 @@ def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray,
         bad = frames[(reliability[:, j] < threshold) & (frames > good[0]) & (frames < good[-1])]
         for c in range(2):
             out[bad, j, c] = np.interp(bad, good, joints2d[good, j, c])
+    return out
+
+
+def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tuple[float, float]]],
+                       fps: float, spread_s: float = SPREAD_S) -> np.ndarray:
+    """Tracked joints (F, 16, 2) with the user's ``corrections`` (frame -> {joint:
+    (x, y)}, the annotations' joint overrides) put in: each correction wins on its own
+    frame, and the frames around it move by its offset from the tracked joint, fading
+    linearly to nothing ``spread_s`` seconds away, or changing linearly into the
+    offset of the next correction of that joint where it is nearer than twice that.
+
+    Beyond the paper: tracking errors last (a limb lost to clutter stays lost for a
+    while), so a correction says how far off the tracker was on the frames around it
+    too; a user who corrects one frame in ten then fixes most of a drift, not a tenth."""
+    out = joints2d.copy()
+    fade = max(1, int(round(spread_s * fps)))
+    frames = np.arange(len(joints2d))
+    for joint in sorted({j for points in corrections.values() for j in points}):
+        j = JOINT_INDEX[joint]
+        keys = sorted(f for f, points in corrections.items() if joint in points and f < len(out))
+        at, offsets = [], []
+        for n, key in enumerate(keys):
+            offset = np.asarray(corrections[key][joint], float) - joints2d[key, j]
+            if n == 0 or key - keys[n - 1] > 2 * fade:
+                at.append(key - fade)
+                offsets.append(np.zeros(2))
+            at.append(key)
+            offsets.append(offset)
+            if n == len(keys) - 1 or keys[n + 1] - key > 2 * fade:
+                at.append(key + fade)
+                offsets.append(np.zeros(2))
+        offsets = np.array(offsets)
+        for c in range(2):
+            out[:, j, c] += np.interp(frames, at, offsets[:, c], left=0.0, right=0.0)
     return out
 
 

@@ -27,7 +27,8 @@ from mocap.orientation import NEGLIGIBLE, held_user_signs
 from mocap.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
                                to_contract)
 from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
-from mocap.track import TrackResult, guessed_turn, steady_joints, track_video, turn_of
+from mocap.track import (TrackResult, guessed_turn, spread_corrections, steady_joints, track_video,
+                         turn_of)
 from mocap.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
@@ -90,12 +91,10 @@ class TrackSession(Session):
         return self._resolution
 
     def _joints2d(self) -> np.ndarray:
-        """The tracked joints with the user's overrides put in."""
-        joints = self.tracked.joints2d.copy()
-        for i, points in self._annotations.overrides().items():
-            for joint, xy in points.items():
-                joints[i, JOINT_INDEX[joint]] = xy
-        return joints
+        """The tracked joints with the user's overrides put in, each carried to the
+        frames around it (mocap.track.spread_corrections)."""
+        return spread_corrections(self.tracked.joints2d, self._annotations.overrides(),
+                                  self.info.fps)
 
     def _reconstructed(self, joints: np.ndarray) -> np.ndarray:
         """(F, 16, 3) contract-frame joints: the turn said on frame 0 (else the knees'),

@@ -13,7 +13,8 @@ from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
 from mocap.marks import check_marks
-from mocap.track import LOW_RELIABILITY, fill_unreliable, joint_reliability, track_video
+from mocap.track import (LOW_RELIABILITY, fill_unreliable, joint_reliability, spread_corrections,
+                         track_video)
 from mocap.edges import Edges
 from mocap.tracker import (FOLD_COST, JUMP_COST, OUTLINE_COST, added, around_root, limb_penalty,
                            outline_cost, overlap, twin_overlap)
@@ -207,6 +208,26 @@ def test_unreliable_stretches_are_interpolated_between_reliable_frames():
     reliability[[2, 3, 5]] = LOW_RELIABILITY / 2
     filled = fill_unreliable(joints, reliability)
     assert np.allclose(filled[:, 0, 0], [0.0, 1.0, 2.0, 3.0, 4.0, 70.0])
+
+
+def test_a_correction_carries_to_the_frames_around_it():
+    """A tracker 10 px off on frames 8-22; the user puts the wrist right on frame 15:
+    the correction wins there and fades out over 0.2 s (5 frames at 25 fps) on either
+    side; two corrections of a joint that near each other blend into one another."""
+    tracked = np.zeros((30, 16, 2))
+    wrist = JOINT_INDEX["wrist_l"]
+    tracked[8:23, wrist, 0] = 10.0
+    once = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}}, 25.0)
+    assert np.allclose(once[:, wrist, 0], np.r_[np.zeros(8), 10, 10, 10, 8, 6, 4, 2, 0, 2, 4, 6,
+                                                  8, 10, 10, 10, np.zeros(7)])
+    assert np.array_equal(np.delete(once, wrist, axis=1), np.delete(tracked, wrist, axis=1))
+    twice = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}, 22: {"wrist_l": (4.0, 0.0)},
+                                         3: {"elbow_l": (1.0, 2.0)}}, 25.0)
+    assert np.allclose(twice[15:23, wrist, 0], np.linspace(0.0, 4.0, 8))
+    assert np.allclose(twice[23:28, wrist, 0], [-4.8, -3.6, -2.4, -1.2, 0])
+    assert np.allclose(twice[3, JOINT_INDEX["elbow_l"]], [1.0, 2.0])
+    alone = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}}, 25.0, spread_s=0.0)
+    assert np.flatnonzero(alone[:, wrist, 0] != tracked[:, wrist, 0]).tolist() == [15]
 
 
 def test_joint_reliability_follows_the_parts_that_placed_it():

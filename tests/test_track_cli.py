@@ -115,12 +115,18 @@ def test_a_held_foreshortening_fixes_the_limb_depths(session):
 
 
 def test_a_joint_override_moves_the_tracked_joint(session):
+    """An override wins on its frame and carries, fading, to the frames around it
+    (0.2 s: 3 frames at 15 frames/s)."""
     tracked, truth = session
     notes = tracked.annotations
     frame, joint = 7, JOINTS.index("wrist_l")
-    moved = tuple(tracked.tracked.joints2d[frame, joint] + [25.0, -10.0])
+    offset = np.array([24.0, -9.0])
+    moved = tuple(tracked.tracked.joints2d[frame, joint] + offset)
     tracked.annotate(notes.with_joint(frame, "wrist_l", moved))
     assert np.allclose(tracked.inputs.joints2d[frame, joint], moved)
+    shift = tracked.inputs.joints2d[:, joint] - tracked.tracked.joints2d[:, joint]
+    assert np.allclose(shift[frame - 3:frame + 4], np.outer([0, 1, 2, 3, 2, 1, 0], offset) / 3)
+    assert not shift[:frame - 3].any() and not shift[frame + 4:].any()
     assert not np.allclose(tracked.pose3d(frame)[joint], tracked.tracked.joints3d[frame, joint])
     tracked.annotate(notes)
     assert np.allclose(tracked.inputs.joints2d, tracked.tracked.joints2d)
