@@ -196,13 +196,13 @@ def orientation_text(view: FrameView) -> str:
 
 def review_text(state: AppState) -> str:
     """The review queue's head as markdown."""
-    queue = state.review_queue()
+    queue = state.review_stops()
     if not state.progress.ready:
         return "Ranked once every frame is fitted."
     if not queue:
         return "No doubtful frame."
     lines = [f"- **{d.frame}**: {'; '.join(d.reasons)}" for d in queue[:REVIEW_LINES]]
-    return f"{len(queue)} doubtful frames, most doubtful first:\n" + "\n".join(lines)
+    return f"{len(queue)} frames to review, most doubtful first:\n" + "\n".join(lines)
 
 
 def tracking_text(state: AppState) -> str:

@@ -86,6 +86,17 @@ def review_queue(session: Session) -> list[Doubt]:
     return sorted(queue, key=lambda d: (-d.value, d.frame))
 
 
+def spaced(queue: list[Doubt], spacing: int) -> list[Doubt]:
+    """The doubts of a queue (most doubtful first) that have no more doubtful one
+    within ``spacing`` frames: one frame per doubtful stretch, its worst (a session's
+    review_spacing: the tracking method's pins carry to the frames around them)."""
+    kept: list[Doubt] = []
+    for doubt in queue:
+        if all(abs(doubt.frame - k.frame) > spacing for k in kept):
+            kept.append(doubt)
+    return kept
+
+
 def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray,
              swaps: np.ndarray) -> tuple[str, ...]:
     """One frame's doubts in words (``score``: the frame's score, named)."""

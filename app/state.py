@@ -27,7 +27,7 @@ from typing import Callable
 import numpy as np
 
 from app.preprocess import Progress, Throttle
-from app.review import Doubt, review_queue
+from app.review import Doubt, review_queue, spaced
 from mocap.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
@@ -351,6 +351,13 @@ class AppState:
                 self._queue = review_queue(self._session)
             return self._queue
 
+    def review_stops(self) -> list[Doubt]:
+        """The frames the review visits, most doubtful first: the queue, one frame per
+        stretch of its session's review_spacing (review.spaced)."""
+        with self._lock:
+            queue = self.review_queue()
+            return spaced(queue, self._session.review_spacing) if queue else queue
+
     def motion(self) -> Motion:
         """The animation of the current annotations (keyframes lifted, others interpolated)."""
         with self._lock:
@@ -405,7 +412,7 @@ class AppState:
         the frame this last returned (by its place in the queue as ranked now); None
         when the queue is empty."""
         with self._lock:
-            frames = [d.frame for d in self.review_queue()]
+            frames = [d.frame for d in self.review_stops()]
             if not frames:
                 return None
             at = frames.index(self._reviewed) + 1 if self._reviewed in frames else 0

@@ -17,7 +17,9 @@ over a panning, cluttered background; the tracker given the true joints of frame
 - pins 1 frame in 10: a simulated user who visits every REVIEW_EVERY-th
   frame and puts every joint more than GROSS[-1]% off where it really is (joint
   overrides), on that frame only, then as the app applies them, carried to the frames
-  around it (mocap.track.spread_corrections).
+  around it (mocap.track.spread_corrections); pins on the review's stops: the same
+  user visiting the app's review stops instead (one frame per doubtful 0.2 s stretch,
+  most doubtful first, at most as many as one frame in 10).
 
     python benchmarks/bench_track_budget.py [--quick]
 """
@@ -30,11 +32,15 @@ from pathlib import Path
 import numpy as np
 
 from bench_track import DATA, FOCAL, bench_main, orientation_of
+from app.review import review_queue, spaced
+from mocap.annotations import Annotations
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.metrics import pa_mpjpe
 from mocap.perspective import default_camera, to_contract
 from mocap.synth import render_motion
-from mocap.track import SPREAD_S, spread_corrections, steady_reconstruction, track_video, turn_of
+from mocap.track import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
+                         track_video, turn_of)
+from mocap.tracksession import TrackSession
 from mocap.truth import Truth
 
 LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
@@ -71,16 +77,25 @@ def with_gross_fixed(tracked: np.ndarray, truth: Truth, percent: float) -> np.nd
     return np.where(gross[..., None], truth.joints2d, tracked)
 
 
-def user_corrections(tracked: np.ndarray, truth: Truth) -> dict[int, dict[str, tuple]]:
-    """Joint overrides of a user who corrects, on every REVIEW_EVERY-th frame, every
-    joint more than GROSS[-1]% of body height off."""
+def user_corrections(tracked: np.ndarray, truth: Truth, visits) -> dict[int, dict[str, tuple]]:
+    """Joint overrides of a user who corrects, on each frame of ``visits``, every joint
+    more than GROSS[-1]% of body height off."""
     err = np.linalg.norm(tracked - truth.joints2d, axis=-1) / truth.body_height_px * 100
     return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in np.flatnonzero(err[f] > GROSS[-1])}
-            for f in range(0, len(tracked), REVIEW_EVERY)}
+            for f in visits}
 
 
-def budget(tracked: np.ndarray, truth: Truth, turn: str) -> dict[str, float]:
-    """PA-MPJPE (mm) of every row of the table for one clip."""
+def review_stops(result: TrackResult, orientation: str) -> list[int]:
+    """The frames the app's review visits for this tracking, most doubtful first
+    (app.state.AppState.review_stops), at most one in REVIEW_EVERY."""
+    notes = Annotations().with_method("track").with_orientation(0, orientation)
+    session = TrackSession(result.info, result, notes)
+    stops = spaced(review_queue(session), session.review_spacing)
+    return [d.frame for d in stops][:len(result.joints2d) // REVIEW_EVERY]
+
+
+def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int]) -> dict[str, float]:
+    """PA-MPJPE (mm) of every row of the table for one clip; ``stops``: the review's."""
     camera = default_camera(truth.width, truth.height)
 
     def pinhole(joints2d: np.ndarray) -> np.ndarray:
@@ -95,8 +110,10 @@ def budget(tracked: np.ndarray, truth: Truth, turn: str) -> dict[str, float]:
         "far leg exact": pinhole(with_far(tracked, truth, "leg")),
         **{f"limbs exact where > {p:g}%": pinhole(with_gross_fixed(tracked, truth, p)) for p in GROSS},
         **{f"pins 1 frame in {REVIEW_EVERY}, {name}": pinhole(spread_corrections(
-            tracked, user_corrections(tracked, truth), truth.fps, spread_s))
-           for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))}}
+            tracked, user_corrections(tracked, truth, range(0, len(tracked), REVIEW_EVERY)),
+            truth.fps, spread_s)) for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))},
+        "pins on the review's stops": pinhole(spread_corrections(
+            tracked, user_corrections(tracked, truth, stops), truth.fps))}
     return {name: pa_mpjpe(to_contract(points), truth.joints3d) * 1000 for name, points in rows.items()}
 
 
@@ -107,7 +124,8 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, 
     orientation = orientation_of(truth.joints3d[0])
     result = track_video(video, truth.joints2d[0], orientation=orientation)
     name = Path(bvh).stem.replace("cmu_01_01_", "cmu_")
-    return f"{name} {yaw:.0f}", budget(result.joints2d, truth, turn_of(orientation))
+    stops = review_stops(result, orientation)
+    return f"{name} {yaw:.0f}", budget(result.joints2d, truth, turn_of(orientation), stops)
 
 
 def print_table(columns: list[tuple[str, dict[str, float]]]) -> None:

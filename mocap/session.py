@@ -254,6 +254,7 @@ class Session:
         return guess_orientations(*self._arrays, self.info.fps)
 
     score_name = "similarity S"     # what ``scores`` are, for the page
+    review_spacing = 0              # frames around a listed doubtful frame the review skips
 
     @property
     def scores(self) -> np.ndarray:

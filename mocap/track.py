@@ -128,7 +128,7 @@ def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tu
     while), so a correction says how far off the tracker was on the frames around it
     too; a user who corrects one frame in ten then fixes most of a drift, not a tenth."""
     out = joints2d.copy()
-    fade = max(1, int(round(spread_s * fps)))
+    fade = spread_frames(fps, spread_s)
     frames = np.arange(len(joints2d))
     for joint in sorted({j for points in corrections.values() for j in points}):
         j = JOINT_INDEX[joint]
@@ -148,6 +148,11 @@ def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tu
         for c in range(2):
             out[:, j, c] += np.interp(frames, at, offsets[:, c], left=0.0, right=0.0)
     return out
+
+
+def spread_frames(fps: float, spread_s: float = SPREAD_S) -> int:
+    """The frames (at least 1) over which a correction fades out (spread_corrections)."""
+    return max(1, int(round(spread_s * fps)))
 
 
 def turn_of(orientation: str | None) -> str | None:

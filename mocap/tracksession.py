@@ -27,8 +27,8 @@ from mocap.orientation import NEGLIGIBLE, held_user_signs
 from mocap.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
                                to_contract)
 from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
-from mocap.track import (TrackResult, guessed_turn, spread_corrections, steady_joints, track_video,
-                         turn_of)
+from mocap.track import (TrackResult, guessed_turn, spread_corrections, spread_frames, steady_joints,
+                         track_video, turn_of)
 from mocap.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
@@ -53,6 +53,12 @@ class TrackSession(Session):
     """A tracked video and the user's annotations; reconstructs on demand."""
 
     score_name = "tracking reliability"
+
+    @property
+    def review_spacing(self) -> int:
+        """A pin carries SPREAD_S to either side (spread_corrections), so the review
+        lists one frame of a doubtful stretch that long: the worst."""
+        return spread_frames(self.info.fps)
 
     def __init__(self, info: VideoInfo, tracked: TrackResult,
                  annotations: Annotations | None = None, smooth: float = 0.0):

@@ -14,7 +14,7 @@ import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
 
 from mocap.session import iter_fits, iter_silhouettes
-from app.review import broken_limits, likely_swaps, review_queue
+from app.review import Doubt, broken_limits, likely_swaps, review_queue, spaced
 from app.state import AppState, annotations_path, toggled_keyframe
 from app.views import Layout, segment_transforms
 from mocap.annotations import Annotations, load_annotations
@@ -170,6 +170,12 @@ def test_doubt_signs_on_made_up_joints():
     hands[:, JOINT_INDEX["wrist_r"]] = [(100, 0), (90, 0), (10, 0)]   # frame 2: swapped
     swaps = likely_swaps(hands, np.ones(3))
     assert swaps[:, 0].tolist() == [False, False, True]
+
+
+def test_a_spaced_review_keeps_the_worst_frame_of_each_stretch():
+    queue = [Doubt(f, v, ("low",)) for f, v in ((10, 0.9), (12, 0.8), (30, 0.7), (8, 0.6), (14, 0.5))]
+    assert [d.frame for d in spaced(queue, 3)] == [10, 30, 14]
+    assert spaced(queue, 0) == queue
 
 
 def test_review_queue_ranks_and_cycles(app):

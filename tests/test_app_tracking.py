@@ -123,3 +123,15 @@ def test_marks_from_the_silhouette_fit(tiny_video, tmp_path):
     marks = state.annotations.frames[0].joints2d
     assert np.allclose([marks[j] for j in JOINTS], fitted, atol=0.06)
     assert state.undo() == 0 and state.unmarked() == list(JOINTS)
+
+
+def test_the_tracking_review_visits_one_frame_per_stretch_a_pin_covers(tracked):
+    state, _ = tracked
+    spacing = state._session.review_spacing
+    assert spacing == round(0.2 * state.info.fps)
+    doubtful = {d.frame for d in state.review_queue()}
+    stops = [d.frame for d in state.review_stops()]
+    assert set(stops) <= doubtful and all(abs(a - b) > spacing for a in stops for b in stops if a != b)
+    assert all(any(abs(f - s) <= spacing for s in stops) for f in doubtful)
+    assert stops, "the panning clip has doubtful frames"
+    assert [state.next_doubtful() for _ in stops] == stops
