@@ -120,34 +120,34 @@ def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tu
                        fps: float, spread_s: float = SPREAD_S) -> np.ndarray:
     """Tracked joints (F, 16, 2) with the user's ``corrections`` (frame -> {joint:
     (x, y)}, the annotations' joint overrides) put in: each correction wins on its own
-    frame, and the frames around it move by its offset from the tracked joint, fading
-    linearly to nothing ``spread_s`` seconds away, or changing linearly into the
-    offset of the next correction of that joint where it is nearer than twice that.
+    frame, and the frames around it move by its offset from the tracked joint
+    (``faded_offsets`` over ``spread_s`` seconds).
 
     Beyond the paper: tracking errors last (a limb lost to clutter stays lost for a
     while), so a correction says how far off the tracker was on the frames around it
     too; a user who corrects one frame in ten then fixes most of a drift, not a tenth."""
     out = joints2d.copy()
-    fade = spread_frames(fps, spread_s)
-    frames = np.arange(len(joints2d))
     for joint in sorted({j for points in corrections.values() for j in points}):
         j = JOINT_INDEX[joint]
         keys = sorted(f for f, points in corrections.items() if joint in points and f < len(out))
-        at, offsets = [], []
-        for n, key in enumerate(keys):
-            offset = np.asarray(corrections[key][joint], float) - joints2d[key, j]
-            if n == 0 or key - keys[n - 1] > 2 * fade:
-                at.append(key - fade)
-                offsets.append(np.zeros(2))
-            at.append(key)
-            offsets.append(offset)
-            if n == len(keys) - 1 or keys[n + 1] - key > 2 * fade:
-                at.append(key + fade)
-                offsets.append(np.zeros(2))
-        offsets = np.array(offsets)
-        for c in range(2):
-            out[:, j, c] += np.interp(frames, at, offsets[:, c], left=0.0, right=0.0)
+        offsets = [np.asarray(corrections[f][joint], float) - joints2d[f, j] for f in keys]
+        out[:, j] += faded_offsets(len(out), keys, offsets, spread_frames(fps, spread_s))
     return out
+
+
+def faded_offsets(n_frames: int, keys: list[int], offsets: list[np.ndarray], fade: int) -> np.ndarray:
+    """(n_frames, 2) the ``offsets`` at the frames ``keys`` (sorted), changing linearly
+    from one to the next where they are at most 2 ``fade`` frames apart, else fading
+    linearly to zero ``fade`` frames away."""
+    at, values, zero = [], [], np.zeros(2)
+    for n, (key, offset) in enumerate(zip(keys, offsets)):
+        alone_before = n == 0 or key - keys[n - 1] > 2 * fade
+        alone_after = n == len(keys) - 1 or keys[n + 1] - key > 2 * fade
+        at += [key - fade] * alone_before + [key] + [key + fade] * alone_after
+        values += [zero] * alone_before + [offset] + [zero] * alone_after
+    values = np.array(values)
+    frames = np.arange(n_frames)
+    return np.stack([np.interp(frames, at, values[:, c], left=0.0, right=0.0) for c in range(2)], axis=-1)
 
 
 def spread_frames(fps: float, spread_s: float = SPREAD_S) -> int:
