@@ -184,7 +184,17 @@ def frame_text(view: FrameView) -> str:
     else:
         score = "Tracking reliability" if view.method == "track" else "Similarity S ="
         body = f"{score} **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
+        body += "".join(f"  \n↔ {', '.join(joints)} moved by the pin on frame {source}"
+                        for source, joints in pins_by_frame(view.carried).items())
     return f"{head}  \n{body}"
+
+
+def pins_by_frame(carried: dict[str, int]) -> dict[int, list[str]]:
+    """frame -> the joints its pins carry to this frame (FrameView.carried)."""
+    out: dict[int, list[str]] = {}
+    for joint, source in carried.items():
+        out.setdefault(source, []).append(joint)
+    return dict(sorted(out.items()))
 
 
 def orientation_text(view: FrameView) -> str:

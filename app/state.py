@@ -38,6 +38,7 @@ from mocap.export.motion_json import motion_dict
 from mocap.lift import depth_fractions
 from mocap.marks import check_marks
 from mocap.motion import Motion
+from mocap.track import carried_pins
 from mocap.perspective import calibrate, default_camera
 from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
                            iter_silhouettes, video_dict)
@@ -108,6 +109,7 @@ class FrameView:
     orientation_note: str = ""
     doubts: tuple[str, ...] = ()
     method: str = "silhouette"          # whose joints and 3D these are ("track": tracking's)
+    carried: dict[str, int] = field(default_factory=dict)   # joint -> frame of the pin moving it
 
 
 @dataclass
@@ -321,7 +323,8 @@ class AppState:
             if self.method == "track":
                 if self._tracked is None:
                     return replace(base, fitted=False)
-                return self._lifted_view(replace(base, fitted=True,
+                carried = carried_pins(self._annotations.overrides(), i, self.info.fps)
+                return self._lifted_view(replace(base, fitted=True, carried=carried,
                                                  score=float(self._tracked.scores[i])))
             if fit is None or fit.joints2d is None:
                 return base

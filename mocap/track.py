@@ -150,6 +150,21 @@ def faded_offsets(n_frames: int, keys: list[int], offsets: list[np.ndarray], fad
     return np.stack([np.interp(frames, at, values[:, c], left=0.0, right=0.0) for c in range(2)], axis=-1)
 
 
+def carried_pins(corrections: dict[int, dict[str, tuple[float, float]]], frame: int,
+                 fps: float) -> dict[str, int]:
+    """joint -> the frame of the nearest correction of it that moves it on ``frame``
+    (spread_corrections) without being on that frame; frame 0's (the marks) aside."""
+    fade = spread_frames(fps)
+    out: dict[str, int] = {}
+    for source in sorted(corrections, key=lambda f: abs(f - frame)):
+        if source == 0 or not 0 < abs(source - frame) < fade:
+            continue
+        for joint in corrections[source]:
+            if joint not in corrections.get(frame, {}):
+                out.setdefault(joint, source)
+    return out
+
+
 def spread_frames(fps: float, spread_s: float = SPREAD_S) -> int:
     """The frames (at least 1) over which a correction fades out (spread_corrections)."""
     return max(1, int(round(spread_s * fps)))
