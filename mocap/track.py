@@ -137,12 +137,13 @@ def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tu
 
 def faded_offsets(n_frames: int, keys: list[int], offsets: list[np.ndarray], fade: int) -> np.ndarray:
     """(n_frames, 2) the ``offsets`` at the frames ``keys`` (sorted), changing linearly
-    from one to the next where they are at most 2 ``fade`` frames apart, else fading
-    linearly to zero ``fade`` frames away."""
+    from one to the next where they are fewer than 2 ``fade`` frames apart, else fading
+    linearly to zero ``fade`` frames away (so every frame moved is nearer than ``fade``
+    to a key: carried_pins)."""
     at, values, zero = [], [], np.zeros(2)
     for n, (key, offset) in enumerate(zip(keys, offsets)):
-        alone_before = n == 0 or key - keys[n - 1] > 2 * fade
-        alone_after = n == len(keys) - 1 or keys[n + 1] - key > 2 * fade
+        alone_before = n == 0 or key - keys[n - 1] >= 2 * fade
+        alone_after = n == len(keys) - 1 or keys[n + 1] - key >= 2 * fade
         at += [key - fade] * alone_before + [key] + [key + fade] * alone_after
         values += [zero] * alone_before + [offset] + [zero] * alone_after
     values = np.array(values)

@@ -13,8 +13,8 @@ from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
 from mocap.marks import check_marks
-from mocap.track import (LOW_RELIABILITY, fill_unreliable, joint_reliability, spread_corrections,
-                         track_video)
+from mocap.track import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
+                         spread_corrections, track_video)
 from mocap.edges import Edges
 from mocap.tracker import (FOLD_COST, JUMP_COST, OUTLINE_COST, added, around_root, limb_penalty,
                            outline_cost, overlap, twin_overlap)
@@ -228,6 +228,18 @@ def test_a_correction_carries_to_the_frames_around_it():
     assert np.allclose(twice[3, JOINT_INDEX["elbow_l"]], [1.0, 2.0])
     alone = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}}, 25.0, spread_s=0.0)
     assert np.flatnonzero(alone[:, wrist, 0] != tracked[:, wrist, 0]).tolist() == [15]
+
+
+def test_the_frames_a_pin_moves_are_the_ones_it_is_said_to_move():
+    """carried_pins names a pin on exactly the frames spread_corrections moves (and not
+    on the pinned frame itself), also where two pins' stretches meet."""
+    tracked = np.zeros((40, 16, 2))
+    for gap in (9, 10, 11):                              # 2 x 5 frames of fade at 25 fps
+        pins = {10: {"knee_r": (3.0, 0.0)}, 10 + gap: {"knee_r": (0.0, 4.0)}}
+        moved = spread_corrections(tracked, pins, 25.0)[:, JOINT_INDEX["knee_r"]].any(axis=1)
+        said = [bool(carried_pins(pins, f, 25.0)) or f in pins for f in range(40)]
+        assert moved.tolist() == said, gap
+    assert carried_pins({0: {"neck": (1.0, 1.0)}}, 1, 25.0) == {}     # the marks
 
 
 def test_joint_reliability_follows_the_parts_that_placed_it():
