@@ -38,11 +38,10 @@ from mocap.export.motion_json import motion_dict
 from mocap.lift import depth_fractions
 from mocap.marks import check_marks
 from mocap.motion import Motion
-from mocap.track import carried_pins
 from mocap.perspective import calibrate, default_camera
 from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
                            iter_silhouettes, video_dict)
-from mocap.track import turn_of
+from mocap.track import carried_pins, turn_of
 from mocap.tracksession import TrackSession, marks_of, track_annotated
 from mocap.video import open_video, processing_scale
 
