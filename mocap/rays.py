@@ -8,12 +8,15 @@ radius l around K: two points, mirror images in depth. The trunk's joints take t
 root nearer the rigid trunk carried by the key triangle. The paper settles the limbs'
 choice by continuity from frame to frame; here the choice for each limb (two bones,
 four combinations per frame) is made for the whole clip at once by dynamic
-programming: the sequence with the smallest sum of squared accelerations of the
-middle and end joints, plus a penalty for leaving the joints' ranges, the same joint limits as
-the silhouette method's sign guess (knees and elbows bent the wrong way, an upper
-arm or thigh pointing through the trunk, limbs out of the sagittal plane). A
-greedy frame-to-frame choice cannot tell, where a bone passes through the image
-plane (the two roots meet), whether it goes on or turns back; acceleration can.
+programming: the sequence that leaves the joints' ranges least (the same joint limits
+as the silhouette method's sign guess: knees and elbows bent the wrong way, an upper
+arm or thigh pointing through the trunk, limbs out of the sagittal plane), ties
+broken by the smallest sum of squared accelerations of the middle and end joints.
+A greedy frame-to-frame choice cannot tell, where a bone passes through the image
+plane (the two roots meet), whether it goes on or turns back; acceleration can. The
+limits come first (LIMIT_WEIGHT): tracked 2D joints jitter, and the jitter's depth
+makes the smoothest sequence a poor judge of which root a limb takes (PA-MPJPE 81.5
+mm with acceleration first, 77.1 with the limits first, benchmarks/bench_track.py).
 Where a whole limb's mirror image is as smooth and as possible as the limb (a limb
 that never crosses the image plane, within its ranges), the choice stays a guess:
 the user's foreshortening directions (CONTRACT.md), where given, settle it.
@@ -32,7 +35,7 @@ LIMBS = tuple((*(JOINT_INDEX[f"{name}_{s}"] for name in (a, b, c)), leg, side)
               for s, side in (("l", 1.0), ("r", -1.0))
               for a, b, c, leg in (("shoulder", "elbow", "wrist", False),
                                    ("hip", "knee", "ankle", True)))
-LIMIT_WEIGHT = 0.02     # m^2 of squared acceleration that a unit of joint-limit penalty costs
+LIMIT_WEIGHT = 3.0      # m^2 of squared acceleration that a unit of joint-limit penalty costs
 
 
 def ray_roots(known: np.ndarray, rays: np.ndarray, length: float) -> np.ndarray:

@@ -105,15 +105,16 @@ def test_the_limb_choice_goes_on_through_the_image_plane():
     assert np.allclose(cands[np.arange(len(t)), picked, 0], true)
 
 
-@pytest.mark.parametrize("yaw, bound_mm", [(30.0, 1.0), (60.0, 1.0), (120.0, 1.0), (140.0, 1.5),
-                                           (20.0, 10.0), (40.0, 6.0)])
+@pytest.mark.parametrize("yaw, bound_mm", [(30.0, 4.0), (60.0, 4.0), (120.0, 2.5), (140.0, 2.5),
+                                           (20.0, 7.0), (40.0, 5.5)])
 def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm):
     """The walk of the model's own proportions seen at its true bone lengths. The
     joint limits (limbs near the sagittal plane) tell a leg from its mirror image
-    where both are as smooth (without them: 10-48 mm at 20, 30, 40 and 140
-    degrees); near the frontal (and the back) view a forearm that is nearly straight
-    still has two mirror-image depths that are equally possible (at 140 degrees on 6
-    of 36 frames: 1.0 mm on average)."""
+    (without them: 10-48 mm at 20, 30, 40 and 140 degrees). They come before
+    smoothness (rays.LIMIT_WEIGHT), which real tracked motion needs; on this
+    synthetic walk they take the mirror image of a nearly straight arm swinging out
+    of the sagittal plane on a few frames (3.5 mm at 30 and 60 degrees, 0.5 mm with
+    smoothness first)."""
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=yaw))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
