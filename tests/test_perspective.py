@@ -113,8 +113,8 @@ def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm):
     (without them: 10-48 mm at 20, 30, 40 and 140 degrees). They come before
     smoothness (rays.LIMIT_WEIGHT), which real tracked motion needs; on this
     synthetic walk they take the mirror image of a nearly straight arm swinging out
-    of the sagittal plane on a few frames (3.5 mm at 30 and 60 degrees, 0.5 mm with
-    smoothness first)."""
+    of the sagittal plane on a few frames (3.5 mm at 30 and 60 degrees; 0.5 and 0.0 mm
+    with smoothness first)."""
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=yaw))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
