@@ -10,7 +10,8 @@ of 3D human motion skeleton", Eq. 6-11).
    span as a seventh unknown (see ``calibrate``).
 2. **Later frames** (Eq. 10-11, ``key_depths``): the key joints' depths solve "each
    key joint on its ray, the key triangle's sides keep their lengths", by
-   Gauss-Newton from the previous frame's depths.
+   Gauss-Newton from the previous frame's depths; beyond the paper, kept to the side
+   the user's orientation names (``frame_key_depths``).
 3. **Centre to fringe** (mocap.rays): every other joint on its pixel's viewing ray at
    its bone length from a joint already placed.
 
@@ -69,6 +70,8 @@ TRUNK_SIGNS = {JOINT_INDEX["head_top"]: (SEGMENT_INDEX["head"], JOINT_INDEX["nec
                JOINT_INDEX["pelvis"]: (SEGMENT_INDEX["torso"], JOINT_INDEX["neck"], False)}
 LENGTH_PERCENTILE = 50          # of a bone's seen lengths over the clip (measured_lengths)
 NEWTON_STEPS = 30
+SIDE_MARGIN_DEG = 15.0          # a trunk turned less than this from facing the camera
+                                # (or from facing away) shows no side
 # body frame -> pinhole frame for a performer facing the camera (left to image right,
 # up to image up, forward toward the camera)
 FACING_CAMERA = np.diag([1.0, -1.0, -1.0])
@@ -274,17 +277,51 @@ def body_axes(key: np.ndarray) -> np.ndarray:
     return np.stack([left, up, np.cross(left, up)], axis=-1)
 
 
-def key_joints(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
+def triangle_yaw(key: np.ndarray) -> np.ndarray:
+    """The facing yaw in degrees (as Calibration.yaw) of key joints (..., 3, 3)."""
+    forward = body_axes(key)[..., :, 2]
+    return np.degrees(np.arctan2(forward[..., 0], -forward[..., 2]))
+
+
+def turned_against(key: np.ndarray, turn: str | None) -> bool:
+    """Whether key joints (3, 3) face clearly (SIDE_MARGIN_DEG) to the other side than
+    ``turn`` ("left" or "right", None: either)."""
+    yaw = float(triangle_yaw(key))
+    clear = SIDE_MARGIN_DEG < abs(yaw) < 180.0 - SIDE_MARGIN_DEG
+    return turn is not None and clear and (yaw > 0) != (turn == "right")
+
+
+def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
+                     turn: str | None) -> np.ndarray:
+    """A frame's key depths (3,) from the previous frame's (Eq. 10-11, ``key_depths``),
+    on the side ``turn`` says.
+
+    Beyond the paper: a trunk turning through the frontal view shows two mirror-image
+    triangles alike, and the solution nearest the previous frame turns back where the
+    body turns on (the 2D sides never quite agree with the calibrated ones). Where the
+    triangle found faces the other side than the user's held orientation, the
+    solution from its depths mirrored about their mean is taken instead if it faces
+    the said side."""
+    found = key_depths(rays, depths, sides)
+    if not turned_against(found[:, None] * rays, turn):
+        return found
+    mirror = key_depths(rays, 2 * found.mean() - found, sides)
+    return found if turned_against(mirror[:, None] * rays, turn) else mirror
+
+
+def key_joints(joints2d: np.ndarray, camera: Pinhole, turns=None,
                before: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(F, 3, 3) the key joints of every frame: calibration on frame 0 (Eq. 6-9), then
-    each frame's depths from the previous frame's (Eq. 10-11).
+    each frame's depths from the previous frame's (Eq. 10-11, ``frame_key_depths``).
 
-    ``before``: (2D joints, key joints) of an earlier call on the same clip with the
-    same ``turn``; only the frames whose key joints moved in 2D are solved again (all
-    of them when frame 0's did), each from the frame before it, as a full solve
-    would start them."""
+    ``turns``: the side ("left", "right" or None) of each frame's held orientation,
+    or one side for every frame. ``before``: (2D joints, key joints) of an earlier
+    call on the same clip with the same ``turns``; only the frames whose key joints
+    moved in 2D are solved again (all of them when frame 0's did), each from the
+    frame before it, as a full solve would start them."""
     rays = camera.rays(joints2d[:, KEY])
-    cal = calibrate(joints2d[0], camera, turn)
+    held = [turns] * len(rays) if turns is None or isinstance(turns, str) else list(turns)
+    cal = calibrate(joints2d[0], camera, held[0])
     triangle = cal.model()[KEY]
     depths = cal.to_camera(triangle)[:, 2]
     sides = np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in KEY_LINES])
@@ -293,9 +330,9 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
         moved = (before[0][:, KEY] != joints2d[:, KEY]).any(axis=(1, 2))
         redo = redo if moved[0] else moved
     out = np.empty((len(rays), 3, 3))
-    for f, frame_rays in enumerate(rays):
+    for f, (frame_rays, turn) in enumerate(zip(rays, held)):
         if redo[f]:
-            depths = key_depths(frame_rays, depths, sides)
+            depths = frame_key_depths(frame_rays, depths, sides, turn)
             out[f] = depths[:, None] * frame_rays
         else:
             out[f] = before[1][f]

@@ -3,8 +3,9 @@ video whose joints the user marked on frame 0 (mocap.track).
 
 The 2D joints are tracked once; everything the user says afterwards reshapes the 3D
 without tracking again: joint overrides replace tracked joints on their frame,
-frame 0's orientation tells which way the body is turned (the calibration's two
-mirror fits), and held foreshortening directions fix the depth choices of the
+the held orientation tells which way the body is turned (the calibration's two
+mirror fits on frame 0, the key triangle's two mirror images on later frames), and
+held foreshortening directions fix the depth choices of the
 trunk and the limbs (mocap.perspective.place_joints) while they hold. The key
 joints' depths (Eq. 10-11, the slow part) are kept until the 2D joints change, so a
 foreshortening toggle only re-chooses depths.
@@ -67,8 +68,8 @@ class TrackSession(Session):
         super().__init__(info, fits, annotations, smooth)
         self.tracked = tracked
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
-        # (steady 2D joints, turn, key joints, their placement free of user signs)
-        self._placed: tuple[np.ndarray, str | None, np.ndarray, np.ndarray] | None = None
+        # (steady 2D joints, turns, key joints, their placement free of user signs)
+        self._placed: tuple[np.ndarray, list, np.ndarray, np.ndarray] | None = None
         self._resolution: tuple[Inputs, np.ndarray] | None = None
 
     @classmethod
@@ -103,12 +104,14 @@ class TrackSession(Session):
                                   self.info.fps)
 
     def _reconstructed(self, joints: np.ndarray) -> np.ndarray:
-        """(F, 16, 3) contract-frame joints: the turn said on frame 0 (else the knees'),
-        the depth choices kept to the held foreshortening while it holds."""
+        """(F, 16, 3) contract-frame joints: each frame's trunk turned to the side of
+        its held orientation (frame 0's, where none is said, the knees'), the depth
+        choices kept to the held foreshortening while it holds."""
         notes = self._annotations
         steady = steady_joints(joints, self.info.fps)
-        turn = turn_of(notes.orientations(1)[0]) or guessed_turn(joints, self.info.fps)
-        key, free = self._free_placement(steady, turn)
+        turns = [turn_of(o) for o in notes.orientations(len(joints))]
+        turns[0] = turns[0] or guessed_turn(joints, self.info.fps)
+        key, free = self._free_placement(steady, turns)
         values, since = notes.held_signs(len(joints))
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
         return free if not fixed.any() else self._placed_joints(steady, key, fixed)
@@ -131,15 +134,15 @@ class TrackSession(Session):
                         np.full(n, body_px(joints) / BODY_HEIGHT), signs_of(joints3d), lengths)
         return inputs, joints3d
 
-    def _free_placement(self, steady: np.ndarray, turn: str | None) -> tuple[np.ndarray, np.ndarray]:
+    def _free_placement(self, steady: np.ndarray, turns: list) -> tuple[np.ndarray, np.ndarray]:
         """The key joints of every frame (Eq. 6-11) and every joint placed without the
-        user's signs (contract frame): kept while the 2D joints and the turn stay the
+        user's signs (contract frame): kept while the 2D joints and the turns stay the
         same; after a joint override only the frames it moved are solved again."""
         last = self._placed
-        if last is None or last[1] != turn or not np.array_equal(last[0], steady):
-            before = (last[0], last[2]) if last is not None and last[1] == turn else None
-            key = key_joints(steady, self.camera, turn, before)
-            self._placed = (steady, turn, key, self._placed_joints(steady, key))
+        if last is None or last[1] != turns or not np.array_equal(last[0], steady):
+            before = (last[0], last[2]) if last is not None and last[1] == turns else None
+            key = key_joints(steady, self.camera, turns, before)
+            self._placed = (steady, turns, key, self._placed_joints(steady, key))
         return self._placed[2], self._placed[3]
 
 

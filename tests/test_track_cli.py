@@ -132,6 +132,22 @@ def test_a_joint_override_moves_the_tracked_joint(session):
     assert np.allclose(tracked.inputs.joints2d, tracked.tracked.joints2d)
 
 
+def test_an_orientation_entry_turns_the_trunk_from_its_frame_on(session):
+    """The key triangle shows two mirror-image turns alike; an orientation said on a
+    later frame picks the other one from there on, the frames before it keep theirs."""
+    tracked, _ = session
+    before = tracked.inputs
+    frame = 9
+    assert all(o.endswith("right") for o in before.orientation)
+    tracked.annotate(tracked.annotations.with_orientation(frame, "forward_left"))
+    after = tracked.inputs
+    assert all(o.endswith("left") for o in after.orientation[frame:])
+    assert after.orientation[:frame] == before.orientation[:frame]
+    assert np.array_equal(after.joints2d, before.joints2d)
+    tracked.annotate(tracked.annotations.with_orientation(frame, None))
+    assert tracked.inputs.orientation == before.orientation
+
+
 def test_an_unsaid_turn_is_read_from_the_knees(clip):
     """The calibration's two mirror-image fits are told apart by the way the knees
     bend when the user gives no orientation: the clip turns to the image right, its
