@@ -19,7 +19,10 @@ over a panning, cluttered background; the tracker given the true joints of frame
   overrides), on that frame only, then as the app applies them, carried to the frames
   around it (mocap.track.spread_corrections); pins on the review's stops: the same
   user visiting the app's review stops instead (one frame per doubtful 0.2 s stretch,
-  most doubtful first, at most as many as one frame in 10).
+  most doubtful first, at most as many as one frame in 10);
+- facing said 1 in 10: the same visits, the user saying on each the side the
+  performer really faces (an orientation entry, held until the next), with the exact
+  and with the tracked 2D.
 
     python benchmarks/bench_track_budget.py [--quick]
 """
@@ -94,12 +97,18 @@ def review_stops(result: TrackResult, orientation: str) -> list[int]:
     return [d.frame for d in stops][:len(result.joints2d) // REVIEW_EVERY]
 
 
+def said_turns(truth: Truth) -> list[str]:
+    """Each frame's side of the orientation a user says on every REVIEW_EVERY-th frame."""
+    visited = np.arange(len(truth.joints3d)) // REVIEW_EVERY * REVIEW_EVERY
+    return [turn_of(orientation_of(truth.joints3d[f])) for f in visited]
+
+
 def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int]) -> dict[str, float]:
     """PA-MPJPE (mm) of every row of the table for one clip; ``stops``: the review's."""
     camera = default_camera(truth.width, truth.height)
 
-    def pinhole(joints2d: np.ndarray) -> np.ndarray:
-        return steady_reconstruction(joints2d, camera, turn, truth.fps)
+    def pinhole(joints2d: np.ndarray, turns=turn) -> np.ndarray:
+        return steady_reconstruction(joints2d, camera, turns, truth.fps)
     mine, exact = pinhole(tracked), pinhole(truth.joints2d)
     rows = {
         "tracked": mine,
@@ -113,7 +122,9 @@ def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int]) -> di
             tracked, user_corrections(tracked, truth, range(0, len(tracked), REVIEW_EVERY)),
             truth.fps, spread_s)) for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))},
         "pins on the review's stops": pinhole(spread_corrections(
-            tracked, user_corrections(tracked, truth, stops), truth.fps))}
+            tracked, user_corrections(tracked, truth, stops), truth.fps)),
+        **{f"facing said 1 in {REVIEW_EVERY}, {name}": pinhole(joints2d, said_turns(truth))
+           for name, joints2d in (("exact 2D", truth.joints2d), ("tracked", tracked))}}
     return {name: pa_mpjpe(to_contract(points), truth.joints3d) * 1000 for name, points in rows.items()}
 
 

@@ -408,11 +408,11 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
     return joints
 
 
-def reconstruct(joints2d: np.ndarray, camera: Pinhole, turn: str | None = None,
+def reconstruct(joints2d: np.ndarray, camera: Pinhole, turns=None,
                 lengths: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) joints in the pinhole frame (metres) from 2D joints (F, 16, 2): the
-    key joints (``key_joints``), then the others (``place_joints``)."""
-    return place_joints(joints2d, key_joints(joints2d, camera, turn), camera, lengths)
+    key joints turned to ``turns`` (``key_joints``), then the others (``place_joints``)."""
+    return place_joints(joints2d, key_joints(joints2d, camera, turns), camera, lengths)
 
 
 def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,

@@ -219,12 +219,12 @@ def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 
-def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turn: str | None,
-                          fps: float) -> np.ndarray:
+def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns, fps: float) -> np.ndarray:
     """(F, 16, 3) pinhole-frame joints (metres) of tracked 2D joints (F, 16, 2): the
-    perspective reconstruction of the joints lightly smoothed (``steady_joints``),
+    perspective reconstruction of the joints lightly smoothed (``steady_joints``), the
+    trunk turned to ``turns`` (one side, or each frame's: perspective.key_joints),
     every joint's depth then smoothed along its ray (``steady_depths``)."""
-    return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turn), fps)
+    return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turns), fps)
 
 
 def steady_joints(joints2d: np.ndarray, fps: float) -> np.ndarray:
