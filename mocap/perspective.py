@@ -123,6 +123,10 @@ class Pinhole:
         z = points[..., 2:3]
         return np.array([self.cx, self.cy]) + self.focal * points[..., :2] / z
 
+    def scaled(self, factor: float) -> "Pinhole":
+        """The camera of the frames resized by ``factor``."""
+        return Pinhole(self.focal * factor, self.cx * factor, self.cy * factor)
+
 
 def default_camera(width: int, height: int, focal_px: float | None = None) -> Pinhole:
     """The assumed camera of a video: ``focal_px`` or the frame's width, centred."""
@@ -155,6 +159,13 @@ class Calibration:
     def to_camera(self, points: np.ndarray) -> np.ndarray:
         """Body points (..., 3) in the pinhole frame (Eq. 6)."""
         return Rotation.from_rotvec(self.rotvec).apply(points) + self.translation
+
+    def key_triangle(self) -> tuple[np.ndarray, np.ndarray]:
+        """The key joints' depths (3,) on the calibrated frame and the key triangle's
+        side lengths (3,) (KEY_LINES) that later frames keep (Eq. 10-11)."""
+        triangle = self.model()[KEY]
+        sides = np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in KEY_LINES])
+        return self.to_camera(triangle)[:, 2], sides
 
     @property
     def yaw(self) -> float:
@@ -321,10 +332,7 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turns=None,
     frame before it, as a full solve would start them."""
     rays = camera.rays(joints2d[:, KEY])
     held = [turns] * len(rays) if turns is None or isinstance(turns, str) else list(turns)
-    cal = calibrate(joints2d[0], camera, held[0])
-    triangle = cal.model()[KEY]
-    depths = cal.to_camera(triangle)[:, 2]
-    sides = np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in KEY_LINES])
+    depths, sides = calibrate(joints2d[0], camera, held[0]).key_triangle()
     redo = np.ones(len(rays), bool)
     if before is not None and before[0].shape == joints2d.shape:
         moved = (before[0][:, KEY] != joints2d[:, KEY]).any(axis=(1, 2))

@@ -76,12 +76,14 @@ class TrackResult:
 
 
 def track_frames(frames: Iterable[np.ndarray], marks: np.ndarray,
-                 progress: Callable[[int], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                 progress: Callable[[int], None] | None = None, camera: Pinhole | None = None,
+                 turn: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Track checked ``marks`` (16, 2) of the first frame through ``frames`` (BGR,
-    consumed one at a time): (F, 16, 2) joints and (F, 10) similarities S of the
-    parts (frame 0: the marks, S = inf)."""
+    consumed one at a time) seen by ``camera`` (default the frame's), the body turned
+    to ``turn``: (F, 16, 2) joints and (F, 10) similarities S of the parts (frame 0:
+    the marks, S = inf)."""
     it = iter(frames)
-    tracker = BodyTracker(next(it), marks)
+    tracker = BodyTracker(next(it), marks, camera, turn)
     joints, similarity = [marks], [np.full(len(PARTS), np.inf)]
     for frame in it:
         found, s = tracker.step(frame)
@@ -201,11 +203,12 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     scale = processing_scale(info)
     step = (lambda done: progress(done, info.frame_count)) if progress else None
     frames = (frame for _, frame in iter_frames(info, scale=scale))
-    joints, similarity = track_frames(frames, (marks + 0.5) * scale - 0.5, step)
+    camera = default_camera(info.width, info.height, focal_px)
+    joints, similarity = track_frames(frames, (marks + 0.5) * scale - 0.5, step,
+                                      camera.scaled(scale), turn)
     joints = (joints + 0.5) / scale - 0.5
     reliability = joint_reliability(similarity)
     joints2d = fill_unreliable(joints, reliability)
-    camera = default_camera(info.width, info.height, focal_px)
     turn = turn or guessed_turn(joints2d, info.fps)
     joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps))
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal)

@@ -23,7 +23,9 @@ model. Every later frame is tracked head to feet:
    to its twin) is not found again. The lower part is kept off the places where
    it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
    limb's lower part, ``_part_twins``) and near where it was on the last frame;
-   an arm's blocks pay for sides the frame shows no edge along (``outline_cost``);
+   an arm's blocks pay for sides the frame shows no edge along (``outline_cost``)
+   and for a pose a human arm cannot take in 3D (``arm_limits_cost``, measured
+   from the key triangle followed in 3D as the reconstruction does, ``TrunkDepth``);
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -45,6 +47,8 @@ from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HAL
 from mocap.edges import Edges
 from mocap.headmotion import P_START, adapt_threshold, head_displacement
 from mocap.marks import body_scale
+from mocap.perspective import UNIT_M, Pinhole, body_axes, calibrate, default_camera, key_depths
+from mocap.rays import limb_candidates, limb_penalty as joint_limits
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
 MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
@@ -65,6 +69,8 @@ JUMP_COST = 8.0            # grey levels per usual length that a lower block's e
 TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
 OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
 OUTLINE_COST = 20.0        # grey levels an arm block pays for long sides without an edge
+LIMITS_COST = 10.0         # grey levels per unit of an arm's least joint-limit penalty in 3D
+ARM_M = tuple(float(LENGTH[SEGMENT_INDEX[f"{kind}_arm_l"]]) * UNIT_M for kind in ("upper", "lower"))
 
 
 @dataclass(frozen=True)
@@ -216,6 +222,45 @@ def outline_cost(edges: Edges, cost: float = OUTLINE_COST) -> blocks.Penalty:
     return penalty
 
 
+class TrunkDepth:
+    """Beyond the paper, while tracking: the tracked key triangle (both shoulders and
+    the chest) in 3D on every frame, as the reconstruction finds it (calibrated on
+    the marks, Eq. 6-9, then Eq. 10-11 from frame to frame; mocap.perspective)."""
+
+    def __init__(self, marks: np.ndarray, camera: Pinhole, turn: str | None):
+        self.camera = camera
+        self.depths, self.sides = calibrate(marks, camera, turn).key_triangle()
+
+    def follow(self, key2d: np.ndarray) -> np.ndarray:
+        """(3, 3) the key joints (pinhole frame) of a new frame's (3, 2) key pixels."""
+        rays = self.camera.rays(key2d)
+        self.depths = key_depths(rays, self.depths, self.sides)
+        return self.depths[:, None] * rays
+
+
+def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int,
+                    cost: float = LIMITS_COST) -> blocks.Penalty:
+    """Beyond the paper: the penalty (grey levels) of an arm's candidate lower blocks
+    (K, 5) for the pose they give it in 3D. The elbow (the block's start) and the
+    wrist (its end) lie on their viewing rays at the model's bone lengths from the
+    shoulder, a key joint of ``key`` (3, 3), in one of four ways
+    (mocap.rays.limb_candidates); ``cost`` times the least joint-limit penalty of the
+    four (the silhouette method's limits: elbows bent forward, no upper arm through
+    the trunk, arms near the sagittal plane) in the body frame of ``key``. Where the
+    colours leave an arm's place open (a sleeve over the shirt, a hidden arm), the
+    places a human arm can take win. ``arm``: 0 left, 1 right."""
+    shoulder, axes = key[arm], body_axes(key)
+    side = 1.0 if arm == 0 else -1.0
+
+    def penalty(lowers: np.ndarray) -> np.ndarray:
+        rays = camera.rays(np.stack([lowers[:, :2], block_end(lowers)], axis=1))
+        roots = np.broadcast_to(shoulder, (len(lowers), 3))
+        placed = limb_candidates(roots, rays, ARM_M)
+        body = np.broadcast_to(axes, (len(lowers), 3, 3))
+        return cost * joint_limits(roots, placed, body, False, side).min(axis=1)
+    return penalty
+
+
 def added(*penalties: blocks.Penalty) -> blocks.Penalty:
     """The sum of penalties."""
     return lambda candidates: sum(penalty(candidates) for penalty in penalties)
@@ -263,11 +308,15 @@ def part_lengths() -> np.ndarray:
 class BodyTracker:
     """The state carried from frame to frame: every part's block and its change over
     the last frame (constant-velocity prediction), the colour models and the
-    similarities of the last HISTORY frames, the head's adaptive threshold p and the
-    last frame."""
+    similarities of the last HISTORY frames, the head's adaptive threshold p, the
+    last frame and the trunk in 3D (``TrunkDepth``, seen by ``camera``, default the
+    frame's (mocap.perspective.default_camera), and turned to ``turn``)."""
 
-    def __init__(self, frame0: np.ndarray, marks: np.ndarray):
+    def __init__(self, frame0: np.ndarray, marks: np.ndarray, camera: Pinhole | None = None,
+                 turn: str | None = None):
         scale = body_scale(marks)
+        self.trunk = TrunkDepth(marks, camera or default_camera(frame0.shape[1], frame0.shape[0]), turn)
+        self.arm_costs: dict[int, tuple[blocks.Penalty, blocks.Penalty]] = {}
         self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]],
                                      part_widths(marks, scale))
         self.longest = MAX_STRETCH * np.maximum(scale * part_lengths(), self.blocks[:, M])
@@ -290,15 +339,15 @@ class BodyTracker:
     def step(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Track the next frame: its (16, 2) joints and the (10,) similarities S."""
         predicted = self._predicted()
-        outline = outline_cost(Edges.of_frame(frame))
         new, s = predicted.copy(), np.zeros(len(PARTS))
         new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
+        self.arm_costs = self._arm_costs(new, outline_cost(Edges.of_frame(frame)))
         for k in LIMBS:
-            self._track_limb(frame, new, s, k, self._avoided(k, new), outline)
+            self._track_limb(frame, new, s, k, self._avoided(k, new))
         for twins in TWINS:
-            self._part_twins(frame, new, s, twins, outline)
+            self._part_twins(frame, new, s, twins)
         new = self._bounded(new, frame.shape)
         self._update(frame, new, s)
         return skeleton(new, self.chest), s
@@ -342,22 +391,35 @@ class BodyTracker:
         self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
         return found, s
 
+    def _root(self, k: int, new: np.ndarray) -> np.ndarray:
+        """Limb k's root (a shoulder or hip) carried by the trunk's motion to ``new``."""
+        return from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
+
+    def _arm_costs(self, new: np.ndarray, outline: blocks.Penalty) -> dict:
+        """Each arm's (upper, lower) block penalties on a frame whose trunk is placed:
+        the frame's edges along both (``outline``, the frame's outline_cost), the
+        lower block's also the joint limits (``arm_limits_cost``) in the key
+        triangle's 3D (``TrunkDepth``)."""
+        key = self.trunk.follow(np.array([*(self._root(k, new) for k in ARMS),
+                                          from_block(self.chest, new[TORSO])]))
+        return {k: (outline, added(outline, arm_limits_cost(self.trunk.camera, key, arm)))
+                for arm, k in enumerate(ARMS)}
+
     def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
-                    avoid: tuple, outline: blocks.Penalty) -> None:
+                    avoid: tuple) -> None:
         """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
         best pair of directions all around the root (``around_root``), then the
         lower part searched from there (``_hang``), kept off its upper part and the
         blocks to ``avoid`` and near its last place (limb_penalty); an arm's blocks
-        along the frame's edges (``outline``, the frame's outline_cost)."""
-        root = from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
+        also charged the frame's ``arm_costs``."""
+        root = self._root(k, new)
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
-        if k not in ARMS:
-            outline = None
-        else:
-            penalty = added(penalty, outline)
-        lower = around_root(image, root, *parts, penalty, outline)
+        upper_cost, lower_cost = self.arm_costs.get(k, (None, None))
+        if lower_cost is not None:
+            penalty = added(penalty, lower_cost)
+        lower = around_root(image, root, *parts, penalty, upper_cost)
         self._hang(image, new, s, k, root, lower, penalty)
 
     def _avoided(self, k: int, new: np.ndarray) -> tuple:
@@ -366,7 +428,7 @@ class BodyTracker:
         return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
 
     def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    twins: tuple[int, int], outline: blocks.Penalty) -> None:
+                    twins: tuple[int, int]) -> None:
         """Beyond the paper: twin limbs (both arms, both legs) look alike, and a limb
         that lost its own place follows its twin's. Where their lower blocks lie on
         one another (TWIN_OVERLAP), each twin in turn is tracked again keeping off
@@ -379,7 +441,7 @@ class BodyTracker:
         for moved, kept in ((a, b), (b, a)):
             placed, similarity = new.copy(), s.copy()
             avoid = (*self._avoided(moved, new), (TWIN_COST, new[kept + 1].copy()))
-            self._track_limb(image, placed, similarity, moved, avoid, outline)
+            self._track_limb(image, placed, similarity, moved, avoid)
             options.append((placed, similarity))
         costs = [limb_cost(sim, a) + limb_cost(sim, b)
                  + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options]

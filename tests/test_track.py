@@ -7,6 +7,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from mocap import blocks, synth
 from mocap.body import JOINT_INDEX, JOINTS
@@ -16,8 +17,9 @@ from mocap.marks import check_marks
 from mocap.track import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
                          spread_corrections, track_video)
 from mocap.edges import Edges
-from mocap.tracker import (FOLD_COST, JUMP_COST, OUTLINE_COST, added, around_root, limb_penalty,
-                           outline_cost, overlap, twin_overlap)
+from mocap.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
+from mocap.tracker import (ARM_M, FOLD_COST, JUMP_COST, LIMITS_COST, OUTLINE_COST, added, around_root,
+                           arm_limits_cost, limb_penalty, outline_cost, overlap, twin_overlap)
 from mocap.walk import walk_cycle
 
 
@@ -172,6 +174,28 @@ def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
                                          [45.0, 20.0, np.radians(90), 50.0, 8.0]]))
     assert on_arm < 0.2 * OUTLINE_COST
     assert on_trunk == pytest.approx(OUTLINE_COST)
+
+
+def test_an_arm_through_the_trunk_costs_more_than_one_beside_it():
+    """The arms' joint limits in 3D (arm_limits_cost): the model's left arm hanging
+    or bent forward at the elbow costs only the little it hangs off its rest; the
+    same arm reaching through the trunk to the right costs many times more."""
+    camera = Pinhole(800.0, 320.0, 240.0)
+    turned = Rotation.from_matrix(FACING_CAMERA) * Rotation.from_euler("y", np.radians(30.0))
+    pose = Calibration(turned.as_rotvec(), np.array([0.4, -0.3, 6.0]), 0.36)
+    model = pose.model()
+    cost = arm_limits_cost(camera, pose.to_camera(model[KEY]), 0)
+    shoulder = model[JOINT_INDEX["shoulder_l"]]
+
+    def arm_cost(elbow_dir, wrist_dir) -> float:
+        elbow = shoulder + ARM_M[0] * np.asarray(elbow_dir, float)
+        wrist = elbow + ARM_M[1] * np.asarray(wrist_dir, float)
+        pixels = camera.project(pose.to_camera(np.array([elbow, wrist])))
+        return float(cost(blocks.between(pixels[:1], pixels[1:], 5.0))[0])
+    hanging, bent_forward = arm_cost((0, -1, 0), (0, -1, 0)), arm_cost((0, -1, 0), (0, 0, 1))
+    through_the_trunk = arm_cost((-1, 0, 0), (-1, 0, 0))
+    assert hanging < 0.15 * LIMITS_COST and bent_forward < 0.15 * LIMITS_COST
+    assert through_the_trunk > 0.8 * LIMITS_COST
 
 
 # -- the head's image difference ------------------------------------------------------------
