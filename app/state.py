@@ -84,6 +84,17 @@ def source_note(entry: int | None, frame: int) -> str:
     return "set here" if entry == frame else f"held from frame {entry}"
 
 
+def shown_orientation(notes: Annotations, frame: int, used: str, method: str) -> tuple[str, str]:
+    """The orientation the page shows on ``frame`` and where it comes from. The
+    silhouette method uses the user's held entry (``used``); the tracking method's 3D
+    shows its own facing (``used``), turned to the side of the user's held entry: on
+    the entry's own frame the page shows the entry."""
+    if method != "track":
+        return used, source_note(entry_frame(notes, frame, lambda n: n.orientation), frame)
+    own = notes.frames[frame].orientation if frame in notes.frames else None
+    return (own, "set here") if own is not None else (used, "seen in the tracked 3D")
+
+
 @dataclass(frozen=True, eq=False)
 class FrameView:
     """Everything the page shows of one frame, read at one moment from one state."""
@@ -337,12 +348,11 @@ class AppState:
         sign_notes = tuple(sign_note(notes, i, s, sign) for s, sign in zip(SEGMENT_NAMES, signs))
         doubt = next((d.reasons for d in self.review_queue() if d.frame == i), ())
         pose = self._session.pose3d(i).copy()
-        said = ("seen in the tracked 3D" if base.method == "track"
-                else source_note(entry_frame(notes, i, lambda n: n.orientation), i))
+        orientation, said = shown_orientation(notes, i, inputs.orientation[i], base.method)
         return replace(base, joints2d=inputs.joints2d[i].copy(), sides_known=True, pose3d=pose,
                        signs=signs, sign_notes=sign_notes,
                        depths=tuple(float(d) for d in depth_fractions(pose)),
-                       orientation=inputs.orientation[i], orientation_note=said, doubts=doubt)
+                       orientation=orientation, orientation_note=said, doubts=doubt)
 
     def review_queue(self) -> list[Doubt]:
         """Doubtful frames, most doubtful first (empty until the fit is done)."""

@@ -90,6 +90,22 @@ def test_a_flip_and_an_override_reshape_the_tracked_3d(tracked):
     assert state.view(frame).signs == before.signs
 
 
+def test_facing_set_on_a_later_frame_turns_the_tracked_3d_from_there(tracked):
+    """The Facing dropdown in tracking mode: the other side said on a later frame turns
+    the trunk to it from that frame on (the key triangle's mirror image), undo
+    turns it back."""
+    state, _ = tracked
+    frame = TINY_FRAMES // 2
+    before = [state.view(i).orientation for i in range(TINY_FRAMES)]
+    assert state.set_orientation(frame, "forward_left")
+    after = [state.view(i).orientation for i in range(TINY_FRAMES)]
+    assert after[:frame] == before[:frame]
+    assert all(o.endswith("left") for o in after[frame:])
+    assert state.view(frame).orientation_note == "set here"
+    assert state.undo() == frame
+    assert [state.view(i).orientation for i in range(TINY_FRAMES)] == before
+
+
 def test_moving_a_mark_asks_for_a_new_tracking(tracked):
     state, truth = tracked
     assert not state.marks_changed
