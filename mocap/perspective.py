@@ -30,6 +30,7 @@ optical axis); ``to_contract`` turns them into CONTRACT.md's frame.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,6 +76,8 @@ SIDE_MARGIN_DEG = 15.0          # a trunk turned less than this from facing the 
 # body frame -> pinhole frame for a performer facing the camera (left to image right,
 # up to image up, forward toward the camera)
 FACING_CAMERA = np.diag([1.0, -1.0, -1.0])
+# the side a body is turned to ("left", "right", None: unsaid): one for every frame, or each frame's
+Turns = str | Sequence[str | None] | None
 
 
 def model_skeleton() -> np.ndarray:
@@ -320,7 +323,7 @@ def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
     return found if turned_against(mirror[:, None] * rays, turn) else mirror
 
 
-def key_joints(joints2d: np.ndarray, camera: Pinhole, turns=None,
+def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
                before: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(F, 3, 3) the key joints of every frame: calibration on frame 0 (Eq. 6-9), then
     each frame's depths from the previous frame's (Eq. 10-11, ``frame_key_depths``).
@@ -416,7 +419,7 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
     return joints
 
 
-def reconstruct(joints2d: np.ndarray, camera: Pinhole, turns=None,
+def reconstruct(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
                 lengths: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) joints in the pinhole frame (metres) from 2D joints (F, 16, 2): the
     key joints turned to ``turns`` (``key_joints``), then the others (``place_joints``)."""

@@ -25,7 +25,7 @@ from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.marks import check_marks
 from mocap.orientation import knee_facing
-from mocap.perspective import Pinhole, default_camera, reconstruct, steady_depths, to_contract
+from mocap.perspective import Pinhole, Turns, default_camera, reconstruct, steady_depths, to_contract
 from mocap.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
 from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
 
@@ -222,7 +222,7 @@ def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 
-def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns, fps: float) -> np.ndarray:
+def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns: Turns, fps: float) -> np.ndarray:
     """(F, 16, 3) pinhole-frame joints (metres) of tracked 2D joints (F, 16, 2): the
     perspective reconstruction of the joints lightly smoothed (``steady_joints``), the
     trunk turned to ``turns`` (one side, or each frame's: perspective.key_joints),
