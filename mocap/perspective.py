@@ -62,8 +62,9 @@ BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
     ("hip_l", "knee_l"), ("knee_l", "ankle_l"), ("hip_r", "knee_r"), ("knee_r", "ankle_r")))
 BONE_INDEX = {bone: n for n, bone in enumerate(BONES)}
 BONE_PAIRS = ((0,), (1,), (2,), (5, 7), (6, 8), (9, 11), (10, 12))   # measured, left/right pooled
-# of each pair's seen lengths over the clip (measured_lengths): the median, the shins' upper quartile
-LENGTH_PERCENTILES = (50, 50, 50, 50, 50, 50, 75)
+# of each pair's seen lengths over the clip (measured_lengths): the median; the head's and the
+# torso's lower quartile, the shins' upper quartile
+LENGTH_PERCENTILES = (50, 25, 25, 50, 50, 50, 75)
 HIP_BONES = (3, 4)              # pelvis to hips: the model's, not measured
 TORSO_BONES = 5                 # the first five bones move with the key triangle
 SEGMENT_OF = {(int(a), int(b)): k for k, (a, b) in enumerate(SEGMENT_JOINTS)}
@@ -366,7 +367,10 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     where it crosses the image plane, but 2D tracking errors inflate high percentiles
     more than a missed crossing deflates the median, which measured best on rendered
     motion capture (benchmarks/bench_track.py); the median errs short, toward flat.
-    The shins are the exception: tracked best (the ankles' blocks end on the feet) and
+    The head and the torso stand upright most of the time, where a length read long
+    turns into a lean toward or away from the camera: theirs is the lower quartile,
+    as the silhouette method's (mocap.inputs.FIT_LENGTH_PERCENTILE; PA-MPJPE 74.1 ->
+    73.4 mm). The shins are the other exception: tracked best (the ankles' blocks end on the feet) and
     upright through every stance, where they show their whole length, so their upper
     quartile measures them (PA-MPJPE 77.1 -> 75.3 mm on the tracked 2D, every clip
     better; the 90th percentile overshoots: 76.4)."""
