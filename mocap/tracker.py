@@ -23,8 +23,8 @@ model. Every later frame is tracked head to feet:
    to its twin) is not found again. The lower part is kept off the places where
    it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
    limb's lower part, ``_part_twins``) and near where it was on the last frame;
-   an arm's blocks pay for sides the frame shows no edge along (``outline_cost``)
-   and for a pose a human arm cannot take in 3D (``arm_limits_cost``, measured
+   a limb's blocks pay for sides the frame shows no edge along (``outline_cost``),
+   an arm's also for a pose a human arm cannot take in 3D (``arm_limits_cost``, measured
    from the key triangle followed in 3D as the reconstruction does, ``TrunkDepth``);
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
@@ -69,6 +69,7 @@ JUMP_COST = 8.0            # grey levels per usual length that a lower block's e
 TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
 OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
 OUTLINE_COST = 20.0        # grey levels an arm block pays for long sides without an edge
+LEG_OUTLINE_COST = 5.0     # ... a leg block (legs cross, and share their edges where they do)
 LIMITS_COST = 10.0         # grey levels per unit of an arm's least joint-limit penalty in 3D
 ARM_M = tuple(float(LENGTH[SEGMENT_INDEX[f"{kind}_arm_l"]]) * UNIT_M for kind in ("upper", "lower"))
 
@@ -171,12 +172,13 @@ def overlap(lowers: np.ndarray, other: np.ndarray) -> np.ndarray:
     OVERLAP_POINTS points along its middle line of 1 - d / n, d the point's distance
     to other's middle line (a segment) and n other's width, at least 0."""
     t = (np.arange(OVERLAP_POINTS) + 0.5) / OVERLAP_POINTS
-    points = lowers[:, None, :2] + t[:, None] * (block_end(lowers) - lowers[:, :2])[:, None]
+    length = lowers[:, M, None] * t                                        # (K, P)
     other = np.broadcast_to(other, lowers.shape)
-    axis = np.stack([np.cos(other[:, THETA]), np.sin(other[:, THETA])], axis=-1)[:, None]
-    d = points - other[:, None, :2]
-    along = np.clip((d * axis).sum(axis=-1), 0.0, other[:, M, None])
-    distance = np.linalg.norm(d - along[..., None] * axis, axis=-1)
+    cos, sin = np.cos(other[:, THETA])[:, None], np.sin(other[:, THETA])[:, None]
+    dx = lowers[:, X, None] + length * np.cos(lowers[:, THETA])[:, None] - other[:, X, None]
+    dy = lowers[:, Y, None] + length * np.sin(lowers[:, THETA])[:, None] - other[:, Y, None]
+    along = np.clip(dx * cos + dy * sin, 0.0, other[:, M, None])
+    distance = np.hypot(dx - along * cos, dy - along * sin)
     return np.maximum(1.0 - distance / other[:, N, None], 0.0).mean(axis=1)
 
 
@@ -316,7 +318,7 @@ class BodyTracker:
                  turn: str | None = None):
         scale = body_scale(marks)
         self.trunk = TrunkDepth(marks, camera or default_camera(frame0.shape[1], frame0.shape[0]), turn)
-        self.arm_costs: dict[int, tuple[blocks.Penalty, blocks.Penalty]] = {}
+        self.limb_costs: dict[int, tuple[blocks.Penalty, blocks.Penalty]] = {}
         self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]],
                                      part_widths(marks, scale))
         self.longest = MAX_STRETCH * np.maximum(scale * part_lengths(), self.blocks[:, M])
@@ -343,7 +345,7 @@ class BodyTracker:
         new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
-        self.arm_costs = self._arm_costs(new, outline_cost(Edges.of_frame(frame)))
+        self.limb_costs = self._limb_costs(new, Edges.of_frame(frame))
         for k in LIMBS:
             self._track_limb(frame, new, s, k, self._avoided(k, new))
         for twins in TWINS:
@@ -395,30 +397,31 @@ class BodyTracker:
         """Limb k's root (a shoulder or hip) carried by the trunk's motion to ``new``."""
         return from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
 
-    def _arm_costs(self, new: np.ndarray, outline: blocks.Penalty) -> dict:
-        """Each arm's (upper, lower) block penalties on a frame whose trunk is placed:
-        the frame's edges along both (``outline``, the frame's outline_cost), the
-        lower block's also the joint limits (``arm_limits_cost``) in the key
-        triangle's 3D (``TrunkDepth``)."""
+    def _limb_costs(self, new: np.ndarray, edges: Edges) -> dict:
+        """Each limb's (upper, lower) block penalties on a frame whose trunk is placed:
+        the frame's ``edges`` along both (outline_cost: OUTLINE_COST for an arm,
+        LEG_OUTLINE_COST for a leg), an arm's lower block also the joint limits
+        (``arm_limits_cost``) in the key triangle's 3D (``TrunkDepth``)."""
         key = self.trunk.follow(np.array([*(self._root(k, new) for k in ARMS),
                                           from_block(self.chest, new[TORSO])]))
-        return {k: (outline, added(outline, arm_limits_cost(self.trunk.camera, key, arm)))
-                for arm, k in enumerate(ARMS)}
+        arm, leg = outline_cost(edges), outline_cost(edges, LEG_OUTLINE_COST)
+        costs = {k: (arm, added(arm, arm_limits_cost(self.trunk.camera, key, n)))
+                 for n, k in enumerate(ARMS)}
+        return costs | {k: (leg, leg) for k in LIMBS if k not in ARMS}
 
     def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
                     avoid: tuple) -> None:
         """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
         best pair of directions all around the root (``around_root``), then the
         lower part searched from there (``_hang``), kept off its upper part and the
-        blocks to ``avoid`` and near its last place (limb_penalty); an arm's blocks
-        also charged the frame's ``arm_costs``."""
+        blocks to ``avoid`` and near its last place (limb_penalty); its blocks also
+        charged the frame's ``limb_costs``."""
         root = self._root(k, new)
         parts = [(self.models[i], self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
-        upper_cost, lower_cost = self.arm_costs.get(k, (None, None))
-        if lower_cost is not None:
-            penalty = added(penalty, lower_cost)
+        upper_cost, lower_cost = self.limb_costs[k]
+        penalty = added(penalty, lower_cost)
         lower = around_root(image, root, *parts, penalty, upper_cost)
         self._hang(image, new, s, k, root, lower, penalty)
 
