@@ -19,7 +19,8 @@ from mocap.track import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_r
 from mocap.edges import Edges
 from mocap.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
 from mocap.tracker import (ARM_M, FOLD_COST, JUMP_COST, LIMITS_COST, OUTLINE_COST, added, around_root,
-                           arm_limits_cost, limb_penalty, outline_cost, overlap, twin_overlap)
+                           arm_limits_cost, limb_penalty, outline_cost, overlap, settled_knee,
+                           twin_overlap)
 from mocap.walk import walk_cycle
 
 
@@ -196,6 +197,30 @@ def test_an_arm_through_the_trunk_costs_more_than_one_beside_it():
     through_the_trunk = arm_cost((-1, 0, 0), (-1, 0, 0))
     assert hanging < 0.15 * LIMITS_COST and bent_forward < 0.15 * LIMITS_COST
     assert through_the_trunk > 0.8 * LIMITS_COST
+
+
+def test_a_knee_slid_up_a_thigh_of_its_colour_settles_back():
+    """A leg of one colour bent at the knee (60, 70): a shin whose start slid 5 px up
+    the thigh is settled back to the knee by the thigh's and shin's blocks together
+    (settled_knee); a shin at the knee stays there."""
+    image = np.full((140, 140, 3), 60, np.uint8)
+    hip, knee, ankle = np.array([60.0, 20.0]), np.array([60.0, 70.0]), np.array([95.0, 110.0])
+    cv2.line(image, (60, 20), (60, 70), (150,) * 3, 12)
+    cv2.line(image, (60, 70), (95, 110), (150,) * 3, 12)
+    image[66:75, 55:66] = 150                                                   # the bend
+    image = cv2.GaussianBlur(image, (5, 5), 1.0)
+    parts = []
+    for a, b in ((hip, knee), (knee, ankle)):
+        block = blocks.between(a[None], b[None], 12.0)[0]
+        grid = blocks.make_grid(block[3], 12.0, 0.3)
+        parts.append((blocks.sample_blocks(image, block, grid)[0], grid))
+    nothing = lambda candidates: np.zeros(len(candidates))  # noqa: E731
+    for start in (knee + [0.0, -5.0], knee):
+        shin = blocks.between(start[None], ankle[None], 12.0)[0]
+        settled, s = settled_knee(image, hip, shin, (*parts[0], 12.0), parts[1], nothing, nothing)
+        assert np.hypot(*(settled[:2] - knee)) < 1.5
+        assert blocks.block_end(settled) == pytest.approx(ankle)
+        assert s > 0
 
 
 # -- the head's image difference ------------------------------------------------------------
