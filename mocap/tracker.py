@@ -74,7 +74,7 @@ OUTLINE_COST = 20.0        # grey levels an arm block pays for long sides withou
 LEG_OUTLINE_COST = 5.0     # ... a leg block (legs cross, and share their edges where they do)
 LIMITS_COST = 10.0         # grey levels per unit of an arm's least joint-limit penalty in 3D
 KNEE_STEP = 0.04           # of the shin's length: spacing of the knee places tried (settled_knee)
-KNEE_STEPS = 3             # ... that many steps up and down the shin, half as far across it
+KNEE_STEPS = 3             # ... that many steps up and down the shin, one to either side
 ARM_M = tuple(float(LENGTH[SEGMENT_INDEX[f"{kind}_arm_l"]]) * UNIT_M for kind in ("upper", "lower"))
 
 
@@ -306,7 +306,7 @@ def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_par
     """Beyond the paper: a leg's ``shin`` block and its S with the knee moved to where
     the thigh (from ``hip``) and the shin (to its ankle, which stays) match best
     together (both 1/S and the blocks' penalties ``thigh_cost`` and ``shin_cost``),
-    among knee places KNEE_STEP of the shin apart around the shin's start.
+    among knee places KNEE_STEP of the shin apart around the shin's start (7 x 3).
     ``thigh_part``: (colour model, grid, width); ``shin_part``: (colour model, grid).
     A shin's search alone sees one colour of trousers above the knee as below it and
     slides its start up the thigh (tracked knees sat 1.4% of the body's height short
@@ -315,8 +315,9 @@ def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_par
     mean error rose 6.1 -> 6.3% of the body's height)."""
     ankle, along = block_end(shin), np.array([np.cos(shin[THETA]), np.sin(shin[THETA])])
     steps = np.arange(-KNEE_STEPS, KNEE_STEPS + 1) * KNEE_STEP * shin[M]
+    sideways = steps[KNEE_STEPS - 1:KNEE_STEPS + 2]
     knees = (shin[:2] + steps[:, None, None] * along
-             + steps[None, :, None] * 0.5 * np.array([-along[1], along[0]])).reshape(-1, 2)
+             + sideways[None, :, None] * np.array([-along[1], along[0]])).reshape(-1, 2)
     shins = blocks.between(knees, np.broadcast_to(ankle, knees.shape), shin[N])
     thighs = blocks.between(np.broadcast_to(hip, knees.shape), knees, thigh_part[2])
     s_shins = blocks.score(image, *shin_part, shins)
