@@ -120,9 +120,14 @@ def similarity(model: np.ndarray, samples: np.ndarray, grid: Grid) -> np.ndarray
     S = 1 / (W_1 sum_{b_1} diff_ij + W_2 sum_{b_2} diff_ij)                 (Eq. 4)
 
     with the region weights of Eq. 5 normalised (Grid), so 1/S is in grey levels.
+    Beyond the paper, a model (A, R, C, 3) holds A alternatives: a block's S is then
+    that of the alternative it matches best.
     """
-    diff = np.abs(samples - model) @ CHANNEL_WEIGHTS                   # (B, R, C)
-    return 1.0 / np.maximum((diff * grid.weights).sum(axis=(1, 2)), MIN_DIFF)
+    if model.ndim == 4:
+        return np.max([similarity(one, samples, grid) for one in model], axis=0)
+    weights = (grid.weights[:, :, None] * CHANNEL_WEIGHTS).ravel()        # W_1 or W_2 times W_c
+    diff = np.abs(samples - model).reshape(len(samples), -1)               # (B, R * C * 3)
+    return 1.0 / np.maximum(diff @ weights, MIN_DIFF)
 
 
 def score(image: np.ndarray, model: np.ndarray, grid: Grid, blocks: np.ndarray) -> np.ndarray:

@@ -19,8 +19,8 @@ from mocap.track import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_r
 from mocap.edges import Edges
 from mocap.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
 from mocap.tracker import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
-                           around_root, arm_limits_cost, limb_penalty, outline_cost, overlap,
-                           settled_knee, twin_overlap)
+                           PARTS, around_root, arm_limits_cost, far_forearm, limb_penalty,
+                           mirrored_model, outline_cost, overlap, settled_knee, twin_overlap)
 from mocap.walk import walk_cycle
 
 
@@ -78,6 +78,30 @@ def test_similarity_is_the_weighted_difference_of_eq_3_to_5():
     weights[2:6, 1:5] = blocks.CENTRE_WEIGHT
     expected = weights.sum() / (weights * diff).sum()
     assert blocks.similarity(model, seen, grid)[0] == pytest.approx(expected, rel=1e-5)
+
+
+def test_a_model_of_alternatives_scores_the_best_one():
+    grid = blocks.make_grid(8, 6)
+    seen = np.stack([np.full((8, 6, 3), 100.0, np.float32), np.full((8, 6, 3), 20.0, np.float32)])
+    near_first, near_second = np.full((8, 6, 3), 90.0, np.float32), np.full((8, 6, 3), 25.0, np.float32)
+    both = blocks.similarity(np.stack([near_first, near_second]), seen, grid)
+    assert both == pytest.approx([1 / 10.0, 1 / 5.0])
+    assert blocks.similarity(near_first, seen, grid) == pytest.approx([1 / 10.0, 1 / 70.0])
+
+
+def test_the_far_forearm_and_its_twins_mirrored_colours():
+    """The forearm of the arm whose shoulder lies deeper (key depths: left shoulder,
+    right shoulder, chest) is the far one; none for a body square to the camera. The
+    twin's model is mirrored across the block and resampled to the forearm's grid."""
+    part = {p.segment: k for k, p in enumerate(PARTS)}
+    assert far_forearm(np.array([6.3, 6.0, 6.1])) == part["lower_arm_l"]
+    assert far_forearm(np.array([6.0, 6.3, 6.1])) == part["lower_arm_r"]
+    assert far_forearm(np.array([6.0, 6.05, 6.1])) is None
+    twin = np.zeros((14, 7, 3), np.float32)
+    twin[:, 0] = 200.0                                       # lit on its first column
+    mirrored = mirrored_model(twin, (10, 7, 3))
+    assert mirrored.shape == (10, 7, 3)
+    assert (mirrored[:, -1] == 200.0).all() and (mirrored[:, 0] == 0.0).all()
 
 
 def test_sub_pixel_sampling_is_bilinear():
