@@ -522,7 +522,7 @@ class BodyTracker:
         new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new, penalty)
         if k not in ARMS:
             new[k + 1], s[k + 1] = settled_knee(
-                image, root, new[k + 1], (self.models[k], self.grids[k], new[k, N]),
+                image, root, new[k + 1], (self._model(k), self.grids[k], new[k, N]),
                 (self._model(k + 1), self.grids[k + 1]), self.limb_costs[k][0], penalty)
         new[k] = blocks.between(root[None], new[k + 1, None, :2], new[k, N])[0]
         s[k] = blocks.score(image, self._model(k), self.grids[k], new[k])[0]
