@@ -27,7 +27,7 @@ from typing import Callable
 import numpy as np
 
 from app.preprocess import Progress, Throttle
-from app.review import Doubt, review_queue, spaced
+from app.review import Doubt, covering, review_queue
 from mocap.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
@@ -364,11 +364,13 @@ class AppState:
             return self._queue
 
     def review_stops(self) -> list[Doubt]:
-        """The frames the review visits, most doubtful first: the queue, one frame per
-        stretch of its session's review_spacing (review.spaced)."""
+        """The frames the review visits, most doubtful first: the queue; with the
+        tracking method one frame in every stretch its pins cover (review.covering)."""
         with self._lock:
             queue = self.review_queue()
-            return spaced(queue, self._session.review_spacing) if queue else queue
+            if self._session is None or not self._session.review_spacing:
+                return queue
+            return covering(queue, self.n_frames, self._session.review_spacing)
 
     def motion(self) -> Motion:
         """The animation of the current annotations (keyframes lifted, others interpolated)."""

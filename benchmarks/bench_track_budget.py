@@ -18,8 +18,8 @@ over a panning, cluttered background; the tracker given the true joints of frame
   frame and puts every joint more than GROSS[-1]% off where it really is (joint
   overrides), on that frame only, then as the app applies them, carried to the frames
   around it (mocap.track.spread_corrections); pins on the review's stops: the same
-  user visiting the app's review stops instead (one frame per doubtful 0.2 s stretch,
-  most doubtful first, at most as many as one frame in 10);
+  user visiting the app's review stops instead (the middle frame of every 0.4 s
+  stretch, most doubtful first, at most as many as one frame in 10);
 - facing said 1 in 10: the same visits, the user saying on each the side the
   performer really faces (an orientation entry, held until the next), with the exact
   and with the tracked 2D.
@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from bench_track import DATA, FOCAL, bench_main, orientation_of
-from app.review import review_queue, spaced
+from app.review import covering, review_queue
 from mocap.annotations import Annotations
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.metrics import pa_mpjpe
@@ -93,7 +93,7 @@ def review_stops(result: TrackResult, orientation: str) -> list[int]:
     (app.state.AppState.review_stops), at most one in REVIEW_EVERY."""
     notes = Annotations().with_method("track").with_orientation(0, orientation)
     session = TrackSession(result.info, result, notes)
-    stops = spaced(review_queue(session), session.review_spacing)
+    stops = covering(review_queue(session), len(result.joints2d), session.review_spacing)
     return [d.frame for d in stops][:len(result.joints2d) // REVIEW_EVERY]
 
 

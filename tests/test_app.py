@@ -14,7 +14,7 @@ import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
 
 from mocap.session import iter_fits, iter_silhouettes
-from app.review import Doubt, broken_limits, likely_swaps, review_queue, spaced
+from app.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.state import AppState, annotations_path, toggled_keyframe
 from app.views import Layout, segment_transforms
 from mocap.annotations import Annotations, load_annotations
@@ -172,10 +172,16 @@ def test_doubt_signs_on_made_up_joints():
     assert swaps[:, 0].tolist() == [False, False, True]
 
 
-def test_a_spaced_review_keeps_the_worst_frame_of_each_stretch():
-    queue = [Doubt(f, v, ("low",)) for f, v in ((10, 0.9), (12, 0.8), (30, 0.7), (8, 0.6), (14, 0.5))]
-    assert [d.frame for d in spaced(queue, 3)] == [10, 30, 14]
-    assert spaced(queue, 0) == queue
+def test_a_covering_review_stops_in_the_middle_of_every_stretch_worst_first():
+    """Stretches of 6 frames (pins carry 3 to either side) over 20 frames: stops on
+    3, 9, 15 and 19 (the short last stretch's last frame), the stretch of the most
+    doubtful frame first, each saying its worst frame's reasons."""
+    queue = [Doubt(f, v, ("low",)) for f, v in ((10, 0.9), (12, 0.8), (15, 0.7), (8, 0.6))]
+    stops = covering(queue, 20, 3)
+    assert [(d.frame, d.value) for d in stops] == [(9, 0.9), (15, 0.8), (3, 0.0), (19, 0.0)]
+    assert stops[0].reasons == ("low (frame 10)",) and stops[1].reasons == ("low (frame 12)",)
+    assert stops[2].reasons == ("nothing doubtful nearby",)
+    assert all(any(abs(f - d.frame) <= 3 for d in stops) for f in range(20))
 
 
 def test_review_queue_ranks_and_cycles(app):

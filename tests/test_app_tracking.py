@@ -142,16 +142,22 @@ def test_marks_from_the_silhouette_fit(tiny_video, tmp_path):
     assert state.undo() == 0 and state.unmarked() == list(JOINTS)
 
 
-def test_the_tracking_review_visits_one_frame_per_stretch_a_pin_covers(tracked):
+def test_the_tracking_review_stops_where_its_pins_reach_every_frame(tracked):
+    """One stop per stretch of 2 x 0.2 s, so that pins at the stops carry to every
+    frame; the stretches with doubtful frames first, most doubtful first."""
     state, _ = tracked
     spacing = state._session.review_spacing
     assert spacing == round(0.2 * state.info.fps)
+    stops = state.review_stops()
+    frames = [d.frame for d in stops]
+    assert len(frames) == -(-state.n_frames // (2 * spacing))
+    assert all(any(abs(f - s) <= spacing for s in frames) for f in range(state.n_frames))
     doubtful = {d.frame for d in state.review_queue()}
-    stops = [d.frame for d in state.review_stops()]
-    assert set(stops) <= doubtful and all(abs(a - b) > spacing for a in stops for b in stops if a != b)
-    assert all(any(abs(f - s) <= spacing for s in stops) for f in doubtful)
-    assert stops, "the panning clip has doubtful frames"
-    assert [state.next_doubtful() for _ in stops] == stops
+    assert doubtful, "the panning clip has doubtful frames"
+    first = stops[0]
+    assert first.value == max(d.value for d in state.review_queue())
+    assert [d.value for d in stops] == sorted((d.value for d in stops), reverse=True)
+    assert [state.next_doubtful() for _ in frames] == frames
 
 
 def test_a_pin_moves_the_frames_around_it_and_says_so(tracked):
