@@ -356,10 +356,11 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
 def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -> np.ndarray:
     """(13,) bone lengths (metres) measured over a clip: a percentile
     (LENGTH_PERCENTILES) of each bone's image length at the body's depth ``depth``
-    (F,), both sides of a pair pooled; the metric scale is the model key triangle's. The hips keep the
-    model's span: a body turned from the camera never shows it (turned 45 degrees the
-    median reads it a third short, and each hip then sinks to the pelvis' depth), and
-    hip spans differ little from body to body (see ``calibrate``).
+    (F,), both sides of a pair pooled; the metric scale is the model key triangle's.
+    The hips keep the model's span: a body turned from the camera never shows it
+    (turned 45 degrees the median reads it a third short, and each hip then sinks to
+    the pelvis' depth), and hip spans differ little from body to body (see
+    ``calibrate``).
 
     Beyond the paper, which takes lengths from anatomy: real bodies differ from the
     model (the forearms of the CMU skeletons are about 30% shorter), and a bone taken
@@ -370,10 +371,10 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     The head and the torso stand upright most of the time, where a length read long
     turns into a lean toward or away from the camera: theirs is the lower quartile,
     as the silhouette method's (mocap.inputs.FIT_LENGTH_PERCENTILE; PA-MPJPE 74.1 ->
-    73.4 mm). The shins are the other exception: tracked best (the ankles' blocks end on the feet) and
-    upright through every stance, where they show their whole length, so their upper
-    quartile measures them (PA-MPJPE 77.1 -> 75.3 mm on the tracked 2D, every clip
-    better; the 90th percentile overshoots: 76.4)."""
+    73.4 mm). The shins are the other exception: tracked best (the ankles' blocks end
+    on the feet) and upright through every stance, where they show their whole
+    length, so their upper quartile measures them (PA-MPJPE 77.1 -> 75.3 mm on the
+    tracked 2D, every clip better; the 90th percentile overshoots: 76.4)."""
     ends = joints2d[:, np.array(BONES)]                                     # (F, 13, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) * depth[:, None] / camera.focal
     out = np.empty(len(BONES))

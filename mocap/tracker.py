@@ -127,7 +127,7 @@ PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PART
 LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
 ARMS = (2, 6)
 TWINS = (ARMS, (4, 8))     # the arms, the legs
-TWIN_PART = {3: 7, 7: 3}   # each forearm's twin
+TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}   # each forearm's twin
 HEAD, TORSO = 0, 1
 
 
@@ -319,7 +319,7 @@ def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_par
     mean error rose 6.1 -> 6.3% of the body's height)."""
     ankle, along = block_end(shin), np.array([np.cos(shin[THETA]), np.sin(shin[THETA])])
     steps = np.arange(-KNEE_STEPS, KNEE_STEPS + 1) * KNEE_STEP * shin[M]
-    sideways = steps[KNEE_STEPS - 1:KNEE_STEPS + 2]
+    sideways = np.array([-1.0, 0.0, 1.0]) * KNEE_STEP * shin[M]
     knees = (shin[:2] + steps[:, None, None] * along
              + sideways[None, :, None] * np.array([-along[1], along[0]])).reshape(-1, 2)
     shins = blocks.between(knees, np.broadcast_to(ankle, knees.shape), shin[N])
