@@ -51,7 +51,8 @@ from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HAL
 from mocap.edges import Edges
 from mocap.headmotion import P_START, adapt_threshold, head_displacement
 from mocap.marks import body_scale
-from mocap.perspective import UNIT_M, Pinhole, body_axes, calibrate, default_camera, key_depths
+from mocap.perspective import (UNIT_M, Pinhole, body_axes, calibrate, default_camera,
+                               frame_key_depths)
 from mocap.rays import limb_candidates, limb_penalty as joint_limits
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
@@ -235,16 +236,17 @@ def outline_cost(edges: Edges, cost: float = OUTLINE_COST) -> blocks.Penalty:
 class TrunkDepth:
     """Beyond the paper, while tracking: the tracked key triangle (both shoulders and
     the chest) in 3D on every frame, as the reconstruction finds it (calibrated on
-    the marks, Eq. 6-9, then Eq. 10-11 from frame to frame; mocap.perspective)."""
+    the marks, Eq. 6-9, then Eq. 10-11 from frame to frame on the side ``turn`` says;
+    mocap.perspective.frame_key_depths)."""
 
     def __init__(self, marks: np.ndarray, camera: Pinhole, turn: str | None):
-        self.camera = camera
+        self.camera, self.turn = camera, turn
         self.depths, self.sides = calibrate(marks, camera, turn).key_triangle()
 
     def follow(self, key2d: np.ndarray) -> np.ndarray:
         """(3, 3) the key joints (pinhole frame) of a new frame's (3, 2) key pixels."""
         rays = self.camera.rays(key2d)
-        self.depths = key_depths(rays, self.depths, self.sides)
+        self.depths = frame_key_depths(rays, self.depths, self.sides, self.turn)
         return self.depths[:, None] * rays
 
 
