@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.lift import yaw_of
 
 LIMBS = tuple(tuple((f"{j}_l", f"{j}_r") for j in names)
               for names in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")))
@@ -43,3 +44,11 @@ def pa_mpjpe(pred: np.ndarray, truth: np.ndarray) -> float:
     """Mean per-joint error after Procrustes alignment, averaged over frames (F, J, 3)."""
     return float(np.mean([np.linalg.norm(procrustes_aligned(p, t) - t, axis=-1).mean()
                           for p, t in zip(pred, truth)]))
+
+
+def facing_error(pred: np.ndarray, truth: np.ndarray) -> float:
+    """Mean absolute difference (degrees) of the facing yaw (lift.yaw_of: the turn
+    about the vertical that PA-MPJPE's alignment forgives) of contract-frame poses
+    (F, 16, 3) and the truth's."""
+    diff = np.array([yaw_of(p) - yaw_of(t) for p, t in zip(pred, truth)])
+    return float(np.mean(np.abs((diff + 180.0) % 360.0 - 180.0)))

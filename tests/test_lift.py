@@ -6,11 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from helpers import SHARED_DATA
+from scipy.spatial.transform import Rotation
 
 from mocap import lift, synth
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.bvh import contract_joints, read_bvh
-from mocap.metrics import pa_mpjpe
+from mocap.metrics import facing_error, pa_mpjpe
 from mocap.walk import walk_cycle
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
@@ -63,6 +64,15 @@ def test_the_six_orientations(name, yaw):
     left_x = lift.lateral_axis(lift.facing_yaw(name, spread))[0]
     rule = lift.image_left_is_right(name)
     assert rule is None if name in ("left", "right") else rule == (left_x > 0)
+
+
+def test_facing_error_is_the_turn_about_the_vertical_that_pa_forgives():
+    poses = walk_cycle(1.2, 30.0)[:5]
+    for turn in (30.0, 170.0):
+        turned = Rotation.from_euler("y", turn, degrees=True).apply(poses.reshape(-1, 3)).reshape(poses.shape)
+        assert facing_error(turned, poses) == pytest.approx(turn, abs=1e-6)
+        assert pa_mpjpe(turned, poses) < 1e-9
+    assert facing_error(poses, poses) == 0.0
 
 
 def test_the_performers_left_in_a_profile_is_away_from_the_camera_when_facing_right():
