@@ -162,16 +162,17 @@ def test_the_tracking_review_stops_where_its_pins_reach_every_frame(tracked):
 
 def test_a_pin_moves_the_frames_around_it_and_says_so(tracked):
     """At 15 frames/s a pin carries 3 frames: frames 8-12 for a pin on frame 10, the
-    ones beside it moved part of the way and captioned with the pin's frame."""
+    ones beside it moved part of the way (an ankle by the pin's offset) and captioned
+    with the pin's frame."""
     state, _ = tracked
-    wrist = JOINTS.index("wrist_l")
-    before = {i: state.view(i).joints2d[wrist].copy() for i in range(6, 15)}
-    state.set_override(10, "wrist_l", tuple(before[10] + [9.0, -6.0]))
-    moved = {i: state.view(i).joints2d[wrist] - before[i] for i in before}
+    ankle = JOINTS.index("ankle_l")
+    before = {i: state.view(i).joints2d[ankle].copy() for i in range(6, 15)}
+    state.set_override(10, "ankle_l", tuple(before[10] + [9.0, -6.0]))
+    moved = {i: state.view(i).joints2d[ankle] - before[i] for i in before}
     assert np.allclose([moved[i] for i in range(7, 14)],
                        np.outer([0, 1, 2, 3, 2, 1, 0], [9.0, -6.0]) / 3)
-    assert state.view(11).carried == {"wrist_l": 10} and state.view(10).carried == {}
+    assert state.view(11).carried == {"ankle_l": 10} and state.view(10).carried == {}
     assert state.view(13).carried == {}
-    assert "wrist_l moved by the pin on frame 10" in frame_text(state.view(9))
-    state.set_override(12, "wrist_l", tuple(before[12]))
-    assert state.view(11).carried == {"wrist_l": 10} and state.view(13).carried == {"wrist_l": 12}
+    assert "ankle_l moved by the pin on frame 10" in frame_text(state.view(9))
+    state.set_override(12, "ankle_l", tuple(before[12]))
+    assert state.view(11).carried == {"ankle_l": 10} and state.view(13).carried == {"ankle_l": 12}

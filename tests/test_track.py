@@ -284,23 +284,46 @@ def test_unreliable_stretches_are_interpolated_between_reliable_frames():
 
 
 def test_a_correction_carries_to_the_frames_around_it():
-    """A tracker 10 px off on frames 8-22; the user puts the wrist right on frame 15:
+    """A tracker 10 px off on frames 8-22; the user puts the ankle right on frame 15:
     the correction wins there and fades out over 0.2 s (5 frames at 25 fps) on either
     side; two corrections of a joint that near each other blend into one another."""
     tracked = np.zeros((30, 16, 2))
-    wrist = JOINT_INDEX["wrist_l"]
-    tracked[8:23, wrist, 0] = 10.0
-    once = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}}, 25.0)
-    assert np.allclose(once[:, wrist, 0], np.r_[np.zeros(8), 10, 10, 10, 8, 6, 4, 2, 0, 2, 4, 6,
+    ankle = JOINT_INDEX["ankle_l"]
+    tracked[8:23, ankle, 0] = 10.0
+    once = spread_corrections(tracked, {15: {"ankle_l": (0.0, 0.0)}}, 25.0)
+    assert np.allclose(once[:, ankle, 0], np.r_[np.zeros(8), 10, 10, 10, 8, 6, 4, 2, 0, 2, 4, 6,
                                                   8, 10, 10, 10, np.zeros(7)])
-    assert np.array_equal(np.delete(once, wrist, axis=1), np.delete(tracked, wrist, axis=1))
-    twice = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}, 22: {"wrist_l": (4.0, 0.0)},
-                                         3: {"elbow_l": (1.0, 2.0)}}, 25.0)
-    assert np.allclose(twice[15:23, wrist, 0], np.linspace(0.0, 4.0, 8))
-    assert np.allclose(twice[23:28, wrist, 0], [-4.8, -3.6, -2.4, -1.2, 0])
-    assert np.allclose(twice[3, JOINT_INDEX["elbow_l"]], [1.0, 2.0])
-    alone = spread_corrections(tracked, {15: {"wrist_l": (0.0, 0.0)}}, 25.0, spread_s=0.0)
-    assert np.flatnonzero(alone[:, wrist, 0] != tracked[:, wrist, 0]).tolist() == [15]
+    assert np.array_equal(np.delete(once, ankle, axis=1), np.delete(tracked, ankle, axis=1))
+    twice = spread_corrections(tracked, {15: {"ankle_l": (0.0, 0.0)}, 22: {"ankle_l": (4.0, 0.0)},
+                                         3: {"knee_l": (1.0, 2.0)}}, 25.0)
+    assert np.allclose(twice[15:23, ankle, 0], np.linspace(0.0, 4.0, 8))
+    assert np.allclose(twice[23:28, ankle, 0], [-4.8, -3.6, -2.4, -1.2, 0])
+    assert np.allclose(twice[3, JOINT_INDEX["knee_l"]], [1.0, 2.0])
+    alone = spread_corrections(tracked, {15: {"ankle_l": (0.0, 0.0)}}, 25.0, spread_s=0.0)
+    assert np.flatnonzero(alone[:, ankle, 0] != tracked[:, ankle, 0]).tolist() == [15]
+
+
+def test_a_corrected_arm_moves_with_its_shoulder():
+    """The body walks right 2 px a frame, bobbing; the tracker lost the left arm to
+    clutter that stands still. The user pins the elbow and the wrist, hanging from the shoulder, on
+    frames 12 and 17: between the pins (0.2 s at 25 fps) the arm hangs from the moving
+    shoulder as pinned, not where the clutter is, and it fades back to the tracked
+    arm beyond them. A pin where the tracker was (the marks) carries nothing."""
+    j = JOINT_INDEX
+    tracked = np.zeros((30, 16, 2))
+    tracked[:, :, 0] = 2.0 * np.arange(30)[:, None]
+    tracked[:, :, 1] = 4.0 * np.sin(np.arange(30))[:, None]
+    tracked[:, [j["elbow_l"], j["wrist_l"]]] = (300.0, 50.0)
+    hanging = {"elbow_l": (0.0, 30.0), "wrist_l": (5.0, 55.0)}
+    pins = {f: {name: tuple(tracked[f, j["shoulder_l"]] + (dx, dy)) for name, (dx, dy) in hanging.items()}
+            for f in (12, 17)}
+    spread = spread_corrections(tracked, pins, 25.0)
+    for name, (dx, dy) in hanging.items():
+        assert np.allclose(spread[12:18, j[name]], tracked[12:18, j["shoulder_l"]] + (dx, dy))
+        assert np.allclose(spread[23:, j[name]], tracked[23:, j[name]])
+    assert np.array_equal(spread[:, j["shoulder_l"]], tracked[:, j["shoulder_l"]])
+    where_tracked = {0: {"wrist_l": tuple(tracked[0, j["wrist_l"]])}}    # the marks
+    assert np.array_equal(spread_corrections(tracked, where_tracked, 25.0), tracked)
 
 
 def test_the_frames_a_pin_moves_are_the_ones_it_is_said_to_move():

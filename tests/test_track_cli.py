@@ -119,10 +119,10 @@ def test_a_joint_override_moves_the_tracked_joint(session):
     (0.2 s: 3 frames at 15 frames/s)."""
     tracked, truth = session
     notes = tracked.annotations
-    frame, joint = 7, JOINTS.index("wrist_l")
+    frame, joint = 7, JOINTS.index("knee_l")
     offset = np.array([24.0, -9.0])
     moved = tuple(tracked.tracked.joints2d[frame, joint] + offset)
-    tracked.annotate(notes.with_joint(frame, "wrist_l", moved))
+    tracked.annotate(notes.with_joint(frame, "knee_l", moved))
     assert np.allclose(tracked.inputs.joints2d[frame, joint], moved)
     shift = tracked.inputs.joints2d[:, joint] - tracked.tracked.joints2d[:, joint]
     assert np.allclose(shift[frame - 3:frame + 4], np.outer([0, 1, 2, 3, 2, 1, 0], offset) / 3)
