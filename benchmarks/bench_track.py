@@ -114,7 +114,8 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> dict:
 
 def print_table(rows: list[dict]) -> None:
     print(f"{'clip':24s} {'frames':>6s} {'fps':>4s} {'body px':>7s} | {'2D med%':>7s} {'p90%':>6s} "
-          f"{'PA mm':>6s} {'exact 2D':>8s} {'facing°':>7s} {'exact':>5s} | {'CPU ms':>6s} {'frames/s':>8s} {'total':>6s} | "
+          f"{'PA mm':>6s} {'exact 2D':>8s} {'facing°':>7s} {'exact':>5s} | "
+          f"{'CPU ms':>6s} {'frames/s':>8s} {'total':>6s} | "
           f"{'silhouette med%: same clip':>26s} {'static twin':>11s}")
     for r in rows:
         moving = "no person"
@@ -126,7 +127,8 @@ def print_table(rows: list[dict]) -> None:
               f"{r['facing_exact']:5.1f} | {r['ms']:6.1f} "
               f"{1000 / r['ms']:8.0f} {r['total_ms']:6.1f} | {moving:>26s} {r['sil_static']:11.1f}")
     err = np.concatenate([r["err"] for r in rows])
-    mean = {key: np.mean([r[key] for r in rows]) for key in ("pa", "pa_exact", "facing", "facing_exact", "ms", "total_ms")}
+    mean = {key: np.mean([r[key] for r in rows])
+            for key in ("pa", "pa_exact", "facing", "facing_exact", "ms", "total_ms")}
     print(f"{'all':24s} {len(err):6d} {'':4s} {'':7s} | {np.median(err):7.2f} "
           f"{np.percentile(err, 90):6.1f} {mean['pa']:6.0f} {mean['pa_exact']:8.0f} "
           f"{mean['facing']:7.1f} {mean['facing_exact']:5.1f} | "

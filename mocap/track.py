@@ -134,6 +134,7 @@ def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tu
     too; a user who corrects one frame in ten then fixes most of a drift, not a tenth."""
     out = joints2d.copy()
     fade = spread_frames(fps, spread_s)
+    # in joint order: a shoulder or elbow is spread before the joint it carries
     for j in sorted({JOINT_INDEX[name] for points in corrections.values() for name in points}):
         keys = sorted(f for f, points in corrections.items() if JOINTS[j] in points and f < len(out))
         pins = np.array([corrections[f][JOINTS[j]] for f in keys], float)
