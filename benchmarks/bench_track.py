@@ -24,7 +24,7 @@ orientation's side (the user's annotation); it assumes the default focal length
   numbers there show its assumption broken. Beside it, the same motion and camera
   over a static background ("static twin").
 
-    python benchmarks/bench_track.py [--quick]
+    python benchmarks/bench_track.py [--quick] [--yaws 60 120]
 """
 
 from __future__ import annotations
@@ -143,7 +143,11 @@ def bench_main(doc: str, run_clip: Callable, print_table: Callable[[list], None]
     returned; skipped, said so, when the motion capture is absent."""
     parser = argparse.ArgumentParser(description=doc)
     parser.add_argument("--quick", action="store_true", help="one view per motion")
-    yaws = YAWS[:1] if parser.parse_args().quick else YAWS
+    parser.add_argument("--yaws", type=float, nargs="+", default=YAWS, metavar="DEG",
+                        help=f"render yaws to view every motion from (default {YAWS}; other "
+                             "views check that a change is not made for these two)")
+    args = parser.parse_args()
+    yaws = args.yaws[:1] if args.quick else args.yaws
     if not DATA.is_dir():
         print(f"skipped: {DATA} is absent (real motion capture is needed to render the clips)")
         return 0

@@ -24,7 +24,7 @@ over a panning, cluttered background; the tracker given the true joints of frame
   performer really faces (an orientation entry, held until the next), with the exact
   and with the tracked 2D.
 
-    python benchmarks/bench_track_budget.py [--quick]
+    python benchmarks/bench_track_budget.py [--quick] [--yaws 60 120]
 """
 
 from __future__ import annotations
