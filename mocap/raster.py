@@ -116,6 +116,8 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
     """
     x0, y0, x1, y1 = bounding_window(sweep, canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
+    if not shape[0] or not shape[1]:            # swept wholly outside the frame: explains nothing
+        return np.zeros(len(sweep)), lambda candidates: np.zeros(len(candidates))
     planes = _draw_planes(sweep, offset, shape)
     free = canvas.fixed[y0:y1, x0:x1] == 0
     sil = canvas.sil[y0:y1, x0:x1].astype(bool)

@@ -14,7 +14,7 @@ from mocap.contour import find_angle, find_elbow_corner, lower_legs_cross
 from mocap.fit2d import FIT_SCALE, Fit2D, coarse_to_fine, fit_frame, two_link_angles
 from mocap.legchain import LegChain
 from mocap.metrics import side_matched_errors
-from mocap.raster import draw_model, similarity, similarity_from_counts
+from mocap.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
 from mocap.session import body_heights, extract_silhouettes, fit_silhouettes
 from mocap.synth import render_motion
 from mocap.video import open_video, processing_scale
@@ -31,6 +31,18 @@ def test_similarity_is_eq_3():
     assert similarity(a, b) == pytest.approx(np.exp(-p - n) * (1 - p))
     assert similarity(a, a) == pytest.approx(1.0)
     assert similarity_from_counts(60, 0, 0) == 0.0
+
+
+def test_candidates_swept_wholly_outside_the_frame_explain_nothing():
+    """A limb's sweep can leave the frame where the performer is at its edge; its
+    candidates then score 0 (they explain no silhouette), without drawing."""
+    sil = np.zeros((40, 60), np.uint8)
+    sil[10:30, 20:40] = 1
+    inside = np.array([[[[20, 10], [39, 10], [39, 29], [20, 29]]]], float)
+    outside = inside + [200.0, 0.0]
+    scores, more = sweep_scorer(Canvas(sil), outside)
+    assert scores.tolist() == [0.0] and more(outside).tolist() == [0.0]
+    assert sweep_scorer(Canvas(sil), inside)[0][0] > 0.9
 
 
 def test_coarse_to_fine_finds_the_peak_and_keeps_a_flat_start():
