@@ -212,7 +212,17 @@ def review_text(state: AppState) -> str:
     if not queue:
         return "No doubtful frame."
     lines = [f"- **{d.frame}**: {'; '.join(d.reasons)}" for d in queue[:REVIEW_LINES]]
-    return f"{len(queue)} frames to review, most doubtful first:\n" + "\n".join(lines)
+    return far_arm_text(state) + f"{len(queue)} frames to review, most doubtful first:\n" + "\n".join(lines)
+
+
+def far_arm_text(state: AppState) -> str:
+    """The tracking's advice to check its far arm first (TrackSession.far_arm)."""
+    side = state.far_arm()
+    if side is None:
+        return ""
+    name = {"l": "left", "r": "right"}[side]
+    return (f"The tracker loses the **far arm** most: at each stop, check the **{name}** "
+            f"elbow and wrist first (the performer's {name}, farther from the camera).\n\n")
 
 
 def tracking_text(state: AppState) -> str:

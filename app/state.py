@@ -184,6 +184,12 @@ class AppState:
         """The shown method's session (None until fitted, or tracked)."""
         return self._tracked if self.method == "track" else self._fitted
 
+    def far_arm(self) -> str | None:
+        """The tracking's far arm, "l" or "r" (TrackSession.far_arm); None with the
+        silhouette method, before the tracking, or for a body facing the camera."""
+        with self._lock:
+            return self._tracked.far_arm() if self.method == "track" and self._tracked else None
+
     @property
     def tracking(self) -> bool:
         """Whether a tracking runs now."""

@@ -19,7 +19,9 @@ over a panning, cluttered background; the tracker given the true joints of frame
   overrides), on that frame only, then as the app applies them, carried to the frames
   around it (mocap.track.spread_corrections); pins on the review's stops: the same
   user visiting the app's review stops instead (the middle frame of every 0.4 s
-  stretch, most doubtful first, at most as many as one frame in 10);
+  stretch, most doubtful first, at most as many as one frame in 10); on its far arm
+  only: the same user correcting only the elbow and wrist of the arm the review says
+  to check first (mocap.tracksession.TrackSession.far_arm);
 - facing said 1 in 10: the same visits, the user saying on each the side the
   performer really faces (an orientation entry, held until the next), with the exact
   and with the tracked 2D.
@@ -117,21 +119,25 @@ def with_gross_fixed(tracked: np.ndarray, truth: Truth, percent: float) -> np.nd
     return np.where(gross[..., None], truth.joints2d, tracked)
 
 
-def user_corrections(tracked: np.ndarray, truth: Truth, visits) -> dict[int, dict[str, tuple]]:
+def user_corrections(tracked: np.ndarray, truth: Truth, visits,
+                     joints: list[int] | None = None) -> dict[int, dict[str, tuple]]:
     """Joint overrides of a user who corrects, on each frame of ``visits``, every joint
-    more than GROSS[-1]% of body height off."""
+    (of ``joints``, default all) more than GROSS[-1]% of body height off."""
     err = np.linalg.norm(tracked - truth.joints2d, axis=-1) / truth.body_height_px * 100
-    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in np.flatnonzero(err[f] > GROSS[-1])}
+    looked = np.zeros(len(JOINTS), bool)
+    looked[joints if joints is not None else slice(None)] = True
+    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in np.flatnonzero(looked & (err[f] > GROSS[-1]))}
             for f in visits}
 
 
-def review_stops(result: TrackResult, orientation: str) -> list[int]:
+def review_plan(result: TrackResult, orientation: str) -> tuple[list[int], str | None]:
     """The frames the app's review visits for this tracking, most doubtful first
-    (app.state.AppState.review_stops), at most one in REVIEW_EVERY."""
+    (app.state.AppState.review_stops), at most one in REVIEW_EVERY; and the far arm
+    it says to check first (TrackSession.far_arm)."""
     notes = Annotations().with_method("track").with_orientation(0, orientation)
     session = TrackSession(result.info, result, notes)
     stops = covering(review_queue(session), len(result.joints2d), session.review_spacing)
-    return [d.frame for d in stops][:len(result.joints2d) // REVIEW_EVERY]
+    return [d.frame for d in stops][:len(result.joints2d) // REVIEW_EVERY], session.far_arm()
 
 
 def said_turns(truth: Truth) -> list[str]:
@@ -140,8 +146,10 @@ def said_turns(truth: Truth) -> list[str]:
     return [turn_of(orientation_of(truth.joints3d[f])) for f in visited]
 
 
-def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int]) -> dict[str, float]:
-    """PA-MPJPE (mm) of every row of the table for one clip; ``stops``: the review's."""
+def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int],
+           far: str | None) -> dict[str, float]:
+    """PA-MPJPE (mm) of every row of the table for one clip; ``stops`` and ``far``: the
+    review's stops and the arm it says to check first."""
     camera = default_camera(truth.width, truth.height)
 
     def pinhole(joints2d: np.ndarray, turns=turn) -> np.ndarray:
@@ -160,6 +168,8 @@ def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int]) -> di
             truth.fps, spread_s)) for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))},
         "pins on the review's stops": pinhole(spread_corrections(
             tracked, user_corrections(tracked, truth, stops), truth.fps)),
+        "... on its far arm only": pinhole(spread_corrections(tracked, user_corrections(
+            tracked, truth, stops, LIMB_JOINTS[far, "arm"] if far else []), truth.fps)),
         **{f"facing said 1 in {REVIEW_EVERY}, {name}": pinhole(joints2d, said_turns(truth))
            for name, joints2d in (("exact 2D", truth.joints2d), ("tracked", tracked))}}
     return {name: pa_mpjpe(to_contract(points), truth.joints3d) * 1000 for name, points in rows.items()}
@@ -172,8 +182,8 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, 
     orientation = orientation_of(truth.joints3d[0])
     result = track_video(video, truth.joints2d[0], orientation=orientation)
     name = Path(bvh).stem.replace("cmu_01_01_", "cmu_")
-    stops = review_stops(result, orientation)
-    return f"{name} {yaw:.0f}", (budget(result.joints2d, truth, turn_of(orientation), stops),
+    stops, far = review_plan(result, orientation)
+    return f"{name} {yaw:.0f}", (budget(result.joints2d, truth, turn_of(orientation), stops, far),
                                  far_wrist_failures(result.joints2d, truth))
 
 

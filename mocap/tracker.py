@@ -333,10 +333,19 @@ def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_par
     return shins[best], float(s_shins[best])
 
 
+def far_arm(key_depths: np.ndarray) -> str | None:
+    """"l" or "r": the arm whose shoulder lies FAR_MARGIN_M or more deeper than the
+    other in a key triangle (``key_depths``: left shoulder, right shoulder, chest),
+    None for a body facing the camera or away."""
+    gap = key_depths[0] - key_depths[1]
+    if abs(gap) < FAR_MARGIN_M:
+        return None
+    return "l" if gap > 0 else "r"
+
+
 def far_forearm(key_depths: np.ndarray) -> int | None:
-    """Beyond the paper: the forearm part of the arm whose shoulder lies FAR_MARGIN_M
-    or more deeper than the other in the marks' key triangle (``key_depths``: left
-    shoulder, right shoulder, chest), None for a body facing the camera or away.
+    """Beyond the paper: the forearm part of the far arm of the marks' key triangle
+    (``far_arm``), None for a body facing the camera or away.
 
     The far forearm is often behind the trunk on frame 0, where its marked colours
     are the shirt's, and it keeps them: it then follows the trunk, also where the
@@ -347,10 +356,8 @@ def far_forearm(key_depths: np.ndarray) -> int | None:
     not mirrored: 71.1; either model for both forearms: 72.5 (a near forearm then
     matches the trunk). The twin's model in place of the far forearm's own lost the
     far arm where it was hidden (an earlier tracker: 77 -> 83 mm)."""
-    gap = key_depths[0] - key_depths[1]
-    if abs(gap) < FAR_MARGIN_M:
-        return None
-    return ARMS[0] + 1 if gap > 0 else ARMS[1] + 1
+    side = far_arm(key_depths)
+    return None if side is None else ARMS["lr".index(side)] + 1
 
 
 def mirrored_model(model: np.ndarray, shape: tuple) -> np.ndarray:

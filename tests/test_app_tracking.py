@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from app_helpers import TINY_FRAMES, fresh_copy, panning_clip, tiny_video  # noqa: F401
 
-from app.controls import frame_text
+from app.controls import frame_text, review_text
 from app.state import AppState
 from mocap.annotations import load_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
@@ -158,6 +158,19 @@ def test_the_tracking_review_stops_where_its_pins_reach_every_frame(tracked):
     assert first.value == max(d.value for d in state.review_queue())
     assert [d.value for d in stops] == sorted((d.value for d in stops), reverse=True)
     assert [state.next_doubtful() for _ in frames] == frames
+
+
+def test_the_review_says_to_check_the_arm_farther_from_the_camera_first(tracked):
+    """The tracker loses the far arm most; the Review tab names it: the arm whose
+    shoulder is truly deeper on frame 0 (the contract frame's z points at the camera)."""
+    state, truth = tracked
+    shoulders = truth.joints3d[0, [JOINTS.index("shoulder_l"), JOINTS.index("shoulder_r")], 2]
+    far = "left" if shoulders[0] < shoulders[1] else "right"
+    assert abs(shoulders[0] - shoulders[1]) > 0.1
+    assert state.far_arm() == far[0]
+    assert f"check the **{far}** elbow and wrist first" in review_text(state)
+    state.set_method("silhouette")
+    assert state.far_arm() is None and "far arm" not in review_text(state)
 
 
 def test_a_pin_moves_the_frames_around_it_and_says_so(tracked):

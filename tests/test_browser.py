@@ -251,6 +251,10 @@ def test_switch_to_tracking_mark_by_clicking_and_track(browser, panning_clip, tm
         err = np.linalg.norm(view.joints2d - truth.joints2d[1], axis=-1)
         assert np.median(err) < 0.04 * truth.body_height_px
         shot(page, "tracking_tracked")
+        page.get_by_role("tab", name="Review").click()
+        side = {"l": "left", "r": "right"}[app.state.far_arm()]
+        page.get_by_text(f"check the {side} elbow and wrist first").wait_for()
+        shot(page, "tracking_review")
     finally:
         app.server.stop()
 

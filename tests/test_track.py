@@ -19,7 +19,7 @@ from mocap.track import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_r
 from mocap.edges import Edges
 from mocap.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
 from mocap.tracker import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
-                           PARTS, around_root, arm_limits_cost, far_forearm, limb_penalty,
+                           PARTS, around_root, arm_limits_cost, far_arm, far_forearm, limb_penalty,
                            mirrored_model, outline_cost, overlap, settled_knee, twin_overlap)
 from mocap.walk import walk_cycle
 
@@ -97,6 +97,8 @@ def test_the_far_forearm_and_its_twins_mirrored_colours():
     assert far_forearm(np.array([6.3, 6.0, 6.1])) == part["lower_arm_l"]
     assert far_forearm(np.array([6.0, 6.3, 6.1])) == part["lower_arm_r"]
     assert far_forearm(np.array([6.0, 6.05, 6.1])) is None
+    assert [far_arm(np.array(d)) for d in ([6.3, 6.0, 6.1], [6.0, 6.3, 6.1], [6.0, 6.05, 6.1])] == [
+        "l", "r", None]
     twin = np.zeros((14, 7, 3), np.float32)
     twin[:, 0] = 200.0                                       # lit on its first column
     mirrored = mirrored_model(twin, (10, 7, 3))
