@@ -94,7 +94,7 @@ def far_wrist_failures(tracked: np.ndarray, truth: Truth) -> dict[str, int]:
     twin = segment_distance(placed, t[frames, near_arm[:, 0]], t[frames, near_arm[:, 1]]) < (
         WIDTH[SEGMENT_INDEX["lower_arm_l"]] * px)
     trunk = on_trunk(placed) & ~twin
-    return {"far wrist > 8% off": int(gross.sum()), "... on the near forearm": int((gross & twin).sum()),
+    return {f"far wrist > {GROSS[0]:g}% off": int(gross.sum()), "... on the near forearm": int((gross & twin).sum()),
             "... on the trunk": int((gross & trunk).sum()),
             "... elsewhere": int((gross & ~twin & ~trunk).sum()),
             "... truly on the trunk": int((gross & on_trunk(true)).sum())}
@@ -124,9 +124,8 @@ def user_corrections(tracked: np.ndarray, truth: Truth, visits,
     """Joint overrides of a user who corrects, on each frame of ``visits``, every joint
     (of ``joints``, default all) more than GROSS[-1]% of body height off."""
     err = np.linalg.norm(tracked - truth.joints2d, axis=-1) / truth.body_height_px * 100
-    looked = np.zeros(len(JOINTS), bool)
-    looked[joints if joints is not None else slice(None)] = True
-    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in np.flatnonzero(looked & (err[f] > GROSS[-1]))}
+    looked = range(len(JOINTS)) if joints is None else joints
+    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in looked if err[f, j] > GROSS[-1]}
             for f in visits}
 
 
@@ -187,16 +186,21 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, 
                                  far_wrist_failures(result.joints2d, truth))
 
 
+def print_rows(columns: list[tuple[str, dict]], title: str, total: str, summary) -> None:
+    """One table: a column per clip, a row per key of its dict, the ``total`` column
+    ``summary(values)`` (a string) of the row's values."""
+    print(f"{title:30s} " + " ".join(f"{name[:13]:>13s}" for name, _ in columns) + f" {total:>6s}")
+    for row in columns[0][1]:
+        values = [table[row] for _, table in columns]
+        print(f"{row:30s} " + " ".join(f"{v:13.0f}" for v in values) + f" {summary(values):>6s}")
+
+
 def print_table(columns: list[tuple[str, tuple[dict[str, float], dict[str, int]]]]) -> None:
-    names = [name for name, _ in columns]
-    for table, (title, total) in enumerate((("PA-MPJPE mm", "mean"), ("frames", "all"))):
-        print(f"{title:30s} " + " ".join(f"{n[:13]:>13s}" for n in names) + f" {total:>6s}")
-        for row in columns[0][1][table]:
-            values = [tables[table][row] for _, tables in columns]
-            summary = np.mean(values) if table == 0 else np.sum(values)
-            print(f"{row:30s} " + " ".join(f"{v:13.0f}" for v in values) + f" {summary:6.{1 - table}f}")
-        if table == 0:
-            print("target: PA-MPJPE <= 60 mm from the tracked 2D\n")
+    print_rows([(name, pa) for name, (pa, _) in columns], "PA-MPJPE mm", "mean",
+               lambda values: f"{np.mean(values):.1f}")
+    print("target: PA-MPJPE <= 60 mm from the tracked 2D\n")
+    print_rows([(name, failures) for name, (_, failures) in columns], "frames", "all",
+               lambda values: f"{np.sum(values):d}")
 
 
 if __name__ == "__main__":

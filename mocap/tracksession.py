@@ -25,7 +25,7 @@ from mocap.errors import MocapError
 from mocap.inputs import Inputs
 from mocap.lift import depth_fractions, orientation_of_yaw, signs_of, yaw_of
 from mocap.orientation import NEGLIGIBLE, held_user_signs
-from mocap.perspective import (UNIT_M, calibrate, default_camera, key_joints, place_joints, steady_depths,
+from mocap.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
                                to_contract)
 from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
 from mocap.tracker import far_arm
@@ -72,7 +72,6 @@ class TrackSession(Session):
         # (steady 2D joints, turns, key joints, their placement free of user signs)
         self._placed: tuple[np.ndarray, list, np.ndarray, np.ndarray] | None = None
         self._resolution: tuple[Inputs, np.ndarray] | None = None
-        self._far: tuple[str | None] | None = None     # far_arm's answer, until an edit
 
     @classmethod
     def from_video(cls, info: VideoInfo, notes: Annotations, *, smooth: float = 0.0,
@@ -82,23 +81,21 @@ class TrackSession(Session):
 
     def annotate(self, annotations: Annotations) -> None:
         super().annotate(annotations)
-        self._resolution = self._far = None
+        self._resolution = None
 
     def far_arm(self) -> str | None:
         """"l" or "r": the arm farther from the camera on frame 0 (mocap.tracker.far_arm
-        of the key triangle calibrated on the marks, turned as frame 0's orientation
-        says or else as the knees tell), None for a body facing the camera or away.
+        of frame 0's key triangle as the reconstruction finds it: calibrated on the
+        marks, turned as frame 0's orientation says or else as the knees tell), None
+        for a body facing the camera or away.
 
         The tracker loses that arm most (benchmarks/bench_track_budget.py: its elbow
         and wrist cost 7.7 of the 10.7 mm that the limbs' gross failures cost); a user
         who pins it alone at the review's stops mends about half of what pinning every
         joint mends, with a third of the pins (64.8 -> 58.7 mm, against 53.5; from the
         held-out views, --yaws 60 120: 76.2 -> 70.6, against 62.9)."""
-        if self._far is None:
-            joints = self._joints2d()
-            turn = turn_of(self._annotations.orientations(1)[0]) or guessed_turn(joints, self.info.fps)
-            self._far = (far_arm(calibrate(joints[0], self.camera, turn).key_triangle()[0]),)
-        return self._far[0]
+        self._resolved()
+        return far_arm(self._placed[2][0, :, 2])
 
     @property
     def inputs(self) -> Inputs:
