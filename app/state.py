@@ -36,7 +36,7 @@ from mocap.export.glb import glb_bytes
 from mocap.export.html import motion_html
 from mocap.export.motion_json import motion_dict
 from mocap.lift import depth_fractions
-from mocap.marks import check_marks
+from mocap.marks import check_marks, shoulders_as_hips
 from mocap.motion import Motion
 from mocap.perspective import calibrate, default_camera
 from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
@@ -525,12 +525,13 @@ class AppState:
 
     def marks_from_fit(self) -> bool:
         """Place all 16 marks on frame 0 where the silhouette method's fit has them
-        (sides resolved, overrides kept): a start for the user to correct."""
+        (sides resolved, overrides kept, the shoulders in the hips' order:
+        mocap.marks.shoulders_as_hips): a start for the user to correct."""
         with self._lock:
             if self._fitted is None or self._fits[0].joints2d is None:
                 raise MocapError("frame 0 has no silhouette fit to take the marks from"
                                  + (" yet" if self._fitted is None else ""))
-            joints = self._fitted.inputs.joints2d[0]
+            joints = shoulders_as_hips(self._fitted.inputs.joints2d[0])
         def change(notes: Annotations) -> Annotations:
             for name, (x, y) in zip(JOINTS, joints):
                 notes = notes.with_joint(0, name, (round(float(x), 1), round(float(y), 1)))

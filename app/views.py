@@ -26,6 +26,7 @@ from mocap.video import VideoInfo, read_frame
 
 PANEL_HEIGHT = 1.9          # scene units (metres) of each panel: a 1.75 m body fits
 GAP = 0.3                   # between panels, room for their captions
+DISPLAY_HEIGHT = 480        # px: smaller frames are shown enlarged to this height
 CENTRE_RGB = (150, 150, 160)        # torso and head in 3D (the scene is white)
 MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
 UNSIDED_BGR = (90, 200, 90)         # the 2D model before left and right are known
@@ -94,8 +95,22 @@ def segment_rgb(segment: str) -> tuple[int, int, int]:
     return r, g, b
 
 
+def for_display(image: np.ndarray, scale: float) -> tuple[np.ndarray, float]:
+    """A copy of ``image`` to draw on and show, and ``scale`` (video pixels to the
+    image's) to draw with: an image less than DISPLAY_HEIGHT tall is enlarged to it,
+    so that rings, names and skeleton lines stay thin against the body (on a 144-pixel
+    frame, the 16 marks' rings and names covered it)."""
+    factor = DISPLAY_HEIGHT / image.shape[0]
+    if factor <= 1.0:
+        return image.copy(), scale
+    return cv2.resize(image, None, fx=factor, fy=factor, interpolation=cv2.INTER_LINEAR), scale * factor
+
+
 def caption_image(size: tuple[int, int], text: str) -> np.ndarray:
-    """A grey RGB image of ``size`` (width, height) that says ``text``."""
+    """A grey RGB image of ``size`` (width, height), enlarged as ``for_display``, that
+    says ``text``."""
+    factor = max(1.0, DISPLAY_HEIGHT / size[1])
+    size = (round(size[0] * factor), round(size[1] * factor))
     image = np.full((size[1], size[0], 3), 60, np.uint8)
     scale = size[1] / 400
     (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
@@ -116,22 +131,24 @@ def mark_joints(image: np.ndarray, points: dict[str, tuple[float, float]], scale
 
 
 def video_image(frame_bgr: np.ndarray, marks: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
-    """The video frame (RGB) with the joints of ``marks`` ringed."""
-    return cv2.cvtColor(mark_joints(frame_bgr.copy(), marks, scale), cv2.COLOR_BGR2RGB)
+    """The video frame (RGB, ``for_display``) with the joints of ``marks`` ringed."""
+    image, scale = for_display(frame_bgr, scale)
+    return cv2.cvtColor(mark_joints(image, marks, scale), cv2.COLOR_BGR2RGB)
 
 
 def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None, sides_known: bool,
                      overrides: dict[str, tuple[float, float]], scale: float,
                      size: tuple[int, int]) -> np.ndarray:
-    """The silhouette in grey with the fitted model over it (RGB, ``size`` = width,
-    height of the processed frame); limbs in one colour until the sides are known."""
+    """The silhouette in grey with the fitted model over it (RGB, ``for_display``;
+    ``size`` = width, height of the processed frame); limbs in one colour until the
+    sides are known."""
     mask = np.zeros((size[1], size[0]), np.uint8)
     if silhouette is not None:
         x0, y0, x1, y1 = silhouette.box
         mask[y0:y1, x0:x1] = silhouette.mask()
-    view = silhouette_view(mask, None)
+    view, scale = for_display(silhouette_view(mask, None), scale)
     if joints2d is not None:
-        thickness = max(2, size[1] // 240)
+        thickness = max(2, view.shape[0] // 240)
         draw_skeleton(view, joints2d * scale, thickness, None if sides_known else UNSIDED_BGR)
         mark_joints(view, overrides, scale)
     return cv2.cvtColor(view, cv2.COLOR_BGR2RGB)
@@ -139,8 +156,9 @@ def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None,
 
 def tracked_image(frame_bgr: np.ndarray, joints2d: np.ndarray,
                   overrides: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
-    """The video frame dimmed with the tracked joints (anatomical sides) over it (RGB)."""
-    view = (frame_bgr * 0.55).astype(np.uint8)
+    """The video frame dimmed with the tracked joints (anatomical sides) over it (RGB,
+    ``for_display``)."""
+    view, scale = for_display((frame_bgr * 0.55).astype(np.uint8), scale)
     draw_skeleton(view, joints2d * scale, max(2, view.shape[0] // 240))
     return cv2.cvtColor(mark_joints(view, overrides, scale), cv2.COLOR_BGR2RGB)
 

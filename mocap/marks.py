@@ -64,6 +64,40 @@ def check_key_triangle(marks: np.ndarray) -> None:
                              f"line through the other two key joints")
 
 
+def across_trunk(marks: np.ndarray, side: str) -> float:
+    """How far the left joint of a pair (``side``: "shoulder" or "hip") lies from the
+    right one square to the marked trunk (neck to pelvis), in pixels: positive on the
+    image right of an upright body. Both pairs have one sign on a body turned as a
+    whole: the left joints on the image right of a body facing the camera, on the
+    image left of one facing away."""
+    axis = marks[JOINT_INDEX["pelvis"]] - marks[JOINT_INDEX["neck"]]
+    across = np.array([axis[1], -axis[0]]) / max(np.hypot(*axis), 1e-9)
+    return float((marks[JOINT_INDEX[f"{side}_l"]] - marks[JOINT_INDEX[f"{side}_r"]]) @ across)
+
+
+def turned_apart(marks: np.ndarray) -> bool:
+    """Whether the shoulders and the hips are marked turned opposite ways
+    (``across_trunk`` of opposite signs), which no rigid trunk shows."""
+    return across_trunk(marks, "shoulder") * across_trunk(marks, "hip") < 0
+
+
+def shoulders_as_hips(marks: np.ndarray) -> np.ndarray:
+    """The marks with the two shoulders exchanged where they are ``turned_apart`` from
+    the hips. For marks taken from the silhouette method's fit: seen from the side,
+    the fit places its shoulders where the 2D model puts them, in either order,
+    while its hips follow the legs, whose sides it settles (mocap.orientation). On
+    the real dog_walker clip (a walk seen from the side) the fit's frame 0 gives
+    shoulders and hips turned apart, which the calibration refuses; with the
+    shoulders exchanged it finds the body facing image right, turned 89 degrees
+    (with the hips exchanged instead: 131)."""
+    if not turned_apart(marks):
+        return marks
+    out = marks.copy()
+    pair = [JOINT_INDEX["shoulder_l"], JOINT_INDEX["shoulder_r"]]
+    out[pair] = marks[pair[::-1]]
+    return out
+
+
 def body_scale(marks: np.ndarray) -> float:
     """Pixels per model unit of a marked skeleton: the least foreshortened of the
     head-and-trunk line and the two legs against their model lengths."""

@@ -41,6 +41,7 @@ from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.errors import MocapError
 from mocap.inputs import DEPTH_SMOOTH_S
+from mocap.marks import turned_apart
 from mocap.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots,
                         signs_allowed, toward_signs)
 
@@ -267,7 +268,10 @@ def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None) -> Ca
              if SPAN_RANGE[0] <= p[6] <= SPAN_RANGE[1] else np.inf for p in fits]
     if min(error) > MAX_CALIBRATION_ERROR * np.ptp(marks, axis=0).max():
         raise MocapError("cannot calibrate the camera from the marked shoulders, chest and "
-                         "hips: they fit no view of a human trunk")
+                         "hips: they fit no view of a human trunk" + (
+                             "; the shoulders and the hips are marked turned opposite ways: "
+                             "swap shoulder_l and shoulder_r, or hip_l and hip_r"
+                             if turned_apart(marks) else ""))
     if turn in ("left", "right"):
         wrong_side = [(Calibration.from_params(p).yaw > 0) != (turn == "right") for p in fits]
         error = [np.inf if wrong else e for e, wrong in zip(error, wrong_side)]

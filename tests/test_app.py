@@ -16,7 +16,7 @@ from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_vide
 from mocap.session import iter_fits, iter_silhouettes
 from app.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.state import AppState, annotations_path, toggled_keyframe
-from app.views import Layout, segment_transforms
+from app.views import DISPLAY_HEIGHT, Layout, segment_transforms, video_image
 from mocap.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
@@ -204,6 +204,19 @@ def test_click_ray_to_video_pixel():
     at = layout.video_pixel(origin, np.array([x, y, 0.0]) - origin, (320, 240))
     np.testing.assert_allclose(at, (100, 60), atol=1e-9)
     assert layout.video_pixel(origin, (0.0, 0.0, -1.0), (320, 240)) is None     # between panels
+
+
+def test_a_small_frame_is_shown_enlarged_with_its_marks_in_place():
+    frame = np.full((144, 180, 3), 90, np.uint8)
+    image = video_image(frame, {"wrist_l": (60.0, 100.0)}, 1.0)
+    factor = DISPLAY_HEIGHT / 144
+    assert image.shape == (DISPLAY_HEIGHT, round(180 * factor), 3)
+    drawn = np.argwhere((image != 90).any(axis=-1))            # the ring and its name
+    ring = drawn[np.hypot(*(drawn - (100 * factor, 60 * factor)).T) < 0.03 * DISPLAY_HEIGHT]
+    assert len(ring) and np.abs(ring.mean(axis=0) - (100 * factor, 60 * factor)).max() < 1
+    assert np.ptp(ring, axis=0).max() < 0.05 * DISPLAY_HEIGHT   # small against the frame
+    big = np.full((480, 640, 3), 90, np.uint8)
+    assert video_image(big, {}, 1.0).shape == big.shape
 
 
 def test_cylinders_join_the_joints(app):

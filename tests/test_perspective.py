@@ -10,6 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from mocap import perspective as P
 from mocap.errors import MocapError
+from mocap.marks import shoulders_as_hips, turned_apart
 from mocap.metrics import pa_mpjpe
 from mocap.rays import choose_limb, ray_roots
 from mocap.synth import RenderOptions, plan_scene, scene_truth
@@ -52,6 +53,22 @@ def test_marks_that_fit_no_view_are_refused():
     marks[P.JOINT_INDEX["chest"]] += (60.0, 0.0)            # the chest beside the body
     with pytest.raises(MocapError, match="cannot calibrate"):
         P.calibrate(marks, CAMERA)
+
+
+@pytest.mark.parametrize("yaw", [70.0, -110.0])
+def test_shoulders_marked_against_the_hips_are_refused_with_the_fix(yaw):
+    truth = known_pose(yaw)
+    marks = CAMERA.project(truth.to_camera(truth.model()))
+    assert not turned_apart(marks) and shoulders_as_hips(marks) is marks
+    pair = [P.JOINT_INDEX["shoulder_l"], P.JOINT_INDEX["shoulder_r"]]
+    swapped = marks.copy()
+    swapped[pair] = marks[pair[::-1]]
+    assert turned_apart(swapped)
+    with pytest.raises(MocapError, match="turned opposite ways: swap shoulder_l and shoulder_r"):
+        P.calibrate(swapped, CAMERA)
+    assert np.array_equal(shoulders_as_hips(swapped), marks)
+    assert P.calibrate(shoulders_as_hips(swapped), CAMERA, "right" if yaw > 0 else "left").yaw \
+        == pytest.approx(yaw, abs=0.2)
 
 
 def test_key_depths_follow_the_moving_triangle():
