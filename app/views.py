@@ -95,21 +95,27 @@ def segment_rgb(segment: str) -> tuple[int, int, int]:
     return r, g, b
 
 
+def display_factor(height: int) -> float:
+    """How much an image ``height`` pixels tall is enlarged for display: to
+    DISPLAY_HEIGHT if it is less tall, so that rings, names and skeleton lines stay
+    thin against the body (on a 144-pixel frame, the 16 marks' rings and names
+    covered it)."""
+    return max(1.0, DISPLAY_HEIGHT / height)
+
+
 def for_display(image: np.ndarray, scale: float) -> tuple[np.ndarray, float]:
-    """A copy of ``image`` to draw on and show, and ``scale`` (video pixels to the
-    image's) to draw with: an image less than DISPLAY_HEIGHT tall is enlarged to it,
-    so that rings, names and skeleton lines stay thin against the body (on a 144-pixel
-    frame, the 16 marks' rings and names covered it)."""
-    factor = DISPLAY_HEIGHT / image.shape[0]
-    if factor <= 1.0:
+    """A copy of ``image`` to draw on and show, enlarged by ``display_factor``, and
+    ``scale`` (video pixels to the image's) to draw with."""
+    factor = display_factor(image.shape[0])
+    if factor == 1.0:
         return image.copy(), scale
     return cv2.resize(image, None, fx=factor, fy=factor, interpolation=cv2.INTER_LINEAR), scale * factor
 
 
 def caption_image(size: tuple[int, int], text: str) -> np.ndarray:
-    """A grey RGB image of ``size`` (width, height), enlarged as ``for_display``, that
-    says ``text``."""
-    factor = max(1.0, DISPLAY_HEIGHT / size[1])
+    """A grey RGB image of ``size`` (width, height), enlarged by ``display_factor``,
+    that says ``text``."""
+    factor = display_factor(size[1])
     size = (round(size[0] * factor), round(size[1] * factor))
     image = np.full((size[1], size[0], 3), 60, np.uint8)
     scale = size[1] / 400

@@ -475,8 +475,7 @@ class BodyTracker:
         starts = np.stack([np.r_[head[:2] + moved.vector, predicted[2:]], predicted])
         order = np.argsort(-blocks.score(frame, self.models[HEAD], self.grids[HEAD], starts))
         found, s = self._search(frame, HEAD, starts[order[0]], self.blocks)
-        usual = np.median(self.history, axis=0)[HEAD] if self.history else np.inf
-        if s < HEAD_RETRY * usual:
+        if s < HEAD_RETRY * self._usual()[HEAD]:
             found, s = max((found, s), self._search(frame, HEAD, starts[order[1]], self.blocks),
                            key=lambda match: match[1])
         found[M] = np.clip(found[M], *self.head_lengths)
@@ -562,6 +561,10 @@ class BodyTracker:
         twin = self.models[TWIN_PART[k]]
         return np.stack([self.models[k], mirrored_model(twin, self.models[k].shape)])
 
+    def _usual(self) -> np.ndarray:
+        """(10,) every part's median S over the last HISTORY frames (inf before any)."""
+        return np.median(self.history, axis=0) if self.history else np.full(len(PARTS), np.inf)
+
     def _update(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> None:
         """Velocities; colour models by linear weighting (matches at least UPDATE_MIN
         of the part's median S only, so an occluder's colours stay out)."""
@@ -569,8 +572,7 @@ class BodyTracker:
         self.velocity[:, THETA] = (self.velocity[:, THETA] + np.pi) % (2 * np.pi) - np.pi
         self.blocks = new
         self.history.append(s)
-        typical = np.median(self.history, axis=0)
-        for k in np.flatnonzero(s >= UPDATE_MIN * typical):
+        for k in np.flatnonzero(s >= UPDATE_MIN * self._usual()):
             seen = blocks.sample_blocks(frame, new[k], self.grids[k])[0]
             adapted = (1 - UPDATE_RATE) * self.models[k] + UPDATE_RATE * seen
             self.models[k] = ANCHOR * self.marked[k] + (1 - ANCHOR) * adapted
