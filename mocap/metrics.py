@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from itertools import permutations
+
 import numpy as np
 
 from mocap.body import JOINT_INDEX
@@ -52,3 +54,32 @@ def facing_error(pred: np.ndarray, truth: np.ndarray) -> float:
     (F, 16, 3) and the truth's."""
     diff = np.array([yaw_of(p) - yaw_of(t) for p, t in zip(pred, truth)])
     return float(np.mean(np.abs((diff + 180.0) % 360.0 - 180.0)))
+
+
+def labelled_errors(joints2d: np.ndarray, labels: dict[str, dict[str, list[float]]]) -> dict[str, np.ndarray]:
+    """Distances in pixels (one per mark) of 2D joints (F, 16, 2) from hand marks,
+    by kind of joint: ``labels`` maps a frame index (a string, as in JSON) to joint ->
+    (x, y). A pair's marks name no anatomical side (``knee_a``, ``knee_b``: a hand
+    cannot tell them apart in profile), and either may be missing; they are matched to
+    the joints' pair (``knee_l``, ``knee_r``) in the order that gives the smaller sum,
+    each kind of joint on its own."""
+    out: dict[str, list[float]] = {}
+    for frame, marks in labels.items():
+        joints = joints2d[int(frame)]
+        for kind in dict.fromkeys(name.removesuffix("_a").removesuffix("_b") for name in marks):
+            seen = [np.asarray(marks[n], float) for n in (kind, f"{kind}_a", f"{kind}_b") if n in marks]
+            if kind in JOINT_INDEX:
+                options = [(joints[JOINT_INDEX[kind]],)]
+            else:
+                options = list(permutations(joints[[JOINT_INDEX[f"{kind}_l"], JOINT_INDEX[f"{kind}_r"]]], len(seen)))
+            distances = min((np.linalg.norm(np.array(seen) - np.array(o), axis=-1) for o in options),
+                            key=np.sum)
+            out.setdefault(kind, []).extend(distances.tolist())
+    return {kind: np.array(d) for kind, d in out.items()}
+
+
+def labelled_body_height(labels: dict[str, dict[str, list[float]]]) -> float:
+    """The body height in pixels that hand marks show: the median over frames of the
+    lower marked ankle's height below the head top."""
+    return float(np.median([max(m[a][1] for a in ("ankle_a", "ankle_b") if a in m) - m["head_top"][1]
+                            for m in labels.values()]))

@@ -22,6 +22,8 @@ from mocap.walk import walk_cycle
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DOG_WALKER = SHARED_DATA / "video" / "dog_walker.avi"
+# joints marked by hand on every third frame of dog_walker (see the file's own notes)
+DOG_WALKER_LABELS = Path(__file__).resolve().parent / "data" / "dog_walker.labels.json"
 CLIP = dict(size=(320, 240), fps=15.0, seconds=2.0)
 
 
@@ -54,6 +56,11 @@ def write_empty_scene(path: str | Path, n: int = 20) -> None:
     frames = (np.clip(room + rng.normal(0, 2, room.shape), 0, 255).astype(np.uint8)
               for _ in range(n))
     synth.write_video(path, frames, opts.fps, opts.size)
+
+
+def dog_walker_marks() -> dict[str, dict[str, list[float]]]:
+    """frame -> joint -> (x, y): the hand marks of dog_walker (mocap.metrics.labelled_errors)."""
+    return json.loads(DOG_WALKER_LABELS.read_text())["frames"]
 
 
 def frame_joints(motion: dict) -> np.ndarray:

@@ -10,14 +10,14 @@ import time
 import numpy as np
 import pytest
 from app_helpers import TINY_FRAMES, fresh_copy, panning_clip, tiny_video  # noqa: F401
-from helpers import DOG_WALKER
+from helpers import DOG_WALKER, dog_walker_marks
 
 from app.controls import frame_text, review_text
 from app.state import AppState
 from mocap.annotations import load_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
-from mocap.metrics import side_matched_errors
+from mocap.metrics import labelled_body_height, labelled_errors
 
 
 def mark(state: AppState, truth, joints=JOINTS) -> None:
@@ -145,24 +145,26 @@ def test_marks_from_the_silhouette_fit(tiny_video, tmp_path):
 
 
 def test_a_real_walk_seen_from_the_side_is_tracked_from_the_marks_of_its_fit(tmp_path):
-    """The real dog_walker clip (a man 75 px tall walks across a street): marked from
+    """The real dog_walker clip (a man 70 px tall walks across a street): marked from
     the silhouette fit (whose shoulders, seen from the side, come in either order) and
-    tracked, the head and trunk stay with the walker as the fit finds him on every
-    frame (matched by image side; benchmarks/bench_track.py: median 3.1%, 90th
-    percentile 6.0% of the body's height)."""
+    tracked, the head, neck and pelvis stay near the joints marked by hand on every
+    third frame (benchmarks/bench_track.py: medians 3.1, 2.5, 2.0% of the body's
+    height; all 154 marks 4.9%)."""
     if not DOG_WALKER.exists():
         pytest.skip(f"real data absent: {DOG_WALKER} (../shared/data beside the checkout)")
     state = AppState(fresh_copy(DOG_WALKER, tmp_path))
     state.start().join()
-    fitted = np.array([state.view(i).joints2d for i in range(state.n_frames)])
     assert state.marks_from_fit() and state.set_method("track")
     state.start_tracking().join()
     assert state.progress.ready, state.progress.error
     tracked = np.array([state.view(i).joints2d for i in range(state.n_frames)])
-    body_px = np.median(np.ptp(fitted[..., 1], axis=1))
-    trunk = [JOINTS.index(n) for n in ("head_top", "neck", "chest", "pelvis", "hip_l", "hip_r")]
-    apart = side_matched_errors(tracked, fitted)[:, trunk] / body_px
-    assert np.median(apart) < 0.05 and np.percentile(apart, 90) < 0.09
+    marks = dog_walker_marks()
+    errors = labelled_errors(tracked, marks)
+    body_px = labelled_body_height(marks)
+    trunk = np.concatenate([errors[k] for k in ("head_top", "neck", "pelvis")]) / body_px
+    every = np.concatenate(list(errors.values())) / body_px
+    assert np.median(trunk) < 0.04 and np.percentile(trunk, 90) < 0.06
+    assert np.median(every) < 0.065
 
 
 def test_the_tracking_review_stops_where_its_pins_reach_every_frame(tracked):
