@@ -23,7 +23,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from test_silhouette import DOG_WALKER, synthetic_scene  # noqa: E402
+from helpers import DOG_WALKER  # noqa: E402
+from test_silhouette import synthetic_scene  # noqa: E402
 
 from mocap.silhouette import estimate_background, extract_silhouette  # noqa: E402
 from mocap.video import iter_frames, open_video  # noqa: E402

@@ -37,7 +37,6 @@ the silhouette fit").
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import tempfile
@@ -51,7 +50,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import cv2  # noqa: E402
 
 cv2.setNumThreads(1)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from helpers import DOG_WALKER, dog_walker_marks  # noqa: E402
 from mocap.body import JOINT_INDEX  # noqa: E402
 from mocap.marks import check_marks, shoulders_as_hips  # noqa: E402
 from mocap.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
@@ -64,8 +65,6 @@ from mocap.video import iter_frames, open_video  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 FOCAL = 800.0
-REAL_VIDEO = DATA.parent / "video" / "dog_walker.avi"
-REAL_LABELS = Path(__file__).resolve().parents[1] / "tests" / "data" / "dog_walker.labels.json"
 CLIPS = [  # (bvh, source frames, fps): at least 100 output frames each
     ("walk01.bvh", None, 30.0), ("cmu_walk.bvh", (6, None), 42.0),
     ("cmu_run.bvh", (6, None), 72.0), ("cmu_01_01_jumps.bvh", (1, 1200), 30.0)]
@@ -168,14 +167,13 @@ def bench_main(doc: str, run_clip: Callable, print_table: Callable[[list], None]
     return 0
 
 
-def real_clip_errors(video: Path, labels: Path) -> None:
+def real_clip_errors(video: Path, marks: dict[str, dict[str, list[float]]]) -> None:
     """Print the second table: ``video`` fitted by the silhouette method and tracked
-    from the marks that fit gives frame 0, both against the hand marks of ``labels``
-    (% of the body height they show)."""
+    from the marks that fit gives frame 0, both against its hand ``marks`` (frame ->
+    joint -> (x, y); % of the body height they show)."""
     if not video.exists():
         print(f"real clip skipped: {video} is absent")
         return
-    marks = json.loads(labels.read_text())["frames"]
     info, fits = fit_video(video)
     fitted = Session(info, fits).inputs
     t = time.process_time()
@@ -197,5 +195,5 @@ def real_clip_errors(video: Path, labels: Path) -> None:
 
 if __name__ == "__main__":
     status = bench_main(__doc__, run_clip, print_table)
-    real_clip_errors(REAL_VIDEO, REAL_LABELS)
+    real_clip_errors(DOG_WALKER, dog_walker_marks())
     sys.exit(status)

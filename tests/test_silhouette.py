@@ -3,17 +3,15 @@ and the real dog_walker clip (skipped when ../shared/data is absent)."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import cv2
 import numpy as np
 import pytest
+from helpers import DOG_WALKER
 
 from mocap.errors import MocapError
 from mocap.silhouette import clean_mask, estimate_background, exposure_gain, extract_silhouette
 from mocap.video import iter_frames, open_video
 
-DOG_WALKER = Path(__file__).resolve().parents[2] / "shared" / "data" / "video" / "dog_walker.avi"
 EXPOSURE = {4: 1.3, 9: 0.75}  # frame index -> global exposure factor of that frame
 
 
