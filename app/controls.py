@@ -13,7 +13,7 @@ from pathlib import Path
 
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
-from mocap.lift import ORIENTATIONS
+from mocap.body import ORIENTATIONS
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
 NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing"

@@ -28,22 +28,22 @@ import numpy as np
 
 from app.preprocess import Progress, Throttle
 from app.review import Doubt, covering, review_queue
-from mocap.annotations import Annotations, FrameNote, load_annotations, save_annotations
+from mocap.io.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
-from mocap.export.bvh import bvh_text
-from mocap.export.glb import glb_bytes
-from mocap.export.html import motion_html
-from mocap.export.motion_json import motion_dict
-from mocap.lift import depth_fractions
-from mocap.marks import check_marks, shoulders_as_hips
-from mocap.motion import Motion
-from mocap.perspective import calibrate, default_camera
+from mocap.io.export.bvh import bvh_text
+from mocap.io.export.glb import glb_bytes
+from mocap.io.export.html import motion_html
+from mocap.io.export.motion_json import motion_dict
+from mocap.lift.taylor import depth_fractions
+from mocap.track.marks import check_marks, shoulders_as_hips
+from mocap.lift.motion import Motion
+from mocap.track.perspective import calibrate, default_camera
 from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
                            iter_silhouettes, video_dict)
-from mocap.track import carried_pins, turn_of
+from mocap.track.tracking import carried_pins, turn_of
 from mocap.tracksession import TrackSession, marks_of, track_annotated
-from mocap.video import open_video, processing_scale
+from mocap.io.video import open_video, processing_scale
 
 EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json", "html": ".html"}
 Change = Callable[[Annotations], Annotations]
@@ -526,7 +526,7 @@ class AppState:
     def marks_from_fit(self) -> bool:
         """Place all 16 marks on frame 0 where the silhouette method's fit has them
         (sides resolved, overrides kept, the shoulders in the hips' order:
-        mocap.marks.shoulders_as_hips): a start for the user to correct."""
+        mocap.track.marks.shoulders_as_hips): a start for the user to correct."""
         with self._lock:
             if self._fitted is None or self._fits[0].joints2d is None:
                 raise MocapError("frame 0 has no silhouette fit to take the marks from"

@@ -36,7 +36,7 @@ from websockets.sync.client import connect
 
 from app.main import SAMPLE, create
 from mocap.body import JOINTS, SEGMENT_NAMES
-from mocap.lift import depth_fractions
+from mocap.lift.taylor import depth_fractions
 from mocap.synth import render_clip
 from mocap.walk import walk_cycle
 

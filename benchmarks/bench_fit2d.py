@@ -25,12 +25,12 @@ import cv2  # noqa: E402
 cv2.setNumThreads(1)
 
 from mocap.body import JOINTS  # noqa: E402
-from mocap.fit2d import FIT_SCALE, fit_frame, torso_spread  # noqa: E402
+from mocap.silhouette.fit2d import FIT_SCALE, fit_frame, torso_spread  # noqa: E402
 from mocap.metrics import side_matched_errors  # noqa: E402
 from mocap.session import (body_heights, extract_silhouettes, fit_silhouettes, normalise,  # noqa: E402
                            normalised_grey)
 from mocap.synth import render_motion  # noqa: E402
-from mocap.video import open_video, processing_scale  # noqa: E402
+from mocap.io.video import open_video, processing_scale  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 CLIPS = [  # (bvh, view, source frame range)

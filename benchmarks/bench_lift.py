@@ -34,12 +34,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.annotations import Annotations, annotations_for_poses
+from mocap.io.annotations import Annotations, annotations_for_poses
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_NAMES
-from mocap.lift import (clip_lengths, depth_fractions, facing_yaw, image_to_model, lift_pose,
+from mocap.lift.taylor import (clip_lengths, depth_fractions, facing_yaw, image_to_model, lift_pose,
                         orientation_of_yaw, signs_of, yaw_of, UNIT_M)
 from mocap.metrics import pa_mpjpe
-from mocap.orientation import NEGLIGIBLE, guess_signs
+from mocap.lift.orientation import NEGLIGIBLE, guess_signs
 from mocap.session import Session, fit_video
 from mocap.synth import render_motion
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from mocap.session import body_heights, extract_silhouettes, fit_silhouettes
 from mocap.synth import render_motion
-from mocap.video import open_video, processing_scale
+from mocap.io.video import open_video, processing_scale
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh" / "cmu_01_01_jumps.bvh"
 

@@ -54,14 +54,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from helpers import DOG_WALKER, dog_walker_marks  # noqa: E402
 from mocap.body import JOINT_INDEX  # noqa: E402
-from mocap.marks import check_marks, shoulders_as_hips  # noqa: E402
+from mocap.track.marks import check_marks, shoulders_as_hips  # noqa: E402
 from mocap.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
                            side_matched_errors)
-from mocap.perspective import default_camera, to_contract  # noqa: E402
+from mocap.track.perspective import default_camera, to_contract  # noqa: E402
 from mocap.session import Session, fit_video  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402
-from mocap.track import steady_reconstruction, track_frames, track_video, turn_of  # noqa: E402
-from mocap.video import iter_frames, open_video  # noqa: E402
+from mocap.track.tracking import steady_reconstruction, track_frames, track_video, turn_of  # noqa: E402
+from mocap.io.video import iter_frames, open_video  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 FOCAL = 800.0

@@ -1,7 +1,7 @@
 """Where the tracking method's 3D error comes from: PA-MPJPE (mm) of bench_track's
 clips with parts of the tracked input replaced by the truth.
 
-Every row runs the 3D of mocap.track (mocap.track.steady_reconstruction) on 2D
+Every row runs the 3D of mocap.track.tracking (mocap.track.tracking.steady_reconstruction) on 2D
 joints of the bench_track clips (real motion capture rendered with a pinhole camera
 over a panning, cluttered background; the tracker given the true joints of frame 0):
 
@@ -17,7 +17,7 @@ over a panning, cluttered background; the tracker given the true joints of frame
 - pins 1 frame in 10: a simulated user who visits every REVIEW_EVERY-th
   frame and puts every joint more than GROSS[-1]% off where it really is (joint
   overrides), on that frame only, then as the app applies them, carried to the frames
-  around it (mocap.track.spread_corrections); pins on the review's stops: the same
+  around it (mocap.track.tracking.spread_corrections); pins on the review's stops: the same
   user visiting the app's review stops instead (the middle frame of every 0.4 s
   stretch, most doubtful first, at most as many as one frame in 10); on its far arm
   only: the same user correcting only the elbow and wrist of the arm the review says
@@ -44,12 +44,12 @@ import numpy as np
 
 from bench_track import DATA, FOCAL, bench_main, orientation_of
 from app.review import covering, review_queue
-from mocap.annotations import Annotations
+from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_INDEX, WIDTH
 from mocap.metrics import pa_mpjpe
-from mocap.perspective import default_camera, to_contract
+from mocap.track.perspective import default_camera, to_contract
 from mocap.synth import render_motion
-from mocap.track import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
+from mocap.track.tracking import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
                          track_video, turn_of)
 from mocap.tracksession import TrackSession
 from mocap.truth import Truth

@@ -237,3 +237,53 @@ def body_height(joints3d_rest: np.ndarray) -> float:
     by = dict(zip(SEGMENT_NAMES, lengths))
     legs = (by["upper_leg_l"] + by["lower_leg_l"] + by["upper_leg_r"] + by["lower_leg_r"]) / 2
     return float(by["head"] + by["torso"] + legs)
+
+
+# -- geometry of a body that both methods read --------------------------------------
+
+ORIENTATIONS: tuple[str, ...] = ("left", "right", "forward_left", "forward_right",
+                                 "backward_left", "backward_right")
+FORESHORTENING: tuple[str, ...] = ("toward", "away")
+TOWARD, AWAY = 1, -1
+ARM_REST = 0.15            # sine of the upper arms' rest angle out from the sagittal plane
+
+
+def knee_facing(joints2d: np.ndarray) -> str:
+    """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward
+    over the frames given (knees bend forward)."""
+    return "right" if sum(knee_bend(joints2d, side) for side in "lr").sum() >= 0 else "left"
+
+
+def knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
+    """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
+    hip, knee, ankle = (joints2d[:, JOINT_INDEX[f"{n}_{side}"]] for n in ("hip", "knee", "ankle"))
+    along = ankle - hip
+    t = np.clip(((knee - hip) * along).sum(-1) / np.maximum((along ** 2).sum(-1), 1e-9), 0, 1)
+    return (knee - hip - t[:, None] * along)[:, 0]
+
+
+def unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-9)
+
+
+def limb_penalty(upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left: np.ndarray,
+                 side: float, leg: bool) -> np.ndarray:
+    """Joint-limit violation (>= 0) of limbs given as 3D upper/lower vectors (..., 3).
+
+    Legs: thigh not more than 30 degrees back nor across the midline, knee bending
+    backward only. Arms: upper arm not across the midline nor more than 60 degrees
+    back, elbow bending forward, not outward. Both prefer the sagittal plane (limbs
+    swing forward and back; arms hang ARM_REST out from it, beside the torso).
+    """
+    u, l = unit(upper), unit(lower)
+    bend = l - (l * u).sum(-1, keepdims=True) * u
+    uf, ul = (u * facing).sum(-1), side * (u * left).sum(-1)
+    bf, bl = (bend * facing).sum(-1), side * (bend * left).sum(-1)
+    if leg:
+        ll = side * (l * left).sum(-1)
+        return (np.maximum(0, -uf - 0.5) + np.maximum(0, -ul - 0.25) + 0.3 * np.maximum(0, ul - 0.5)
+                + np.maximum(0, bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - 0.3)
+                + np.abs(ul) + np.abs(ll))
+    return (np.maximum(0, -ul) + 0.5 * np.maximum(0, ul - 0.3) + np.maximum(0, -uf - 0.87)
+            + 0.5 * np.maximum(0, -bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - np.maximum(bf, 0))
+            + np.abs(ul - ARM_REST))

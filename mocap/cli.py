@@ -77,7 +77,7 @@ def _add_export(sub) -> None:
                    help="the self-contained playback page to write (opens from disk, no network)")
 
     def run(args) -> None:
-        from mocap.export.html import motion_file_html, write_html
+        from mocap.io.export.html import motion_file_html, write_html
         print(f"wrote {write_html(args.html, motion_file_html(args.motion))}")
 
     p.set_defaults(run=run)

@@ -15,11 +15,11 @@ import cv2
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.export.motion_json import read_motion
-from mocap.fileio import atomic_write_bytes
+from mocap.io.export.motion_json import read_motion
+from mocap.io.fileio import atomic_write_bytes
 from mocap.overlay import silhouette_view
-from mocap.silhouette import Background, estimate_background, extract_silhouette
-from mocap.video import VideoInfo, open_video, processing_scale, read_frame
+from mocap.silhouette.background import Background, estimate_background, extract_silhouette
+from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
 
 DEFAULT_FRAMES = 12
 TILE_HEIGHT = 240          # px: small videos (dog_walker is 144 tall) are upscaled to this

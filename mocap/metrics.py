@@ -7,7 +7,7 @@ from itertools import permutations
 import numpy as np
 
 from mocap.body import JOINT_INDEX
-from mocap.lift import yaw_of
+from mocap.lift.taylor import yaw_of
 
 LIMBS = tuple(tuple((f"{j}_l", f"{j}_r") for j in names)
               for names in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")))

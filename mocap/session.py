@@ -7,8 +7,8 @@ around each frame, so a performer who walks toward the camera keeps a right scal
 
 Then ``Session`` owns the video's per-frame fits and the user's annotations: it
 resolves the lifting inputs (orientation, sides, overrides, signs: the user's over
-the first guess of ``mocap.orientation``), lifts the keyframes (section 3.4), and
-interpolates the other frames (``mocap.motion``). An edit of the annotations
+the first guess of ``mocap.lift.orientation``), lifts the keyframes (section 3.4), and
+interpolates the other frames (``mocap.lift.motion``). An edit of the annotations
 re-resolves the inputs and re-lifts the clip (milliseconds both).
 """
 
@@ -24,17 +24,17 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from mocap.annotations import Annotations, load_annotations
+from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINTS, Pose2D, reported_joints
 from mocap.errors import MocapError
-from mocap.export.motion_json import write_motion
-from mocap.motion import Motion, build_motion
-from mocap.inputs import Inputs, resolve_inputs, root_track
-from mocap.legchain import LAG_S, LegChain
-from mocap.orientation import guess_orientations
-from mocap.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
-from mocap.silhouette import estimate_background, extract_silhouette
-from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
+from mocap.io.export.motion_json import write_motion
+from mocap.lift.motion import Motion, build_motion
+from mocap.lift.inputs import Inputs, resolve_inputs, root_track
+from mocap.silhouette.legchain import LAG_S, LegChain
+from mocap.lift.orientation import guess_orientations
+from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
+from mocap.silhouette.background import estimate_background, extract_silhouette
+from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
 
 Progress = Callable[[int, int], None]
 MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody
@@ -160,7 +160,7 @@ def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: 
               fps: float) -> Iterator[FrameFit]:
     """Pass two (section 3.3): every frame's 2D fit in turn, each search centred on
     the previous fit; each frame's legs are chosen among its hypotheses over time
-    (``mocap.legchain``), so a fit comes out LAG_S later than its frame is fitted."""
+    (``mocap.silhouette.legchain``), so a fit comes out LAG_S later than its frame is fitted."""
     spreads = torso_spreads(silhouettes, heights, fps)
     chain = LegChain(max(1, int(round(LAG_S * fps))))
     for index, sil in enumerate(silhouettes):
@@ -229,7 +229,7 @@ class Session:
     """A video's per-frame 2D fits and the user's annotations; lifts on demand.
 
     ``annotate`` replaces the annotations (already checked; see
-    mocap.annotations); the lifting inputs are re-resolved and the clip lifted again
+    mocap.io.annotations); the lifting inputs are re-resolved and the clip lifted again
     when next needed.
     """
 
@@ -289,7 +289,7 @@ class Session:
                 if self.fits[k].joints2d is not None]
 
     def motion(self) -> Motion:
-        """Keyframes lifted, the frames between interpolated (mocap.motion)."""
+        """Keyframes lifted, the frames between interpolated (mocap.lift.motion)."""
         keys = self.keyframes()
         if not keys:
             raise MocapError(f"{self.info.path}: no keyframe shows a person, nothing to lift")
@@ -328,9 +328,9 @@ class Session:
 def write_outputs(info: VideoInfo, motion: Motion, frames: list[dict], out, *, bvh=None, glb=None,
                   csv=None) -> list[Path]:
     """The motion file and the exports asked for (None: not wanted); the paths written."""
-    from mocap.export.bvh import write_bvh
-    from mocap.export.csv import write_csv
-    from mocap.export.glb import write_glb
+    from mocap.io.export.bvh import write_bvh
+    from mocap.io.export.csv import write_csv
+    from mocap.io.export.glb import write_glb
     written = [write_motion(out, video_dict(info), frames)]
     for path, writer in ((bvh, write_bvh), (glb, write_glb), (csv, write_csv)):
         if path is not None:

@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 from mocap import body
-from mocap.bvh import contract_joints, read_bvh
+from mocap.io.bvh import contract_joints, read_bvh
 from mocap.errors import MocapError
 from mocap.truth import Camera, Truth, save_truth
 from mocap.walk import walk_cycle

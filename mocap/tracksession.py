@@ -1,12 +1,12 @@
 """The tracking method's session: the counterpart of mocap.session.Session for a
-video whose joints the user marked on frame 0 (mocap.track).
+video whose joints the user marked on frame 0 (mocap.track.tracking).
 
 The 2D joints are tracked once; everything the user says afterwards reshapes the 3D
 without tracking again: joint overrides replace tracked joints on their frame,
 the held orientation tells which way the body is turned (the calibration's two
 mirror fits on frame 0, the key triangle's two mirror images on later frames), and
 held foreshortening directions fix the depth choices of the
-trunk and the limbs (mocap.perspective.place_joints) while they hold. The key
+trunk and the limbs (mocap.track.perspective.place_joints) while they hold. The key
 joints' depths (Eq. 10-11, the slow part) are kept until the 2D joints change, so a
 foreshortening toggle only re-chooses depths.
 
@@ -19,19 +19,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap.annotations import Annotations
+from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_JOINTS
 from mocap.errors import MocapError
-from mocap.inputs import Inputs
-from mocap.lift import depth_fractions, orientation_of_yaw, signs_of, yaw_of
-from mocap.orientation import NEGLIGIBLE, held_user_signs
-from mocap.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
+from mocap.lift.inputs import Inputs
+from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
+from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
+from mocap.track.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
                                to_contract)
 from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
-from mocap.tracker import far_arm
-from mocap.track import (TrackResult, guessed_turn, spread_corrections, spread_frames, steady_joints,
+from mocap.track.tracker import far_arm
+from mocap.track.tracking import (TrackResult, guessed_turn, spread_corrections, spread_frames, steady_joints,
                          track_video, turn_of)
-from mocap.video import VideoInfo
+from mocap.io.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
                 'with frames["0"].joints2d, or mark them in the app)')
@@ -84,7 +84,7 @@ class TrackSession(Session):
         self._resolution = None
 
     def far_arm(self) -> str | None:
-        """"l" or "r": the arm farther from the camera on frame 0 (mocap.tracker.far_arm
+        """"l" or "r": the arm farther from the camera on frame 0 (mocap.track.tracker.far_arm
         of frame 0's key triangle as the reconstruction finds it: calibrated on the
         marks, turned as frame 0's orientation says or else as the knees tell), None
         for a body facing the camera or away.
@@ -114,7 +114,7 @@ class TrackSession(Session):
 
     def _joints2d(self) -> np.ndarray:
         """The tracked joints with the user's overrides put in, each carried to the
-        frames around it (mocap.track.spread_corrections)."""
+        frames around it (mocap.track.tracking.spread_corrections)."""
         return spread_corrections(self.tracked.joints2d, self._annotations.overrides(),
                                   self.info.fps)
 

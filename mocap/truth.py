@@ -11,7 +11,7 @@ import numpy as np
 
 from mocap import body
 from mocap.errors import MocapError
-from mocap.fileio import atomic_write_json
+from mocap.io.fileio import atomic_write_json
 
 
 @dataclass(frozen=True, eq=False)

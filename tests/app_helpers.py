@@ -11,7 +11,7 @@ import pytest
 from helpers import CLIP, render_walk
 
 from mocap.body import SEGMENT_NAMES
-from mocap.lift import depth_fractions
+from mocap.lift.taylor import depth_fractions
 
 TINY_FRAMES = 20            # 320x240 at 15 fps: fitted in about half a second
 

@@ -17,12 +17,12 @@ from mocap.session import iter_fits, iter_silhouettes
 from app.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.state import AppState, annotations_path, toggled_keyframe
 from app.views import DISPLAY_HEIGHT, Layout, segment_transforms, video_image
-from mocap.annotations import Annotations, load_annotations
+from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
 from mocap.errors import MocapError
 from mocap.session import body_heights, fit_video
-from mocap.video import open_video, processing_scale
+from mocap.io.video import open_video, processing_scale
 
 
 def saved(state: AppState) -> Annotations:

@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from app.controls import segment_label, sign_button
 from app.views import SIDE
-from mocap.annotations import Annotations, load_annotations
+from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 
 CHROMIUM = Path("/usr/bin/chromium")

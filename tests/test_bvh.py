@@ -5,7 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mocap import body, bvh
+from mocap import body
+
+from mocap.io import bvh
 from mocap.errors import MocapError
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh"

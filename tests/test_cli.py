@@ -14,11 +14,11 @@ import pytest
 from helpers import frame_joints, png_avi, render_walk, text_mp4, write_empty_scene
 
 from mocap.cli import main
-from mocap.export.motion_json import read_motion
+from mocap.io.export.motion_json import read_motion
 from mocap.metrics import side_matched_errors
 from mocap.synth import render_clip, write_video
 from mocap.walk import walk_cycle
-from mocap.video import iter_frames
+from mocap.io.video import iter_frames
 
 
 def run(capsys, *argv) -> tuple[int, list[str]]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.edges import Edges
-from mocap.raster import Canvas, segment_quads, sweep_scorer
+from mocap.silhouette.raster import Canvas, segment_quads, sweep_scorer
 
 BAR = 6.0      # px: the width of the bar drawn over the trunk
 

@@ -12,12 +12,12 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from mocap import body
-from mocap.bvh import contract_joints, read_bvh
+from mocap.io.bvh import contract_joints, read_bvh
 from mocap.errors import MocapError
-from mocap.export.bvh import write_bvh
-from mocap.export.csv import write_csv
-from mocap.export.glb import write_glb
-from mocap.motion import build_motion
+from mocap.io.export.bvh import write_bvh
+from mocap.io.export.csv import write_csv
+from mocap.io.export.glb import write_glb
+from mocap.lift.motion import build_motion
 from mocap.synth import resample_indices
 from mocap.walk import walk_cycle
 

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, Pose2D, default_angles, forward_kinematics_2d
-from mocap.contour import find_angle, find_elbow_corner, lower_legs_cross
-from mocap.fit2d import FIT_SCALE, Fit2D, coarse_to_fine, fit_frame, two_link_angles
-from mocap.legchain import LegChain
+from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_cross
+from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, coarse_to_fine, fit_frame, two_link_angles
+from mocap.silhouette.legchain import LegChain
 from mocap.metrics import side_matched_errors
-from mocap.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
+from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
 from mocap.session import body_heights, extract_silhouettes, fit_silhouettes
 from mocap.synth import render_motion
-from mocap.video import open_video, processing_scale
+from mocap.io.video import open_video, processing_scale
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 

@@ -15,7 +15,7 @@ from app_helpers import TINY_FRAMES, app, download_export, tiny_video  # noqa: F
 from helpers import page_data
 
 from app.controls import HELP_FILE, build_controls, help_markdown
-from mocap.lift import ORIENTATIONS
+from mocap.body import ORIENTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = Path("/usr/bin/chromium")

@@ -8,9 +8,11 @@ import pytest
 from helpers import SHARED_DATA
 from scipy.spatial.transform import Rotation
 
-from mocap import lift, synth
+from mocap import synth
+
+from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
-from mocap.bvh import contract_joints, read_bvh
+from mocap.io.bvh import contract_joints, read_bvh
 from mocap.metrics import facing_error, pa_mpjpe
 from mocap.walk import walk_cycle
 
@@ -105,7 +107,7 @@ def test_lifting_real_motion_capture_from_true_2d_within_30_mm(view):
 
 
 def test_a_wrist_that_slips_on_one_frame_is_steadied_and_a_swing_is_kept():
-    from mocap.inputs import steadied_arms
+    from mocap.lift.inputs import steadied_arms
     n, fps = 30, 30.0
     joints = np.zeros((n, 16, 2))
     joints[:, JOINT_INDEX["wrist_l"], 0] = np.linspace(100.0, 160.0, n)       # a steady swing

@@ -7,9 +7,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from mocap import body
-from mocap.bvh import contract_joints, read_bvh
+from mocap.io.bvh import contract_joints, read_bvh
 from mocap.errors import MocapError
-from mocap.motion import BONES, PARENTS, build_motion, forward_kinematics
+from mocap.lift.motion import BONES, PARENTS, build_motion, forward_kinematics
 from mocap.synth import resample_indices
 from mocap.walk import walk_cycle
 

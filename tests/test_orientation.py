@@ -7,11 +7,13 @@ import numpy as np
 import pytest
 from helpers import SHARED_DATA
 
-from mocap import body, lift, synth
+from mocap import body, synth
+
+from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, MIRROR_JOINTS
-from mocap.bvh import contract_joints, read_bvh
-from mocap.lift import known_sides, runs, track_sides
-from mocap.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, legs_crossed
+from mocap.io.bvh import contract_joints, read_bvh
+from mocap.lift.taylor import known_sides, runs, track_sides
+from mocap.lift.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, legs_crossed
 from mocap.smoothest import smoothest_states
 from mocap.walk import walk_cycle
 

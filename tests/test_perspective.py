@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from mocap import perspective as P
+from mocap.track import perspective as P
 from mocap.errors import MocapError
-from mocap.marks import shoulders_as_hips, turned_apart
+from mocap.track.marks import shoulders_as_hips, turned_apart
 from mocap.metrics import pa_mpjpe
-from mocap.rays import choose_limb, ray_roots
+from mocap.track.rays import choose_limb, ray_roots
 from mocap.synth import RenderOptions, plan_scene, scene_truth
 from mocap.walk import walk_cycle
 

@@ -1,4 +1,4 @@
-"""The playback page (mocap.export.html, static/playback.html): written from a motion
+"""The playback page (mocap.io.export.html, static/playback.html): written from a motion
 file by `mocap export --html`, opened from file:// in headless chromium, where it
 draws the body and plays. The screenshot goes to artifacts/playback/ (gitignored)."""
 
@@ -12,9 +12,9 @@ import pytest
 from helpers import page_data
 
 from mocap.cli import main as cli
-from mocap.export.html import DATA_SLOT, TEMPLATE, motion_html
-from mocap.export.motion_json import write_motion
-from mocap.motion import build_motion
+from mocap.io.export.html import DATA_SLOT, TEMPLATE, motion_html
+from mocap.io.export.motion_json import write_motion
+from mocap.lift.motion import build_motion
 from mocap.walk import walk_cycle
 
 N_FRAMES, FPS = 100, 25.0

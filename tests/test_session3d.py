@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from helpers import render_walk, render_walk_with_exit
 
-from mocap import lift
-from mocap.annotations import Annotations, annotations_for_poses, save_annotations
+from mocap.lift import taylor as lift
+from mocap.io.annotations import Annotations, annotations_for_poses, save_annotations
 from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
 from mocap.cli import main
-from mocap.export.motion_json import read_motion
-from mocap.inputs import DEPTH_SMOOTH_S
+from mocap.io.export.motion_json import read_motion
+from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.metrics import pa_mpjpe
-from mocap.orientation import NEGLIGIBLE
+from mocap.lift.orientation import NEGLIGIBLE
 from mocap.session import Session, fit_video
 
 

@@ -9,16 +9,18 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from mocap import blocks, synth
+from mocap import synth
+
+from mocap.track import blocks
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
-from mocap.headmotion import adapt_threshold, head_displacement, two_peak_displacement
-from mocap.marks import check_marks
-from mocap.track import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
+from mocap.track.headmotion import adapt_threshold, head_displacement, two_peak_displacement
+from mocap.track.marks import check_marks
+from mocap.track.tracking import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
                          spread_corrections, track_video)
 from mocap.edges import Edges
-from mocap.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
-from mocap.tracker import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
+from mocap.track.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
+from mocap.track.tracker import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
                            PARTS, around_root, arm_limits_cost, far_arm, far_forearm, limb_penalty,
                            mirrored_model, outline_cost, overlap, settled_knee, twin_overlap)
 from mocap.walk import walk_cycle

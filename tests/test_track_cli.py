@@ -9,15 +9,17 @@ import json
 import numpy as np
 import pytest
 
-from mocap import lift, synth
-from mocap.annotations import Annotations
+from mocap import synth
+
+from mocap.lift import taylor as lift
+from mocap.io.annotations import Annotations
 from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.cli import main
-from mocap.export.motion_json import read_motion
-from mocap.orientation import NEGLIGIBLE
-from mocap.track import guessed_turn
+from mocap.io.export.motion_json import read_motion
+from mocap.lift.orientation import NEGLIGIBLE
+from mocap.track.tracking import guessed_turn
 from mocap.tracksession import TrackSession
-from mocap.video import open_video
+from mocap.io.video import open_video
 from mocap.walk import walk_cycle
 
 IN_PLANE = 0.1      # |dZ| / length: a segment this flat shows no sign

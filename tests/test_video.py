@@ -12,7 +12,7 @@ import pytest
 from helpers import png_avi, text_mp4
 
 from mocap.errors import MocapError
-from mocap.video import iter_frames, open_video, processing_scale, read_frame, sample_frames
+from mocap.io.video import iter_frames, open_video, processing_scale, read_frame, sample_frames
 
 SIZE = (96, 64)  # width, height
 

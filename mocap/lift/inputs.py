@@ -8,11 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
-from mocap.annotations import Annotations
+from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_NAMES
-from mocap.lift import (LENGTH, anatomical_joints, clip_lengths, exchange_legs, known_sides, lift_pose,
+from mocap.smoothest import DEPTH_SMOOTH_S
+from mocap.lift.taylor import (LENGTH, anatomical_joints, clip_lengths, exchange_legs, known_sides, lift_pose,
                         runs, track_sides)
-from mocap.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
+from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
                                legs_crossed, segment_vectors, yaws)
 
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
@@ -24,7 +25,6 @@ FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0
 # The fit's arms slip on single frames (an arm in front of the trunk fits anywhere
 # inside it); the lifting reads their elbows and wrists through a running median.
 ARM_MEDIAN_S = 0.2
-DEPTH_SMOOTH_S = 0.1       # seconds: Gaussian sigma of the lifted depths over time (Inputs.lift_clip)
 
 
 @dataclass(frozen=True, eq=False)

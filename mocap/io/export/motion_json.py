@@ -10,7 +10,7 @@ import numpy as np
 
 from mocap.body import JOINTS
 from mocap.errors import MocapError
-from mocap.fileio import atomic_write_json
+from mocap.io.fileio import atomic_write_json
 
 FORMAT, VERSION = "mocap-motion", 1
 

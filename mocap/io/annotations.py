@@ -4,7 +4,7 @@ names the bad place, sticky resolution, atomic saving.
 Orientation and foreshortening are sticky: a frame's entry holds from that frame on
 until a later entry changes it. Joint overrides hold for their own frame only.
 ``keyframes`` is optional (None: every frame). How a held sign meets the automatic
-first guess is decided in ``mocap.orientation.resolve_inputs``.
+first guess is decided in ``mocap.lift.orientation.resolve_inputs``.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ import numpy as np
 
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
-from mocap.fileio import atomic_write_json
-from mocap.lift import FORESHORTENING, ORIENTATIONS
+from mocap.io.fileio import atomic_write_json
+from mocap.body import FORESHORTENING, ORIENTATIONS
 
 FORMAT, VERSION = "mocap-annotations", 1
 _FRAME_KEY = re.compile(r"0|[1-9][0-9]*")
@@ -288,7 +288,7 @@ def annotations_for_poses(joints3d: np.ndarray, joints2d: np.ndarray | None = No
     once per profile stretch (on its frame within a second where the pair is widest
     apart), since in a profile the image cannot tell the sides apart.
     For benchmarks and tests against ground truth."""
-    from mocap.lift import orientation_of_yaw, signs_of, yaw_of
+    from mocap.lift.taylor import orientation_of_yaw, signs_of, yaw_of
     joints3d = np.asarray(joints3d, float)
     names = [orientation_of_yaw(yaw_of(pose)) for pose in joints3d]
     notes = Annotations()

@@ -16,7 +16,7 @@ guesses whose elbow bends backward (the knees tell which way the performer faces
 are dropped; with the frame's grey levels, an arm over the trunk counts as inside
 the silhouette and the edges inside the silhouette along its sides add to S
 (mocap.edges), so that an arm in front of the trunk is found where it shows. The legs are fitted as a few hypotheses scored together
-(``leg_hypotheses``), among which ``mocap.legchain`` chooses over time.
+(``leg_hypotheses``), among which ``mocap.silhouette.legchain`` chooses over time.
 """
 
 from __future__ import annotations
@@ -27,10 +27,10 @@ import numpy as np
 
 from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
                         forward_kinematics_2d, forward_kinematics_2d_batch, spread_for_width)
-from mocap.contour import (arm_curve, find_angle, find_elbow_corner, lower_leg_curves,
+from mocap.silhouette.contour import (arm_curve, find_angle, find_elbow_corner, lower_leg_curves,
                            lower_legs_cross, row_runs)
-from mocap.orientation import knee_bend
-from mocap.raster import Canvas, draw_model, joint_quads, pose_quads, similarity, sweep_scorer
+from mocap.body import knee_bend
+from mocap.silhouette.raster import Canvas, draw_model, joint_quads, pose_quads, similarity, sweep_scorer
 
 TORSO_HEAD = ("torso", "head")
 LEG = {"l": ("upper_leg_l", "lower_leg_l"), "r": ("upper_leg_r", "lower_leg_r")}
@@ -68,7 +68,7 @@ DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this clos
 class Fit2D:
     """A fitted 2D pose, its joints (pixels of the fitted silhouette) and its S;
     ``alternatives``: the same fit with the other leg hypotheses, for a choice over
-    time (``mocap.legchain``)."""
+    time (``mocap.silhouette.legchain``)."""
 
     pose: Pose2D
     joints: np.ndarray
@@ -301,7 +301,7 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
     left unexplained). So each leg is also fitted again beside the other
     (``refit_leg_beside``); near profile, each fit also enters with its legs'
     names exchanged, since there the two legs look alike and only their motion over
-    time tells which is which (``mocap.legchain`` chooses)."""
+    time tells which is which (``mocap.silhouette.legchain`` chooses)."""
     first = fit_legs(canvas, pose, prev)
     poses = [first] + [refit_leg_beside(canvas, first, side, prev) for side in "lr"]
     if pose.spread < UNCROSS_SPREAD:

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from mocap.errors import MocapError
-from mocap.fileio import atomic_write_bytes
+from mocap.io.fileio import atomic_write_bytes
 
 
 def write_export(path: str | os.PathLike, data: bytes, kind: str) -> Path:

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import JOINT_INDEX
-from mocap.orientation import limb_penalty as joint_limits
+from mocap.body import limb_penalty as joint_limits
 from mocap.smoothest import smoothest_states
 
 # (root, middle, end, leg, side): side +1 left, -1 right

@@ -12,7 +12,7 @@ of 3D human motion skeleton", Eq. 6-11).
    key joint on its ray, the key triangle's sides keep their lengths", by
    Gauss-Newton from the previous frame's depths; beyond the paper, kept to the side
    the user's orientation names (``frame_key_depths``).
-3. **Centre to fringe** (mocap.rays): every other joint on its pixel's viewing ray at
+3. **Centre to fringe** (mocap.track.rays): every other joint on its pixel's viewing ray at
    its bone length from a joint already placed.
 
 Bone lengths are measured from the tracked 2D over the clip (``measured_lengths``)
@@ -40,9 +40,9 @@ from scipy.spatial.transform import Rotation
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.errors import MocapError
-from mocap.inputs import DEPTH_SMOOTH_S
-from mocap.marks import turned_apart
-from mocap.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots,
+from mocap.smoothest import DEPTH_SMOOTH_S
+from mocap.track.marks import turned_apart
+from mocap.track.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots,
                         signs_allowed, toward_signs)
 
 UNIT_M = body.BODY_HEIGHT_M / body.BODY_HEIGHT
@@ -394,7 +394,7 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     motion capture (benchmarks/bench_track.py); the median errs short, toward flat.
     The head and the torso stand upright most of the time, where a length read long
     turns into a lean toward or away from the camera: theirs is the lower quartile,
-    as the silhouette method's (mocap.inputs.FIT_LENGTH_PERCENTILE; PA-MPJPE 74.1 ->
+    as the silhouette method's (mocap.lift.inputs.FIT_LENGTH_PERCENTILE; PA-MPJPE 74.1 ->
     73.4 mm). The shins are the other exception: tracked best (the ankles' blocks end
     on the feet) and upright through every stance, where they show their whole
     length, so their upper quartile measures them (PA-MPJPE 77.1 -> 75.3 mm on the

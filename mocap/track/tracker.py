@@ -2,13 +2,13 @@
 paper's feature tracking (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000,
 section "Feature tracking").
 
-Each of the 10 body parts is a morph block (mocap.blocks) from one of its joints to the
+Each of the 10 body parts is a morph block (mocap.track.blocks) from one of its joints to the
 other, as wide as its cylinder (body.WIDTH; the torso as wide as the marked shoulders
 show it turned) at the marked skeleton's scale. Its colours on frame 0 are its colour
 model. Every later frame is tracked head to feet:
 
 1. the head (calvaria to neck): its calvaria predicted by image difference
-   (mocap.headmotion, Eq. 1-5 of the head part) or by constant velocity, whichever
+   (mocap.track.headmotion, Eq. 1-5 of the head part) or by constant velocity, whichever
    start the block match scores higher (a moving background breaks the image
    difference's premise of a still background), then the morph-block search of
    position, angle and scale along the search path (Fig. 6), from the other start
@@ -45,16 +45,16 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from mocap import blocks
-from mocap.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
+from mocap.track import blocks
+from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
 from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HALF_SPAN, WIDTH,
                         torso_width)
 from mocap.edges import Edges
-from mocap.headmotion import P_START, adapt_threshold, head_displacement
-from mocap.marks import body_scale
-from mocap.perspective import (UNIT_M, Pinhole, body_axes, calibrate, default_camera,
+from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
+from mocap.track.marks import body_scale
+from mocap.track.perspective import (UNIT_M, Pinhole, body_axes, calibrate, default_camera,
                                frame_key_depths)
-from mocap.rays import limb_candidates, limb_penalty as joint_limits
+from mocap.track.rays import limb_candidates, limb_penalty as joint_limits
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
 MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
@@ -239,7 +239,7 @@ class TrunkDepth:
     """Beyond the paper, while tracking: the tracked key triangle (both shoulders and
     the chest) in 3D on every frame, as the reconstruction finds it (calibrated on
     the marks, Eq. 6-9, then Eq. 10-11 from frame to frame on the side ``turn`` says;
-    mocap.perspective.frame_key_depths)."""
+    mocap.track.perspective.frame_key_depths)."""
 
     def __init__(self, marks: np.ndarray, camera: Pinhole, turn: str | None):
         self.camera, self.turn = camera, turn
@@ -258,7 +258,7 @@ def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int,
     (K, 5) for the pose they give it in 3D. The elbow (the block's start) and the
     wrist (its end) lie on their viewing rays at the model's bone lengths from the
     shoulder, a key joint of ``key`` (3, 3), in one of four ways
-    (mocap.rays.limb_candidates); ``cost`` times the least joint-limit penalty of the
+    (mocap.track.rays.limb_candidates); ``cost`` times the least joint-limit penalty of the
     four (the silhouette method's limits: elbows bent forward, no upper arm through
     the trunk, arms near the sagittal plane) in the body frame of ``key``. Where the
     colours leave an arm's place open (a sleeve over the shirt, a hidden arm), the
@@ -386,7 +386,7 @@ class BodyTracker:
     the last frame (constant-velocity prediction), the colour models and the
     similarities of the last HISTORY frames, the head's adaptive threshold p, the
     last frame and the trunk in 3D (``TrunkDepth``, seen by ``camera``, default the
-    frame's (mocap.perspective.default_camera), and turned to ``turn``)."""
+    frame's (mocap.track.perspective.default_camera), and turned to ``turn``)."""
 
     def __init__(self, frame0: np.ndarray, marks: np.ndarray, camera: Pinhole | None = None,
                  turn: str | None = None):

@@ -1,7 +1,7 @@
-"""BVH export of a Motion: the skeleton of ``mocap.motion`` as a BVH hierarchy.
+"""BVH export of a Motion: the skeleton of ``mocap.lift.motion`` as a BVH hierarchy.
 
 Joints are named after the contract joints, plus the helper joints ``waist`` and
-``collar`` (see ``mocap.motion``). Lengths are in centimetres: OFFSETs are the
+``collar`` (see ``mocap.lift.motion``). Lengths are in centimetres: OFFSETs are the
 motion's fixed bone offsets, the root (pelvis) has 6 channels (its world position,
 then its rotation) and every other joint 3 rotation channels, all in the order
 Z, X, Y (intrinsic, degrees, as in the CMU files). Leaves end in a zero End Site.
@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from mocap.export.atomic import write_export
-from mocap.motion import BONES, PARENTS, Motion
+from mocap.io.export.atomic import write_export
+from mocap.lift.motion import BONES, PARENTS, Motion
 
 CM_PER_M = 100.0
 _ORDER = "ZXY"

@@ -2,7 +2,7 @@
 the orientation and every foreshortening direction): orientation, which image-side
 limb is which in a profile, and every segment's sign.
 
-Which image-side limb is which is decided in ``mocap.lift`` (``track_sides``) from the
+Which image-side limb is which is decided in ``mocap.lift.taylor`` (``track_sides``) from the
 orientation; where the legs cross in a turned view, the user's signs on them revise it
 (``legs_crossed``).
 Three cues, each a short function:
@@ -29,8 +29,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import median_filter
 
-from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
-from mocap.lift import (LENGTH, TOWARD, exchange_legs, facing_yaw, lateral_axis, relative_depths,
+from mocap.body import (ARM_REST, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, knee_bend, limb_penalty,
+                        unit)
+from mocap.lift.taylor import (LENGTH, TOWARD, exchange_legs, facing_yaw, lateral_axis, relative_depths,
                         runs)
 from mocap.smoothest import smoothest_states
 
@@ -43,7 +44,6 @@ MIN_RUN_S = 0.5            # orientation runs shorter than this join their neigh
 LIMIT_WEIGHT = 30.0        # model units of acceleration per unit of joint-limit violation
 DEPTH_FILTER_S = 0.15      # seconds: a running median of each |dZ| the signs are chosen on
 SAGITTAL_WEIGHT = 0.5      # limit units per length of depth against the sagittal-plane prior
-ARM_REST = 0.15            # sine of the upper arms' rest angle out from the sagittal plane
 _J = JOINT_INDEX
 _LIMBS = {  # limb -> (upper segment, lower segment, side sign: +1 left, -1 right)
     "arm_l": ("upper_arm_l", "lower_arm_l", 1.0), "arm_r": ("upper_arm_r", "lower_arm_r", -1.0),
@@ -67,20 +67,6 @@ def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> n
     walk = np.where(np.abs(speed) > WALK_SPEED, np.sign(speed), 0.0)
     knees = sum(knee_bend(joints2d, side) for side in "lr") / body_px
     return 2.0 * walk + np.clip(10.0 * knees, -1.0, 1.0)
-
-
-def knee_facing(joints2d: np.ndarray) -> str:
-    """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward
-    over the frames given (knees bend forward)."""
-    return "right" if sum(knee_bend(joints2d, side) for side in "lr").sum() >= 0 else "left"
-
-
-def knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
-    """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
-    hip, knee, ankle = (joints2d[:, _J[f"{n}_{side}"]] for n in ("hip", "knee", "ankle"))
-    along = ankle - hip
-    t = np.clip(((knee - hip) * along).sum(-1) / np.maximum((along ** 2).sum(-1), 1e-9), 0, 1)
-    return (knee - hip - t[:, None] * along)[:, 0]
 
 
 def pooled(values: np.ndarray, fps: float) -> np.ndarray:
@@ -134,36 +120,9 @@ def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]
 
 # -- foreshortening signs -------------------------------------------------------------
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-9)
-
-
-def limb_penalty(upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left: np.ndarray,
-                 side: float, leg: bool) -> np.ndarray:
-    """Joint-limit violation (>= 0) of limbs given as 3D upper/lower vectors (..., 3).
-
-    Legs: thigh not more than 30 degrees back nor across the midline, knee bending
-    backward only. Arms: upper arm not across the midline nor more than 60 degrees
-    back, elbow bending forward, not outward. Both prefer the sagittal plane (limbs
-    swing forward and back; arms hang ARM_REST out from it, beside the torso).
-    """
-    u, l = _unit(upper), _unit(lower)
-    bend = l - (l * u).sum(-1, keepdims=True) * u
-    uf, ul = (u * facing).sum(-1), side * (u * left).sum(-1)
-    bf, bl = (bend * facing).sum(-1), side * (bend * left).sum(-1)
-    if leg:
-        ll = side * (l * left).sum(-1)
-        return (np.maximum(0, -uf - 0.5) + np.maximum(0, -ul - 0.25) + 0.3 * np.maximum(0, ul - 0.5)
-                + np.maximum(0, bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - 0.3)
-                + np.abs(ul) + np.abs(ll))
-    return (np.maximum(0, -ul) + 0.5 * np.maximum(0, ul - 0.3) + np.maximum(0, -uf - 0.87)
-            + 0.5 * np.maximum(0, -bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - np.maximum(bf, 0))
-            + np.abs(ul - ARM_REST))
-
-
 def lean_penalty(axis: np.ndarray, facing: np.ndarray, left: np.ndarray, back: float) -> np.ndarray:
     """Torso or head leaning back more than ``back`` (a cosine) or sideways."""
-    a = _unit(axis)
+    a = unit(axis)
     return np.maximum(0, -(a * facing).sum(-1) - back) + np.maximum(0, np.abs((a * left).sum(-1)) - 0.2)
 
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from mocap.body import JOINT_INDEX
-from mocap.fit2d import FIT_BODY_PX, Fit2D
+from mocap.silhouette.fit2d import FIT_BODY_PX, Fit2D
 
 LAG_S = 0.5                 # seconds of later frames seen before a frame's legs are chosen
 SMOOTH_WEIGHT = 1.0         # S given up per body height that knees and ankles move (mean)

@@ -17,11 +17,11 @@ import numpy as np
 
 from mocap import body
 from mocap.errors import MocapError
-from mocap.export.atomic import write_export
-from mocap.export.motion_json import read_motion
-from mocap.motion import Motion
+from mocap.io.export.atomic import write_export
+from mocap.io.export.motion_json import read_motion
+from mocap.lift.motion import Motion
 
-STATIC = Path(__file__).resolve().parents[2] / "static"
+STATIC = Path(__file__).resolve().parents[3] / "static"
 TEMPLATE = STATIC / "playback.html"
 DATA_SLOT, TITLE_SLOT = "/*MOCAP_DATA*/null", "__MOCAP_TITLE__"
 COLOURS = {"torso": "#8a9bb0", "head": "#c9a27e", "l": "#3d8fb8", "r": "#d9822b"}

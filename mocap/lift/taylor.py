@@ -28,13 +28,10 @@ import numpy as np
 
 from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, CHEST_FRACTION, HIP_HALF_SPAN,
                         JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS,
-                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN)
+                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN, AWAY, FORESHORTENING,
+                        ORIENTATIONS, TOWARD)
 
 UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT            # metres per model unit
-ORIENTATIONS: tuple[str, ...] = ("left", "right", "forward_left", "forward_right",
-                                 "backward_left", "backward_right")
-FORESHORTENING: tuple[str, ...] = ("toward", "away")
-TOWARD, AWAY = 1, -1
 SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)     # model half-spans: shoulders, hips
 # A yaw within this many degrees of a profile (+-90) is named a profile by
 # ``orientation_of_yaw``: the six orientations split the circle into 60-degree sectors.

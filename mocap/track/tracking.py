@@ -1,7 +1,7 @@
 """The tracking method (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000) as
 one call: the user marks the 16 joints on frame 0; every frame is tracked
-(mocap.tracker), stretches of low reliability are filled by interpolation, and the
-3D skeleton is reconstructed under perspective (mocap.perspective) from the 2D
+(mocap.track.tracker), stretches of low reliability are filled by interpolation, and the
+3D skeleton is reconstructed under perspective (mocap.track.perspective) from the 2D
 joints lightly smoothed in time (SMOOTH_S).
 
     result = track_video("clip.mp4", marks)        # marks: (16, 2) or {joint: (x, y)}
@@ -23,11 +23,11 @@ from scipy.ndimage import gaussian_filter1d
 
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
-from mocap.marks import check_marks
-from mocap.orientation import knee_facing
-from mocap.perspective import Pinhole, Turns, default_camera, reconstruct, steady_depths, to_contract
-from mocap.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
-from mocap.video import VideoInfo, iter_frames, open_video, processing_scale
+from mocap.track.marks import check_marks
+from mocap.body import knee_facing
+from mocap.track.perspective import Pinhole, Turns, default_camera, reconstruct, steady_depths, to_contract
+from mocap.track.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
+from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
 
 Progress = Callable[[int, int], None]
 LOW_RELIABILITY = 0.5      # a part matched this much worse than usual is taken as hidden
@@ -221,7 +221,7 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     ``marks``: (16, 2) pixels in JOINTS order or a mapping joint -> (x, y) (frame 0's
     ``joints2d`` of an annotations file); bad marks raise a MocapError naming the
     joint. ``focal_px``: the camera's focal length in pixels if known (default: the
-    frame width, see mocap.perspective). ``orientation``: the performer's orientation
+    frame width, see mocap.track.perspective). ``orientation``: the performer's orientation
     on frame 0 in CONTRACT.md's words; its side ("right" of forward_right) tells
     which way the body is turned, which the key triangle alone cannot (None: the
     knees tell, ``guessed_turn``).
@@ -248,7 +248,7 @@ def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
     """Which way the body is turned ("left" or "right", as the side of an orientation)
     where the user did not say: the way the knees bend over the first TURN_CUE_S
     (orientation.knee_facing). Beyond the paper: the key triangle and hips fit two
-    mirror-image turns about equally well (mocap.perspective.calibrate)."""
+    mirror-image turns about equally well (mocap.track.perspective.calibrate)."""
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 

@@ -1,6 +1,6 @@
 """GLB export of a Motion: the animated 10-cylinder body (glTF 2.0, binary).
 
-One node per bone of ``mocap.motion`` (same names, same hierarchy, translation =
+One node per bone of ``mocap.lift.motion`` (same names, same hierarchy, translation =
 the bone's offset, metres, y up). Each of the 10 cylinders is a mesh on the node
 of its proximal joint (the torso on ``waist``, whose x axis follows the hips), its
 cross-section the model's (``body.semi_axes`` at 1.75 m). One animation, one
@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from mocap import body
-from mocap.export.atomic import write_export
-from mocap.motion import BONES, PARENTS, Motion, forward_kinematics
+from mocap.io.export.atomic import write_export
+from mocap.lift.motion import BONES, PARENTS, Motion, forward_kinematics
 
 SIDES = 16                                      # facets around each cylinder
 _OWNERS = {s: "waist" if s == "torso" else a for s, (a, _) in body.SEGMENTS.items()}

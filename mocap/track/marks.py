@@ -85,7 +85,7 @@ def shoulders_as_hips(marks: np.ndarray) -> np.ndarray:
     """The marks with the two shoulders exchanged where they are ``turned_apart`` from
     the hips. For marks taken from the silhouette method's fit: seen from the side,
     the fit places its shoulders where the 2D model puts them, in either order,
-    while its hips follow the legs, whose sides it settles (mocap.orientation). On
+    while its hips follow the legs, whose sides it settles (mocap.lift.orientation). On
     the real dog_walker clip (a walk seen from the side) the fit's frame 0 gives
     shoulders and hips turned apart, which the calibration refuses; with the
     shoulders exchanged it finds the body facing image right, turned 89 degrees

@@ -12,8 +12,8 @@ import os
 from pathlib import Path
 
 from mocap.body import JOINTS
-from mocap.export.atomic import write_export
-from mocap.motion import Motion
+from mocap.io.export.atomic import write_export
+from mocap.lift.motion import Motion
 
 HEADER = ["frame", "time"] + [f"{j}_{axis}" for j in JOINTS for axis in "xyz"]
 

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.video import VideoInfo, sample_frames
+from mocap.io.video import VideoInfo, sample_frames
 
 _MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
