@@ -27,7 +27,7 @@ from typing import Callable
 import numpy as np
 
 from app.preprocess import Progress, Throttle
-from app.review import Doubt, covering, review_queue
+from mocap.review import Doubt, covering, review_queue
 from mocap.io.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError

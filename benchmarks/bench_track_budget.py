@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from bench_track import DATA, FOCAL, bench_main, orientation_of
-from app.review import covering, review_queue
+from mocap.review import covering, review_queue
 from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_INDEX, WIDTH
 from mocap.metrics import pa_mpjpe

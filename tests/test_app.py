@@ -14,7 +14,7 @@ import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
 
 from mocap.session import iter_fits, iter_silhouettes
-from app.review import Doubt, broken_limits, covering, likely_swaps, review_queue
+from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.state import AppState, annotations_path, toggled_keyframe
 from app.views import DISPLAY_HEIGHT, Layout, segment_transforms, video_image
 from mocap.io.annotations import Annotations, load_annotations

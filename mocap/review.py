@@ -1,4 +1,4 @@
-"""The review queue: which frames' fits deserve a look, and why.
+"""The review queue: which frames' fits deserve a look, and why (the app's Review).
 
 Four signs of a doubtful frame, each a short function over a session's resolved
 lifting inputs (anatomical 2D joints, overrides applied) and fits:
