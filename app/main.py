@@ -7,7 +7,9 @@ of the state redraws what it changed (``App.refresh``), for every tab at once.
 
 from __future__ import annotations
 
+import errno
 import math
+import socket
 import sys
 import threading
 import time
@@ -328,7 +330,33 @@ def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: in
     """The app on ``video`` (default: the bundled sample) on a new viser server;
     preprocessing starts with ``app.state.start()``."""
     state = AppState(video or SAMPLE)
-    return App(viser.ViserServer(host=host, port=port, verbose=False), state)
+    check_port(host, port)
+    server = viser.ViserServer(host=host, port=port, verbose=False)
+    if port and server.get_port() != port:  # taken between the check and viser's bind
+        server.stop()
+        raise MocapError(_taken(host, port))
+    return App(server, state)
+
+
+def _taken(host: str, port: int) -> str:
+    return (f"port {port} on {host} is taken (another program listens there): stop it, "
+            "or choose another with --port (--port 0: any free one)")
+
+
+def check_port(host: str, port: int) -> None:
+    """Refuse an address the server cannot have. viser would move on to the next free
+    port by itself, and a user who named one (or opens the default address) would be
+    looking at another program's page; a host that is no address of this machine would
+    make viser try a thousand ports."""
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, proto) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server binds
+            probe.bind(address)
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            raise MocapError(_taken(host, port)) from None
+        raise MocapError(f"cannot listen on {host} port {port}: {exc.strerror or exc}") from None
 
 
 def main(video: str | None = None, port: int = 8080, host: str = "127.0.0.1",

@@ -56,7 +56,8 @@ def _add_serve(sub) -> None:
     p = sub.add_parser("serve", help="review and correct a video's fit in the browser, export the animation")
     p.add_argument("video", nargs="?", default=None,
                    help="input video (default: the bundled sample_videos/walk.mp4)")
-    p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080, the next free one if taken)")
+    p.add_argument("--port", type=_port, default=8080,
+                   help="port to listen on (default 8080; an error if taken; 0: any free one)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
 
     def run(args) -> None:
@@ -67,6 +68,13 @@ def _add_serve(sub) -> None:
         serve(args.video, args.port, args.host, progress=_progress)
 
     p.set_defaults(run=run)
+
+
+def _port(text: str) -> int:
+    """--port's value: a TCP port number, 0 for any free one."""
+    if not text.isdigit() or int(text) > 65535:
+        raise argparse.ArgumentTypeError(f"expected a port number from 0 to 65535, got {text!r}")
+    return int(text)
 
 
 def _add_export(sub) -> None:
