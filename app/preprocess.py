@@ -1,25 +1,10 @@
-"""How far preprocessing is, reported to the page as the two passes of
-``mocap.session`` (``iter_silhouettes``, ``iter_fits``) run frame by frame, so that
-the page shows each frame's silhouette and fit as soon as it exists."""
+"""How often the page hears of a run's progress (mocap.pipeline.Progress): each
+frame's silhouette and fit are kept as they come, the page redrawn at each whole
+percent."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable
-
-
-@dataclass(frozen=True)
-class Progress:
-    """How far preprocessing is: ``done`` of ``total`` steps (two per frame)."""
-
-    done: int
-    total: int
-    stage: str
-    error: str | None = None
-
-    @property
-    def ready(self) -> bool:
-        return self.done == self.total and self.error is None
 
 
 class Throttle:

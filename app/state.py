@@ -8,7 +8,7 @@ in a background thread (``start``); each frame's silhouette and fit can be looke
 as soon as it exists, the 3D lifting once every frame is fitted.
 
 The annotations' method chooses what the page shows and exports: the silhouette
-method's session, or the tracking method's (mocap.tracksession), tracked in a
+method's session, or the tracking method's (mocap.session.tracking), tracked in a
 background thread (``start_tracking``) from the 16 joints marked on frame 0, which
 are frame 0's joint overrides. Both sessions take every edit.
 """
@@ -26,7 +26,7 @@ from typing import Callable
 
 import numpy as np
 
-from app.preprocess import Progress, Throttle
+from app.preprocess import Throttle
 from mocap.review import Doubt, covering, review_queue
 from mocap.io.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
@@ -39,10 +39,10 @@ from mocap.lift.taylor import depth_fractions
 from mocap.track.marks import check_marks, shoulders_as_hips
 from mocap.lift.motion import Motion
 from mocap.track.perspective import calibrate, default_camera
-from mocap.session import (FrameFit, Session, Silhouette, body_heights, iter_fits,
-                           iter_silhouettes, video_dict)
+from mocap.pipeline import FITTING, SILHOUETTES, Progress, open_session, video_dict
+from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
+from mocap.silhouette.passes import FrameFit, Silhouette
 from mocap.track.tracking import carried_pins, turn_of
-from mocap.tracksession import TrackSession, marks_of, track_annotated
 from mocap.io.video import open_video, processing_scale
 
 EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json", "html": ".html"}
@@ -144,7 +144,7 @@ class AppState:
         self._silhouettes_done = 0
         self._fits: list[FrameFit | None] = [None] * n
         self._progress = Progress(0, 2 * n, "waiting")
-        self._fitted: Session | None = None          # the silhouette method's
+        self._fitted: SilhouetteSession | None = None    # the silhouette method's
         self._tracked: TrackSession | None = None    # the tracking method's, once tracked
         self._tracked_from: dict | None = None       # the marks it was tracked from
         self._track_progress = Progress(0, n, "waiting for the 16 marks on frame 0")
@@ -244,24 +244,22 @@ class AppState:
             self.ready.set()
 
     def _run_passes(self, progress: Callable[[int, int], None]) -> None:
-        n, total = self.n_frames, 2 * self.n_frames
-        report = Throttle(self._step, total)
-        for i, sil in enumerate(iter_silhouettes(self.info, self.scale)):
+        report = Throttle(self._step, 2 * self.n_frames)
+
+        def step(p: Progress) -> None:
             with self._lock:
-                self._silhouettes[i], self._silhouettes_done = sil, i + 1
-            progress(i + 1, total)
-            report(i + 1, "finding the performer's silhouette")
-        if all(s is None for s in self._silhouettes):
-            raise MocapError(f"{self.info.path}: no person found in any of its {n} frames")
-        heights = body_heights(self._silhouettes, self.info.fps)
-        for fit in iter_fits(self._silhouettes, heights, self.scale, self.info.fps):
-            with self._lock:
-                self._fits[fit.index] = fit
-            progress(n + fit.index + 1, total)
-            report(n + fit.index + 1, "fitting the body model")
+                if p.stage == SILHOUETTES:
+                    self._silhouettes[p.frame], self._silhouettes_done = p.product, p.frame + 1
+                elif p.stage == FITTING:
+                    self._fits[p.frame] = p.product
+            progress(p.done, p.total)
+            report(p.done, p.stage)
+
+        session = open_session(self.info, self._annotations, method="silhouette", progress=step)
         with self._lock:
-            self._fitted = Session(self.info, list(self._fits), self._annotations)
-            self._progress = Progress(total, total, "ready")
+            session.annotate(self._annotations)     # edits made while fitting
+            self._fitted = session
+            self._progress = Progress(session.n_frames * 2, session.n_frames * 2, "ready")
         self._changed()
 
     def _step(self, done: int, stage: str) -> None:
@@ -299,8 +297,8 @@ class AppState:
     def _track(self, notes: Annotations, marks: dict) -> None:
         report = Throttle(lambda done, stage: self._track_step(done), self.n_frames)
         try:
-            result = track_annotated(self.info, notes, lambda done, total: report(done, "tracking"))
-            session = TrackSession(self.info, result, notes)
+            session = open_session(self.info, notes, method="track",
+                                   progress=lambda p: report(p.done, "tracking"))
             session.inputs      # the 3D, before the lock
             with self._lock:
                 if self._annotations != notes:      # edits made while tracking
@@ -496,7 +494,7 @@ class AppState:
 
     def _session_signs(self, frame: int) -> np.ndarray:
         session = self._require_session()
-        if session.fits[frame].joints2d is None:
+        if not session.person[frame]:
             raise MocapError("foreshortening needs the 3D pose of this frame (nobody found)")
         return session.inputs.signs[frame]
 

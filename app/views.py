@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, semi_axes
 from mocap.overlay import draw_skeleton, segment_colour, silhouette_view
-from mocap.session import Silhouette
+from mocap.silhouette.passes import Silhouette
 from mocap.io.video import VideoInfo, read_frame
 
 PANEL_HEIGHT = 1.9          # scene units (metres) of each panel: a 1.75 m body fits

@@ -27,10 +27,10 @@ cv2.setNumThreads(1)
 from mocap.body import JOINTS  # noqa: E402
 from mocap.silhouette.fit2d import FIT_SCALE, fit_frame, torso_spread  # noqa: E402
 from mocap.metrics import side_matched_errors  # noqa: E402
-from mocap.session import (body_heights, extract_silhouettes, fit_silhouettes, normalise,  # noqa: E402
-                           normalised_grey)
+from mocap.pipeline import silhouette_passes  # noqa: E402
+from mocap.silhouette.passes import body_heights, normalise, normalised_grey  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402
-from mocap.io.video import open_video, processing_scale  # noqa: E402
+from mocap.io.video import open_video  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 CLIPS = [  # (bvh, view, source frame range)
@@ -45,10 +45,8 @@ def run_clip(bvh: str, view: str, frames, workdir: Path):
     video = workdir / f"{Path(bvh).stem}_{view}.mp4"
     truth = render_motion(DATA / bvh, video, view=view, frames=frames)
     info = open_video(video)
-    scale = processing_scale(info)
-    sils = extract_silhouettes(info, scale)
+    sils, fits = silhouette_passes(info)
     heights = body_heights(sils, info.fps)
-    fits = fit_silhouettes(sils, heights, scale, info.fps)
     fit_ms = time_fits(sils, heights, [f.fit.pose.spread if f.fit else None for f in fits])
     pred = np.array([f.joints2d if f.joints2d is not None else np.full((16, 2), np.nan) for f in fits])
     err = side_matched_errors(pred, truth.joints2d) / truth.body_height_px * 100

@@ -40,7 +40,8 @@ from mocap.lift.taylor import (clip_lengths, depth_fractions, facing_yaw, image_
                         orientation_of_yaw, signs_of, yaw_of, UNIT_M)
 from mocap.metrics import pa_mpjpe
 from mocap.lift.orientation import NEGLIGIBLE, guess_signs
-from mocap.session import Session, fit_video
+from mocap.pipeline import fit_video
+from mocap.session import SilhouetteSession as Session
 from mocap.synth import render_motion
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"

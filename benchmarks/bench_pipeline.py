@@ -16,7 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from mocap.session import body_heights, extract_silhouettes, fit_silhouettes
+from mocap.silhouette.passes import body_heights, iter_fits, iter_silhouettes
 from mocap.synth import render_motion
 from mocap.io.video import open_video, processing_scale
 
@@ -36,9 +36,9 @@ def main() -> int:
         info = open_video(video)
         scale = processing_scale(info)
         t0 = time.perf_counter()
-        sils = extract_silhouettes(info, scale)
+        sils = list(iter_silhouettes(info, scale))
         t1 = time.perf_counter()
-        fits = fit_silhouettes(sils, body_heights(sils, info.fps), scale, info.fps)
+        fits = list(iter_fits(sils, body_heights(sils, info.fps), scale, info.fps))
         t2 = time.perf_counter()
         out = Path(tmp) / "jumps.motion.json"
         subprocess.run(["mocap", "fit", str(video), "--out", str(out), "--quiet"], check=True)

@@ -19,7 +19,7 @@ orientation's side (the user's annotation); it assumes the default focal length
   shows, from the tracked and from the exact 2D;
 - CPU ms/frame and frames/s: tracking alone (frames already decoded), one thread,
   CPU time; "total" is track_video end to end (decoding, tracking, 3D);
-- silhouette: mocap.session.fit_video on the same clip (2D error matched by image
+- silhouette: mocap.pipeline.fit_video on the same clip (2D error matched by image
   side); it estimates a static background, which a panning one is not, so its
   numbers there show its assumption broken. Beside it, the same motion and camera
   over a static background ("static twin").
@@ -58,7 +58,8 @@ from mocap.track.marks import check_marks, shoulders_as_hips  # noqa: E402
 from mocap.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
                            side_matched_errors)
 from mocap.track.perspective import default_camera, to_contract  # noqa: E402
-from mocap.session import Session, fit_video  # noqa: E402
+from mocap.pipeline import fit_video  # noqa: E402
+from mocap.session import SilhouetteSession as Session  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402
 from mocap.track.tracking import steady_reconstruction, track_frames, track_video, turn_of  # noqa: E402
 from mocap.io.video import iter_frames, open_video  # noqa: E402

@@ -21,7 +21,7 @@ over a panning, cluttered background; the tracker given the true joints of frame
   user visiting the app's review stops instead (the middle frame of every 0.4 s
   stretch, most doubtful first, at most as many as one frame in 10); on its far arm
   only: the same user correcting only the elbow and wrist of the arm the review says
-  to check first (mocap.tracksession.TrackSession.far_arm);
+  to check first (mocap.session.TrackSession.far_arm);
 - facing said 1 in 10: the same visits, the user saying on each the side the
   performer really faces (an orientation entry, held until the next), with the exact
   and with the tracked 2D.
@@ -51,7 +51,7 @@ from mocap.track.perspective import default_camera, to_contract
 from mocap.synth import render_motion
 from mocap.track.tracking import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
                          track_video, turn_of)
-from mocap.tracksession import TrackSession
+from mocap.session import TrackSession
 from mocap.truth import Truth
 
 LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]

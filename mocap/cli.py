@@ -30,13 +30,13 @@ def _add_fit(sub) -> None:
 
 
 def _run_fit(args) -> None:
-    from mocap.session import fit_video_to_file
+    from mocap.pipeline import fit_video_to_file
     if args.smooth < 0:
         raise MocapError(f"--smooth must be 0 or more, got {args.smooth}")
     written = fit_video_to_file(args.video, args.out, annotations=args.annotations,
                                 method=args.method, bvh=args.bvh,
                                 glb=args.glb, csv=args.csv, smooth=args.smooth,
-                                progress=None if args.quiet else _progress)
+                                progress=None if args.quiet else _progress.step)
     print("wrote " + ", ".join(str(p) for p in written))
 
 
@@ -111,6 +111,10 @@ class _Bar:
             print(f"\r{bar}", end="" if self.open else "\n", file=sys.stderr, flush=True)
         else:
             print(bar, file=sys.stderr, flush=True)
+
+    def step(self, progress) -> None:
+        """The bar of a pipeline's step (mocap.pipeline.Progress)."""
+        self(progress.done, progress.total)
 
     def end(self) -> None:
         if self.open:

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
 
-from mocap.session import iter_fits, iter_silhouettes
+from mocap.silhouette.passes import iter_fits, iter_silhouettes
 from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.state import AppState, annotations_path, toggled_keyframe
 from app.views import DISPLAY_HEIGHT, Layout, segment_transforms, video_image
@@ -21,7 +21,8 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
 from mocap.errors import MocapError
-from mocap.session import body_heights, fit_video
+from mocap.pipeline import fit_video
+from mocap.silhouette.passes import body_heights
 from mocap.io.video import open_video, processing_scale
 
 
@@ -53,7 +54,7 @@ def test_page_state_while_preprocessing(tiny_video, tmp_path, monkeypatch):
                 held.set()
                 gate.wait(30)
             yield fit
-    monkeypatch.setattr("app.state.iter_fits", slow)
+    monkeypatch.setattr("mocap.pipeline.iter_fits", slow)
     state = AppState(fresh_copy(tiny_video, tmp_path))
     state.start()
     assert held.wait(30)

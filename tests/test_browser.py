@@ -282,7 +282,7 @@ def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypa
     """Fitted frames show at once; the others say they are not fitted yet."""
     import threading
     from app.main import create
-    from app.state import iter_fits
+    from mocap.silhouette.passes import iter_fits
     gate = threading.Event()
 
     def slow(*args):
@@ -290,7 +290,7 @@ def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypa
             if fit.index == TINY_FRAMES // 2:
                 gate.wait(60)
             yield fit
-    monkeypatch.setattr("app.state.iter_fits", slow)
+    monkeypatch.setattr("mocap.pipeline.iter_fits", slow)
     app = create(fresh_copy(tiny_video, tmp_path), port=0)
     try:
         app.state.start()

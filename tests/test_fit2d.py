@@ -15,9 +15,9 @@ from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, coarse_to_fine, fit_frame, 
 from mocap.silhouette.legchain import LegChain
 from mocap.metrics import side_matched_errors
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
-from mocap.session import body_heights, extract_silhouettes, fit_silhouettes
+from mocap.pipeline import silhouette_passes
 from mocap.synth import render_motion
-from mocap.io.video import open_video, processing_scale
+from mocap.io.video import open_video
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 
@@ -98,9 +98,7 @@ def test_fit_on_rendered_motion_capture(tmp_path):
     video = tmp_path / "walk.avi"
     truth = render_motion(CMU_WALK, video, view="side", size=(480, 360), seconds=1.5)
     info = open_video(video)
-    scale = processing_scale(info)
-    sils = extract_silhouettes(info, scale)
-    fits = fit_silhouettes(sils, body_heights(sils, info.fps), scale, info.fps)
+    _, fits = silhouette_passes(info)
     assert all(f.joints2d is not None for f in fits)
     pred = np.array([f.joints2d for f in fits])
     err = side_matched_errors(pred, truth.joints2d) / truth.body_height_px
@@ -115,9 +113,7 @@ def test_legs_stay_apart_where_they_cross_in_profile(tmp_path):
     video = tmp_path / "walk.avi"
     truth = render_motion("walk-cycle", video, view="side", size=(480, 360), seconds=3.0)
     info = open_video(video)
-    scale = processing_scale(info)
-    sils = extract_silhouettes(info, scale)
-    fits = fit_silhouettes(sils, body_heights(sils, info.fps), scale, info.fps)
+    _, fits = silhouette_passes(info)
     legs = [JOINT_INDEX[f"{j}_{s}"] for j in ("knee", "ankle") for s in "lr"]
     pred = np.array([f.joints2d for f in fits])
     err = side_matched_errors(pred, truth.joints2d)[:, legs] / truth.body_height_px

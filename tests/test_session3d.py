@@ -17,7 +17,8 @@ from mocap.io.export.motion_json import read_motion
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.metrics import pa_mpjpe
 from mocap.lift.orientation import NEGLIGIBLE
-from mocap.session import Session, fit_video
+from mocap.pipeline import fit_video
+from mocap.session import SilhouetteSession as Session
 
 
 @pytest.fixture(scope="module")

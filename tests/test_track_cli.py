@@ -18,7 +18,8 @@ from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.orientation import NEGLIGIBLE
 from mocap.track.tracking import guessed_turn
-from mocap.tracksession import TrackSession
+from mocap.pipeline import track
+from mocap.session import TrackSession
 from mocap.io.video import open_video
 from mocap.walk import walk_cycle
 
@@ -72,7 +73,7 @@ def session(clip):
     notes = Annotations().with_method("track").with_orientation(0, "forward_right")
     for j, xy in zip(JOINTS, truth.joints2d[0]):
         notes = notes.with_joint(0, j, tuple(xy))
-    return TrackSession.from_video(info, notes), truth
+    return TrackSession(info, track(info, notes), notes), truth
 
 
 def test_the_annotations_method_chooses_tracking(clip, tmp_path):
@@ -92,7 +93,7 @@ def test_a_held_foreshortening_fixes_the_limb_depths(session):
     passes through the image plane; the 3D follows it, nothing else changes in 2D."""
     tracked, _ = session
     before = tracked.inputs
-    pose_before = np.array([tracked.pose3d(i) for i in range(len(tracked.fits))])
+    pose_before = np.array([tracked.pose3d(i) for i in range(tracked.n_frames)])
     k = SEGMENT_INDEX["lower_leg_r"]
     depth = lift.depth_fractions(pose_before)[:, k]
     frame = int(np.argmax(depth))

@@ -1,5 +1,6 @@
-"""The tracking method's session: the counterpart of mocap.session.Session for a
-video whose joints the user marked on frame 0 (mocap.track.tracking).
+"""The tracking method's session: the counterpart of the silhouette method's
+(mocap.session.silhouette) for a video whose joints the user marked on frame 0
+(mocap.track.tracking).
 
 The 2D joints are tracked once; everything the user says afterwards reshapes the 3D
 without tracking again: joint overrides replace tracked joints on their frame,
@@ -11,8 +12,8 @@ joints' depths (Eq. 10-11, the slow part) are kept until the 2D joints change, s
 foreshortening toggle only re-chooses depths.
 
 The same motion file, exports and review as the silhouette method follow from the
-Session it extends: ``inputs`` holds the tracked joints and what the 3D shows
-(orientation and signs read back from it).
+Session protocol (mocap.session.base): ``inputs`` holds the tracked joints and what
+the 3D shows (orientation and signs read back from it).
 """
 
 from __future__ import annotations
@@ -27,10 +28,11 @@ from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw
 from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
 from mocap.track.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
                                to_contract)
-from mocap.session import SCALE_PERCENTILE, FrameFit, Progress, Session
+from mocap.session.base import Session
+from mocap.silhouette.passes import SCALE_PERCENTILE
 from mocap.track.tracker import far_arm
-from mocap.track.tracking import (TrackResult, guessed_turn, spread_corrections, spread_frames, steady_joints,
-                         track_video, turn_of)
+from mocap.track.tracking import (TrackResult, guessed_turn, spread_corrections, spread_frames,
+                                  steady_joints, turn_of)
 from mocap.io.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
@@ -45,15 +47,10 @@ def marks_of(notes: Annotations) -> dict[str, tuple[float, float]]:
     return dict(first.joints2d)
 
 
-def track_annotated(info: VideoInfo, notes: Annotations,
-                    progress: Progress | None = None) -> TrackResult:
-    """Track a video from the marks and frame 0's orientation in ``notes``."""
-    return track_video(info, marks_of(notes), progress, orientation=notes.orientations(1)[0])
-
-
 class TrackSession(Session):
     """A tracked video and the user's annotations; reconstructs on demand."""
 
+    method = "track"
     score_name = "tracking reliability"
 
     @property
@@ -64,20 +61,17 @@ class TrackSession(Session):
 
     def __init__(self, info: VideoInfo, tracked: TrackResult,
                  annotations: Annotations | None = None, smooth: float = 0.0):
-        fits = [FrameFit(i, joints, float(rel.mean()))
-                for i, (joints, rel) in enumerate(zip(tracked.joints2d, tracked.reliability))]
-        super().__init__(info, fits, annotations, smooth)
+        super().__init__(info, annotations, smooth)
         self.tracked = tracked
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
         # (steady 2D joints, turns, key joints, their placement free of user signs)
         self._placed: tuple[np.ndarray, list, np.ndarray, np.ndarray] | None = None
         self._resolution: tuple[Inputs, np.ndarray] | None = None
 
-    @classmethod
-    def from_video(cls, info: VideoInfo, notes: Annotations, *, smooth: float = 0.0,
-                   progress: Progress | None = None) -> "TrackSession":
-        """Track a video from the marks in its annotations (``marks_of``)."""
-        return cls(info, track_annotated(info, notes, progress), notes, smooth)
+    @property
+    def scores(self) -> np.ndarray:
+        """(F,) each frame's mean joint reliability (every frame shows the performer)."""
+        return self.tracked.reliability.mean(axis=1).astype(float)
 
     def annotate(self, annotations: Annotations) -> None:
         super().annotate(annotations)
@@ -104,6 +98,7 @@ class TrackSession(Session):
     def pose3d(self, frame: int) -> np.ndarray:
         """(16, 3) the reconstructed joints of a frame (metres, contract frame)."""
         return self._resolved()[1][frame]
+
 
     def _resolved(self) -> tuple[Inputs, np.ndarray]:
         """The shown inputs and the 3D joints (F, 16, 3) of the current annotations."""

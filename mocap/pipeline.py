@@ -1,0 +1,128 @@
+"""The one pipeline from a video to a 3D animation; the command line and the app
+both run it, reporting each step to a ``progress`` callback.
+
+The silhouette method: silhouettes (section 3.2), then the 2D fits (section 3.3),
+streamed frame by frame (``mocap.silhouette.passes``); the lifting (section 3.4) and
+the motion follow from its session. The tracking method: the joints marked on frame
+0 followed through the video (mocap.track.tracking), the 3D from its session.
+``open_session`` runs either and returns the session (mocap.session) that lifts
+and exports; ``fit_video_to_file`` is `mocap fit`.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from mocap.errors import MocapError
+from mocap.io.annotations import Annotations, load_annotations
+from mocap.io.export.motion_json import write_motion
+from mocap.io.video import VideoInfo, open_video, processing_scale
+from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
+from mocap.silhouette.passes import FrameFit, Silhouette, body_heights, iter_fits, iter_silhouettes
+from mocap.track.tracking import TrackResult, track_video
+
+SILHOUETTES = "finding the performer's silhouette"
+FITTING = "fitting the body model"
+TRACKING = "following the marked joints"
+
+
+@dataclass(frozen=True)
+class Progress:
+    """How far a run is: ``done`` of ``total`` steps (the silhouette method: two per
+    frame, the tracking method: one), at ``stage``. A step that produced a frame's
+    silhouette or 2D fit carries it (``frame``, ``product``: a Silhouette, None where
+    nobody is, or a FrameFit) so that a viewer can show it at once."""
+
+    done: int
+    total: int
+    stage: str
+    error: str | None = None
+    frame: int | None = None
+    product: Silhouette | FrameFit | None = None
+
+    @property
+    def ready(self) -> bool:
+        return self.done == self.total and self.error is None
+
+
+Report = Callable[[Progress], None]
+
+
+def _quiet(_: Progress) -> None:
+    pass
+
+
+def silhouette_passes(info: VideoInfo, progress: Report | None = None
+                      ) -> tuple[list[Silhouette | None], list[FrameFit]]:
+    """The silhouette method's two passes over a video: every frame's silhouette,
+    then every frame's 2D fit, each reported as it comes."""
+    report, n = progress or _quiet, info.frame_count
+    scale = processing_scale(info)
+    silhouettes: list[Silhouette | None] = []
+    for i, sil in enumerate(iter_silhouettes(info, scale)):
+        silhouettes.append(sil)
+        report(Progress(i + 1, 2 * n, SILHOUETTES, frame=i, product=sil))
+    if all(s is None for s in silhouettes):
+        raise MocapError(f"{info.path}: no person found in any of its {n} frames")
+    fits: list[FrameFit] = []
+    for fit in iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps):
+        fits.append(fit)
+        report(Progress(n + fit.index + 1, 2 * n, FITTING, frame=fit.index, product=fit))
+    return silhouettes, fits
+
+
+def fit_video(video: str | os.PathLike | VideoInfo,
+              progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:
+    """Silhouettes and 2D fits for every frame of a video (a path or an opened one)."""
+    info = video if isinstance(video, VideoInfo) else open_video(video)
+    return info, silhouette_passes(info, progress)[1]
+
+
+def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
+    """The tracking method's pass: the marks on frame 0 of ``notes`` (marks_of) and
+    frame 0's orientation followed through the video."""
+    report = progress or _quiet
+    return track_video(info, marks_of(notes), lambda done, total: report(Progress(done, total, TRACKING)),
+                       orientation=notes.orientations(1)[0])
+
+
+def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None = None, *,
+                 method: str | None = None, smooth: float = 0.0,
+                 progress: Report | None = None) -> Session:
+    """Run a method over a video and return its session. ``method`` None: the
+    annotations' method, else the silhouette method."""
+    info = video if isinstance(video, VideoInfo) else open_video(video)
+    notes = notes or Annotations()
+    if (method or notes.method) == "track":
+        return TrackSession(info, track(info, notes, progress), notes, smooth)
+    return SilhouetteSession(info, silhouette_passes(info, progress)[1], notes, smooth)
+
+
+def fit_video_to_file(video: str | os.PathLike, out: str | os.PathLike | None, *,
+                      annotations: str | os.PathLike | None = None, method: str | None = None,
+                      bvh=None, glb=None, csv=None, smooth: float = 0.0,
+                      progress: Report | None = None) -> list[Path]:
+    """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
+    interpolate and write the motion file and the exports asked for (None: not
+    wanted); returns the paths written."""
+    from mocap.io.export.bvh import write_bvh
+    from mocap.io.export.csv import write_csv
+    from mocap.io.export.glb import write_glb
+    info = open_video(video)
+    notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
+    session = open_session(info, notes, method=method, smooth=smooth, progress=progress)
+    motion = session.motion()
+    out = Path(out) if out else Path(video).with_suffix(".motion.json")
+    written = [write_motion(out, video_dict(info), session.motion_frames(motion))]
+    for path, writer in ((bvh, write_bvh), (glb, write_glb), (csv, write_csv)):
+        if path is not None:
+            written.append(writer(path, motion))
+    return written
+
+
+def video_dict(info: VideoInfo) -> dict:
+    return {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
+            "frame_count": info.frame_count}

@@ -1,0 +1,8 @@
+"""The session: one protocol (mocap.session.base.Session) for both methods, what the
+command line and the app work through; ``mocap.pipeline.open_session`` opens one."""
+
+from mocap.session.base import Session
+from mocap.session.silhouette import SilhouetteSession
+from mocap.session.tracking import MARKS_NEEDED, TrackSession, marks_of
+
+__all__ = ["MARKS_NEEDED", "Session", "SilhouetteSession", "TrackSession", "marks_of"]

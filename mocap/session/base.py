@@ -1,0 +1,114 @@
+"""The session: one video, the user's annotations and the 3D they give, whichever the
+method. The command line and the app both work through it (``mocap.pipeline`` opens
+one); ``mocap.session.silhouette`` and ``mocap.session.tracking`` are the two methods'.
+
+A method's session says what its 2D joints and 3D are (``inputs``, ``pose3d``,
+``root``); everything after that is shared: the keyframes, the motion (section 3.4's
+interpolation, ``mocap.lift.motion``) and the motion file's frames (CONTRACT.md).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from mocap.errors import MocapError
+from mocap.io.annotations import Annotations
+from mocap.io.video import VideoInfo
+from mocap.lift.inputs import Inputs, root_track
+from mocap.lift.motion import Motion, build_motion
+
+
+class Session(ABC):
+    """A video's per-frame results and the user's annotations; the 3D on demand.
+
+    ``annotate`` replaces the annotations (already checked; see mocap.io.annotations);
+    what they change is computed again when next needed.
+    """
+
+    method: str                     # "silhouette" or "track", as the annotations name it
+    score_name: str                 # what ``scores`` are, for the page
+    review_spacing = 0              # frames around a listed doubtful frame the review skips
+
+    def __init__(self, info: VideoInfo, annotations: Annotations | None = None,
+                 smooth: float = 0.0):
+        self.info, self.smooth = info, smooth
+        self._annotations = annotations or Annotations()
+
+    @property
+    def annotations(self) -> Annotations:
+        return self._annotations
+
+    @property
+    def n_frames(self) -> int:
+        return self.info.frame_count
+
+    def annotate(self, annotations: Annotations) -> None:
+        """Take new annotations; what they change is resolved again when next needed."""
+        self._annotations = annotations
+
+    @property
+    @abstractmethod
+    def scores(self) -> np.ndarray:
+        """(F,) each frame's score in [0, 1], NaN where nobody was found."""
+
+    @property
+    def person(self) -> np.ndarray:
+        """(F,) bool: the frames that show the performer."""
+        return np.isfinite(self.scores)
+
+    @property
+    @abstractmethod
+    def inputs(self) -> Inputs:
+        """The 2D joints (anatomical sides, overrides in), orientation, signs and
+        lengths of the current annotations."""
+
+    @abstractmethod
+    def pose3d(self, frame: int) -> np.ndarray | None:
+        """(16, 3) joints of a frame (metres, contract frame, pelvis-centred), None
+        without a person."""
+
+    def root(self) -> np.ndarray:
+        """(F, 3) the pelvis in metres (CONTRACT.md's ``root``), NaN where nobody is:
+        here across the image and above the clip's ground, without depth (the
+        orthographic view says nothing about distance: lift.inputs.root_track)."""
+        inputs = self.inputs
+        return root_track(inputs.joints2d, inputs.px_per_unit, (self.info.width, self.info.height))
+
+    def far_arm(self) -> str | None:
+        """"l" or "r": the arm to check first, where the method knows one."""
+        return None
+
+    def keyframes(self) -> list[int]:
+        """The annotations' keyframes (default every frame) where a person was found."""
+        person = self.person
+        return [k for k in self._annotations.keyframe_indices(self.n_frames) if person[k]]
+
+    def motion(self) -> Motion:
+        """Keyframes' 3D, the frames between interpolated (mocap.lift.motion)."""
+        keys = self.keyframes()
+        if not keys:
+            raise MocapError(f"{self.info.path}: no keyframe shows a person, nothing to lift")
+        return build_motion({k: self.pose3d(k) for k in keys}, self.n_frames, self.info.fps,
+                            root=self.root(), smooth=self.smooth)
+
+    def motion_frames(self, motion: Motion) -> list[dict]:
+        """Motion-file entries (CONTRACT.md). A frame without a person stays
+        ``person: false``; it gets interpolated joints3d when it lies between keyframes."""
+        keys = np.flatnonzero(motion.keyframes)
+        person, scores, inputs = self.person, self.scores, self.inputs
+        frames = []
+        for i in range(self.n_frames):
+            entry: dict = {"index": i, "keyframe": bool(motion.keyframes[i]),
+                           "person": bool(person[i])}
+            if person[i]:
+                if entry["keyframe"]:
+                    entry["score"] = float(scores[i])
+                entry["orientation"] = inputs.orientation[i]
+                entry["joints2d"] = inputs.joints2d[i]
+            if person[i] or keys[0] < i < keys[-1]:
+                entry["joints3d"] = motion.joints3d[i]
+                entry["root"] = motion.root[i]
+            frames.append(entry)
+        return frames

@@ -1,0 +1,71 @@
+"""The silhouette method's session: a video's per-frame 2D fits (section 3.3,
+``mocap.silhouette.passes``) and the user's annotations.
+
+It resolves the lifting inputs (orientation, sides, overrides, signs: the user's
+over the first guess of ``mocap.lift.orientation``), lifts the keyframes (section
+3.4) and interpolates the other frames (``mocap.lift.motion``). An edit of the
+annotations re-resolves the inputs and re-lifts the clip (milliseconds both).
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from mocap.io.annotations import Annotations
+from mocap.io.video import VideoInfo
+from mocap.lift.inputs import Inputs, resolve_inputs
+from mocap.lift.orientation import guess_orientations
+from mocap.session.base import Session
+from mocap.silhouette.passes import FrameFit, fit_arrays
+
+
+class SilhouetteSession(Session):
+    """A video's per-frame 2D fits and the user's annotations; lifts on demand."""
+
+    method = "silhouette"
+    score_name = "similarity S"
+
+    def __init__(self, info: VideoInfo, fits: list[FrameFit],
+                 annotations: Annotations | None = None, smooth: float = 0.0):
+        super().__init__(info, annotations, smooth)
+        self.fits = fits
+        self._inputs: Inputs | None = None
+        self._lifted: tuple[Inputs, np.ndarray] | None = None
+
+    @cached_property
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return fit_arrays(self.fits)
+
+    @cached_property
+    def _guessed(self) -> list[str | None]:
+        """The orientations the fits alone suggest (once per session)."""
+        return guess_orientations(*self._arrays, self.info.fps)
+
+    @cached_property
+    def scores(self) -> np.ndarray:
+        """(F,) each frame's fit score (Eq. 3's S), NaN where nobody was found."""
+        return np.array([np.nan if f.score is None else f.score for f in self.fits], float)
+
+    def annotate(self, annotations: Annotations) -> None:
+        super().annotate(annotations)
+        self._inputs = None
+
+    @property
+    def inputs(self) -> Inputs:
+        if self._inputs is None:
+            joints, body_px, spread = self._arrays
+            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
+                                          guessed=self._guessed)
+        return self._inputs
+
+    def pose3d(self, frame: int) -> np.ndarray | None:
+        """(16, 3) lifted joints of a frame (metres, contract frame), None without a
+        person; the clip is lifted again (milliseconds) when the inputs change."""
+        if self.fits[frame].joints2d is None:
+            return None
+        inputs = self.inputs
+        if self._lifted is None or self._lifted[0] is not inputs:
+            self._lifted = (inputs, inputs.lift_clip(self.info.fps))
+        return self._lifted[1][frame]

@@ -1,0 +1,164 @@
+"""The silhouette method's two passes over a video, both streamed: silhouettes
+(section 3.2), kept as small bit-packed crops, then the 2D fit (section 3.3) on each
+crop normalised to the model's size. The body's height in pixels comes from the
+silhouettes' heights around each frame, so a performer who walks toward the camera
+keeps a right scale. ``mocap.pipeline`` runs them with progress.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from mocap.body import JOINTS, reported_joints
+from mocap.io.video import VideoInfo, iter_frames
+from mocap.silhouette.background import estimate_background, extract_silhouette
+from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
+from mocap.silhouette.legchain import LAG_S, LegChain
+
+MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody
+SCALE_PERCENTILE = 90           # of silhouette heights around a frame: the standing height
+SCALE_WINDOW_S = 1.0            # half-width of that window, seconds
+MARGIN = 0.25                   # of the body height, around the silhouette's box when fitting
+SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame
+SPREAD_WINDOW_S = 0.5           # half-width of that window, seconds
+MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a search centre
+
+
+@dataclass(frozen=True)
+class Silhouette:
+    """A frame's silhouette as its bounding box and the packed mask inside it, with
+    the frame's grey levels in the box (the inner edges' source, mocap.edges)."""
+
+    box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
+    bits: np.ndarray
+    grey: np.ndarray | None = None
+
+    @classmethod
+    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None) -> "Silhouette | None":
+        x, y, w, h = cv2.boundingRect((mask > 0).astype(np.uint8))
+        if w * h == 0 or np.count_nonzero(mask) < MIN_PERSON_FRACTION * mask.size:
+            return None
+        grey = None if frame is None else cv2.cvtColor(frame[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
+        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey)
+
+    @property
+    def height(self) -> int:
+        return self.box[3] - self.box[1]
+
+    def mask(self) -> np.ndarray:
+        x0, y0, x1, y1 = self.box
+        n = (x1 - x0) * (y1 - y0)
+        return np.unpackbits(self.bits, count=n).reshape(y1 - y0, x1 - x0)
+
+
+@dataclass(frozen=True)
+class FrameFit:
+    """The fit of one frame: joints in original video pixels (image sides), or
+    nothing when no person was found."""
+
+    index: int
+    joints2d: np.ndarray | None
+    score: float | None
+    fit: Fit2D | None = None
+    body_px: float | None = None    # video pixels of the model's 175-unit body height
+
+
+def iter_silhouettes(info: VideoInfo, scale: float) -> Iterator[Silhouette | None]:
+    """Pass one (section 3.2): the background, then every frame's silhouette in turn."""
+    background = estimate_background(info, scale=scale)
+    for _, frame in iter_frames(info, scale=scale):
+        yield Silhouette.from_mask(extract_silhouette(frame, background), frame)
+
+
+def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
+    """The standing body height in pixels around each frame (NaN where nobody is):
+    a high percentile of the silhouette heights within SCALE_WINDOW_S."""
+    h = np.array([np.nan if s is None else s.height for s in silhouettes], float)
+    return rolling_percentile(h, max(1, int(round(SCALE_WINDOW_S * fps))), SCALE_PERCENTILE)
+
+
+def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The silhouette cropped with a margin and resized to FIT_BODY_PX body height;
+    returns (mask, origin in processing pixels, pixels of processing per fit pixel)."""
+    pad = int(np.ceil(MARGIN * body_px))
+    small = _fit_sized(sil.mask() * 255, pad, FIT_BODY_PX / body_px) > 127
+    origin = np.array([sil.box[0] - pad, sil.box[1] - pad], float)
+    return small.astype(np.uint8), origin, (sil.box[2] - sil.box[0] + 2 * pad) / small.shape[1]
+
+
+def normalised_grey(sil: Silhouette, body_px: float) -> np.ndarray | None:
+    """The silhouette's grey levels cropped and resized as ``normalise`` does its mask."""
+    if sil.grey is None:
+        return None
+    return _fit_sized(sil.grey, int(np.ceil(MARGIN * body_px)), FIT_BODY_PX / body_px)
+
+
+def _fit_sized(image: np.ndarray, pad: int, factor: float) -> np.ndarray:
+    """An image with a black margin of ``pad`` pixels, resized by ``factor``."""
+    padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
+    h, w = padded.shape
+    size = (max(1, round(w * factor)), max(1, round(h * factor)))
+    return cv2.resize(padded, size, interpolation=cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR)
+
+
+def torso_spreads(silhouettes: list[Silhouette | None], heights: np.ndarray, fps: float) -> np.ndarray:
+    """Each frame's torso horizontal foreshortening, as a low percentile of the
+    per-frame estimates within SPREAD_WINDOW_S (arms passing the torso widen it)."""
+    raw = np.full(len(silhouettes), np.nan)
+    for i, sil in enumerate(silhouettes):
+        if sil is not None:
+            raw[i] = torso_spread(normalise(sil, heights[i])[0], FIT_SCALE)
+    return rolling_percentile(raw, max(1, int(round(SPREAD_WINDOW_S * fps))), SPREAD_PERCENTILE)
+
+
+def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
+    """The q-th percentile of the finite values within +-half of each finite entry."""
+    out = np.full(len(values), np.nan)
+    for i in np.flatnonzero(np.isfinite(values)):
+        out[i] = np.nanpercentile(values[max(0, i - half): i + half + 1], q)
+    return out
+
+
+def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
+              fps: float) -> Iterator[FrameFit]:
+    """Pass two (section 3.3): every frame's 2D fit in turn, each search centred on
+    the previous fit; each frame's legs are chosen among its hypotheses over time
+    (``mocap.silhouette.legchain``), so a fit comes out LAG_S later than its frame is fitted."""
+    spreads = torso_spreads(silhouettes, heights, fps)
+    chain = LegChain(max(1, int(round(LAG_S * fps))))
+    for index, sil in enumerate(silhouettes):
+        if sil is None:
+            yield from _frame_fits(chain.push(index, None), scale)
+            continue
+        small, origin, step = normalise(sil, heights[index])
+        best = chain.current
+        prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
+        fit = fit_frame(small, FIT_SCALE, prev, spreads[index], normalised_grey(sil, heights[index]))
+        yield from _frame_fits(chain.push((index, origin, step), fit), scale)
+    yield from _frame_fits(chain.flush(), scale)
+
+
+def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
+    """FrameFits of (item, fit) pairs from ``LegChain``: the item is (index, crop
+    origin, crop step) of a fitted frame, the index of one without a person."""
+    for item, fit in decided:
+        if fit is None:
+            yield FrameFit(item, None, None)
+            continue
+        index, origin, step = item
+        joints = (origin + (reported_joints(fit.joints, FIT_SCALE) + 0.5) * step - 0.5) / scale
+        yield FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale)
+
+
+def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Image-side joints (F, 16, 2), body heights (F,) and torso spreads (F,) of the
+    fits, NaN where nobody was found."""
+    nan = np.full((len(JOINTS), 2), np.nan)
+    joints = np.array([nan if f.joints2d is None else f.joints2d for f in fits], float)
+    body_px = np.array([np.nan if f.body_px is None else f.body_px for f in fits], float)
+    spread = np.array([np.nan if f.fit is None else f.fit.pose.spread for f in fits], float)
+    return joints.reshape(len(fits), len(JOINTS), 2), body_px, spread
