@@ -14,13 +14,14 @@ from pathlib import Path
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.body import ORIENTATIONS
+from mocap.session import FORMATS
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
 NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing"
 FRAME_STEPS = ("◀ frame", "frame ▶")
 KEY_STEPS = ("◀ keyframe", "keyframe ▶")
 EDITS = ("↶ undo", "redo ↷")
-DOWNLOADS = {"BVH": "bvh", "GLB": "glb", "motion JSON": "json", "HTML page": "html"}
+DOWNLOADS = {fmt.label: fmt.key for fmt in FORMATS.values()}     # button -> format
 METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}    # shown -> annotations'
 MARKING_HELP = ("The tracking method follows the 16 joints you mark on frame 0, over any "
                 "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "

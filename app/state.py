@@ -15,7 +15,6 @@ are frame 0's joint overrides. Both sessions take every edit.
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import threading
@@ -31,21 +30,16 @@ from mocap.review import Doubt, covering, review_queue
 from mocap.io.annotations import Annotations, FrameNote, load_annotations, save_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
-from mocap.io.export.bvh import bvh_text
-from mocap.io.export.glb import glb_bytes
-from mocap.io.export.html import motion_html
-from mocap.io.export.motion_json import motion_dict
 from mocap.lift.taylor import depth_fractions
 from mocap.track.marks import check_marks, shoulders_as_hips
 from mocap.lift.motion import Motion
 from mocap.track.perspective import calibrate, default_camera
-from mocap.pipeline import FITTING, SILHOUETTES, Progress, open_session, video_dict
+from mocap.pipeline import FITTING, SILHOUETTES, Progress, open_session
 from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
 from mocap.silhouette.passes import FrameFit, Silhouette
 from mocap.track.tracking import carried_pins, turn_of
 from mocap.io.video import open_video, processing_scale
 
-EXPORTS = {"bvh": ".bvh", "glb": ".glb", "json": ".motion.json", "html": ".html"}
 Change = Callable[[Annotations], Annotations]
 
 
@@ -381,22 +375,10 @@ class AppState:
         with self._lock:
             return self._require_session().motion()
 
-    def export(self, kind: str) -> tuple[str, bytes]:
-        """(file name, content) of the motion as ``kind``: 'bvh', 'glb', 'json' or 'html'
-        (the playback page)."""
+    def export(self, key: str) -> tuple[str, bytes]:
+        """(file name, content) of the animation in a format of mocap.session.FORMATS."""
         with self._lock:
-            session = self._require_session()
-            motion = session.motion()
-            if kind == "bvh":
-                data = bvh_text(motion).encode()
-            elif kind == "glb":
-                data = glb_bytes(motion)
-            elif kind == "html":
-                data = motion_html(motion, Path(self.info.path).stem).encode()
-            else:
-                doc = motion_dict(video_dict(self.info), session.motion_frames(motion))
-                data = (json.dumps(doc, indent=1) + "\n").encode()
-        return Path(self.info.path).stem + EXPORTS[kind], data
+            return self._require_session().export(key)
 
     def _require_session(self) -> Session:
         if self._session is not None:

@@ -7,6 +7,7 @@ import os
 import sys
 
 from mocap.errors import MocapError
+from mocap.io.export.formats import FORMATS
 
 
 def _add_fit(sub) -> None:
@@ -20,9 +21,9 @@ def _add_fit(sub) -> None:
     p.add_argument("--annotations", metavar="FILE",
                    help="mocap-annotations JSON: orientation, foreshortening, joint overrides, keyframes")
     p.add_argument("--out", default=None, help="motion JSON to write (default: VIDEO.motion.json)")
-    p.add_argument("--bvh", metavar="FILE", help="also write the animation as BVH")
-    p.add_argument("--glb", metavar="FILE", help="also write the animated cylinder body as GLB")
-    p.add_argument("--csv", metavar="FILE", help="also write the joint positions as CSV")
+    for fmt in FORMATS.values():
+        if fmt.key != "json":
+            p.add_argument(f"--{fmt.key}", metavar="FILE", help=f"also write {fmt.holds}")
     p.add_argument("--smooth", type=float, default=0.0, metavar="SIGMA",
                    help="Gaussian smoothing of the animation in frames, keyframes kept (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
@@ -33,10 +34,10 @@ def _run_fit(args) -> None:
     from mocap.pipeline import fit_video_to_file
     if args.smooth < 0:
         raise MocapError(f"--smooth must be 0 or more, got {args.smooth}")
-    written = fit_video_to_file(args.video, args.out, annotations=args.annotations,
-                                method=args.method, bvh=args.bvh,
-                                glb=args.glb, csv=args.csv, smooth=args.smooth,
-                                progress=None if args.quiet else _progress.step)
+    paths = {key: getattr(args, "out" if key == "json" else key) for key in FORMATS}
+    written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
+                                annotations=args.annotations, method=args.method,
+                                smooth=args.smooth, progress=None if args.quiet else _progress.step)
     print("wrote " + ", ".join(str(p) for p in written))
 
 

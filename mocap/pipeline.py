@@ -18,7 +18,7 @@ from typing import Callable
 
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, load_annotations
-from mocap.io.export.motion_json import write_motion
+from mocap.io.export.formats import write_format
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
 from mocap.silhouette.passes import FrameFit, Silhouette, body_heights, iter_fits, iter_silhouettes
@@ -101,28 +101,16 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
     return SilhouetteSession(info, silhouette_passes(info, progress)[1], notes, smooth)
 
 
-def fit_video_to_file(video: str | os.PathLike, out: str | os.PathLike | None, *,
+def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.PathLike], *,
                       annotations: str | os.PathLike | None = None, method: str | None = None,
-                      bvh=None, glb=None, csv=None, smooth: float = 0.0,
-                      progress: Report | None = None) -> list[Path]:
+                      smooth: float = 0.0, progress: Report | None = None) -> list[Path]:
     """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
-    interpolate and write the motion file and the exports asked for (None: not
-    wanted); returns the paths written."""
-    from mocap.io.export.bvh import write_bvh
-    from mocap.io.export.csv import write_csv
-    from mocap.io.export.glb import write_glb
+    interpolate and write the files asked for, {format key: path} of
+    mocap.io.export.formats (the motion file "json" always: VIDEO.motion.json unless
+    given); returns the paths written."""
     info = open_video(video)
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
     session = open_session(info, notes, method=method, smooth=smooth, progress=progress)
-    motion = session.motion()
-    out = Path(out) if out else Path(video).with_suffix(".motion.json")
-    written = [write_motion(out, video_dict(info), session.motion_frames(motion))]
-    for path, writer in ((bvh, write_bvh), (glb, write_glb), (csv, write_csv)):
-        if path is not None:
-            written.append(writer(path, motion))
-    return written
-
-
-def video_dict(info: VideoInfo) -> dict:
-    return {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
-            "frame_count": info.frame_count}
+    clip = session.clip()
+    paths = {"json": Path(video).with_suffix(".motion.json")} | exports
+    return [write_format(key, path, clip) for key, path in paths.items()]

@@ -14,9 +14,7 @@ from scipy.spatial.transform import Rotation
 from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
 from mocap.errors import MocapError
-from mocap.io.export.bvh import write_bvh
-from mocap.io.export.csv import write_csv
-from mocap.io.export.glb import write_glb
+from mocap.io.export.formats import FORMATS, Clip, write_format
 from mocap.lift.motion import build_motion
 from mocap.synth import resample_indices
 from mocap.walk import walk_cycle
@@ -63,7 +61,7 @@ def bvhio_joints(path: Path) -> tuple[np.ndarray, float]:
 @pytest.mark.parametrize("which", ["walk_motion", "cmu_motion"])
 def test_bvh_round_trip_through_bvhio(which, tmp_path, request):
     motion = request.getfixturevalue(which)
-    path = write_bvh(tmp_path / "m.bvh", motion)
+    path = write_format("bvh", tmp_path / "m.bvh", Clip("m", {}, [], motion))
     joints, frame_time = bvhio_joints(path)
     assert frame_time == pytest.approx(1 / FPS) and len(joints) == motion.n_frames
     assert np.abs(joints - motion.world_joints).max() < 0.001
@@ -71,7 +69,7 @@ def test_bvh_round_trip_through_bvhio(which, tmp_path, request):
 
 def test_bvh_of_one_frame(tmp_path):
     motion = build_motion({0: walk_cycle(0.1, FPS)[0]}, 1, FPS)
-    joints, _ = bvhio_joints(write_bvh(tmp_path / "one.bvh", motion))
+    joints, _ = bvhio_joints(write_format("bvh", tmp_path / "one.bvh", Clip("m", {}, [], motion)))
     assert np.abs(joints - motion.world_joints).max() < 0.001
 
 
@@ -111,7 +109,7 @@ class Gltf:
 
 
 def test_glb_animation_puts_cylinders_on_the_joints(walk_motion, tmp_path):
-    gltf = Gltf(write_glb(tmp_path / "m.glb", walk_motion))
+    gltf = Gltf(write_format("glb", tmp_path / "m.glb", Clip("m", {}, [], walk_motion)))
     doc = gltf.doc
     assert len(doc.animations) == 1 and len(doc.meshes) == 10
     times = gltf.accessor(doc.animations[0].samplers[0].input)[:, 0]
@@ -135,7 +133,7 @@ def test_glb_animation_puts_cylinders_on_the_joints(walk_motion, tmp_path):
 
 
 def test_glb_loads_in_trimesh(walk_motion, tmp_path):
-    scene = trimesh.load(write_glb(tmp_path / "m.glb", walk_motion))
+    scene = trimesh.load(write_format("glb", tmp_path / "m.glb", Clip("m", {}, [], walk_motion)))
     assert len(scene.geometry) == 10
     assert all(m.is_watertight and m.volume > 0 for m in scene.geometry.values())
     torso = scene.geometry["torso"]
@@ -147,7 +145,7 @@ def test_glb_loads_in_trimesh(walk_motion, tmp_path):
 
 
 def test_csv_round_trip(walk_motion, tmp_path):
-    with open(write_csv(tmp_path / "m.csv", walk_motion), newline="") as f:
+    with open(write_format("csv", tmp_path / "m.csv", Clip("m", {}, [], walk_motion)), newline="") as f:
         rows = list(csv.reader(f))
     assert rows[0][:5] == ["frame", "time", "head_top_x", "head_top_y", "head_top_z"]
     assert len(rows[0]) == 2 + 3 * 16 and len(rows) == 1 + walk_motion.n_frames
@@ -157,10 +155,16 @@ def test_csv_round_trip(walk_motion, tmp_path):
     assert np.abs(values[:, 2:].reshape(-1, 16, 3) - walk_motion.world_joints).max() < 1e-6
 
 
-@pytest.mark.parametrize("writer", [write_bvh, write_glb, write_csv])
-def test_unwritable_path_is_refused(writer, walk_motion, tmp_path):
+@pytest.mark.parametrize("key", list(FORMATS))
+def test_unwritable_path_is_refused(key, walk_motion, tmp_path):
+    clip = Clip("m", {}, [], walk_motion)
     with pytest.raises(MocapError, match="cannot write"):
-        writer(tmp_path / "missing" / "out", walk_motion)
+        write_format(key, tmp_path / "missing" / "out", clip)
     with pytest.raises(MocapError, match="cannot write"):
-        writer(tmp_path, walk_motion)                   # a directory
+        write_format(key, tmp_path, clip)                   # a directory
     assert list(tmp_path.iterdir()) == []
+
+
+def test_unknown_format_is_refused(walk_motion, tmp_path):
+    with pytest.raises(MocapError, match="no export format 'fbx'"):
+        write_format("fbx", tmp_path / "m.fbx", Clip("m", {}, [], walk_motion))

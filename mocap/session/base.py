@@ -10,11 +10,13 @@ interpolation, ``mocap.lift.motion``) and the motion file's frames (CONTRACT.md)
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from pathlib import Path
 
 import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
+from mocap.io.export.formats import Clip, export_file
 from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs, root_track
 from mocap.lift.motion import Motion, build_motion
@@ -112,3 +114,14 @@ class Session(ABC):
                 entry["root"] = motion.root[i]
             frames.append(entry)
         return frames
+
+    def clip(self) -> Clip:
+        """The motion and its motion-file frames, what every export format is made of."""
+        motion, info = self.motion(), self.info
+        video = {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
+                 "frame_count": info.frame_count}
+        return Clip(Path(info.path).stem, video, self.motion_frames(motion), motion)
+
+    def export(self, key: str) -> tuple[str, bytes]:
+        """(file name, content) of the animation in a format of mocap.io.export.formats."""
+        return export_file(key, self.clip())

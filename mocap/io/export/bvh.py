@@ -10,14 +10,11 @@ Z, X, Y (intrinsic, degrees, as in the CMU files). Leaves end in a zero End Site
 from __future__ import annotations
 
 import io
-import os
 import warnings
-from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from mocap.io.export.atomic import write_export
 from mocap.lift.motion import BONES, PARENTS, Motion
 
 CM_PER_M = 100.0
@@ -25,13 +22,8 @@ _ORDER = "ZXY"
 _ROTATION_CHANNELS = " ".join(f"{axis}rotation" for axis in _ORDER)
 
 
-def write_bvh(path: str | os.PathLike, motion: Motion) -> Path:
-    """Write the motion as a BVH file (centimetres, one frame per motion frame)."""
-    return write_export(path, bvh_text(motion).encode(), "BVH")
-
-
 def bvh_text(motion: Motion) -> str:
-    """The whole BVH file: HIERARCHY then MOTION."""
+    """The whole BVH file (centimetres, one frame per motion frame): HIERARCHY then MOTION."""
     lines = ["HIERARCHY"] + _joint_lines(0, motion.offsets * CM_PER_M, 0)
     lines += ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {1.0 / motion.fps:.8f}"]
     out = io.StringIO()

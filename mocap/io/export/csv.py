@@ -8,22 +8,19 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-from pathlib import Path
 
 from mocap.body import JOINTS
-from mocap.io.export.atomic import write_export
 from mocap.lift.motion import Motion
 
 HEADER = ["frame", "time"] + [f"{j}_{axis}" for j in JOINTS for axis in "xyz"]
 
 
-def write_csv(path: str | os.PathLike, motion: Motion) -> Path:
-    """Write the motion's world joint positions as CSV."""
+def csv_text(motion: Motion) -> str:
+    """The motion's world joint positions as CSV text."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(HEADER)
     world = motion.world_joints.reshape(motion.n_frames, -1) + 0.0   # no "-0.000000"
     for i, (time, row) in enumerate(zip(motion.times, world)):
         writer.writerow([i, f"{time:.6f}"] + [f"{v:.6f}" for v in row])
-    return write_export(path, out.getvalue().encode(), "CSV")
+    return out.getvalue()

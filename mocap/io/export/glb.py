@@ -11,25 +11,17 @@ world translation; glTF's LINEAR interpolation of rotations is slerp.
 from __future__ import annotations
 
 import json
-import os
 import struct
-from pathlib import Path
 
 import numpy as np
 
 from mocap import body
-from mocap.io.export.atomic import write_export
 from mocap.lift.motion import BONES, PARENTS, Motion, forward_kinematics
 
 SIDES = 16                                      # facets around each cylinder
 _OWNERS = {s: "waist" if s == "torso" else a for s, (a, _) in body.SEGMENTS.items()}
 _FLOAT, _UINT16 = 5126, 5123
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
-
-
-def write_glb(path: str | os.PathLike, motion: Motion) -> Path:
-    """Write the motion as an animated GLB of the cylinder body."""
-    return write_export(path, glb_bytes(motion), "GLB")
 
 
 def glb_bytes(motion: Motion) -> bytes:

@@ -10,7 +10,7 @@ import numpy as np
 
 from mocap.body import JOINTS
 from mocap.errors import MocapError
-from mocap.io.fileio import atomic_write_json
+from mocap.io.export.atomic import write_export
 
 FORMAT, VERSION = "mocap-motion", 1
 
@@ -32,9 +32,14 @@ def _frame_entry(frame: dict) -> dict:
     return entry
 
 
+def motion_text(video: dict, frames: list[dict]) -> str:
+    """The motion file's text."""
+    return json.dumps(motion_dict(video, frames), indent=1) + "\n"
+
+
 def write_motion(path: str | os.PathLike, video: dict, frames: list[dict]) -> Path:
     """Write the motion file atomically."""
-    return atomic_write_json(path, motion_dict(video, frames))
+    return write_export(path, motion_text(video, frames).encode(), "motion")
 
 
 def read_motion(path: str | os.PathLike) -> dict:
