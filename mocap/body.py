@@ -142,6 +142,12 @@ def direction(angle_deg):
     return np.stack([np.cos(a), -np.sin(a)], axis=-1)
 
 
+def image_angle(d: np.ndarray) -> float:
+    """The model's angle (degrees, counter-clockwise from image right) of an image
+    vector ``d`` (x right, y down): the inverse of ``direction``."""
+    return float(np.degrees(np.arctan2(-d[1], d[0])))
+
+
 @dataclass(frozen=True)
 class Pose2D:
     """The 2D model: where the pelvis is, how big the body is, how each segment lies.

@@ -11,7 +11,9 @@ import pytest
 
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, Pose2D, default_angles, forward_kinematics_2d
 from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_cross
-from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, coarse_to_fine, fit_frame, two_link_angles
+from mocap.silhouette.arms import two_link_angles
+from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, fit_frame
+from mocap.silhouette.search import coarse_to_fine
 from mocap.silhouette.legchain import LegChain
 from mocap.metrics import side_matched_errors
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer

@@ -1,6 +1,6 @@
 """Choosing each frame's legs over time (beyond the paper, whose fit is per frame).
 
-Each frame's fit comes with a few leg hypotheses (``fit2d.leg_hypotheses``): the
+Each frame's fit comes with a few leg hypotheses (``legs.leg_hypotheses``): the
 legs apart or stacked, their names exchanged. Where the two legs pass each other
 in profile, the similarity S (Eq. 3) tells these apart badly, and a fit that
 follows the previous frame alone keeps its first mistake. So the hypotheses are

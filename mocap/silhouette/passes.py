@@ -16,7 +16,8 @@ import numpy as np
 from mocap.body import JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.silhouette.background import estimate_background, extract_silhouette
-from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame, torso_spread
+from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
+from mocap.silhouette.torso import torso_spread
 from mocap.silhouette.legchain import LAG_S, LegChain
 
 MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody

@@ -1,0 +1,146 @@
+"""The arms of the 2D fit (section 3.3): first guesses by contour analysis with elbow
+detection (Algorithms 2-4), refined by Algorithm 1 (upper arm with the lower arm
+attached, then the lower arm) and Algorithm 6. Beyond the paper: each arm explains
+only its own image side; guesses whose elbow bends backward (the knees tell which
+way the performer faces) are dropped; with the frame's grey levels, an arm over the
+trunk counts as inside the silhouette and the edges inside the silhouette along its
+sides add to S (mocap.edges), so that an arm in front of the trunk is found where it
+shows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
+                        forward_kinematics_2d, forward_kinematics_2d_batch, image_angle, knee_bend)
+from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
+from mocap.silhouette.raster import Canvas, joint_quads, sweep_scorer
+from mocap.silhouette.search import Knob, span, refine_limb, search_angle
+
+ARM = {"l": ("upper_arm_l", "lower_arm_l"), "r": ("upper_arm_r", "lower_arm_r")}
+ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
+KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
+ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
+ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend shows in the image
+# (upper, lower) angles every 30 degrees all around the shoulder: arm guesses that the
+# frame's edges may pick inside the silhouette
+ARM_GRID = [(float(u), float(u + b)) for u in range(0, 360, 30) for b in range(-150, 151, 30)]
+
+
+def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
+    """Upper and lower arm angles from the arm curve (Algorithms 3-4)."""
+    corner = find_elbow_corner(points)
+    if corner < 0:
+        a = find_angle(points, default[0])
+        return a, a
+    return find_angle(points[: corner + 1], default[0]), find_angle(points[corner:], default[1])
+
+
+def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) -> list[tuple[float, float]]:
+    """Angles of a two-segment limb from start whose tip reaches end (both elbow
+    bends); a straight limb pointing at end when it is out of reach."""
+    d = end - start
+    dist = float(np.hypot(*d))
+    toward = image_angle(d)
+    if dist >= l1 + l2 or dist < 1e-6:
+        return [(toward, toward)]
+    alpha = float(np.degrees(np.arccos(np.clip((l1 ** 2 + dist ** 2 - l2 ** 2) / (2 * l1 * dist), -1, 1))))
+    out = []
+    for upper in (toward + alpha, toward - alpha):
+        elbow = start + l1 * np.array([np.cos(np.radians(upper)), -np.sin(np.radians(upper))])
+        e = end - elbow
+        out.append((upper, image_angle(e)))
+    return out
+
+
+def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
+    """First guesses for one arm's (upper, lower) angles and foreshortening ratios:
+    contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point,
+    hanging down, all at the model's lengths, the previous frame's arm as it was and,
+    where the frame's edges can tell arms inside the silhouette apart, a grid of
+    arms all around the shoulder (ARM_GRID). (An arm hidden in front of the trunk
+    scores alike at any length, so a length carried over from frame to frame could
+    only shrink.)"""
+    upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
+    guesses = [((270.0, 270.0), (1.0, 1.0))]
+    if prev is not None:
+        guesses.append(((prev.angle[upper], prev.angle[lower]), (prev.ratio[upper], prev.ratio[lower])))
+    angles = [guesses[-1][0]]
+    joints = forward_kinematics_2d(pose)
+    points = arm_curve(canvas, joints, side, pose.scale)
+    if len(points) >= 3:
+        angles.append(_contour_guess(points, angles[0]))
+        shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
+        tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
+        angles += two_link_angles(shoulder, tip, LENGTH[upper] * pose.scale, LENGTH[lower] * pose.scale)
+    if canvas.by_edges:
+        angles += ARM_GRID
+    guesses += [(a, (1.0, 1.0)) for a in angles[1:]]
+    return [(*a, *r) for a, r in guesses]
+
+
+def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
+    """Pixels on one image side ('l' or 'r') of the torso's axis: an arm explains only
+    silhouette on its own side (section 3.3 names limbs by image side), so one arm
+    cannot take the other's pixels."""
+    joints = forward_kinematics_2d(pose)
+    pelvis, neck = joints[JOINT_INDEX["pelvis"]], joints[JOINT_INDEX["neck"]]
+    ys, xs = np.arange(shape[0])[:, None], np.arange(shape[1])[None, :]
+    # positive on the image-right of the upward axis (image y points down)
+    cross = (neck[0] - pelvis[0]) * (ys - pelvis[1]) - (neck[1] - pelvis[1]) * (xs - pelvis[0])
+    return cross < 0 if side == "l" else cross > 0
+
+
+def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
+            facing: int = 0) -> Pose2D:
+    """One arm, on its image side: the best-scoring first guess (among those whose
+    elbow bends the way the performer faces, ``facing`` +1 image right, -1 left, 0
+    unknown), refined by Algorithm 1 (upper arm with the lower arm attached, then the
+    lower arm) and Algorithm 6."""
+    own = canvas.fork(keep=image_side(canvas.sil.shape, pose, side), by_edges=True)
+    pose = best_arm_guess(own, pose, side, prev, facing)
+    upper = ARM[side][0]
+    pose = search_angle(own, pose, (upper,), ARM[side],
+                        *span(pose.angle[SEGMENT_INDEX[upper]], ARM_REFINE_HALF_RANGE))
+    return refine_limb(pose, ARM[side], own, ARM_REFINE_HALF_RANGE)
+
+
+def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
+                   facing: int = 0) -> Pose2D:
+    """The arm_candidates guess with the highest S, among those that do not bend the
+    elbow backward (``elbow_bends_back``) where that can be told."""
+    guesses = np.array(arm_candidates(canvas, pose, side, prev))
+    backward = elbow_bends_back(guesses[:, 1] - guesses[:, 0], pose.spread, facing)
+    if not backward.all():
+        guesses = guesses[~backward]
+    both = Knob("angle", ARM[side])
+    pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
+    angle[:, both.indices[1]] = guesses[:, 1]
+    ratio[:, both.indices] = guesses[:, 2:]
+    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+    scores, _ = sweep_scorer(canvas, joint_quads(joints, pose.scale, both.indices, spread))
+    scores = scores + canvas.edge_scores(joints, both.indices, pose.scale)
+    best = int(np.argmax(scores))
+    return replace(pose, angle=angle[best], ratio=ratio[best])
+
+
+def facing_of_knees(pose: Pose2D) -> int:
+    """+1 if the knees of a 2D pose bend toward image right (knees bend forward, so
+    the performer faces that way), -1 toward image left, 0 if both legs are straight
+    (less than KNEE_FACING of body height from their hip-ankle lines)."""
+    joints = forward_kinematics_2d(pose)[None]
+    bend = sum(float(knee_bend(joints, side)[0]) for side in "lr") / (BODY_HEIGHT * pose.scale)
+    return 0 if abs(bend) < KNEE_FACING else int(np.sign(bend))
+
+
+def elbow_bends_back(bend: np.ndarray, spread: float, facing: int) -> np.ndarray:
+    """Whether arms whose lower arm turns ``bend`` degrees (counter-clockwise, y up)
+    from the upper arm bend the elbow backward by more than ELBOW_BACK: elbows flex
+    toward the front, which the image shows when the body is seen near profile
+    (torso spread below ELBOW_SHOWS_SPREAD) and the facing side is known."""
+    if not facing or spread >= ELBOW_SHOWS_SPREAD:
+        return np.zeros(np.shape(bend), bool)
+    return facing * ((np.asarray(bend) + 180.0) % 360.0 - 180.0) < -ELBOW_BACK

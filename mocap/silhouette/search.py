@@ -1,0 +1,161 @@
+"""The narrowing search of the paper's Algorithms 1 and 6: turn one pose parameter
+(a segment's angle, a foreshortening ratio, the torso's position or spread) over a
+range to maximise S (Eq. 1-3) of the drawn segments on their partial silhouette.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mocap.body import LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d_batch
+from mocap.silhouette.raster import Canvas, joint_quads, sweep_scorer
+
+RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs differ from Table 1
+TRACK_HALF_RANGE = 20.0          # degrees searched around a previous estimate
+ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
+RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
+
+
+@dataclass(frozen=True)
+class Knob:
+    """One pose parameter a search turns: 'angle' or 'ratio' of some segments,
+    the pelvis's 'x', or the shoulder/hip 'spread'."""
+
+    field: str
+    segments: tuple[str, ...] = ()
+
+    def apply(self, pose: Pose2D, value: float) -> Pose2D:
+        """The pose with the knob set to value (built directly: this runs per search)."""
+        pelvis, angle, ratio, spread = pose.pelvis, pose.angle, pose.ratio, pose.spread
+        if self.field == "angle":
+            angle = angle.copy()
+            angle[self.indices] = value
+        elif self.field == "ratio":
+            ratio = ratio.copy()
+            ratio[self.indices] = value
+        elif self.field == "x":
+            pelvis = np.array([pelvis[0] + value, pelvis[1]])
+        else:
+            spread = float(value)
+        return Pose2D(pelvis=pelvis, scale=pose.scale, angle=angle, ratio=ratio, spread=spread)
+
+    def batch(self, pose: Pose2D, values: np.ndarray):
+        """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""
+        n = len(values)
+        pelvis = np.repeat(pose.pelvis[None], n, 0)
+        angle, ratio = np.repeat(pose.angle[None], n, 0), np.repeat(pose.ratio[None], n, 0)
+        spread = np.full(n, pose.spread)
+        if self.field in ("angle", "ratio"):
+            (angle if self.field == "angle" else ratio)[:, self.indices] = values[:, None]
+        elif self.field == "x":
+            pelvis[:, 0] += values
+        else:
+            spread = values
+        return pelvis, angle, ratio, spread
+
+    @property
+    def indices(self) -> list[int]:
+        return [SEGMENT_INDEX[s] for s in self.segments]
+
+
+def coarse_to_fine(score, n: int, opening: list[int], opening_scores: np.ndarray, start: int,
+                   interval: int) -> int:
+    """The shared narrowing search of Algorithms 1 and 6 over n ordered values.
+
+    The opening round (a division of the whole range, with the incumbent ``start``,
+    already scored) picks the best; ``start`` wins ties, so a flat score keeps it
+    (the paper starts from S = 0, which lets a flat score drift to the range's
+    start). The interval of two divisions around the best (``interval`` values
+    wide) is then divided at full resolution, which ends the narrowing. ``score``
+    maps index arrays to S.
+    """
+    known = dict(zip(opening, opening_scores.tolist()))
+    best = max(opening, key=lambda i: (known[i], i == start))
+    near = [i for i in range(max(best - interval // 2, 0), min(best + interval // 2, n - 1) + 1)
+            if i not in known]
+    if not near:
+        return best
+    known.update(zip(near, score(np.array(near)).tolist()))
+    top = max(near, key=known.__getitem__)
+    return top if known[top] > known[best] else best
+
+
+@dataclass(frozen=True)
+class Search:
+    """One knob to turn over [lo, hi] to ``resolution`` for the drawn segments, first
+    divided every ``sweep_step`` (see ``search``)."""
+
+    canvas: Canvas
+    knob: Knob
+    drawn: tuple[str, ...]
+    lo: float
+    hi: float
+    center: float
+    resolution: float
+    sweep_step: float
+
+
+def search(pose: Pose2D, job: Search) -> Pose2D:
+    """Turn one knob of pose to maximise S of the drawn segments on their partial
+    silhouette: Algorithm 1's (and 6's) narrowing with two levels of division.
+
+    Every value of the grid is posed at once. The first level divides the range
+    every ``sweep_step``; those poses also outline the partial silhouette (the
+    region the range reaches). The second divides the two divisions around the
+    best at full resolution.
+    """
+    n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
+    step = (job.hi - job.lo) / (n - 1)
+    values = job.lo + step * np.arange(n)
+    pelvis, angle, ratio, spread = job.knob.batch(pose, values)
+    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
+    quads = joint_quads(joints, pose.scale, [SEGMENT_INDEX[d] for d in job.drawn], spread)
+    every = max(1, int(round(job.sweep_step / step)))
+    start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
+    opening = sorted({*range(0, n, every), n - 1, start})
+    drawn = [SEGMENT_INDEX[d] for d in job.drawn]
+    first, score = sweep_scorer(job.canvas, quads[opening])
+    first = first + job.canvas.edge_scores(joints[opening], drawn, pose.scale)
+    best = coarse_to_fine(lambda i: score(quads[i]) + job.canvas.edge_scores(joints[i], drawn, pose.scale),
+                          n, opening, first, start, 2 * every)
+    return job.knob.apply(pose, float(values[best]))
+
+
+def search_angle(canvas: Canvas, pose: Pose2D, segments, drawn, lo: float, hi: float,
+                 center: float) -> Pose2D:
+    """Algorithm 1: rotate segment(s) about the image normal to maximise S (to 1 degree)."""
+    return search(pose, Search(canvas, Knob("angle", tuple(segments)), tuple(drawn), lo, hi,
+                               center, 1.0, ANGLE_SWEEP_STEP))
+
+
+def search_ratio(canvas: Canvas, pose: Pose2D, segment: str, drawn) -> Pose2D:
+    """Algorithm 6: the foreshortening ratio maximising S (to one pixel of length)."""
+    i = SEGMENT_INDEX[segment]
+    return search(pose, Search(canvas, Knob("ratio", (segment,)), tuple(drawn), *RATIO_RANGE,
+                               pose.ratio[i], 1.0 / max(LENGTH[i] * pose.scale, 1.0),
+                               RATIO_SWEEP_STEP))
+
+
+def refine_limb(pose: Pose2D, limb: tuple[str, str], canvas: Canvas, half_range: float) -> Pose2D:
+    """A limb's distal angle within ``half_range`` (Algorithm 1), then its proximal
+    and distal foreshortening ratios (Algorithm 6)."""
+    upper, lower = limb
+    pose = search_angle(canvas, pose, (lower,), (lower,),
+                        *span(pose.angle[SEGMENT_INDEX[lower]], half_range))
+    pose = search_ratio(canvas, pose, upper, limb)
+    return search_ratio(canvas, pose, lower, (lower,))
+
+
+def span(center: float, half: float) -> tuple[float, float, float]:
+    return center - half, center + half, center
+
+
+def around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: float,
+            half: float = TRACK_HALF_RANGE):
+    """(lo, hi, centre): within ``half`` of the previous frame's angle, else the whole range."""
+    if prev is None:
+        return lo, hi, default
+    c = float(np.clip(prev.angle[SEGMENT_INDEX[segment]], lo, hi))
+    return max(lo, c - half), min(hi, c + half), c

@@ -1,0 +1,89 @@
+"""The torso and head of the 2D fit (section 3.3, Fig. 3a): where the body stands,
+how far it is turned (the torso's horizontal foreshortening, section 3.4), the torso
+and head angles by Algorithm 1 and their lengthwise ratios by Algorithm 6.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from mocap.body import LENGTH, SEGMENT_INDEX, Pose2D, spread_for_width
+from mocap.silhouette.contour import row_runs
+from mocap.silhouette.raster import Canvas
+from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, search,
+                                     search_angle, search_ratio)
+
+TORSO_HEAD = ("torso", "head")
+WAIST_RANGE = (45.0, 135.0)      # Table 1
+NECK_RANGE = (45.0, 135.0)       # Table 1
+SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
+
+
+def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
+    """Torso location from Table 1 ratios: the head at the silhouette's top, the pelvis
+    head+torso lengths below, x at the horizontal middle of the silhouette there."""
+    rows = np.flatnonzero(silhouette.any(axis=1))
+    top, bottom = int(rows[0]), int(rows[-1])
+    head = LENGTH[SEGMENT_INDEX["head"]] * scale
+    pelvis_y = min(top + head + LENGTH[SEGMENT_INDEX["torso"]] * scale, bottom)
+    xs = np.nonzero(silhouette[int(top + head): int(pelvis_y) + 1])[1]
+    x = float(np.median(xs)) if len(xs) else float(np.median(np.nonzero(silhouette)[1]))
+    return Pose2D(pelvis=np.array([x, pelvis_y]), scale=scale)
+
+
+def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
+                   spread: float | None = None) -> Pose2D:
+    """Torso angle by Algorithm 1 with the head drawn along it (Fig. 3a), the torso's
+    horizontal position and foreshortening (unless ``spread`` is given), the head
+    angle, then both lengthwise ratios (Algorithm 6)."""
+    pose = place_torso(canvas, pose, prev)
+    pose = fit_spread(canvas, pose) if spread is None else replace(pose, spread=spread)
+    lo, hi, c = around(prev, "head", *NECK_RANGE, pose.angle[SEGMENT_INDEX["torso"]])
+    pose = search_angle(canvas, pose, ("head",), TORSO_HEAD, lo, hi, c)
+    pose = search_ratio(canvas, pose, "torso", TORSO_HEAD)
+    return search_ratio(canvas, pose, "head", ("head",))
+
+
+def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
+    """The torso's angle (Algorithm 1, head drawn along it) and horizontal position."""
+    lo, hi, c = around(prev, "torso", *WAIST_RANGE, 90.0)
+    pose = search_angle(canvas, pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
+    return fit_pelvis_x(canvas, pose)
+
+
+def torso_spread(silhouette: np.ndarray, scale: float) -> float:
+    """The torso's horizontal foreshortening on one frame (section 3.4), from its
+    seen width: the narrowest quarter of the silhouette's widths across the torso's
+    middle rows, less the pixel by which edges and the difference threshold widen a
+    silhouette, converted by ``body.spread_for_width``. Arms in front of or behind the
+    torso widen some rows and some frames, so callers also take a low percentile
+    over neighbouring frames (the body turns slowly, arms swing)."""
+    ys = np.flatnonzero(silhouette.any(axis=1))
+    if len(ys) == 0:
+        return 1.0
+    head, torso = LENGTH[SEGMENT_INDEX["head"]] * scale, LENGTH[SEGMENT_INDEX["torso"]] * scale
+    band = silhouette[int(ys[0] + head + 0.25 * torso): int(ys[0] + head + 0.75 * torso)] > 0
+    rows, starts, ends = row_runs(band)
+    if len(rows) == 0:
+        return 1.0
+    widest = np.zeros(band.shape[0])
+    np.maximum.at(widest, rows, ends - starts)
+    width = (np.percentile(widest[widest > 0], 25) - SILHOUETTE_BLEED_PX) / scale
+    return float(spread_for_width(width))
+
+
+def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
+    """The torso's horizontal position by the same search (the paper takes the
+    silhouette's middle, which arms and a swinging leg pull off the torso)."""
+    r = reach * pose.scale
+    return search(pose, Search(canvas, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0))
+
+
+def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
+    """The torso's horizontal foreshortening (section 3.4): how much of the shoulder
+    and hip span is seen, 0 in profile .. 1 frontal, from the torso's seen width,
+    by Algorithm 6's search."""
+    return search(pose, Search(canvas, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05,
+                               RATIO_SWEEP_STEP))
