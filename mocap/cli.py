@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 
-from mocap.errors import MocapError
+from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
 
 
@@ -145,11 +146,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _warn_in_one_line(show):
+    """warnings.showwarning that prints a MocapWarning as `mocap: warning: ...` (other
+    warnings as `show` does)."""
+    def showwarning(message, category, *args, **kwargs) -> None:
+        if not issubclass(category, MocapWarning):
+            return show(message, category, *args, **kwargs)
+        _progress.end()
+        print(f"mocap: warning: {message}", file=sys.stderr, flush=True)
+    return showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _quiet_video_libraries()
     try:
-        args.run(args)
+        with warnings.catch_warnings():
+            warnings.simplefilter("default", MocapWarning)   # each one once
+            warnings.showwarning = _warn_in_one_line(warnings.showwarning)
+            args.run(args)
     except MocapError as exc:
         _progress.end()
         print(f"mocap: error: {exc}", file=sys.stderr)

@@ -16,7 +16,8 @@ import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.export.motion_json import read_motion
-from mocap.io.fileio import atomic_write_bytes
+from mocap.io.export.atomic import write_export
+from mocap.io.fileio import check_writable
 from mocap.overlay import silhouette_view
 from mocap.silhouette.background import Background, estimate_background, extract_silhouette
 from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
@@ -122,13 +123,12 @@ def write_sheet(video: str | os.PathLike, motion_path: str | os.PathLike,
     out = Path(out) if out else Path(video).with_suffix(".sheet.png")
     if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise MocapError(f"{out}: the contact sheet must end in .png or .jpg")
-    if not out.parent.is_dir():
-        raise MocapError(f"{out}: folder {out.parent} does not exist")
+    check_writable(out)
     image = contact_sheet(video, read_motion(motion_path), n)
     ok, data = cv2.imencode(out.suffix, image)
     if not ok:
         raise MocapError(f"{out}: OpenCV could not encode the sheet")
-    return atomic_write_bytes(out, data.tobytes())
+    return write_export(out, data.tobytes(), "contact sheet")
 
 
 def add_sheet_arguments(parser) -> None:

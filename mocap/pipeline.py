@@ -19,6 +19,7 @@ from typing import Callable
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import write_format
+from mocap.io.fileio import check_writable
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
 from mocap.silhouette.passes import FrameFit, Silhouette, body_heights, iter_fits, iter_silhouettes
@@ -110,7 +111,8 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     given); returns the paths written."""
     info = open_video(video)
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
+    paths = {"json": Path(video).with_suffix(".motion.json")} | exports
+    check_writable(*paths.values())
     session = open_session(info, notes, method=method, smooth=smooth, progress=progress)
     clip = session.clip()
-    paths = {"json": Path(video).with_suffix(".motion.json")} | exports
     return [write_format(key, path, clip) for key, path in paths.items()]

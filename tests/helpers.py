@@ -86,3 +86,18 @@ def page_data(text: str) -> dict:
     """The clip a playback page carries (the JSON of its `const DATA = ...;` line)."""
     line = next(line for line in text.splitlines() if line.startswith("const DATA = "))
     return json.loads(line[len("const DATA = "):].rstrip(";"))
+
+
+def run_cli(capsys, *argv) -> tuple[int, list[str]]:
+    """Exit code and stderr lines of `mocap ARGV` run in this process."""
+    from mocap.cli import main
+    code = main([str(a) for a in argv])
+    return code, capsys.readouterr().err.splitlines()
+
+
+def assert_one_line_error(err: list[str], *words: str) -> None:
+    """stderr is one `mocap: error: ...` line (no traceback) holding every word."""
+    assert len(err) == 1, err
+    assert err[0].startswith("mocap: error: "), err
+    for word in words:
+        assert word in err[0], err

@@ -11,7 +11,7 @@ import pytest
 
 from helpers import png_avi, text_mp4
 
-from mocap.errors import MocapError
+from mocap.errors import MocapError, MocapWarning
 from mocap.io.video import iter_frames, open_video, processing_scale, read_frame, sample_frames
 
 SIZE = (96, 64)  # width, height
@@ -82,8 +82,12 @@ def test_truncated_avi_reads_the_frames_that_decode(tmp_path):
     data = open(write_clip(tmp_path / "full.avi", n=30), "rb").read()
     cut = tmp_path / "cut.avi"
     cut.write_bytes(data[: len(data) // 2])
-    info = open_video(cut)
+    with pytest.warns(MocapWarning) as said:
+        info = open_video(cut)
     assert 5 <= info.frame_count < 30
+    assert [str(w.message) for w in said] == [
+        f"{cut}: only {info.frame_count} of the 30 frames the file announces decode "
+        "(truncated or damaged); using those"]
     frames = [f for _, f in iter_frames(info)]
     assert len(frames) == info.frame_count
     assert [level(f) for f in frames] == list(range(info.frame_count))

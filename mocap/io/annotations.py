@@ -21,6 +21,7 @@ import numpy as np
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.io.fileio import atomic_write_json
+from mocap.io.jsoncheck import Bad, expect, is_number
 from mocap.body import FORESHORTENING, ORIENTATIONS
 
 FORMAT, VERSION = "mocap-annotations", 1
@@ -146,13 +147,6 @@ class Annotations:
 
 # -- reading and checking -------------------------------------------------------------
 
-class _Bad(Exception):
-    """A problem at a place in the document (turned into one MocapError)."""
-
-    def __init__(self, place: str, problem: str):
-        super().__init__(f"{place}: {problem}" if place else problem)
-
-
 def _no_constant(name: str):
     raise ValueError(f"{name} is not a JSON number")
 
@@ -165,85 +159,71 @@ def _unique_keys(pairs: list) -> dict:
     return dict(pairs)
 
 
-def _kind(value) -> str:
-    return {dict: "an object", list: "a list", str: "a string", bool: "true/false",
-            type(None): "null"}.get(type(value), "a number")
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _expect(value, kind: type, place: str, what: str):
-    if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
-        raise _Bad(place, f"expected {what}, got {_kind(value)}")
-    return value
-
-
 def _frame_index(key: str, frame_count: int | None, place: str) -> int:
     if not _FRAME_KEY.fullmatch(key):
-        raise _Bad(place, f"frame key {json.dumps(key)} is not a frame index (0, 1, 2, ...)")
+        raise Bad(place, f"frame key {json.dumps(key)} is not a frame index (0, 1, 2, ...)")
     index = int(key)
     if frame_count is not None and index >= frame_count:
-        raise _Bad(place, f"frame {index} is out of range (the video has {frame_count} frames)")
+        raise Bad(place, f"frame {index} is out of range (the video has {frame_count} frames)")
     return index
 
 
 def _keyframes(value, frame_count: int | None) -> tuple[int, ...]:
-    _expect(value, list, "keyframes", "a list of frame indices")
+    expect(value, list, "keyframes", "a list of frame indices")
     if not value:
-        raise _Bad("keyframes", "empty list (leave it out for every frame)")
+        raise Bad("keyframes", "empty list (leave it out for every frame)")
     for i, k in enumerate(value):
         if not isinstance(k, int) or isinstance(k, bool) or k < 0:
-            raise _Bad(f"keyframes[{i}]", f"expected a frame index, got {json.dumps(k)[:40]}")
+            raise Bad(f"keyframes[{i}]", f"expected a frame index, got {json.dumps(k)[:40]}")
         if frame_count is not None and k >= frame_count:
-            raise _Bad(f"keyframes[{i}]", f"frame {k} is out of range (the video has {frame_count} frames)")
+            raise Bad(f"keyframes[{i}]", f"frame {k} is out of range (the video has {frame_count} frames)")
     return tuple(sorted(set(value)))
 
 
 def _note(value, place: str) -> FrameNote:
-    _expect(value, dict, place, "an object")
+    expect(value, dict, place, f"an object (keys {', '.join(_FRAME_KEYS)})")
     for key in value:
         if key not in _FRAME_KEYS:
-            raise _Bad(place, f"unknown key {json.dumps(key)} (expected {', '.join(_FRAME_KEYS)})")
+            raise Bad(place, f"unknown key {json.dumps(key)} (expected {', '.join(_FRAME_KEYS)})")
     orientation = value.get("orientation")
     if orientation is not None and orientation not in ORIENTATIONS:
-        raise _Bad(f"{place}.orientation", f"unknown orientation {json.dumps(orientation)[:40]} "
+        raise Bad(f"{place}.orientation", f"unknown orientation {json.dumps(orientation)[:40]} "
                    f"(choose {', '.join(ORIENTATIONS)})")
-    signs = _expect(value.get("foreshortening", {}), dict, f"{place}.foreshortening", "an object")
+    signs = expect(value.get("foreshortening", {}), dict, f"{place}.foreshortening", "an object")
     for segment, sign in signs.items():
         if segment not in SEGMENT_INDEX:
-            raise _Bad(f"{place}.foreshortening", f"unknown segment {json.dumps(segment)[:40]}")
+            raise Bad(f"{place}.foreshortening", f"unknown segment {json.dumps(segment)[:40]}")
         if sign not in FORESHORTENING:
-            raise _Bad(f"{place}.foreshortening.{segment}",
+            raise Bad(f"{place}.foreshortening.{segment}",
                        f"expected \"toward\" or \"away\", got {json.dumps(sign)[:40]}")
-    joints = _expect(value.get("joints2d", {}), dict, f"{place}.joints2d", "an object")
+    joints = expect(value.get("joints2d", {}), dict, f"{place}.joints2d", "an object")
     points = {}
     for joint, xy in joints.items():
         if joint not in JOINTS:
-            raise _Bad(f"{place}.joints2d", f"unknown joint {json.dumps(joint)[:40]}")
-        if not (isinstance(xy, list) and len(xy) == 2 and all(_is_number(v) and math.isfinite(v) for v in xy)):
-            raise _Bad(f"{place}.joints2d.{joint}", f"expected [x, y] in pixels, got {json.dumps(xy)[:40]}")
+            raise Bad(f"{place}.joints2d", f"unknown joint {json.dumps(joint)[:40]}")
+        if not (isinstance(xy, list) and len(xy) == 2 and all(is_number(v) and math.isfinite(v) for v in xy)):
+            raise Bad(f"{place}.joints2d.{joint}", f"expected [x, y] in pixels, got {json.dumps(xy)[:40]}")
         points[joint] = (float(xy[0]), float(xy[1]))
     return FrameNote(orientation, dict(signs), points)
 
 
 def parse_annotations(data, frame_count: int | None = None) -> Annotations:
-    """Check a decoded annotation document; raises _Bad naming the place."""
-    _expect(data, dict, "", "a JSON object")
+    """Check a decoded annotation document; raises Bad naming the place."""
+    expect(data, dict, "", "a JSON object")
     for key in data:
         if key not in _TOP_KEYS:
-            raise _Bad("", f"unknown key {json.dumps(key)[:40]} (expected {', '.join(_TOP_KEYS)})")
+            raise Bad("", f"unknown key {json.dumps(key)[:40]} (expected {', '.join(_TOP_KEYS)})")
     if data.get("format") != FORMAT:
-        raise _Bad("format", f"expected \"{FORMAT}\", got {json.dumps(data.get('format'))[:40]}")
+        raise Bad("format", f"expected \"{FORMAT}\", got {json.dumps(data.get('format'))[:40]}")
     version = data.get("version")
     if not (isinstance(version, int) and not isinstance(version, bool) and version == VERSION):
-        raise _Bad("version", f"expected {VERSION}, got {json.dumps(version)[:40]}")
+        raise Bad("version", f"expected {VERSION}, got {json.dumps(version)[:40]}")
     method = data.get("method")
     if method is not None and method not in METHODS:
-        raise _Bad("method", f"expected one of {', '.join(METHODS)}, got {json.dumps(method)[:40]}")
+        raise Bad("method", f"expected one of {', '.join(METHODS)}, got {json.dumps(method)[:40]}")
     keyframes = _keyframes(data["keyframes"], frame_count) if "keyframes" in data else None
-    frames = _expect(data.get("frames", {}), dict, "frames", "an object")
+    frames = expect(data.get("frames", {}), dict, "frames",
+                    'an object of notes by frame index (e.g. {"12": {"orientation": "left"}})')
     notes = {}
     for key, value in frames.items():
         place = f"frames[{json.dumps(key)[:40]}]"
@@ -261,7 +241,7 @@ def annotations_from_text(text: str, frame_count: int | None = None,
         raise MocapError(f"{source}: not valid JSON ({exc})") from None
     try:
         return parse_annotations(data, frame_count)
-    except _Bad as exc:
+    except Bad as exc:
         raise MocapError(f"{source}: {exc}") from None
 
 

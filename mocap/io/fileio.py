@@ -7,6 +7,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from mocap.errors import MocapError
+
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
     """Write data to path atomically: a temporary file beside it, fsync, rename."""
@@ -29,3 +31,25 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
 def atomic_write_json(path: str | os.PathLike, obj) -> Path:
     """Write obj as JSON atomically."""
     return atomic_write_bytes(path, (json.dumps(obj, indent=1) + "\n").encode())
+
+
+def check_writable(*paths: str | os.PathLike | None) -> None:
+    """Refuse, before the long work that ends in writing them, output paths whose
+    folder is missing or takes no new file (None: not asked for). The probe is a real
+    file made and removed there: permission bits say nothing to root, and read-only
+    mounts and folders like /proc refuse files whatever the bits say."""
+    for path in (Path(p) for p in paths if p is not None):
+        folder = path.parent
+        if path.is_dir():
+            raise MocapError(f"{path}: is a folder, not a file")
+        if folder.exists() and not folder.is_dir():
+            raise MocapError(f"{path}: {folder} is a file, not a folder")
+        if not folder.is_dir():
+            raise MocapError(f"{path}: folder {folder} does not exist")
+        try:
+            fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+            os.close(fd)
+            os.unlink(probe)
+        except OSError as exc:
+            raise MocapError(f"{path}: cannot write in folder {folder} "
+                             f"({exc.strerror or exc})") from None

@@ -10,7 +10,8 @@ decoding every frame when it is missing or wrong), `VideoInfo.frame_count` is th
 number, and iteration and random access stay inside it. When fewer frames decode
 than the container announces (a file cut short), the last one decoded is dropped:
 the cut almost always falls inside it, and FFmpeg then returns it half-decoded or
-repeats the previous picture.
+repeats the previous picture; a `MocapWarning` says how many of the announced frames
+decode.
 
 Large frames: `processing_scale` gives the factor that brings the longer side down
 to `max_side`; `iter_frames`, `read_frame` and `sample_frames` take it as `scale` and
@@ -23,13 +24,14 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from mocap.errors import MocapError
+from mocap.errors import MocapError, MocapWarning
 
 DEFAULT_FPS = 25.0  # used when the container does not state a usable frame rate
 _MAX_GRAB_GAP = 32  # forward jumps up to this many frames decode instead of seeking
@@ -196,6 +198,9 @@ def _count_frames(cap: cv2.VideoCapture, path: str) -> int:
         count -= 1
     if count == 0:
         raise MocapError(f"{path}: no complete frame decodes (the file is truncated or damaged)")
+    if announced and count < claimed:
+        warnings.warn(f"{path}: only {count} of the {int(claimed)} frames the file announces "
+                      "decode (truncated or damaged); using those", MocapWarning, stacklevel=2)
     return count
 
 

@@ -66,7 +66,10 @@ def motion_file_html(path: str | os.PathLike) -> str:
     name = Path(str(video.get("path") or path)).stem
     if name.endswith(".motion"):
         name = name[: -len(".motion")]
-    return playback_html(name, float(video.get("fps") or 0), joints)
+    try:
+        return playback_html(name, float(video.get("fps") or 0), joints)
+    except MocapError as exc:  # no frames, or no frame rate: say which file
+        raise MocapError(f"{path}: {exc}") from None
 
 
 def write_html(path: str | os.PathLike, page: str) -> Path:
