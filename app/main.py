@@ -53,10 +53,10 @@ class Player:
 
     def start(self) -> None:
         """Play from the current frame on, looping."""
-        motion = self.app.state.motion()
+        joints3d, fps = self.app.state.animation()
         self.frame = self.app.state.frame
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, args=(motion.joints3d, motion.fps),
+        self._thread = threading.Thread(target=self._run, args=(joints3d, fps),
                                         daemon=True, name="mocap-player")
         self._thread.start()
         self.app.refresh(force=True)

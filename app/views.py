@@ -20,9 +20,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, semi_axes
-from mocap.overlay import draw_skeleton, segment_colour, silhouette_view
-from mocap.silhouette.passes import Silhouette
-from mocap.io.video import VideoInfo, read_frame
+from mocap.session import (Silhouette, VideoInfo, draw_skeleton, read_frame, segment_colour,
+                           silhouette_view)
 
 PANEL_HEIGHT = 1.9          # scene units (metres) of each panel: a 1.75 m body fits
 GAP = 0.3                   # between panels, room for their captions

@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap.body import ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
-from mocap.session import Session
 
 LOW_SCORE = 0.7           # S below this is a doubtful fit
 END_ON_RATIO = 0.3        # seen length / length below this: the segment points at the camera
@@ -73,8 +72,8 @@ def likely_swaps(joints2d: np.ndarray, px_per_unit: np.ndarray) -> np.ndarray:
     return out
 
 
-def review_queue(session: Session) -> list[Doubt]:
-    """Every doubtful frame with a person, most doubtful first."""
+def review_queue(session) -> list[Doubt]:
+    """Every doubtful frame with a person of a session (mocap.session), most doubtful first."""
     inputs = session.inputs
     scores = session.scores
     signs = (end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),

@@ -15,7 +15,9 @@ from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_vide
 
 from mocap.silhouette.passes import iter_fits, iter_silhouettes
 from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_queue
-from app.state import AppState, annotations_path, toggled_keyframe
+from app.edits import toggled_keyframe
+from app.saving import annotations_path
+from app.state import AppState
 from app.views import DISPLAY_HEIGHT, Layout, segment_transforms, video_image
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
@@ -124,7 +126,7 @@ def test_keyframes_marked_and_unmarked():
 def test_unsaveable_edit_is_refused_and_not_applied(app, monkeypatch):
     def refuse(*_args):
         raise PermissionError(13, "Permission denied")
-    monkeypatch.setattr("app.state.save_annotations", refuse)
+    monkeypatch.setattr("app.saving.save_annotations", refuse)
     with pytest.raises(MocapError, match="cannot save annotations"):
         app.state.set_orientation(0, "left")
     assert app.state.annotations == Annotations() and not app.state.path.exists()

@@ -1,6 +1,6 @@
 """The code's layout rules (README, "How the code is laid out"): no two modules of
 mocap import each other, even through others; mocap never imports the app but for
-`mocap serve`."""
+`mocap serve`; the app reaches the methods only through the session and the pipeline."""
 
 from __future__ import annotations
 
@@ -81,3 +81,15 @@ def test_mocap_never_imports_the_app_but_to_serve():
         names |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
         uses_app = {m for m in names if m == "app" or m.startswith("app.")}
         assert uses_app <= ({"app.main"} if path.name == "cli.py" else set()), path
+
+
+APP_MAY_IMPORT = {"mocap.session", "mocap.pipeline", "mocap.body", "mocap.errors"}
+
+
+def test_the_app_talks_to_the_session_only():
+    for path in (ROOT / "app").rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        names = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+        names |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
+        reached = {m for m in names if m.startswith("mocap")}
+        assert reached <= APP_MAY_IMPORT, f"{path.name} imports {sorted(reached - APP_MAY_IMPORT)}"

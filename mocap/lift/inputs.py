@@ -39,6 +39,7 @@ class Inputs:
     px_per_unit: np.ndarray    # (F,) pixels per model unit (body height / 175)
     signs: np.ndarray          # (F, 10) +1 toward, -1 away
     lengths: np.ndarray        # (10,) segment lengths in model units
+    held: np.ndarray | None = None     # (F, 10) the user's signs where they hold, 0 elsewhere
 
     def lift(self, frame: int) -> np.ndarray:
         """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
@@ -106,7 +107,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     fixed = _held_signs(joints, ppu, lengths, values, since, person)
     for r in runs(person):
         signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed[r], fps)
-    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths)
+    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths, fixed)
 
 
 def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:

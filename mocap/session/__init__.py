@@ -1,10 +1,23 @@
 """The session: one protocol (mocap.session.base.Session) for both methods, what the
 command line and the app work through; ``mocap.pipeline.open_session`` opens one.
-FORMATS: the export formats a session writes (``Session.export``)."""
 
+Beside the sessions, the words a front end needs to speak with them, so that it
+reaches the methods through this door alone: the annotations (read, saved, edited),
+the export formats a session writes (``Session.export``), the review's doubts, the
+video's frames, the silhouette method's per-frame products and their drawing.
+"""
+
+from mocap.io.annotations import Annotations, load_annotations, save_annotations
 from mocap.io.export.formats import FORMATS
+from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
+from mocap.overlay import draw_skeleton, segment_colour, silhouette_view
+from mocap.review import Doubt
 from mocap.session.base import Session
 from mocap.session.silhouette import SilhouetteSession
-from mocap.session.tracking import MARKS_NEEDED, TrackSession, marks_of
+from mocap.session.tracking import MARKS_NEEDED, TrackSession, check_tracking_marks, marks_of
+from mocap.silhouette.passes import FrameFit, Silhouette
 
-__all__ = ["FORMATS", "MARKS_NEEDED", "Session", "SilhouetteSession", "TrackSession", "marks_of"]
+__all__ = ["FORMATS", "MARKS_NEEDED", "Annotations", "Doubt", "FrameFit", "Session", "Silhouette",
+           "SilhouetteSession", "TrackSession", "VideoInfo", "check_tracking_marks",
+           "draw_skeleton", "load_annotations", "marks_of", "open_video", "processing_scale",
+           "read_frame", "save_annotations", "segment_colour", "silhouette_view"]

@@ -11,15 +11,18 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.io.annotations import Annotations
+from mocap.io.annotations import Annotations, FrameNote
 from mocap.io.export.formats import Clip, export_file
 from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs, root_track
 from mocap.lift.motion import Motion, build_motion
+from mocap.lift.taylor import depth_fractions
+from mocap.review import Doubt, covering, review_queue
 
 
 class Session(ABC):
@@ -37,6 +40,7 @@ class Session(ABC):
                  smooth: float = 0.0):
         self.info, self.smooth = info, smooth
         self._annotations = annotations or Annotations()
+        self._queue: list[Doubt] | None = None
 
     @property
     def annotations(self) -> Annotations:
@@ -48,7 +52,7 @@ class Session(ABC):
 
     def annotate(self, annotations: Annotations) -> None:
         """Take new annotations; what they change is resolved again when next needed."""
-        self._annotations = annotations
+        self._annotations, self._queue = annotations, None
 
     @property
     @abstractmethod
@@ -81,6 +85,50 @@ class Session(ABC):
     def far_arm(self) -> str | None:
         """"l" or "r": the arm to check first, where the method knows one."""
         return None
+
+    # -- what a frame shows and where it comes from ----------------------------------
+
+    @abstractmethod
+    def held_signs(self) -> np.ndarray:
+        """(F, 10) the user's signs where they hold (+1 toward, -1 away; an entry holds
+        until its segment next passes through the image plane: held_user_signs), 0 elsewhere."""
+
+    def sign_sources(self, frame: int) -> tuple[str, ...]:
+        """Where each segment's sign on ``frame`` comes from: the user's entry while
+        it holds ("set here", "held from frame K"), else "guessed"."""
+        held = self.held_signs()[frame]
+        since = self._annotations.held_signs(self.n_frames)[1][frame]
+        return tuple(source_note(int(s), frame) if h else "guessed" for h, s in zip(held, since))
+
+    def orientation_shown(self, frame: int) -> tuple[str | None, str]:
+        """The orientation a frame is lifted with and where it comes from: the user's
+        held entry, else the first guess."""
+        entry = entry_frame(self._annotations, frame, lambda n: n.orientation)
+        return self.inputs.orientation[frame], source_note(entry, frame)
+
+    def depths(self, frame: int) -> tuple[float, ...]:
+        """Each segment's |dZ| / length on ``frame`` (0: in the image plane); () without a person."""
+        pose = self.pose3d(frame)
+        return () if pose is None else tuple(float(d) for d in depth_fractions(pose))
+
+    def carried(self, frame: int) -> dict[str, int]:
+        """joint -> the frame of a joint override that moves it on ``frame`` from
+        another frame (the tracking method's pins reach around them)."""
+        return {}
+
+    def review_queue(self) -> list[Doubt]:
+        """Doubtful frames, most doubtful first, and why (mocap.review)."""
+        if self._queue is None:
+            self._queue = review_queue(self)
+        return self._queue
+
+    def review_stops(self) -> list[Doubt]:
+        """The frames a review visits, most doubtful first: the queue; where the
+        method's edits reach around a frame (``review_spacing``), one frame in every
+        stretch they cover (review.covering)."""
+        if not self.review_spacing:
+            return self.review_queue()
+        return covering(self.review_queue(), self.n_frames, self.review_spacing)
 
     def keyframes(self) -> list[int]:
         """The annotations' keyframes (default every frame) where a person was found."""
@@ -125,3 +173,16 @@ class Session(ABC):
     def export(self, key: str) -> tuple[str, bytes]:
         """(file name, content) of the animation in a format of mocap.io.export.formats."""
         return export_file(key, self.clip())
+
+
+def entry_frame(notes: Annotations, frame: int, has: Callable[[FrameNote], object]) -> int | None:
+    """The latest frame at or before ``frame`` whose note satisfies ``has`` (sticky entries)."""
+    return max((k for k, note in notes.frames.items() if k <= frame and has(note)), default=None)
+
+
+def source_note(entry: int | None, frame: int) -> str:
+    """Where a sticky value of ``frame`` comes from (the frame of its entry, -1 or
+    None: no entry), for the page."""
+    if entry is None or entry < 0:
+        return "guessed"
+    return "set here" if entry == frame else f"held from frame {entry}"

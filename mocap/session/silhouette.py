@@ -13,12 +13,15 @@ from functools import cached_property
 
 import numpy as np
 
+from mocap.body import JOINTS
+from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.orientation import guess_orientations
 from mocap.session.base import Session
 from mocap.silhouette.passes import FrameFit, fit_arrays
+from mocap.track.marks import shoulders_as_hips
 
 
 class SilhouetteSession(Session):
@@ -59,6 +62,18 @@ class SilhouetteSession(Session):
             self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
                                           guessed=self._guessed)
         return self._inputs
+
+    def held_signs(self) -> np.ndarray:
+        return self.inputs.held
+
+    def tracking_marks(self) -> dict[str, tuple[float, float]]:
+        """Frame 0's 16 joints as the tracking method's marks, to the tenth of a pixel
+        (sides resolved, overrides kept, the shoulders in the hips' order:
+        mocap.track.marks.shoulders_as_hips): a start for the user to correct."""
+        if not self.person[0]:
+            raise MocapError("frame 0 has no silhouette fit to take the marks from")
+        joints = shoulders_as_hips(self.inputs.joints2d[0])
+        return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
 
     def pose3d(self, frame: int) -> np.ndarray | None:
         """(16, 3) lifted joints of a frame (metres, contract frame), None without a

@@ -26,13 +26,14 @@ from mocap.errors import MocapError
 from mocap.lift.inputs import Inputs
 from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
 from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
-from mocap.track.perspective import (UNIT_M, default_camera, key_joints, place_joints, steady_depths,
-                               to_contract)
+from mocap.track.perspective import (UNIT_M, calibrate, default_camera, key_joints, place_joints,
+                                     steady_depths, to_contract)
 from mocap.session.base import Session
 from mocap.silhouette.passes import SCALE_PERCENTILE
 from mocap.track.tracker import far_arm
-from mocap.track.tracking import (TrackResult, guessed_turn, spread_corrections, spread_frames,
-                                  steady_joints, turn_of)
+from mocap.track.marks import check_marks
+from mocap.track.tracking import (TrackResult, carried_pins, guessed_turn, spread_corrections,
+                                  spread_frames, steady_joints, turn_of)
 from mocap.io.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
@@ -45,6 +46,14 @@ def marks_of(notes: Annotations) -> dict[str, tuple[float, float]]:
     if first is None or not first.joints2d:
         raise MocapError(MARKS_NEEDED)
     return dict(first.joints2d)
+
+
+def check_tracking_marks(info: VideoInfo, notes: Annotations) -> None:
+    """Refuse at once (a MocapError naming the joint) the marks of ``notes`` that the
+    tracking cannot start from: a mark missing or outside the frame, or shoulders,
+    chest and hips that fit no view of a trunk (the calibration fails)."""
+    checked = check_marks(marks_of(notes), info.width, info.height)
+    calibrate(checked, default_camera(info.width, info.height), turn_of(notes.orientations(1)[0]))
 
 
 class TrackSession(Session):
@@ -66,7 +75,7 @@ class TrackSession(Session):
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
         # (steady 2D joints, turns, key joints, their placement free of user signs)
         self._placed: tuple[np.ndarray, list, np.ndarray, np.ndarray] | None = None
-        self._resolution: tuple[Inputs, np.ndarray] | None = None
+        self._resolution: tuple[Inputs, np.ndarray, np.ndarray] | None = None
 
     @property
     def scores(self) -> np.ndarray:
@@ -99,12 +108,28 @@ class TrackSession(Session):
         """(16, 3) the reconstructed joints of a frame (metres, contract frame)."""
         return self._resolved()[1][frame]
 
+    def held_signs(self) -> np.ndarray:
+        return self._resolved()[0].held
 
-    def _resolved(self) -> tuple[Inputs, np.ndarray]:
-        """The shown inputs and the 3D joints (F, 16, 3) of the current annotations."""
+    def carried(self, frame: int) -> dict[str, int]:
+        """joint -> the frame of the nearest pin that moves it on ``frame``
+        (mocap.track.tracking.carried_pins)."""
+        return carried_pins(self._annotations.overrides(), frame, self.info.fps)
+
+    def orientation_shown(self, frame: int) -> tuple[str | None, str]:
+        """The 3D shows its own facing, turned to the side of the user's held entry;
+        on the entry's own frame the page shows the entry."""
+        note = self._annotations.frames.get(frame)
+        if note is not None and note.orientation is not None:
+            return note.orientation, "set here"
+        return self.inputs.orientation[frame], "seen in the tracked 3D"
+
+    def _resolved(self) -> tuple[Inputs, np.ndarray, np.ndarray]:
+        """The shown inputs, the 3D joints (F, 16, 3, contract frame) and the root
+        (F, 3) of the current annotations."""
         if self._resolution is None:
             joints = self._joints2d()
-            self._resolution = self._shown(joints, self._reconstructed(joints))
+            self._resolution = self._shown(joints, *self._reconstructed(joints))
         return self._resolution
 
     def _joints2d(self) -> np.ndarray:
@@ -113,10 +138,11 @@ class TrackSession(Session):
         return spread_corrections(self.tracked.joints2d, self._annotations.overrides(),
                                   self.info.fps)
 
-    def _reconstructed(self, joints: np.ndarray) -> np.ndarray:
-        """(F, 16, 3) contract-frame joints: each frame's trunk turned to the side of
+    def _reconstructed(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(F, 16, 3) pinhole-frame joints: each frame's trunk turned to the side of
         its held orientation (frame 0's, where none is said, the knees'), the depth
-        choices kept to the held foreshortening while it holds."""
+        choices kept to the held foreshortening while it holds; and (F, 10) the
+        user's signs where they hold."""
         notes = self._annotations
         steady = steady_joints(joints, self.info.fps)
         turns = [turn_of(o) for o in notes.orientations(len(joints))]
@@ -124,25 +150,29 @@ class TrackSession(Session):
         key, free = self._free_placement(steady, turns)
         values, since = notes.held_signs(len(joints))
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
-        return free if not fixed.any() else self._placed_joints(steady, key, fixed)
+        return (free if not fixed.any() else self._placed_joints(steady, key, fixed)), fixed
 
     def _placed_joints(self, steady: np.ndarray, key: np.ndarray,
                        fixed: np.ndarray | None = None) -> np.ndarray:
-        """(F, 16, 3) contract-frame joints placed from the key joints (place_joints),
+        """(F, 16, 3) pinhole-frame joints placed from the key joints (place_joints),
         their depths smoothed along their rays (steady_depths)."""
-        return to_contract(steady_depths(place_joints(steady, key, self.camera, fixed=fixed), self.info.fps))
+        return steady_depths(place_joints(steady, key, self.camera, fixed=fixed), self.info.fps)
 
     @staticmethod
-    def _shown(joints: np.ndarray, joints3d: np.ndarray) -> tuple[Inputs, np.ndarray]:
+    def _shown(joints: np.ndarray, camera: np.ndarray,
+               held: np.ndarray) -> tuple[Inputs, np.ndarray, np.ndarray]:
         """What the page and the motion file show: the 2D joints, and the orientation,
-        signs and segment lengths read back from the 3D."""
+        signs and segment lengths read back from the 3D; the 3D pelvis-centred in the
+        contract's frame, and the pelvis in the camera's (its root)."""
+        joints3d = to_contract(camera)
+        root = camera[:, JOINT_INDEX["pelvis"]] * np.array([1.0, -1.0, -1.0])
         n = len(joints)
         yaw = np.array([yaw_of(pose) for pose in joints3d])
         ends = joints3d[:, SEGMENT_JOINTS]
         lengths = np.median(np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1), axis=0) / UNIT_M
         inputs = Inputs([orientation_of_yaw(y) for y in yaw], yaw, np.zeros((n, 2), bool), joints,
-                        np.full(n, body_px(joints) / BODY_HEIGHT), signs_of(joints3d), lengths)
-        return inputs, joints3d
+                        np.full(n, body_px(joints) / BODY_HEIGHT), signs_of(joints3d), lengths, held)
+        return inputs, joints3d, root
 
     def _free_placement(self, steady: np.ndarray, turns: list) -> tuple[np.ndarray, np.ndarray]:
         """The key joints of every frame (Eq. 6-11) and every joint placed without the

@@ -1,0 +1,129 @@
+"""The app's edits: each turns a click into new annotations (``Change``), which
+``Edits.edit`` saves, applies to both methods' sessions and records for undo."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable
+
+from app import saving
+from mocap.body import JOINTS, SEGMENT_INDEX
+from mocap.errors import MocapError
+from mocap.session import Annotations
+
+Change = Callable[[Annotations], Annotations]
+
+
+def toggled_keyframe(notes: Annotations, frame: int, n_frames: int) -> Annotations:
+    """The annotations with ``frame`` marked as a keyframe or unmarked; all frames
+    marked is written as no list (the contract's default)."""
+    keys = set(notes.keyframe_indices(n_frames)) ^ {frame}
+    if not keys:
+        raise MocapError("the last keyframe cannot be unmarked: the animation needs one")
+    return replace(notes, keyframes=None if len(keys) == n_frames else tuple(sorted(keys)))
+
+
+def placed(notes: Annotations, frame: int) -> dict[str, tuple[float, float]]:
+    """The joint overrides of a frame (frame 0's: the tracking method's marks)."""
+    return dict(notes.frames[frame].joints2d) if frame in notes.frames else {}
+
+
+class Edits:
+    """AppState's edits (a mixin: the state's lock, annotations, sessions, history)."""
+
+    def edit(self, frame: int, change: Change) -> bool:
+        """Apply ``change`` to the annotations on behalf of ``frame``: saved, applied,
+        undoable, shown. False when it changes nothing."""
+        with self._lock:
+            before = self._annotations
+            after = change(before)
+            if after == before:
+                return False
+            self._apply(after)
+            self._history.record(before, after, frame)
+            self._frame = frame
+        self._changed()
+        return True
+
+    def _apply(self, notes: Annotations) -> None:
+        """Save first (atomically), then use: what is shown is on disk."""
+        saving.save(self.path, notes)
+        self._annotations = notes
+        for session in (self._fitted, self._tracked):
+            if session is not None:
+                session.annotate(notes)
+
+    def undo(self) -> int | None:
+        """Undo the last edit; returns its frame (now current), None if nothing to undo."""
+        return self._travel(back=True)
+
+    def redo(self) -> int | None:
+        """Redo the last undone edit; returns its frame, None if nothing to redo."""
+        return self._travel(back=False)
+
+    def _travel(self, back: bool) -> int | None:
+        with self._lock:
+            step = self._history.peek(back)
+            if step is None:
+                return None
+            self._apply(step[0])
+            self._history.move(back)
+            self._frame = step[1]
+        self._changed()
+        return step[1]
+
+    def flip_sign(self, frame: int, segment: str) -> bool:
+        """Set a segment's foreshortening on ``frame`` to the opposite of what it is."""
+        def change(notes: Annotations) -> Annotations:
+            session = self._require_session()
+            if not session.person[frame]:
+                raise MocapError("foreshortening needs the 3D pose of this frame (nobody found)")
+            value = "away" if session.inputs.signs[frame, SEGMENT_INDEX[segment]] > 0 else "toward"
+            return notes.with_foreshortening(frame, segment, value)
+        return self.edit(frame, change)
+
+    def set_orientation(self, frame: int, orientation: str | None) -> bool:
+        """Say (or with None unsay) which way the performer faces from ``frame`` on."""
+        return self.edit(frame, lambda n: n.with_orientation(frame, orientation))
+
+    def set_override(self, frame: int, joint: str, xy: tuple[float, float] | None) -> bool:
+        """Fix (or with None release) a joint's 2D position on ``frame``."""
+        return self.edit(frame, lambda n: n.with_joint(frame, joint, xy))
+
+    def clear_overrides(self, frame: int, joint: str | None = None) -> bool:
+        """Release ``joint`` on ``frame``, or with None every joint placed there (one edit)."""
+        def change(notes: Annotations) -> Annotations:
+            there = placed(notes, frame)
+            if not there or joint is not None and joint not in there:
+                raise MocapError(f"no override of {joint or 'any joint'} on frame {frame}")
+            for name in ([joint] if joint else list(there)):
+                notes = notes.with_joint(frame, name, None)
+            return notes
+        return self.edit(frame, change)
+
+    def set_method(self, method: str) -> bool:
+        """Choose the silhouette ("silhouette") or the tracking ("track") method."""
+        return self.edit(self._frame, lambda n: n.with_method(method))
+
+    def marks_from_fit(self) -> bool:
+        """Place all 16 marks on frame 0 where the silhouette method's fit has them
+        (SilhouetteSession.tracking_marks): a start for the user to correct."""
+        with self._lock:
+            if self._fitted is None:
+                raise MocapError("frame 0 has no silhouette fit to take the marks from yet")
+            marks = self._fitted.tracking_marks()
+
+        def change(notes: Annotations) -> Annotations:
+            for name, xy in marks.items():
+                notes = notes.with_joint(0, name, xy)
+            return notes
+        return self.edit(0, change)
+
+    def unmarked(self) -> list[str]:
+        """The joints not yet marked on frame 0, in JOINTS order."""
+        there = placed(self._annotations, 0)
+        return [j for j in JOINTS if j not in there]
+
+    def toggle_keyframe(self, frame: int) -> bool:
+        """Mark ``frame`` as a keyframe, or unmark it."""
+        return self.edit(frame, lambda n: toggled_keyframe(n, frame, self.n_frames))
