@@ -17,7 +17,7 @@ from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.orientation import NEGLIGIBLE
-from mocap.track.tracking import guessed_turn
+from mocap.track.tracking import guessed_turn, track_video
 from mocap.pipeline import track
 from mocap.session import TrackSession
 from mocap.io.video import open_video
@@ -159,3 +159,22 @@ def test_an_unsaid_turn_is_read_from_the_knees(clip):
     assert guessed_turn(truth.joints2d, 15.0) == "right"
     mirrored = truth.joints2d * [-1.0, 1.0] + [truth.width, 0.0]
     assert guessed_turn(mirrored, 15.0) == "left"
+
+
+def test_the_root_keeps_the_perspective_depth(clip, session, tmp_path):
+    """The tracking's pelvis in the camera's frame (the motion file's `root`: x right,
+    y up, z toward the camera) follows the true one; with the true focal length its
+    distance too, while the default focal length (the frame width, 320 px against the
+    true 400) scales the distance by their ratio and leaves x and y."""
+    video, truth = clip
+    tracked, _ = session
+    info = open_video(video)
+    exact = TrackSession(info, track_video(info, truth.joints2d[0], focal_px=400.0,
+                                           orientation="forward_right"), tracked.annotations)
+    for s, depth_scale in ((exact, 1.0), (tracked, 320.0 / 400.0)):
+        root = s.root()
+        assert np.abs(root[:, :2] - truth.pelvis_camera[:, :2]).max() < 0.06
+        ratio = root[:, 2] / (depth_scale * truth.pelvis_camera[:, 2])
+        assert np.abs(ratio - 1.0).max() < 0.05
+    frames = s.motion_frames(s.motion())
+    np.testing.assert_allclose([f["root"] for f in frames], tracked.root(), atol=1e-9)

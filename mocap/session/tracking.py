@@ -108,6 +108,11 @@ class TrackSession(Session):
         """(16, 3) the reconstructed joints of a frame (metres, contract frame)."""
         return self._resolved()[1][frame]
 
+    def root(self) -> np.ndarray:
+        """(F, 3) the pelvis in the camera's frame (metres, x right, y up, z toward
+        the camera): the perspective reconstruction tells its distance (Eq. 10-11)."""
+        return self._resolved()[2]
+
     def held_signs(self) -> np.ndarray:
         return self._resolved()[0].held
 
