@@ -9,6 +9,7 @@ import warnings
 
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
+from mocap.progressbar import Bar
 
 
 def _add_fit(sub) -> None:
@@ -38,7 +39,7 @@ def _run_fit(args) -> None:
     paths = {key: getattr(args, "out" if key == "json" else key) for key in FORMATS}
     written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
                                 annotations=args.annotations, method=args.method,
-                                smooth=args.smooth, progress=None if args.quiet else _progress.step)
+                                smooth=args.smooth, progress=_progress.step)
     print("wrote " + ", ".join(str(p) for p in written))
 
 
@@ -93,38 +94,7 @@ def _add_export(sub) -> None:
     p.set_defaults(run=run)
 
 
-class _Bar:
-    """A progress bar on stderr, redrawn at each whole percent on a terminal (a line
-    per 10% otherwise); ``end`` finishes an unfinished line before other output."""
-
-    def __init__(self) -> None:
-        self.open = False
-
-    def __call__(self, done: int, total: int) -> None:
-        tty = sys.stderr.isatty()
-        step = 1 if tty else 10
-        percent = 100 * done // max(total, 1)
-        if percent // step == 100 * (done - 1) // max(total, 1) // step and done < total:
-            return
-        filled = 30 * done // max(total, 1)
-        bar = f"[{'#' * filled}{'.' * (30 - filled)}] {percent:3d}% ({done}/{total} steps)"
-        if tty:
-            self.open = done < total
-            print(f"\r{bar}", end="" if self.open else "\n", file=sys.stderr, flush=True)
-        else:
-            print(bar, file=sys.stderr, flush=True)
-
-    def step(self, progress) -> None:
-        """The bar of a pipeline's step (mocap.pipeline.Progress)."""
-        self(progress.done, progress.total)
-
-    def end(self) -> None:
-        if self.open:
-            print(file=sys.stderr)
-            self.open = False
-
-
-_progress = _Bar()
+_progress = Bar()    # --quiet makes it quiet (main)
 
 
 def _quiet_video_libraries() -> None:
@@ -152,13 +122,15 @@ def _warn_in_one_line(show):
     def showwarning(message, category, *args, **kwargs) -> None:
         if not issubclass(category, MocapWarning):
             return show(message, category, *args, **kwargs)
-        _progress.end()
+        _progress.close()
         print(f"mocap: warning: {message}", file=sys.stderr, flush=True)
     return showwarning
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    _progress.quiet = getattr(args, "quiet", False)
+    args.progress = _progress
     _quiet_video_libraries()
     try:
         with warnings.catch_warnings():
@@ -166,11 +138,11 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = _warn_in_one_line(warnings.showwarning)
             args.run(args)
     except MocapError as exc:
-        _progress.end()
+        _progress.close()
         print(f"mocap: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        _progress.end()
+        _progress.close()
         print("mocap: interrupted", file=sys.stderr)
         return 130
     return 0

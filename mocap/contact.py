@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Callable
 
 import cv2
 import numpy as np
@@ -22,6 +23,7 @@ from mocap.overlay import silhouette_view
 from mocap.silhouette.background import Background, estimate_background, extract_silhouette
 from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
 
+Progress = Callable[[int, int, str], None]   # done, total, stage
 DEFAULT_FRAMES = 12
 TILE_HEIGHT = 240          # px: small videos (dog_walker is 144 tall) are upscaled to this
 COLUMNS = 3                # tiles per row
@@ -86,17 +88,23 @@ def _resize(frame: np.ndarray, scale: float) -> np.ndarray:
 
 
 def contact_sheet(video: str | os.PathLike, motion: dict, n: int = DEFAULT_FRAMES,
-                  height: int = TILE_HEIGHT) -> np.ndarray:
-    """The contact sheet (BGR image) of `n` frames of `video` fitted as `motion` says."""
+                  height: int = TILE_HEIGHT, progress: Progress | None = None) -> np.ndarray:
+    """The contact sheet (BGR image) of `n` frames of `video` fitted as `motion` says;
+    ``progress(done, total, stage)`` after the background and after each tile."""
     if n < 1:
         raise MocapError(f"--frames must be at least 1, got {n}")
+    report = progress or (lambda done, total, stage: None)
     info = open_video(video)
     _check_match(info, motion)
+    indices = sheet_indices(info.frame_count, n)
     scale = processing_scale(info)
     background = estimate_background(info, scale=scale)
+    report(1, len(indices) + 1, "background")
     entries = {f.get("index"): f for f in motion.get("frames", [])}
-    tiles = [frame_tile(read_frame(info, i), background, scale, entries.get(i), i, height)
-             for i in sheet_indices(info.frame_count, n)]
+    tiles = []
+    for i in indices:
+        tiles.append(frame_tile(read_frame(info, i), background, scale, entries.get(i), i, height))
+        report(len(tiles) + 1, len(indices) + 1, "tiles")
     return _grid(tiles, min(COLUMNS, len(tiles)))
 
 
@@ -118,13 +126,14 @@ def _grid(tiles: list[np.ndarray], columns: int) -> np.ndarray:
 
 
 def write_sheet(video: str | os.PathLike, motion_path: str | os.PathLike,
-                out: str | os.PathLike | None = None, n: int = DEFAULT_FRAMES) -> Path:
+                out: str | os.PathLike | None = None, n: int = DEFAULT_FRAMES,
+                progress: Progress | None = None) -> Path:
     """`mocap sheet`: read the motion file, draw the sheet, write it (PNG or JPEG)."""
     out = Path(out) if out else Path(video).with_suffix(".sheet.png")
     if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise MocapError(f"{out}: the contact sheet must end in .png or .jpg")
     check_writable(out)
-    image = contact_sheet(video, read_motion(motion_path), n)
+    image = contact_sheet(video, read_motion(motion_path), n, progress=progress)
     ok, data = cv2.imencode(out.suffix, image)
     if not ok:
         raise MocapError(f"{out}: OpenCV could not encode the sheet")
@@ -138,9 +147,10 @@ def add_sheet_arguments(parser) -> None:
     parser.add_argument("--out", help="image to write, .png or .jpg (default VIDEO.sheet.png)")
     parser.add_argument("--frames", type=int, default=DEFAULT_FRAMES,
                         help=f"how many frames, spread evenly (default {DEFAULT_FRAMES})")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(run=run_sheet)
 
 
 def run_sheet(args) -> None:
-    out = write_sheet(args.video, args.motion, args.out, args.frames)
+    out = write_sheet(args.video, args.motion, args.out, args.frames, progress=args.progress)
     print(f"wrote {out}")

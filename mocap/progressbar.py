@@ -1,0 +1,40 @@
+"""The command line's progress bar (tqdm) for long work: `mocap fit`, `mocap sheet`, the
+preprocessing of `mocap serve`. Drawn on stderr only when stderr is a terminal and
+--quiet was not given: in a log or a pipe a bar is only noise."""
+
+from __future__ import annotations
+
+import sys
+
+from tqdm import tqdm
+
+
+class Bar:
+    """Called as ``bar(done, total, stage)`` after each step of the work; a new total
+    starts a new bar. ``close`` ends a drawn bar's line before other output."""
+
+    def __init__(self, quiet: bool = False):
+        self.quiet = quiet
+        self._bar: tqdm | None = None
+
+    def __call__(self, done: int, total: int, stage: str = "") -> None:
+        if self.quiet or not sys.stderr.isatty():
+            return
+        if self._bar is None or self._bar.total != total:
+            self.close()
+            self._bar = tqdm(total=total, desc=stage or None, file=sys.stderr, unit="step",
+                             dynamic_ncols=True)
+        elif stage:
+            self._bar.set_description(stage, refresh=False)
+        self._bar.update(done - self._bar.n)
+        if done >= total:
+            self.close()
+
+    def step(self, progress) -> None:
+        """The bar of a pipeline's step (mocap.pipeline.Progress: done, total, stage)."""
+        self(progress.done, progress.total, progress.stage)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
