@@ -326,10 +326,12 @@ def _set(handle, **props) -> None:
             setattr(handle, name, value)
 
 
-def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: int = 8080) -> App:
-    """The app on ``video`` (default: the bundled sample) on a new viser server;
-    preprocessing starts with ``app.state.start()``."""
-    state = AppState(video or SAMPLE)
+def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: int = 8080,
+           annotations: str | Path | None = None) -> App:
+    """The app on ``video`` (default: the bundled sample) on a new viser server, its
+    edits saved to ``annotations`` (default: beside the video); preprocessing starts
+    with ``app.state.start()``."""
+    state = AppState(video or SAMPLE, annotations)
     check_port(host, port)
     server = viser.ViserServer(host=host, port=port, verbose=False)
     if port and server.get_port() != port:  # taken between the check and viser's bind
@@ -360,10 +362,11 @@ def check_port(host: str, port: int) -> None:
 
 
 def main(video: str | None = None, port: int = 8080, host: str = "127.0.0.1",
-         progress: Callable[[int, int], None] | None = None) -> None:
+         progress: Callable[[int, int], None] | None = None,
+         annotations: str | Path | None = None) -> None:
     """Serve until interrupted: print the page's address, then preprocess with
     ``progress(done, total)`` reporting each step."""
-    app = create(video, host=host, port=port)
+    app = create(video, host=host, port=port, annotations=annotations)
     print(f"mocap: serving {app.state.info.path} at http://{host}:{app.server.get_port()}/",
           flush=True)
     app.state.start(progress)

@@ -58,7 +58,9 @@ def _add_sheet(sub) -> None:
 def _add_serve(sub) -> None:
     p = sub.add_parser("serve", help="review and correct a video's fit in the browser, export the animation")
     p.add_argument("video", nargs="?", default=None,
-                   help="input video (default: the bundled sample_videos/walk.mp4)")
+                   help="input video (default: the bundled sample_videos/walk.mp4), or a video's "
+                        "folder of a `mocap batch` library, DIR/<name>: its edits are saved there "
+                        "for `mocap batch --annotations-from DIR`")
     p.add_argument("--port", type=_port, default=8080,
                    help="port to listen on (default 8080; an error if taken; 0: any free one)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
@@ -68,7 +70,10 @@ def _add_serve(sub) -> None:
             from app.main import main as serve
         except ImportError as exc:
             raise MocapError(f"mocap serve needs the app extra: pip install -e '.[app]' ({exc})") from None
-        serve(args.video, args.port, args.host, progress=_progress)
+        from mocap.library import review_target
+        target = review_target(args.video) if args.video else None
+        video, notes = target or (args.video, None)
+        serve(video, args.port, args.host, progress=_progress, annotations=notes)
 
     p.set_defaults(run=run)
 
@@ -78,6 +83,13 @@ def _port(text: str) -> int:
     if not text.isdigit() or int(text) > 65535:
         raise argparse.ArgumentTypeError(f"expected a port number from 0 to 65535, got {text!r}")
     return int(text)
+
+
+def _add_batch(sub) -> None:
+    from mocap.batch import add_batch_arguments
+    p = sub.add_parser("batch", help="many videos at once on a Dask cluster, into a motion library "
+                                     "(resumable)")
+    add_batch_arguments(p)
 
 
 def _add_export(sub) -> None:
@@ -113,6 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_sheet(sub)
     _add_serve(sub)
     _add_export(sub)
+    _add_batch(sub)
     return parser
 
 
@@ -136,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("default", MocapWarning)   # each one once
             warnings.showwarning = _warn_in_one_line(warnings.showwarning)
-            args.run(args)
+            code = args.run(args) or 0
     except MocapError as exc:
         _progress.close()
         print(f"mocap: error: {exc}", file=sys.stderr)
@@ -145,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
         _progress.close()
         print("mocap: interrupted", file=sys.stderr)
         return 130
-    return 0
+    return code
 
 
 if __name__ == "__main__":

@@ -133,11 +133,16 @@ def write_sheet(video: str | os.PathLike, motion_path: str | os.PathLike,
     if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise MocapError(f"{out}: the contact sheet must end in .png or .jpg")
     check_writable(out)
-    image = contact_sheet(video, read_motion(motion_path), n, progress=progress)
+    return write_image(out, contact_sheet(video, read_motion(motion_path), n, progress=progress),
+                       "contact sheet")
+
+
+def write_image(out: Path, image: np.ndarray, kind: str = "image") -> Path:
+    """Encode an image as its suffix says (.png, .jpg) and write it atomically."""
     ok, data = cv2.imencode(out.suffix, image)
     if not ok:
-        raise MocapError(f"{out}: OpenCV could not encode the sheet")
-    return write_export(out, data.tobytes(), "contact sheet")
+        raise MocapError(f"{out}: OpenCV could not encode the {kind}")
+    return write_export(out, data.tobytes(), kind)
 
 
 def add_sheet_arguments(parser) -> None:

@@ -1,0 +1,164 @@
+"""One video of `mocap batch`: the task a Dask worker runs (``run_job``).
+
+The video goes through the pipeline `mocap fit` runs (``mocap.pipeline.open_session``:
+the annotations' method, else the silhouette method), then every file
+of its library folder (``mocap.library``) is written, each atomically (the formats
+through the export registry, ``mocap.io.export.formats``), and the folder's
+record last. A bad video never raises out of the task: its one-line error comes back
+in the ``Outcome`` and is recorded in the folder, so one broken file does not stop the
+others.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from mocap.contact import contact_sheet, write_image
+from mocap.errors import MocapError
+from mocap.io.annotations import Annotations, load_annotations
+from mocap.io.export.formats import FORMATS, Clip, write_format
+from mocap.io.export.masks import MaskFolder, mask_name
+from mocap.io.export.motion_json import read_motion
+from mocap.io.video import VideoInfo, open_video, processing_scale
+from mocap.library import RECORD, write_failure, write_record
+from mocap.pipeline import SILHOUETTES, Progress, open_session
+from mocap.session import Session
+from mocap.silhouette.passes import Silhouette, iter_silhouettes
+
+ALWAYS = {"json": "motion", "html": "playback"}     # registry format -> the library's name
+EXPORTS = (*(k for k in FORMATS if k not in ALWAYS), "masks")   # what --exports may name
+MOTION, SHEET, THUMB, MASKS = "motion.json", "sheet.png", "thumb.jpg", "masks"
+THUMB_WIDTH = 480                        # px: the library page shows hundreds of these
+
+
+@dataclass(frozen=True)
+class Job:
+    """A video to do: where its files go, the settings and annotations to use."""
+
+    video: str              # absolute path, as the workers see it
+    folder: str             # DIR/<name>
+    settings: dict          # recorded; a finished folder with other settings is done again
+    annotations: str | None = None
+
+    @property
+    def name(self) -> str:
+        return Path(self.folder).name
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What became of a job: frames done and seconds taken, or its one-line error."""
+
+    name: str
+    frames: int = 0
+    seconds: float = 0.0
+    error: str | None = None
+
+
+def run_job(job: Job) -> Outcome:
+    """Do one video; its error, if any, is returned (and recorded), never raised."""
+    cv2.setNumThreads(1)   # one worker process per core: OpenCV's own threads would contend
+    start = time.perf_counter()
+    folder = Path(job.folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        frames = _make(job, folder)
+        return Outcome(job.name, frames, time.perf_counter() - start)
+    except MocapError as exc:
+        error = str(exc)
+    except Exception as exc:  # noqa: BLE001 - whatever breaks on one video must not stop the rest
+        error = f"{type(exc).__name__}: {exc}"
+    error = (error.strip().splitlines() or ["failed"])[0]
+    try:
+        write_failure(folder, job.video, error)
+    except OSError:
+        pass    # an unwritable folder: the error still reaches the client
+    return Outcome(job.name, 0, time.perf_counter() - start, error)
+
+
+def _make(job: Job, folder: Path) -> int:
+    """Fit the video and write its folder, record last; returns its frame count."""
+    (folder / RECORD).unlink(missing_ok=True)   # done again: unfinished until the end
+    start = time.perf_counter()
+    info = open_video(job.video)
+    notes = load_annotations(job.annotations, info.frame_count) if job.annotations else Annotations()
+    masks = Masks(info, folder / MASKS) if "masks" in job.settings["exports"] else None
+    session = open_session(info, notes, smooth=job.settings["smooth"], progress=masks)
+    clip = dataclasses.replace(session.clip(), name=folder.name)
+    files = write_exports(folder, clip, job.settings["exports"], masks)
+    files.update(write_sheets(folder, info))
+    summary = {**summarise(session, notes), "seconds": round(time.perf_counter() - start, 2)}
+    write_record(folder, job.video, job.settings, job.annotations, summary, files)
+    return info.frame_count
+
+
+class Masks:
+    """The video's silhouettes written as its masks (mocap.io.export.masks) as the
+    pipeline reports them: no pass of its own over the video. The tracking method
+    finds no silhouettes; ``finish`` then extracts them (section 3.2)."""
+
+    def __init__(self, info: VideoInfo, folder: Path):
+        self.info, self.scale, self.out = info, processing_scale(info), MaskFolder(folder)
+
+    def __call__(self, progress: Progress) -> None:
+        if progress.stage == SILHOUETTES:
+            self.out.add(progress.frame, self.full(progress.product))
+
+    def full(self, silhouette: Silhouette | None) -> np.ndarray:
+        """A silhouette as a mask of the whole frame at the video's size (255 = performer)."""
+        info, scale = self.info, self.scale
+        size = (max(1, round(info.width * scale)), max(1, round(info.height * scale)))
+        mask = np.zeros(size[::-1], np.uint8)
+        if silhouette is not None:
+            x0, y0, x1, y1 = silhouette.box
+            mask[y0:y1, x0:x1] = silhouette.mask() * 255
+        if size == (info.width, info.height):
+            return mask
+        return cv2.resize(mask, (info.width, info.height), interpolation=cv2.INTER_NEAREST)
+
+    def finish(self) -> Path:
+        if self.out.count < self.info.frame_count:
+            for index, silhouette in enumerate(iter_silhouettes(self.info, self.scale)):
+                self.out.add(index, self.full(silhouette))
+        return self.out.finish()
+
+
+def write_exports(folder: Path, clip: Clip, exports: list[str], masks: Masks | None) -> dict[str, str]:
+    """The motion file (each frame naming its mask when there are masks), the playback
+    page and the exports asked for, through the export registry; their names."""
+    files = {}
+    if masks is not None:
+        files["masks"] = masks.finish().name
+        frames = [{**f, "mask": f"{MASKS}/{mask_name(f['index'])}"} for f in clip.frames]
+        clip = dataclasses.replace(clip, frames=frames)
+    for key, fmt in FORMATS.items():
+        if key in ALWAYS or key in exports:
+            path = write_format(key, folder / f"motion.{fmt.suffix.rsplit('.', 1)[-1]}", clip)
+            files[ALWAYS.get(key, key)] = path.name
+    return files
+
+
+def write_sheets(folder: Path, info: VideoInfo) -> dict[str, str]:
+    """The contact sheet (`mocap sheet`) of the motion file, and its thumbnail."""
+    sheet = contact_sheet(info.path, read_motion(folder / MOTION))
+    height = max(1, round(sheet.shape[0] * THUMB_WIDTH / sheet.shape[1]))
+    thumb = cv2.resize(sheet, (THUMB_WIDTH, height), interpolation=cv2.INTER_AREA)
+    return {"sheet": write_image(folder / SHEET, sheet, "contact sheet").name,
+            "thumb": write_image(folder / THUMB, thumb, "thumbnail").name}
+
+
+def summarise(session: Session, notes: Annotations) -> dict:
+    """What the library shows of a fit: frames, frames with a person, mean score and
+    the number of doubtful frames (the review queue, ``mocap.review``)."""
+    scores = session.scores
+    fitted = np.isfinite(scores)
+    return {"method": notes.method or "silhouette", "frames": len(scores), "fitted": int(fitted.sum()),
+            "fps": session.info.fps,
+            "mean_score": round(float(scores[fitted].mean()), 4) if fitted.any() else None,
+            "doubtful": len(session.review_queue())}
