@@ -5,7 +5,7 @@ something each and changes of acceleration cost more."""
 from __future__ import annotations
 
 import numpy as np
-DEPTH_SMOOTH_S = 0.1       # seconds: Gaussian sigma of the lifted depths over time (Inputs.lift_clip)
+DEPTH_SMOOTH_S = 0.1       # seconds: Gaussian sigma of the lifted depths over time (Inputs.smooth_depths)
 
 
 def smoothest_states(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None,

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from helpers import render_walk, render_walk_with_exit
 
+from mocap.lift import inputs as mocap_inputs
 from mocap.lift import taylor as lift
 from mocap.io.annotations import Annotations, annotations_for_poses, save_annotations
 from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
@@ -117,3 +118,33 @@ def test_bad_annotations_stop_the_fit_before_it_starts(walk, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith(f'mocap: error: {notes}: frames["99"]: frame 99 is out of range') and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_a_sign_click_lifts_only_the_frames_it_changes(walk, monkeypatch):
+    """A sign click re-lifts (Eq. 4-5) the frames whose lifting inputs it changed, its
+    own and those the sign guess re-solves around it, not the clip; the depths are
+    smoothed again, and the poses equal those of a session lifted afresh."""
+    _, _, info, fits = walk
+    session = Session(info, fits)
+    session.lifted()
+    calls = []
+    real = mocap_inputs.lift_pose
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+    monkeypatch.setattr(mocap_inputs, "lift_pose", counted)
+    before = session.inputs
+    frame = 12
+    k = int(np.argmax(lift.depth_fractions(session.pose3d(frame))))
+    flipped = "away" if before.signs[frame, k] > 0 else "toward"
+    session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], flipped))
+    after = session.lifted()
+    touched = session.inputs.changed_frames(before)
+    assert touched[frame] and len(calls) == touched.sum() < len(fits)     # here 17 of 30
+    assert np.flatnonzero(touched).tolist() == np.flatnonzero(
+        (session.inputs.signs != before.signs).any(axis=1)).tolist()
+    calls.clear()
+    fresh = Session(info, fits, session.annotations).lifted()
+    assert len(calls) == len(fits)
+    np.testing.assert_allclose(after, fresh, atol=1e-12)

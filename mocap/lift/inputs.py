@@ -46,19 +46,48 @@ class Inputs:
         return lift_pose(self.joints2d[frame], self.px_per_unit[frame], self.yaw[frame],
                          self.signs[frame], self.lengths)
 
-    def lift_clip(self, fps: float) -> np.ndarray:
-        """(F, 16, 3) metres: every frame lifted (NaN where nobody is), each joint's
-        depth smoothed over time by a Gaussian of DEPTH_SMOOTH_S within each stretch
-        of frames with a person. Eq. 5 turns the fit's frame-to-frame scatter of
-        segment lengths into depth jitter (a segment measured 5% short of its length
-        gets 18 degrees of depth), while real depths change smoothly."""
-        person = np.array([o is not None for o in self.orientation])
-        out = np.full(self.joints2d.shape[:2] + (3,), np.nan)
-        for r in runs(person):
-            poses = np.array([self.lift(i) for i in range(r.start, r.stop)])
-            poses[..., 2] = gaussian_filter1d(poses[..., 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
-            out[r] = poses
+    @property
+    def person(self) -> np.ndarray:
+        """(F,) bool: the frames with a person."""
+        return np.array([o is not None for o in self.orientation])
+
+    def lift_frames(self, frames: np.ndarray, before: np.ndarray | None = None) -> np.ndarray:
+        """(F, 16, 3) each frame of ``frames`` ((F,) bool) lifted by ``lift``, the
+        others' lifts taken from ``before`` (NaN without it, and where nobody is)."""
+        out = np.full(self.joints2d.shape[:2] + (3,), np.nan) if before is None else before.copy()
+        out[~self.person] = np.nan
+        for i in np.flatnonzero(frames):
+            out[i] = self.lift(i)
         return out
+
+    def smooth_depths(self, lifted: np.ndarray, fps: float) -> np.ndarray:
+        """The frames' lifts (F, 16, 3) with each joint's depth smoothed over time by a
+        Gaussian of DEPTH_SMOOTH_S within each stretch of frames with a person. Eq. 5
+        turns the fit's frame-to-frame scatter of segment lengths into depth jitter (a
+        segment measured 5% short of its length gets 18 degrees of depth), while real
+        depths change smoothly."""
+        out = lifted.copy()
+        for r in runs(self.person):
+            out[r, :, 2] = gaussian_filter1d(lifted[r, :, 2], DEPTH_SMOOTH_S * fps, axis=0,
+                                             mode="nearest")
+        return out
+
+    def changed_frames(self, before: "Inputs") -> np.ndarray:
+        """(F,) bool: the frames whose lift (Eq. 4-5) differs from ``before``'s: their
+        2D joints, scale, yaw or signs changed; every frame with a person when the
+        segment lengths (the clip's) or the frames with a person changed."""
+        person = self.person
+        if not np.array_equal(person, before.person) or not np.array_equal(self.lengths, before.lengths):
+            return person
+        same = (_same(self.joints2d, before.joints2d).all(axis=(1, 2))
+                & _same(self.px_per_unit, before.px_per_unit) & _same(self.yaw, before.yaw)
+                & (self.signs == before.signs).all(axis=1))
+        return person & ~same
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Elementwise equality, NaN equal to NaN."""
+    return (a == b) | (np.isnan(a) & np.isnan(b))
 
 
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,

@@ -4,7 +4,8 @@
 It resolves the lifting inputs (orientation, sides, overrides, signs: the user's
 over the first guess of ``mocap.lift.orientation``), lifts the keyframes (section
 3.4) and interpolates the other frames (``mocap.lift.motion``). An edit of the
-annotations re-resolves the inputs and re-lifts the clip (milliseconds both).
+annotations re-resolves the inputs and re-lifts only the frames whose inputs it
+changed (``SilhouetteSession.lifted``).
 """
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ class SilhouetteSession(Session):
         super().__init__(info, annotations, smooth)
         self.fits = fits
         self._inputs: Inputs | None = None
-        self._lifted: tuple[Inputs, np.ndarray] | None = None
+        # the inputs lifted last, their frames' lifts, and those smoothed over time
+        self._lifted: tuple[Inputs, np.ndarray, np.ndarray] | None = None
 
     @cached_property
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -77,10 +79,24 @@ class SilhouetteSession(Session):
 
     def pose3d(self, frame: int) -> np.ndarray | None:
         """(16, 3) lifted joints of a frame (metres, contract frame), None without a
-        person; the clip is lifted again (milliseconds) when the inputs change."""
-        if self.fits[frame].joints2d is None:
-            return None
+        person (``lifted``)."""
+        return self.lifted()[frame] if self.fits[frame].joints2d is not None else None
+
+    def lifted(self) -> np.ndarray:
+        """(F, 16, 3) every frame with a person lifted (Inputs.lift_frames), the depths
+        smoothed over time (Inputs.smooth_depths), NaN elsewhere. After an edit only the
+        frames whose lifting inputs it changed are lifted again (Inputs.changed_frames:
+        a sign click, the frames whose signs it changed, its own and those the sign
+        guess re-solves around it; every frame where the 2D joints' sides or the
+        segment lengths change); the depths are then smoothed again over time (a
+        convolution, not a lift), so the result equals a full re-lift."""
         inputs = self.inputs
-        if self._lifted is None or self._lifted[0] is not inputs:
-            self._lifted = (inputs, inputs.lift_clip(self.info.fps))
-        return self._lifted[1][frame]
+        if self._lifted is None:
+            lifts = inputs.lift_frames(inputs.person)
+        elif self._lifted[0] is not inputs:
+            before, lifts_before, _ = self._lifted
+            lifts = inputs.lift_frames(inputs.changed_frames(before), lifts_before)
+        else:
+            return self._lifted[2]
+        self._lifted = (inputs, lifts, inputs.smooth_depths(lifts, self.info.fps))
+        return self._lifted[2]
