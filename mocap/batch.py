@@ -21,11 +21,14 @@ import os
 import re
 import sys
 import time
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from tqdm import tqdm
 
 from mocap.batchtask import EXPORTS, Job, Outcome, run_job
 from mocap.errors import MocapError
@@ -131,8 +134,11 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator:
         with client:
             yield client
         return
-    with LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                      env=SINGLE_THREADED, silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with warnings.catch_warnings():     # 8787 taken: the dashboard moves, and we print where
+        warnings.filterwarnings("ignore", "Port .* is already in use")
+        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                               processes=True, env=SINGLE_THREADED, silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
         yield client
 
 
@@ -145,7 +151,9 @@ def dashboard(client) -> str:
 
 @dataclass
 class Tally:
-    """How the batch is going: counts, frames done, and the progress line."""
+    """How the batch is going: counts and frames done. Each video's end is a line on
+    stderr with the counts so far; on a terminal a bar (tqdm) stays below the lines:
+    videos done of the total, failures, frames per second over the cluster."""
 
     total: int
     skipped: int = 0
@@ -154,38 +162,41 @@ class Tally:
     failed: list[Outcome] = field(default_factory=list)
     start: float = field(default_factory=time.perf_counter)
     end: float | None = None      # when the last video came back
-    _open: bool = False
+    bar: tqdm | None = None
+
+    def begin(self) -> None:
+        """Start the clock (and the bar, on a terminal) as the tasks go out."""
+        self.start = time.perf_counter()
+        if sys.stderr.isatty():
+            self.bar = tqdm(total=self.total, initial=self.skipped, unit="video", file=sys.stderr,
+                            dynamic_ncols=True)
 
     def add(self, outcome: Outcome) -> None:
-        """Count an outcome; say it on its own line, then redraw the bar."""
+        """Count an outcome and say it."""
         self.done += 1
         if outcome.error:
             self.failed.append(outcome)
-            self.say(f"FAILED {outcome.name}: {outcome.error}")
+            text = f"FAILED {outcome.name}: {outcome.error}"
         else:
             self.frames += outcome.frames
-            self.say(f"done {outcome.name}: {outcome.frames} frames in {outcome.seconds:.1f} s")
-        self.bar()
+            text = f"done {outcome.name}: {outcome.frames} frames in {outcome.seconds:.1f} s"
+        counts = f"{len(self.failed)} failed, {self.fps:.1f} frames/s"
+        if self.bar is None:
+            print(f"{text} [{self.done + self.skipped}/{self.total} videos, {counts}]", file=sys.stderr,
+                  flush=True)
+            return
+        self.bar.write(text, file=sys.stderr)
+        self.bar.set_postfix_str(counts, refresh=False)
+        self.bar.update(1)
+
+    def finish(self) -> None:
+        self.end = time.perf_counter()
+        if self.bar is not None:
+            self.bar.close()
 
     @property
     def fps(self) -> float:
         return self.frames / max((self.end or time.perf_counter()) - self.start, 1e-9)
-
-    def bar(self) -> None:
-        """videos done / total, failures and frames per second over the cluster."""
-        n = self.done + self.skipped
-        filled = 30 * n // max(self.total, 1)
-        line = (f"[{'#' * filled}{'.' * (30 - filled)}] {n}/{self.total} videos"
-                f"{f', {len(self.failed)} failed' if self.failed else ''}, {self.fps:.1f} frames/s")
-        tty = sys.stderr.isatty()
-        self._open = tty and n < self.total
-        print(f"\r{line}" if tty else line, end="" if self._open else "\n", file=sys.stderr, flush=True)
-
-    def say(self, text: str) -> None:
-        if self._open:
-            print(file=sys.stderr)
-            self._open = False
-        print(text, file=sys.stderr, flush=True)
 
 
 def run_batch(jobs: list[Job], client, tally: Tally) -> None:
@@ -223,9 +234,11 @@ def batch(inputs: list[str], out: str, *, scheduler: str | None = None, workers:
         if todo:
             with dask_client(scheduler, workers) as client:
                 print(f"dashboard: {dashboard(client)}", file=sys.stderr, flush=True)
-                tally.start = time.perf_counter()
-                run_batch(todo, client, tally)
-                tally.end = time.perf_counter()
+                tally.begin()
+                try:
+                    run_batch(todo, client, tally)
+                finally:
+                    tally.finish()
     finally:
         page, _ = write_index(folder)
     print(f"{tally.done - len(tally.failed)} fitted, {tally.skipped} skipped, {len(tally.failed)} "

@@ -24,6 +24,7 @@ import pytest
 from helpers import frame_joints, render_walk, text_mp4
 
 from mocap.batch import find_videos, library_names
+from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
 from mocap.library import FAILED, RECORD, is_finished, read_record, review_target
@@ -282,3 +283,25 @@ def sync_api_path(url: str) -> str:
     from urllib.parse import unquote, urlparse
     assert url.startswith("file://"), url
     return unquote(urlparse(url).path)
+
+
+def test_tracking_annotations_beside_the_videos_make_a_tracked_video(tmp_path):
+    """`--annotations-from` with the app's own file name beside a video: the tracking
+    method from frame 0's marks; its masks still come from the silhouettes."""
+    truth = render_walk(tmp_path / "walk_c.mp4", view="three-quarter", seed=4)
+    marks = {j: truth.joints2d[0, i].tolist() for i, j in enumerate(JOINTS)}
+    notes = Annotations(method="track").with_orientation(0, "forward_right")
+    for joint, xy in marks.items():
+        notes = notes.with_joint(0, joint, tuple(xy))
+    (tmp_path / "notes").mkdir()
+    save_annotations(tmp_path / "notes" / "walk_c.annotations.json", notes)
+    out = tmp_path / "lib"
+    code, said = run_cli(["batch", str(tmp_path / "walk_c.mp4"), "--out", str(out), "--workers", "1",
+                          "--annotations-from", str(tmp_path / "notes")])
+    assert code == 0, said
+    record = read_record(out / "walk_c")
+    assert record["summary"]["method"] == "track" and record["summary"]["fitted"] == 30
+    motion = json.loads((out / "walk_c" / "motion.json").read_text())
+    err = np.linalg.norm(frame_joints(motion) - truth.joints2d, axis=-1) / truth.body_height_px
+    assert np.median(err) < 0.05                        # followed, as `mocap fit --method track`
+    assert len(list((out / "walk_c" / "masks").glob("*.png"))) == 30
