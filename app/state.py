@@ -31,8 +31,8 @@ from app.history import History
 from app.preprocess import Preprocessing
 from mocap.errors import MocapError
 from mocap.pipeline import Progress
-from mocap.session import (Doubt, FrameFit, Session, Silhouette, SilhouetteSession, TrackSession,
-                           open_video, processing_scale)
+from mocap.session import (Annotations, Doubt, FrameFit, Session, Silhouette, SilhouetteSession,
+                           TrackSession, open_video, processing_scale)
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,7 +53,7 @@ class FrameView:
     score: float | None = None
     pose3d: np.ndarray | None = None    # (16, 3) metres, contract frame
     signs: tuple[int, ...] | None = None    # +1 toward, -1 away, per SEGMENT_NAMES
-    sign_notes: tuple[str, ...] = ()    # where each sign comes from (source_note)
+    sign_notes: tuple[str, ...] = ()    # where each sign comes from (Session.sign_sources)
     depths: tuple[float, ...] = ()      # |dZ| / length per segment (0: in the image plane)
     orientation: str | None = None
     orientation_note: str = ""
@@ -97,7 +97,7 @@ class AppState(Preprocessing, Edits):
         return self._frame
 
     @property
-    def annotations(self):
+    def annotations(self) -> Annotations:
         return self._annotations
 
     @property
