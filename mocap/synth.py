@@ -22,6 +22,7 @@ import numpy as np
 
 from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
+from mocap.io.fileio import check_writable
 from mocap.errors import MocapError
 from mocap.truth import Camera, Truth, save_truth
 from mocap.walk import walk_cycle
@@ -256,8 +257,7 @@ def write_video(path: str | Path, frames, fps: float, size: tuple[int, int]) -> 
     code = _FOURCC.get(path.suffix.lower())
     if code is None:
         raise MocapError(f"{path}: video must end in {' or '.join(_FOURCC)}")
-    if not path.parent.is_dir():
-        raise MocapError(f"{path}: folder {path.parent} does not exist")
+    check_writable(path)
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*code), float(fps), size)
     if not writer.isOpened():
         raise MocapError(f"{path}: OpenCV cannot write {code} video here")

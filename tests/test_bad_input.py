@@ -79,6 +79,14 @@ def test_sheet_refuses_an_unwritable_output(fitted_walk, tmp_path, capsys, case)
     assert_one_line_error(err, str(out), problem)
 
 
+@pytest.mark.parametrize("case", ["missing", "under a file", "/proc"])
+def test_synth_refuses_an_unwritable_output(tmp_path, capsys, case):
+    out, problem = _unwritable(tmp_path, "a.mp4")[case]
+    code, err = run(capsys, "synth", "walk-cycle", out, "--seconds", "0.5")
+    assert code == 2
+    assert_one_line_error(err, str(out), problem)
+
+
 # -- broken motion files --------------------------------------------------------------
 
 @pytest.mark.parametrize("key, damage, place, problem", [
