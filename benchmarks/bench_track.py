@@ -57,7 +57,8 @@ from mocap.body import JOINT_INDEX  # noqa: E402
 from mocap.track.marks import check_marks, shoulders_as_hips  # noqa: E402
 from mocap.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
                            side_matched_errors)
-from mocap.track.perspective import default_camera, to_contract  # noqa: E402
+from mocap.track.calibration import default_camera  # noqa: E402
+from mocap.track.perspective import to_contract  # noqa: E402
 from mocap.pipeline import fit_video  # noqa: E402
 from mocap.session import SilhouetteSession as Session  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402

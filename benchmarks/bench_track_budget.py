@@ -47,7 +47,8 @@ from mocap.review import covering, review_queue
 from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_INDEX, WIDTH
 from mocap.metrics import pa_mpjpe
-from mocap.track.perspective import default_camera, to_contract
+from mocap.track.calibration import default_camera
+from mocap.track.perspective import to_contract
 from mocap.synth import render_motion
 from mocap.track.tracking import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
                          track_video, turn_of)

@@ -8,7 +8,7 @@ inside the silhouette, running along the arm. A candidate segment is scored by h
 strongly the image changes across its two long sides (the gradient along the side's
 normal), inside the silhouette only: the silhouette's own outline is Eq. 1-3's.
 The tracking method's arm blocks use the whole frame's edges the same way
-(mocap.track.tracker.outline_cost): a sleeve over a shirt of its colour matches the shirt
+(mocap.track.limbs.outline_cost): a sleeve over a shirt of its colour matches the shirt
 anywhere, and only its outline tells where it is.
 """
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from mocap.track import perspective as P
+from mocap.track import calibration as C, keydepths as K, perspective as P
+from mocap.body import JOINT_INDEX, SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.track.marks import shoulders_as_hips, turned_apart
 from mocap.metrics import pa_mpjpe
@@ -16,35 +17,35 @@ from mocap.track.rays import choose_limb, ray_roots
 from mocap.synth import RenderOptions, plan_scene, scene_truth
 from mocap.walk import walk_cycle
 
-CAMERA = P.Pinhole(800.0, 320.0, 240.0)
+CAMERA = C.Pinhole(800.0, 320.0, 240.0)
 
 
-def known_pose(yaw_deg: float, span: float = 0.36) -> P.Calibration:
+def known_pose(yaw_deg: float, span: float = 0.36) -> C.Calibration:
     """A body turned by ``yaw_deg`` (and slightly tilted), 6 m in front of CAMERA."""
     turn = Rotation.from_euler("y", np.radians(yaw_deg)) * Rotation.from_euler("x", 0.05)
-    rotation = Rotation.from_matrix(P.FACING_CAMERA) * turn
-    return P.Calibration(rotation.as_rotvec(), np.array([0.4, -0.3, 6.0]), span)
+    rotation = Rotation.from_matrix(C.FACING_CAMERA) * turn
+    return C.Calibration(rotation.as_rotvec(), np.array([0.4, -0.3, 6.0]), span)
 
 
 @pytest.mark.parametrize("yaw, span", [(35.0, 0.36), (-50.0, 0.30), (20.0, 0.42)])
 def test_calibration_recovers_a_known_camera(yaw, span):
     truth = known_pose(yaw, span)
     marks = CAMERA.project(truth.to_camera(truth.model()))
-    found = P.calibrate(marks, CAMERA, "right" if yaw > 0 else "left")
+    found = C.calibrate(marks, CAMERA, "right" if yaw > 0 else "left")
     turn = Rotation.from_rotvec(found.rotvec).inv() * Rotation.from_rotvec(truth.rotvec)
     assert np.degrees(turn.magnitude()) < 1e-3
     assert np.abs(found.translation - truth.translation).max() < 1e-4
     assert found.span == pytest.approx(span, abs=1e-5)
     assert found.yaw == pytest.approx(yaw, abs=0.2)          # the slight tilt moves it a little
-    assert np.abs(P.line_distances(np.r_[found.rotvec, found.translation, found.span],
+    assert np.abs(C.line_distances(np.r_[found.rotvec, found.translation, found.span],
                                    CAMERA, marks)).max() < 1e-6
 
 
 def test_the_turn_picks_between_the_two_fits():
     truth = known_pose(40.0)
     marks = CAMERA.project(truth.to_camera(truth.model()))
-    assert P.calibrate(marks, CAMERA, "right").yaw > 0
-    assert P.calibrate(marks, CAMERA, "left").yaw < 0
+    assert C.calibrate(marks, CAMERA, "right").yaw > 0
+    assert C.calibrate(marks, CAMERA, "left").yaw < 0
 
 
 @pytest.mark.parametrize("apart_px", [2.0, 3.0])
@@ -54,18 +55,18 @@ def test_a_body_seen_nearly_from_the_side_calibrates_despite_marks_a_few_pixels_
     span held at the range's end finds the turn."""
     truth = known_pose(80.0)
     marks = CAMERA.project(truth.to_camera(truth.model()))
-    marks[P.JOINT_INDEX["shoulder_l"], 0] += apart_px
-    marks[P.JOINT_INDEX["shoulder_r"], 0] -= apart_px
-    found = P.calibrate(marks, CAMERA, "right")
-    assert found.span in P.SPAN_RANGE and found.yaw == pytest.approx(80.0, abs=7.0)
+    marks[JOINT_INDEX["shoulder_l"], 0] += apart_px
+    marks[JOINT_INDEX["shoulder_r"], 0] -= apart_px
+    found = C.calibrate(marks, CAMERA, "right")
+    assert found.span in C.SPAN_RANGE and found.yaw == pytest.approx(80.0, abs=7.0)
 
 
 def test_marks_that_fit_no_view_are_refused():
     truth = known_pose(30.0)
     marks = CAMERA.project(truth.to_camera(truth.model()))
-    marks[P.JOINT_INDEX["chest"]] += (60.0, 0.0)            # the chest beside the body
+    marks[JOINT_INDEX["chest"]] += (60.0, 0.0)            # the chest beside the body
     with pytest.raises(MocapError, match="cannot calibrate"):
-        P.calibrate(marks, CAMERA)
+        C.calibrate(marks, CAMERA)
 
 
 @pytest.mark.parametrize("yaw", [60.0, -120.0])
@@ -73,25 +74,25 @@ def test_shoulders_marked_against_the_hips_are_refused_with_the_fix(yaw):
     truth = known_pose(yaw)
     marks = CAMERA.project(truth.to_camera(truth.model()))
     assert not turned_apart(marks) and shoulders_as_hips(marks) is marks
-    pair = [P.JOINT_INDEX["shoulder_l"], P.JOINT_INDEX["shoulder_r"]]
+    pair = [JOINT_INDEX["shoulder_l"], JOINT_INDEX["shoulder_r"]]
     swapped = marks.copy()
     swapped[pair] = marks[pair[::-1]]
     assert turned_apart(swapped)
     with pytest.raises(MocapError, match="turned opposite ways: swap shoulder_l and shoulder_r"):
-        P.calibrate(swapped, CAMERA)
+        C.calibrate(swapped, CAMERA)
     assert np.array_equal(shoulders_as_hips(swapped), marks)
-    assert P.calibrate(shoulders_as_hips(swapped), CAMERA, "right" if yaw > 0 else "left").yaw \
+    assert C.calibrate(shoulders_as_hips(swapped), CAMERA, "right" if yaw > 0 else "left").yaw \
         == pytest.approx(yaw, abs=0.2)
 
 
 def test_key_depths_follow_the_moving_triangle():
     """Eq. 10-11: from the previous depths to the new frame's, sides kept."""
     before, after = known_pose(30.0), known_pose(38.0)
-    triangle = before.model()[P.KEY]
-    sides = [np.linalg.norm(triangle[i] - triangle[j]) for i, j in P.KEY_LINES]
+    triangle = before.model()[C.KEY]
+    sides = [np.linalg.norm(triangle[i] - triangle[j]) for i, j in C.KEY_LINES]
     moved = after.to_camera(triangle) + [0.05, 0.0, -0.1]
     rays = CAMERA.rays(CAMERA.project(moved))
-    depths = P.key_depths(rays, before.to_camera(triangle)[:, 2], np.array(sides))
+    depths = K.key_depths(rays, before.to_camera(triangle)[:, 2], np.array(sides))
     assert np.allclose(depths, moved[:, 2], atol=1e-7)
 
 
@@ -101,15 +102,15 @@ def test_key_joints_solve_again_only_the_frames_that_moved(monkeypatch):
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=50.0))
     joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
-    camera = P.default_camera(320, 240)
-    first = P.key_joints(joints2d, camera, "right")
+    camera = C.default_camera(320, 240)
+    first = K.key_joints(joints2d, camera, "right")
     moved = joints2d.copy()
-    moved[12:15, P.JOINT_INDEX["chest"]] += [3.0, -2.0]
-    calls, solve = [], P.key_depths
-    monkeypatch.setattr(P, "key_depths", lambda *args: calls.append(1) or solve(*args))
-    again = P.key_joints(moved, camera, "right", before=(joints2d, first))
+    moved[12:15, JOINT_INDEX["chest"]] += [3.0, -2.0]
+    calls, solve = [], K.key_depths
+    monkeypatch.setattr(K, "key_depths", lambda *args: calls.append(1) or solve(*args))
+    again = K.key_joints(moved, camera, "right", before=(joints2d, first))
     assert len(calls) == 3
-    assert np.allclose(again, P.key_joints(moved, camera, "right"), atol=1e-6)
+    assert np.allclose(again, K.key_joints(moved, camera, "right"), atol=1e-6)
     assert np.array_equal(again[:12], first[:12])
 
 
@@ -117,17 +118,17 @@ def turning_trunk(yaws: np.ndarray, span: float) -> tuple[np.ndarray, np.ndarray
     """Rays (F, 3, 3) of the key joints of known_pose turning through ``yaws``, and
     the key triangle's sides with a shoulder span ``span``."""
     poses = [known_pose(yaw) for yaw in yaws]
-    rays = np.array([CAMERA.rays(CAMERA.project(p.to_camera(p.model()[P.KEY]))) for p in poses])
-    triangle = known_pose(0.0, span).model()[P.KEY]
-    return rays, np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in P.KEY_LINES])
+    rays = np.array([CAMERA.rays(CAMERA.project(p.to_camera(p.model()[C.KEY]))) for p in poses])
+    triangle = known_pose(0.0, span).model()[C.KEY]
+    return rays, np.array([np.linalg.norm(triangle[i] - triangle[j]) for i, j in C.KEY_LINES])
 
 
 def followed_yaws(rays: np.ndarray, sides: np.ndarray, depths: np.ndarray, turns) -> np.ndarray:
     """The key triangle's yaw on each frame, chained by frame_key_depths."""
     out = []
     for frame_rays, turn in zip(rays, turns):
-        depths = P.frame_key_depths(frame_rays, depths, sides, turn)
-        out.append(float(P.triangle_yaw(depths[:, None] * frame_rays)))
+        depths = K.frame_key_depths(frame_rays, depths, sides, turn)
+        out.append(float(K.triangle_yaw(depths[:, None] * frame_rays)))
     return np.array(out)
 
 
@@ -138,7 +139,7 @@ def test_a_trunk_turning_through_the_frontal_view_follows_the_held_side():
     (right, then left from the frame it faces the camera) it turns on."""
     yaws = np.linspace(40.0, -60.0, 26)
     rays, sides = turning_trunk(yaws, 0.36 * 1.07)
-    start = known_pose(yaws[0]).to_camera(known_pose(yaws[0]).model()[P.KEY])[:, 2]
+    start = known_pose(yaws[0]).to_camera(known_pose(yaws[0]).model()[C.KEY])[:, 2]
     alone = followed_yaws(rays, sides, start, [None] * len(yaws))
     assert alone[-1] > 40.0                                  # turned back
     held = followed_yaws(rays, sides, start, ["right" if y > 0 else "left" for y in yaws])
@@ -151,7 +152,7 @@ def test_a_trunk_turning_through_the_frontal_view_follows_the_held_side():
 def test_the_triangle_yaw_is_the_calibrations():
     for yaw in (35.0, -50.0, 120.0):
         pose = known_pose(yaw)
-        assert P.triangle_yaw(pose.to_camera(pose.model()[P.KEY])) == pytest.approx(pose.yaw, abs=0.5)
+        assert K.triangle_yaw(pose.to_camera(pose.model()[C.KEY])) == pytest.approx(pose.yaw, abs=0.5)
 
 
 def test_ray_roots_lie_on_the_ray_at_the_bone_length():
@@ -192,17 +193,17 @@ def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm, p
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=yaw))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
-    camera = P.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     turn = "right" if yaw < 90 else "left"
     pulled = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
     monkeypatch.setattr(P, "SWING_PLANE_WEIGHT", {False: 0.0, True: 0.0})
     found = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
-    trunk = [P.JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis", "shoulder_l",
+    trunk = [JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis", "shoulder_l",
                                          "shoulder_r", "hip_l", "hip_r")]
     assert np.abs(found[:, trunk] - scene.joints_cam[:, trunk] * [1, -1, -1]).max() < 1e-6
     assert pa_mpjpe(P.to_contract(found), truth.joints3d) * 1000 < bound_mm
     assert pa_mpjpe(P.to_contract(pulled), truth.joints3d) * 1000 < pulled_mm
-    assert np.allclose(P.to_contract(found)[:, P.JOINT_INDEX["pelvis"]], 0.0)
+    assert np.allclose(P.to_contract(found)[:, JOINT_INDEX["pelvis"]], 0.0)
     assert np.allclose(camera.project(pulled), truth.joints2d)
 
 
@@ -213,7 +214,7 @@ def swing_case(yaw: float, pixel_error: float, across: bool = False) -> tuple:
     (joints as the ray-sphere root places them, rays, lengths, the true knee)."""
     pose = known_pose(yaw)
     body = pose.model()
-    hip, knee = P.JOINT_INDEX["hip_l"], P.JOINT_INDEX["knee_l"]
+    hip, knee = JOINT_INDEX["hip_l"], JOINT_INDEX["knee_l"]
     body[knee] = body[hip] + np.array([0.0, -np.cos(0.6), np.sin(0.6)]) * 0.45   # z forward
     true = pose.to_camera(body)
     seen = CAMERA.project(true)
@@ -233,14 +234,14 @@ def test_a_knee_near_the_image_plane_is_pulled_toward_its_swing_plane():
     a decimetre in depth; the pull toward the plane takes off half of that. It moves
     the knee along its ray only, and not where the user fixed the thigh's
     foreshortening."""
-    knee = P.JOINT_INDEX["knee_l"]
+    knee = JOINT_INDEX["knee_l"]
     placed, rays, lengths, true = swing_case(45.0, 3.0)
     pulled = P.toward_swing_planes(placed.copy(), rays, lengths)
     before, after = (np.linalg.norm(j[0, knee] - true) for j in (placed, pulled))
     assert before > 0.1 and after < 0.6 * before
     assert np.allclose(CAMERA.project(pulled[0, knee]), CAMERA.project(placed[0, knee]))
     fixed = np.zeros((1, 10), int)
-    fixed[0, P.SEGMENT_INDEX["upper_leg_l"]] = -1
+    fixed[0, SEGMENT_INDEX["upper_leg_l"]] = -1
     kept = P.toward_swing_planes(placed.copy(), rays, lengths, fixed)
     assert np.allclose(kept[0, knee], placed[0, knee])
 
@@ -249,7 +250,7 @@ def test_a_body_facing_the_camera_sees_its_swing_planes_edge_on():
     """Facing the camera, a knee's ray runs nearly in its swing plane: seen a few
     pixels beside the plane, the ray meets it far away, off the thigh's length, and
     the knee keeps its ray-sphere root."""
-    knee = P.JOINT_INDEX["knee_l"]
+    knee = JOINT_INDEX["knee_l"]
     placed, rays, lengths, true = swing_case(0.0, 3.0, across=True)
     pulled = P.toward_swing_planes(placed.copy(), rays, lengths)
     assert np.linalg.norm(pulled[0, knee] - placed[0, knee]) < 0.01
@@ -259,11 +260,11 @@ def test_measured_lengths_read_bones_seen_side_on():
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=90.0))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
-    camera = P.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     depth = -truth.pelvis_camera[:, 2]
     found = P.measured_lengths(truth.joints2d, depth, camera)
     true = P.bone_lengths(truth.joints3d[0])
-    trunk = [P.BONE_INDEX[P.JOINT_INDEX["chest"], P.JOINT_INDEX["pelvis"]]]
+    trunk = [P.BONE_INDEX[JOINT_INDEX["chest"], JOINT_INDEX["pelvis"]]]
     assert found[trunk] == pytest.approx(true[trunk], rel=0.05)
     assert np.all(found <= true * 1.05)
 

@@ -19,10 +19,11 @@ from mocap.track.marks import check_marks
 from mocap.track.tracking import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
                          spread_corrections, track_video)
 from mocap.edges import Edges
-from mocap.track.perspective import FACING_CAMERA, KEY, Calibration, Pinhole
-from mocap.track.tracker import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
-                           PARTS, around_root, arm_limits_cost, far_arm, far_forearm, limb_penalty,
-                           mirrored_model, outline_cost, overlap, settled_knee, twin_overlap)
+from mocap.track.calibration import FACING_CAMERA, KEY, Calibration, Pinhole
+from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
+                               around_root, arm_limits_cost, limb_penalty, outline_cost, overlap,
+                               settled_knee, twin_overlap)
+from mocap.track.parts import PARTS, far_arm, far_forearm, mirrored_model
 from mocap.walk import walk_cycle
 
 

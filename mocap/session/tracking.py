@@ -26,11 +26,12 @@ from mocap.errors import MocapError
 from mocap.lift.inputs import Inputs
 from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
 from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
-from mocap.track.perspective import (UNIT_M, calibrate, default_camera, key_joints, place_joints,
-                                     steady_depths, to_contract)
+from mocap.track.calibration import UNIT_M, calibrate, default_camera
+from mocap.track.keydepths import key_joints
+from mocap.track.perspective import place_joints, steady_depths, to_contract
 from mocap.session.base import Session
 from mocap.silhouette.passes import SCALE_PERCENTILE
-from mocap.track.tracker import far_arm
+from mocap.track.parts import far_arm
 from mocap.track.marks import check_marks
 from mocap.track.tracking import (TrackResult, carried_pins, guessed_turn, spread_corrections,
                                   spread_frames, steady_joints, turn_of)
@@ -87,7 +88,7 @@ class TrackSession(Session):
         self._resolution = None
 
     def far_arm(self) -> str | None:
-        """"l" or "r": the arm farther from the camera on frame 0 (mocap.track.tracker.far_arm
+        """"l" or "r": the arm farther from the camera on frame 0 (mocap.track.parts.far_arm
         of frame 0's key triangle as the reconstruction finds it: calibrated on the
         marks, turned as frame 0's orientation says or else as the knees tell), None
         for a body facing the camera or away.

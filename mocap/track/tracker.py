@@ -35,350 +35,40 @@ model. Every later frame is tracked head to feet:
    the marked frame's colours, so that a model cannot drift onto clutter.
 
 The similarity S of each part's match is its reliability on that frame.
+
+The parts, their blocks' search and their colour models are mocap.track.parts; a
+limb's search around its root and the penalties of its blocks mocap.track.limbs; here
+the frame loop that carries them from frame to frame.
 """
 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
+from mocap.body import JOINT_INDEX
+from mocap.edges import Edges
 from mocap.track import blocks
 from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
-from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HALF_SPAN, WIDTH,
-                        torso_width)
-from mocap.edges import Edges
+from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
+from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVERLAP, TrunkDepth, added,
+                               arm_limits_cost, around_root, limb_cost, limb_penalty, outline_cost,
+                               settled_knee, twin_overlap)
 from mocap.track.marks import body_scale
-from mocap.track.perspective import (UNIT_M, Pinhole, body_axes, calibrate, default_camera,
-                               frame_key_depths)
-from mocap.track.rays import limb_candidates, limb_penalty as joint_limits
+from mocap.track.parts import (ARMS, HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS, far_forearm,
+                               mirrored_model, part_lengths, part_widths, search_part, skeleton)
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
 MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
-SHORTEST = 0.3             # ... and at least this fraction of its longest
-LENGTHEN_STEPS = np.arange(1, 6) * 0.03   # of the longest: lengthenings tried (blocks.lengthen)
-LENGTHEN_TOLERANCE = 0.03  # relative loss of S a lengthening may cost
 UPDATE_RATE = 0.3          # linear weighting of a colour model by the new block
 UPDATE_MIN = 0.9           # of the part's median S so far: worse matches leave the model
 ANCHOR = 0.5               # weight of frame 0's colours in every updated model
 HISTORY = 150              # frames of S that the median looks back on
-AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
 USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
 ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's) scale stays in it
 HEAD_RETRY = 0.3           # of the head's median S: a worse match is searched again (_track_head)
-FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block,
-HEAD_COST = 40.0           # ... an arm's lower block on the head,
-TWIN_COST = 25.0           # ... a lower block on its twin's
-JUMP_COST = 8.0            # grey levels per usual length that a lower block's ends moved
-TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
-OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
-OUTLINE_COST = 20.0        # grey levels an arm block pays for long sides without an edge
-LEG_OUTLINE_COST = 5.0     # ... a leg block (legs cross, and share their edges where they do)
-LIMITS_COST = 10.0         # grey levels per unit of an arm's least joint-limit penalty in 3D
-FAR_MARGIN_M = 0.1         # metres one shoulder of the marks lies deeper than the other: the far arm
-KNEE_STEP = 0.04           # of the shin's length: spacing of the knee places tried (settled_knee)
-KNEE_STEPS = 3             # ... that many steps up and down the shin, one to either side
-ARM_M = tuple(float(LENGTH[SEGMENT_INDEX[f"{kind}_arm_l"]]) * UNIT_M for kind in ("upper", "lower"))
-
-
-@dataclass(frozen=True)
-class Stage:
-    """One morph-block search (blocks.search): angle offsets (degrees), length offsets
-    (fractions of m), circles of the position search path (0: the position is held)
-    and their spacing in pixels."""
-
-    d_theta_deg: tuple[float, ...]
-    d_m: tuple[float, ...]
-    rings: int = 0
-    step: float = 1.0
-
-
-def _span(limit: float, step: float) -> tuple[float, ...]:
-    return tuple(np.arange(-limit, limit + step / 2, step))
-
-
-_HELD, _FREE = Stage(_span(2, 1), _span(0.03, 0.03)), Stage(_span(2, 1), _span(0.03, 0.03), 1, 0.5)
-_SWING = Stage(_span(30, 5), _span(0.2, 0.1))
-SCHEDULES = {  # coarse to fine, by the kind of part
-    "head": (Stage(_span(6, 3), _span(0.06, 0.06), 8), _FREE),
-    "torso": (Stage(_span(12, 3), _span(0.1, 0.05)), _HELD),
-    "lower": (_SWING, Stage(_span(4, 2), (0.0,), 3), _FREE),
-}
-
-
-@dataclass(frozen=True)
-class Part:
-    """A tracked block from joint ``start`` (its (x, y)) to joint ``end``."""
-
-    segment: str
-    start: str
-    end: str
-
-    @property
-    def schedule(self) -> tuple[Stage, ...]:
-        return SCHEDULES[self.segment.split("_")[0]]
-
-
-PARTS = (Part("head", "head_top", "neck"), Part("torso", "neck", "pelvis"),
-         *(Part(f"{kind}_{side}", f"{a}_{side}", f"{b}_{side}") for side in "lr"
-           for kind, a, b in (("upper_arm", "shoulder", "elbow"), ("lower_arm", "elbow", "wrist"),
-                              ("upper_leg", "hip", "knee"), ("lower_leg", "knee", "ankle"))))
-PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
-LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
-ARMS = (2, 6)
-TWINS = (ARMS, (4, 8))     # the arms, the legs
-TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}   # each forearm's twin
-HEAD, TORSO = 0, 1
-
-
-def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
-    """(10,) block widths in pixels: each cylinder's width at ``scale`` pixels per
-    unit, the torso as wide as the marked shoulders show it turned."""
-    j = JOINT_INDEX
-    axis = marks[j["pelvis"]] - marks[j["neck"]]
-    normal = np.array([-axis[1], axis[0]]) / max(np.hypot(*axis), 1e-9)
-    span = abs((marks[j["shoulder_l"]] - marks[j["shoulder_r"]]) @ normal)
-    widths = np.array([WIDTH[SEGMENT_INDEX[p.segment]] for p in PARTS]) * scale
-    widths[TORSO] = torso_width(min(span / (2 * SHOULDER_HALF_SPAN * scale), 1.0)) * scale
-    return widths
-
-
-def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
-    """(16, 2) joints of the 10 tracked blocks: each part's start and end joints, the
-    chest at ``chest`` in the trunk's block frame."""
-    joints = np.empty((len(JOINTS), 2))
-    joints[PART_JOINTS[:, 0]] = parts[:, :2]
-    joints[PART_JOINTS[:, 1]] = block_end(parts)
-    joints[JOINT_INDEX["chest"]] = from_block(chest, parts[TORSO])
-    return joints
-
-
-def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: np.ndarray,
-                part: Part, longest: float,
-                penalty: blocks.Penalty | None = None) -> tuple[np.ndarray, float]:
-    """The part's block and S in ``image``, searched coarse to fine from the predicted
-    ``start`` (candidates charged ``penalty``, blocks.search); every part but the head
-    kept between SHORTEST and 1 times ``longest`` pixels and finally lengthened to its
-    end (blocks.lengthen)."""
-    best, s = start.copy(), 0.0
-    for stage in part.schedule:
-        best[M] = np.clip(best[M], SHORTEST * longest, longest)
-        best, s = blocks.search(image, model, grid, best, np.radians(stage.d_theta_deg),
-                                best[M] * np.asarray(stage.d_m), zoom=part.segment == "head",
-                                max_ring=stage.rings, step=stage.step, penalty=penalty)
-    if part.segment != "head":
-        best[M] = np.clip(best[M], SHORTEST * longest, longest)
-        extra = LENGTHEN_STEPS * longest
-        best, s = blocks.lengthen(image, model, grid, best, extra[best[M] + extra <= longest],
-                                  LENGTHEN_TOLERANCE)
-    return best, s
-
-
-def overlap(lowers: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """Beyond the paper: how much each of the blocks ``lowers`` (K, 5) lies on the
-    block ``other`` (5,) (or each on its own of K blocks), in [0, 1]: the mean over
-    OVERLAP_POINTS points along its middle line of 1 - d / n, d the point's distance
-    to other's middle line (a segment) and n other's width, at least 0."""
-    t = (np.arange(OVERLAP_POINTS) + 0.5) / OVERLAP_POINTS
-    length = lowers[:, M, None] * t                                        # (K, P)
-    other = np.broadcast_to(other, lowers.shape)
-    cos, sin = np.cos(other[:, THETA])[:, None], np.sin(other[:, THETA])[:, None]
-    dx = lowers[:, X, None] + length * np.cos(lowers[:, THETA])[:, None] - other[:, X, None]
-    dy = lowers[:, Y, None] + length * np.sin(lowers[:, THETA])[:, None] - other[:, Y, None]
-    along = np.clip(dx * cos + dy * sin, 0.0, other[:, M, None])
-    distance = np.hypot(dx - along * cos, dy - along * sin)
-    return np.maximum(1.0 - distance / other[:, N, None], 0.0).mean(axis=1)
-
-
-def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
-    """How much two twin limbs' lower blocks lie on one another (``overlap`` both ways)."""
-    return float(overlap(lower_a[None], lower_b)[0] + overlap(lower_b[None], lower_a)[0]) / 2
-
-
-def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float,
-                 avoid: tuple = ()) -> blocks.Penalty:
-    """Beyond the paper: the penalty (grey levels) of candidate lower blocks of a limb
-    whose upper part, ``width`` wide, runs from ``root`` to the lower block's start:
-
-    - FOLD_COST per unit of overlap with that upper part and ``cost`` per unit of
-      overlap with each ``(cost, block)`` of ``avoid``: limbs look alike along their
-      length (one colour of sleeve or trousers) and alike to their twins, so that a
-      lower part folded back onto its own upper part, or lying on its twin, matches
-      at little cost where the limb itself is hidden or hard to see;
-    - JUMP_COST per ``length`` (the part's usual length) that the block's two ends
-      (the limb's middle and end joints) moved from those of ``last``, the last
-      frame's block: a limb hidden on a frame stays near where it was rather than
-      jump to clutter that matches it as well.
-    """
-    def penalty(lowers: np.ndarray) -> np.ndarray:
-        uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
-        jump = (np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
-                + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)) / length
-        return FOLD_COST * overlap(lowers, uppers) + JUMP_COST * jump + sum(
-            cost * overlap(lowers, block) for cost, block in avoid)
-    return penalty
-
-
-def outline_cost(edges: Edges, cost: float = OUTLINE_COST) -> blocks.Penalty:
-    """Beyond the paper: the penalty (grey levels) of blocks (K, 5) for the edges
-    their two long sides lack, ``cost`` times one less the mean edge strength there
-    (edges.Edges.support). An arm over the trunk or a sleeve over a shirt matches the
-    colours under it as well as its own place does (an arm hidden behind the trunk
-    matches the trunk), and a forearm matches skin-coloured clutter; the arm's own
-    place shows its outline."""
-    def penalty(candidates: np.ndarray) -> np.ndarray:
-        return cost * (1.0 - edges.support(candidates[:, None, :2], block_end(candidates)[:, None],
-                                           candidates[:, None, N]))
-    return penalty
-
-
-class TrunkDepth:
-    """Beyond the paper, while tracking: the tracked key triangle (both shoulders and
-    the chest) in 3D on every frame, as the reconstruction finds it (calibrated on
-    the marks, Eq. 6-9, then Eq. 10-11 from frame to frame on the side ``turn`` says;
-    mocap.track.perspective.frame_key_depths)."""
-
-    def __init__(self, marks: np.ndarray, camera: Pinhole, turn: str | None):
-        self.camera, self.turn = camera, turn
-        self.depths, self.sides = calibrate(marks, camera, turn).key_triangle()
-
-    def follow(self, key2d: np.ndarray) -> np.ndarray:
-        """(3, 3) the key joints (pinhole frame) of a new frame's (3, 2) key pixels."""
-        rays = self.camera.rays(key2d)
-        self.depths = frame_key_depths(rays, self.depths, self.sides, self.turn)
-        return self.depths[:, None] * rays
-
-
-def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int,
-                    cost: float = LIMITS_COST) -> blocks.Penalty:
-    """Beyond the paper: the penalty (grey levels) of an arm's candidate lower blocks
-    (K, 5) for the pose they give it in 3D. The elbow (the block's start) and the
-    wrist (its end) lie on their viewing rays at the model's bone lengths from the
-    shoulder, a key joint of ``key`` (3, 3), in one of four ways
-    (mocap.track.rays.limb_candidates); ``cost`` times the least joint-limit penalty of the
-    four (the silhouette method's limits: elbows bent forward, no upper arm through
-    the trunk, arms near the sagittal plane) in the body frame of ``key``. Where the
-    colours leave an arm's place open (a sleeve over the shirt, a hidden arm), the
-    places a human arm can take win. ``arm``: 0 left, 1 right."""
-    shoulder, axes = key[arm], body_axes(key)
-    side = 1.0 if arm == 0 else -1.0
-
-    def penalty(lowers: np.ndarray) -> np.ndarray:
-        rays = camera.rays(np.stack([lowers[:, :2], block_end(lowers)], axis=1))
-        roots = np.broadcast_to(shoulder, (len(lowers), 3))
-        placed = limb_candidates(roots, rays, ARM_M)
-        body = np.broadcast_to(axes, (len(lowers), 3, 3))
-        return cost * joint_limits(roots, placed, body, False, side).min(axis=1)
-    return penalty
-
-
-def added(*penalties: blocks.Penalty) -> blocks.Penalty:
-    """The sum of penalties."""
-    return lambda candidates: sum(penalty(candidates) for penalty in penalties)
-
-
-def limb_cost(s: np.ndarray, k: int) -> float:
-    """The cost of limb k's placement: its two parts' 1/S."""
-    return 1.0 / s[k] + 1.0 / s[k + 1]
-
-
-def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
-                penalty: blocks.Penalty, upper_penalty: blocks.Penalty | None = None) -> np.ndarray:
-    """Beyond the paper: the lower block of a limb hanging from ``root`` of the pair
-    of directions of its two parts, AROUND_STEP degrees apart, each part at its
-    usual length, of least cost (the sum of the two 1/S, the lower block's
-    ``penalty`` and the upper block's ``upper_penalty``). A limb lost to clutter or
-    to its twin is found again where it shows. ``upper`` and ``lower`` are each
-    (colour model, grid, width, length)."""
-    angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
-    (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
-    uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
-                            root + m_u * np.c_[np.cos(angles), np.sin(angles)], n_u)
-    starts = np.repeat(block_end(uppers), len(angles), axis=0)
-    turns = np.tile(np.c_[np.cos(angles), np.sin(angles)], (len(angles), 1))
-    lowers = blocks.between(starts, starts + m_l * turns, n_l)
-    upper_cost = 1.0 / blocks.score(image, model_u, grid_u, uppers)
-    if upper_penalty is not None:
-        upper_cost += upper_penalty(uppers)
-    cost = upper_cost[:, None] + (1.0 / blocks.score(image, model_l, grid_l, lowers)
-           + penalty(lowers)).reshape(len(angles), -1)
-    return lowers[int(np.argmin(cost))]
-
-
-def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_part: tuple,
-                 shin_part: tuple, thigh_cost: blocks.Penalty,
-                 shin_cost: blocks.Penalty) -> tuple[np.ndarray, float]:
-    """Beyond the paper: a leg's ``shin`` block and its S with the knee moved to where
-    the thigh (from ``hip``) and the shin (to its ankle, which stays) match best
-    together (both 1/S and the blocks' penalties ``thigh_cost`` and ``shin_cost``),
-    among knee places KNEE_STEP of the shin apart around the shin's start (7 x 3).
-    ``thigh_part``: (colour model, grid, width); ``shin_part``: (colour model, grid).
-    A shin's search alone sees one colour of trousers above the knee as below it and
-    slides its start up the thigh (tracked knees sat 1.4% of the body's height short
-    along the thigh, median; benchmarks/bench_track.py). Elbows are not settled so: a
-    sleeve over the shirt gives the upper arm's block nothing to match (the arms'
-    mean error rose 6.1 -> 6.3% of the body's height)."""
-    ankle, along = block_end(shin), np.array([np.cos(shin[THETA]), np.sin(shin[THETA])])
-    steps = np.arange(-KNEE_STEPS, KNEE_STEPS + 1) * KNEE_STEP * shin[M]
-    sideways = np.array([-1.0, 0.0, 1.0]) * KNEE_STEP * shin[M]
-    knees = (shin[:2] + steps[:, None, None] * along
-             + sideways[None, :, None] * np.array([-along[1], along[0]])).reshape(-1, 2)
-    shins = blocks.between(knees, np.broadcast_to(ankle, knees.shape), shin[N])
-    thighs = blocks.between(np.broadcast_to(hip, knees.shape), knees, thigh_part[2])
-    s_shins = blocks.score(image, *shin_part, shins)
-    cost = (1.0 / blocks.score(image, *thigh_part[:2], thighs) + thigh_cost(thighs)
-            + 1.0 / s_shins + shin_cost(shins))
-    best = int(np.argmin(cost))
-    return shins[best], float(s_shins[best])
-
-
-def far_arm(key_depths: np.ndarray) -> str | None:
-    """"l" or "r": the arm whose shoulder lies FAR_MARGIN_M or more deeper than the
-    other in a key triangle (``key_depths``: left shoulder, right shoulder, chest),
-    None for a body facing the camera or away."""
-    gap = key_depths[0] - key_depths[1]
-    if abs(gap) < FAR_MARGIN_M:
-        return None
-    return "l" if gap > 0 else "r"
-
-
-def far_forearm(key_depths: np.ndarray) -> int | None:
-    """Beyond the paper: the forearm part of the far arm of the marks' key triangle
-    (``far_arm``), None for a body facing the camera or away.
-
-    The far forearm is often behind the trunk on frame 0, where its marked colours
-    are the shirt's, and it keeps them: it then follows the trunk, also where the
-    arm shows. It is matched by either its own model or its twin's mirrored
-    (``mirrored_model``), so that it takes the trunk's colours where it is hidden
-    and an arm's where it shows. On the 8 benchmark clips (benchmarks/bench_track.py)
-    PA-MPJPE 71.1 -> 70.4 mm, no clip worse by more than 0.2 mm; the twin's model
-    not mirrored: 71.1; either model for both forearms: 72.5 (a near forearm then
-    matches the trunk). The twin's model in place of the far forearm's own lost the
-    far arm where it was hidden (an earlier tracker: 77 -> 83 mm)."""
-    side = far_arm(key_depths)
-    return None if side is None else ARMS["lr".index(side)] + 1
-
-
-def mirrored_model(model: np.ndarray, shape: tuple) -> np.ndarray:
-    """A colour model (R, C, 3) mirrored across its block (the twin limb's view: the
-    arms are mirror images, lit from the same side of the image) and resampled to
-    ``shape``."""
-    flipped = np.ascontiguousarray(model[:, ::-1])
-    return cv2.resize(flipped, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
-
-
-def part_lengths() -> np.ndarray:
-    """(parts,) model lengths the parts' blocks are measured against; an arm's two
-    parts each take the longer of the two (where the elbow sits along the arm
-    differs from body to body)."""
-    def length(segment: str) -> float:
-        if "_arm_" not in segment:
-            return float(LENGTH[SEGMENT_INDEX[segment]])
-        return float(max(LENGTH[SEGMENT_INDEX[f"{kind}_arm{segment[-2:]}"]] for kind in ("upper", "lower")))
-    return np.array([length(p.segment) for p in PARTS])
 
 
 class BodyTracker:
@@ -386,7 +76,7 @@ class BodyTracker:
     the last frame (constant-velocity prediction), the colour models and the
     similarities of the last HISTORY frames, the head's adaptive threshold p, the
     last frame and the trunk in 3D (``TrunkDepth``, seen by ``camera``, default the
-    frame's (mocap.track.perspective.default_camera), and turned to ``turn``)."""
+    frame's (mocap.track.calibration.default_camera), and turned to ``turn``)."""
 
     def __init__(self, frame0: np.ndarray, marks: np.ndarray, camera: Pinhole | None = None,
                  turn: str | None = None):

@@ -25,8 +25,11 @@ from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.track.marks import check_marks
 from mocap.body import knee_facing
-from mocap.track.perspective import Pinhole, Turns, default_camera, reconstruct, steady_depths, to_contract
-from mocap.track.tracker import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, BodyTracker
+from mocap.track.calibration import Pinhole, default_camera
+from mocap.track.keydepths import Turns
+from mocap.track.perspective import reconstruct, steady_depths, to_contract
+from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO
+from mocap.track.tracker import BodyTracker
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
 
 Progress = Callable[[int, int], None]
@@ -248,14 +251,14 @@ def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
     """Which way the body is turned ("left" or "right", as the side of an orientation)
     where the user did not say: the way the knees bend over the first TURN_CUE_S
     (orientation.knee_facing). Beyond the paper: the key triangle and hips fit two
-    mirror-image turns about equally well (mocap.track.perspective.calibrate)."""
+    mirror-image turns about equally well (mocap.track.calibration.calibrate)."""
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 
 def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns: Turns, fps: float) -> np.ndarray:
     """(F, 16, 3) pinhole-frame joints (metres) of tracked 2D joints (F, 16, 2): the
     perspective reconstruction of the joints lightly smoothed (``steady_joints``), the
-    trunk turned to ``turns`` (one side, or each frame's: perspective.key_joints),
+    trunk turned to ``turns`` (one side, or each frame's: keydepths.key_joints),
     every joint's depth then smoothed along its ray (``steady_depths``)."""
     return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turns), fps)
 

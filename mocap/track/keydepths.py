@@ -1,0 +1,101 @@
+"""The key triangle (both shoulders and the chest) on every frame after the marked one:
+the tracking paper's Eq. 10-11 (Pan, Zhuang and Liu, *Video motion capture in VBA*,
+2000), each frame's key depths from the previous frame's, and the choice between the
+two mirror-image triangles a frontal view leaves open.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from mocap.track.calibration import KEY, KEY_LINES, Pinhole, calibrate, newton
+
+SIDE_MARGIN_DEG = 15.0          # a trunk turned less than this from facing the camera
+                                # (or from facing away) shows no side
+# the side a body is turned to ("left", "right", None: unsaid): one for every frame, or each frame's
+Turns = str | Sequence[str | None] | None
+
+
+def key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray) -> np.ndarray:
+    """Depths Z_i (3,) of the key joints on their rays (3, 3) of a new frame such that
+    the key triangle keeps its side lengths ``sides`` (3,) (Eq. 11 with P_i = Z_i ray_i,
+    Eq. 10), by Gauss-Newton from the previous frame's ``depths``. With 2D tracking
+    errors the equations have no exact solution: the least-squares one is kept."""
+    def residual(z):
+        p = z[:, None] * rays
+        return np.array([np.linalg.norm(p[i] - p[j]) for i, j in KEY_LINES]) - sides
+    return newton(residual, np.asarray(depths, float))
+
+
+def body_axes(key: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) rotations body -> pinhole frame given by key joints (..., 3, 3):
+    x along the shoulders (right to left), y from the chest up to their middle,
+    z = x cross y (forward)."""
+    left = key[..., 0, :] - key[..., 1, :]
+    left = left / np.linalg.norm(left, axis=-1, keepdims=True)
+    up = (key[..., 0, :] + key[..., 1, :]) / 2 - key[..., 2, :]
+    up = up - (up * left).sum(-1, keepdims=True) * left
+    up = up / np.linalg.norm(up, axis=-1, keepdims=True)
+    return np.stack([left, up, np.cross(left, up)], axis=-1)
+
+
+def triangle_yaw(key: np.ndarray) -> np.ndarray:
+    """The facing yaw in degrees (as Calibration.yaw) of key joints (..., 3, 3)."""
+    forward = body_axes(key)[..., :, 2]
+    return np.degrees(np.arctan2(forward[..., 0], -forward[..., 2]))
+
+
+def turned_against(key: np.ndarray, turn: str | None) -> bool:
+    """Whether key joints (3, 3) face clearly (SIDE_MARGIN_DEG) to the other side than
+    ``turn`` ("left" or "right", None: either)."""
+    yaw = float(triangle_yaw(key))
+    clear = SIDE_MARGIN_DEG < abs(yaw) < 180.0 - SIDE_MARGIN_DEG
+    return turn is not None and clear and (yaw > 0) != (turn == "right")
+
+
+def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
+                     turn: str | None) -> np.ndarray:
+    """A frame's key depths (3,) from the previous frame's (Eq. 10-11, ``key_depths``),
+    on the side ``turn`` says.
+
+    Beyond the paper: a trunk turning through the frontal view shows two mirror-image
+    triangles alike, and the solution nearest the previous frame turns back where the
+    body turns on (the 2D sides never quite agree with the calibrated ones). Where the
+    triangle found faces the other side than the user's held orientation, the
+    solution from its depths mirrored about their mean is taken instead if it faces
+    the said side."""
+    found = key_depths(rays, depths, sides)
+    if not turned_against(found[:, None] * rays, turn):
+        return found
+    mirror = key_depths(rays, 2 * found.mean() - found, sides)
+    return found if turned_against(mirror[:, None] * rays, turn) else mirror
+
+
+def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
+               before: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """(F, 3, 3) the key joints of every frame: calibration on frame 0 (Eq. 6-9), then
+    each frame's depths from the previous frame's (Eq. 10-11, ``frame_key_depths``).
+
+    ``turns``: the side ("left", "right" or None) of each frame's held orientation,
+    or one side for every frame. ``before``: (2D joints, key joints) of an earlier
+    call on the same clip with the same ``turns``; only the frames whose key joints
+    moved in 2D are solved again (all of them when frame 0's did), each from the
+    frame before it, as a full solve would start them."""
+    rays = camera.rays(joints2d[:, KEY])
+    held = [turns] * len(rays) if turns is None or isinstance(turns, str) else list(turns)
+    depths, sides = calibrate(joints2d[0], camera, held[0]).key_triangle()
+    redo = np.ones(len(rays), bool)
+    if before is not None and before[0].shape == joints2d.shape:
+        moved = (before[0][:, KEY] != joints2d[:, KEY]).any(axis=(1, 2))
+        redo = redo if moved[0] else moved
+    out = np.empty((len(rays), 3, 3))
+    for f, (frame_rays, turn) in enumerate(zip(rays, held)):
+        if redo[f]:
+            depths = frame_key_depths(frame_rays, depths, sides, turn)
+            out[f] = depths[:, None] * frame_rays
+        else:
+            out[f] = before[1][f]
+            depths = out[f, :, 2]
+    return out
