@@ -30,7 +30,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from mocap.batchtask import EXPORTS, Job, Outcome, run_job
+from mocap.batchtask import EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
 from mocap.errors import MocapError
 from mocap.library import ANNOTATIONS, is_finished, write_index
 
@@ -163,6 +163,8 @@ class Tally:
     start: float = field(default_factory=time.perf_counter)
     end: float | None = None      # when the last video came back
     bar: tqdm | None = None
+    running: dict[str, int] = field(default_factory=dict)    # frames done of running videos
+    ended: set[str] = field(default_factory=set)             # late reports of these are old
 
     def begin(self) -> None:
         """Start the clock (and the bar, on a terminal) as the tasks go out."""
@@ -171,8 +173,20 @@ class Tally:
             self.bar = tqdm(total=self.total, initial=self.skipped, unit="video", file=sys.stderr,
                             dynamic_ncols=True)
 
+    def running_frames(self, event: tuple) -> None:
+        """A worker's report of a running video's frames (Dask's event thread)."""
+        if event[1]["name"] not in self.ended:
+            self.running[event[1]["name"]] = event[1]["frames"]
+        if self.bar is not None:
+            self.bar.set_postfix_str(self.counts())
+
+    def counts(self) -> str:
+        return f"{len(self.failed)} failed, {self.fps:.1f} frames/s"
+
     def add(self, outcome: Outcome) -> None:
         """Count an outcome and say it."""
+        self.ended.add(outcome.name)
+        self.running.pop(outcome.name, None)
         self.done += 1
         if outcome.error:
             self.failed.append(outcome)
@@ -180,7 +194,7 @@ class Tally:
         else:
             self.frames += outcome.frames
             text = f"done {outcome.name}: {outcome.frames} frames in {outcome.seconds:.1f} s"
-        counts = f"{len(self.failed)} failed, {self.fps:.1f} frames/s"
+        counts = self.counts()
         if self.bar is None:
             print(f"{text} [{self.done + self.skipped}/{self.total} videos, {counts}]", file=sys.stderr,
                   flush=True)
@@ -196,12 +210,15 @@ class Tally:
 
     @property
     def fps(self) -> float:
-        return self.frames / max((self.end or time.perf_counter()) - self.start, 1e-9)
+        """Frames per second over the cluster: the videos done and those running."""
+        frames = self.frames + sum(self.running.values())
+        return frames / max((self.end or time.perf_counter()) - self.start, 1e-9)
 
 
 def run_batch(jobs: list[Job], client, tally: Tally) -> None:
     """Run the jobs on the cluster, counting each outcome as it comes."""
     from dask.distributed import as_completed
+    client.subscribe_topic(FRAMES_TOPIC, tally.running_frames)
     futures = client.map(run_job, jobs, pure=False, key=[f"mocap-{j.name}-{i}" for i, j in
                                                           enumerate(jobs)])
     names = {f.key: j.name for f, j in zip(futures, jobs)}

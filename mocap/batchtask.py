@@ -15,6 +15,7 @@ import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import cv2
 import numpy as np
@@ -89,13 +90,43 @@ def _make(job: Job, folder: Path) -> int:
     info = open_video(job.video)
     notes = load_annotations(job.annotations, info.frame_count) if job.annotations else Annotations()
     masks = Masks(info, folder / MASKS) if "masks" in job.settings["exports"] else None
-    session = open_session(info, notes, smooth=job.settings["smooth"], progress=masks)
+    session = open_session(info, notes, smooth=job.settings["smooth"],
+                           progress=Report(job.name, info.frame_count, masks))
     clip = dataclasses.replace(session.clip(), name=folder.name)
     files = write_exports(folder, clip, job.settings["exports"], masks)
     files.update(write_sheets(folder, info))
     summary = {**summarise(session, notes), "seconds": round(time.perf_counter() - start, 2)}
     write_record(folder, job.video, job.settings, job.annotations, summary, files)
     return info.frame_count
+
+
+FRAMES_TOPIC = "mocap-batch-frames"    # Dask events: how far each running video is
+REPORT_EVERY_S = 1.0
+
+
+class Report:
+    """How far a video is, sent to the client about once a second as a Dask event
+    (``FRAMES_TOPIC``: name and frames done), for the frames per second of the whole
+    cluster while long videos run. Outside a Dask worker it says nothing. Each step
+    goes on to ``then`` first (the masks)."""
+
+    def __init__(self, name: str, frames: int, then: Callable[[Progress], None] | None = None):
+        self.name, self.frames, self.then, self.last = name, frames, then, time.monotonic()
+        try:
+            from distributed import get_worker
+            self.worker = get_worker()
+        except (ImportError, ValueError):
+            self.worker = None
+
+    def __call__(self, progress: Progress) -> None:
+        if self.then is not None:
+            self.then(progress)
+        now = time.monotonic()
+        if self.worker is None or now - self.last < REPORT_EVERY_S:
+            return
+        self.last = now
+        done = self.frames * progress.done // max(progress.total, 1)
+        self.worker.log_event(FRAMES_TOPIC, {"name": self.name, "frames": done})
 
 
 class Masks:

@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 from helpers import frame_joints, render_walk, text_mp4
 
-from mocap.batch import find_videos, library_names
+from mocap.batch import Tally, find_videos, library_names
+from mocap.batchtask import Outcome
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
@@ -305,3 +306,14 @@ def test_tracking_annotations_beside_the_videos_make_a_tracked_video(tmp_path):
     err = np.linalg.norm(frame_joints(motion) - truth.joints2d, axis=-1) / truth.body_height_px
     assert np.median(err) < 0.05                        # followed, as `mocap fit --method track`
     assert len(list((out / "walk_c" / "masks").glob("*.png"))) == 30
+
+
+def test_frames_per_second_counts_running_videos_until_they_end():
+    tally = Tally(2)
+    tally.start -= 10.0                                  # ten seconds in
+    tally.running_frames((0.0, {"name": "a", "frames": 40}))
+    tally.running_frames((0.0, {"name": "b", "frames": 20}))
+    assert tally.fps == pytest.approx(6.0, rel=0.01)
+    tally.add(Outcome("a", frames=100, seconds=9.0))
+    tally.running_frames((0.0, {"name": "a", "frames": 90}))    # a late report of a done video
+    assert tally.fps == pytest.approx(12.0, rel=0.01) and tally.running == {"b": 20}
