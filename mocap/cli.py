@@ -26,6 +26,12 @@ def _add_fit(sub) -> None:
     for fmt in FORMATS.values():
         if fmt.key != "json":
             p.add_argument(f"--{fmt.key}", metavar="FILE", help=f"also write {fmt.holds}")
+    p.add_argument("--background", metavar="IMAGE|VIDEO",
+                   help="a photo or short video of the empty scene, same camera (silhouette method; "
+                        "default: the annotations' background, else estimated from the clip)")
+    p.add_argument("--masks", metavar="DIR",
+                   help="also write each frame's silhouette as DIR/NNNNNN.png (255 = performer) and "
+                        "name the folder in the motion file")
     p.add_argument("--smooth", type=float, default=0.0, metavar="SIGMA",
                    help="Gaussian smoothing of the animation in frames, keyframes kept (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
@@ -39,7 +45,8 @@ def _run_fit(args) -> None:
     paths = {key: getattr(args, "out" if key == "json" else key) for key in FORMATS}
     written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
                                 annotations=args.annotations, method=args.method,
-                                smooth=args.smooth, progress=_progress.step)
+                                smooth=args.smooth, background=args.background, masks=args.masks,
+                                progress=_progress.step)
     print("wrote " + ", ".join(str(p) for p in written))
 
 

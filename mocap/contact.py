@@ -20,7 +20,8 @@ from mocap.io.export.motion_json import read_motion
 from mocap.io.export.atomic import write_export
 from mocap.io.fileio import check_writable
 from mocap.overlay import silhouette_view
-from mocap.silhouette.background import Background, estimate_background, extract_silhouette
+from mocap.silhouette.background import Background, extract_silhouette
+from mocap.silhouette.plate import clip_background
 from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
 
 Progress = Callable[[int, int, str], None]   # done, total, stage
@@ -98,7 +99,7 @@ def contact_sheet(video: str | os.PathLike, motion: dict, n: int = DEFAULT_FRAME
     _check_match(info, motion)
     indices = sheet_indices(info.frame_count, n)
     scale = processing_scale(info)
-    background = estimate_background(info, scale=scale)
+    background = clip_background(info, scale)
     report(1, len(indices) + 1, "background")
     entries = {f.get("index"): f for f in motion.get("frames", [])}
     tiles = []

@@ -12,17 +12,20 @@ and exports; ``fit_video_to_file`` is `mocap fit`.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
-from mocap.errors import MocapError
+from mocap.errors import MocapError, MocapWarning
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import write_format
 from mocap.io.fileio import check_writable
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
+from mocap.silhouette.background import Background
 from mocap.silhouette.passes import FrameFit, Silhouette, body_heights, iter_fits, iter_silhouettes
+from mocap.silhouette.plate import clip_background
 from mocap.track.tracking import TrackResult, track_video
 
 SILHOUETTES = "finding the performer's silhouette"
@@ -56,14 +59,15 @@ def _quiet(_: Progress) -> None:
     pass
 
 
-def silhouette_passes(info: VideoInfo, progress: Report | None = None
+def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None
                       ) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    """The silhouette method's two passes over a video: every frame's silhouette,
-    then every frame's 2D fit, each reported as it comes."""
+    """The silhouette method's two passes over a video: every frame's silhouette
+    (against ``background``, else the clip's, mocap.silhouette.plate), then every
+    frame's 2D fit, each reported as it comes."""
     report, n = progress or _quiet, info.frame_count
     scale = processing_scale(info)
     silhouettes: list[Silhouette | None] = []
-    for i, sil in enumerate(iter_silhouettes(info, scale)):
+    for i, sil in enumerate(iter_silhouettes(info, scale, background)):
         silhouettes.append(sil)
         report(Progress(i + 1, 2 * n, SILHOUETTES, frame=i, product=sil))
     if all(s is None for s in silhouettes):
@@ -92,27 +96,45 @@ def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -
 
 def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None = None, *,
                  method: str | None = None, smooth: float = 0.0,
+                 background: str | os.PathLike | tuple[int, int] | None = None,
                  progress: Report | None = None) -> Session:
     """Run a method over a video and return its session. ``method`` None: the
-    annotations' method, else the silhouette method."""
+    annotations' method, else the silhouette method; ``background``: the empty
+    scene for it (a photo or video file, or first and last frames of the clip;
+    None: the annotations', resolved by the caller, else estimated)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
     if (method or notes.method) == "track":
         return TrackSession(info, track(info, notes, progress), notes, smooth)
-    return SilhouetteSession(info, silhouette_passes(info, progress)[1], notes, smooth)
+    scene = clip_background(info, processing_scale(info), background)
+    silhouettes, fits = silhouette_passes(info, progress, scene)
+    return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene)
 
 
 def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.PathLike], *,
                       annotations: str | os.PathLike | None = None, method: str | None = None,
-                      smooth: float = 0.0, progress: Report | None = None) -> list[Path]:
+                      smooth: float = 0.0, background: str | os.PathLike | None = None,
+                      masks: str | os.PathLike | None = None, progress: Report | None = None) -> list[Path]:
     """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
     interpolate and write the files asked for, {format key: path} of
     mocap.io.export.formats (the motion file "json" always: VIDEO.motion.json unless
-    given); returns the paths written."""
+    given); returns the paths written. ``background``: the empty scene (else the
+    annotations'); ``masks``: a folder for the silhouettes, named in the motion
+    file. A background that holds the performer is a MocapWarning."""
     info = open_video(video)
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports
     check_writable(*paths.values())
-    session = open_session(info, notes, method=method, smooth=smooth, progress=progress)
+    plate = background if background is not None else notes.background_source(annotations)
+    session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress)
+    if session.background_warning:
+        warnings.warn(session.background_warning, MocapWarning, stacklevel=2)
     clip = session.clip()
-    return [write_format(key, path, clip) for key, path in paths.items()]
+    folders = []
+    if masks is not None:
+        if not isinstance(session, SilhouetteSession):
+            raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
+        folders = [session.write_masks(masks)]
+        relative = os.path.relpath(folders[0].resolve(), Path(paths["json"]).resolve().parent)
+        clip = replace(clip, extra={"masks": Path(relative).as_posix()})
+    return [write_format(key, path, clip) for key, path in paths.items()] + folders

@@ -52,6 +52,20 @@ def test_the_method_is_kept_through_a_save():
         notes.with_method("optical")
 
 
+def test_the_background_is_kept_through_a_save(tmp_path):
+    for value, kept in (("plate.jpg", "plate.jpg"), ([0, 12], (0, 12))):
+        notes = parse({**CONTRACT_EXAMPLE, "background": value})
+        assert notes.background == kept
+        path = save_annotations(tmp_path / "a.json", notes)
+        assert load_annotations(path, 20) == notes and json.loads(path.read_text())["background"] == value
+    notes = parse({**CONTRACT_EXAMPLE, "background": "plates/empty.png"})
+    assert notes.background_source(tmp_path / "a.json") == str(tmp_path / "plates" / "empty.png")
+    assert notes.with_background(None).to_dict() == parse(CONTRACT_EXAMPLE).to_dict()
+    assert notes.with_background((2, 4)).background == (2, 4)
+    with pytest.raises(MocapError, match="not a range"):
+        notes.with_background((4, 2))
+
+
 def test_keyframes_default_to_every_frame_and_orientation_holds_until_changed():
     notes = parse({"format": "mocap-annotations", "version": 1,
                    "frames": {"3": {"orientation": "left"}, "7": {"orientation": "backward_right"}}})
@@ -93,6 +107,14 @@ def test_a_held_sign_ends_where_its_segment_passes_the_image_plane():
     ([1, 2], "A.json: expected a JSON object, got a list"),
     ({"format": "mocap-annotations", "version": 1, "method": "optical"},
      "A.json: method: expected one of silhouette, track, got \"optical\""),
+    ({"format": "mocap-annotations", "version": 1, "background": [3, 25]},
+     "A.json: background: frame 25 is out of range (the video has 20 frames)"),
+    ({"format": "mocap-annotations", "version": 1, "background": [5, 2]},
+     "A.json: background: frames 5..2 are not a range"),
+    ({"format": "mocap-annotations", "version": 1, "background": ""},
+     "A.json: background: empty file name"),
+    ({"format": "mocap-annotations", "version": 1, "background": {"file": "a.png"}},
+     "A.json: background: expected a file name or [first, last] frames, got an object"),
 ])
 def test_bad_annotations_name_the_place(doc, message):
     with pytest.raises(MocapError) as err:

@@ -42,8 +42,9 @@ def test_fit_draws_a_bar_on_a_terminal_only(fitted, tmp_path, monkeypatch):
     drawn = _stderr_of(monkeypatch, fit, terminal=True)
     assert "finding the performer's silhouette" in drawn
     assert "fitting the body model: 100%" in drawn and "30/30" in drawn
-    assert _stderr_of(monkeypatch, fit + ["--quiet"], terminal=True) == ""
-    assert _stderr_of(monkeypatch, fit, terminal=False) == ""
+    for quiet in (_stderr_of(monkeypatch, fit + ["--quiet"], terminal=True),
+                  _stderr_of(monkeypatch, fit, terminal=False)):
+        assert all(line.startswith("mocap: warning: ") for line in quiet.splitlines())   # no bar
 
 
 def test_sheet_draws_a_bar_on_a_terminal_only(fitted, tmp_path, monkeypatch):

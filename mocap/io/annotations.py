@@ -21,12 +21,12 @@ import numpy as np
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.io.fileio import atomic_write_json
-from mocap.io.jsoncheck import Bad, expect, is_number
+from mocap.io.jsoncheck import Bad, describe, expect, is_number
 from mocap.body import FORESHORTENING, ORIENTATIONS
 
 FORMAT, VERSION = "mocap-annotations", 1
 _FRAME_KEY = re.compile(r"0|[1-9][0-9]*")
-_TOP_KEYS = ("format", "version", "method", "keyframes", "frames")
+_TOP_KEYS = ("format", "version", "method", "background", "keyframes", "frames")
 METHODS = ("silhouette", "track")       # the two methods: mocap fit --method
 _FRAME_KEYS = ("orientation", "foreshortening", "joints2d")
 
@@ -58,11 +58,14 @@ class Annotations:
     """All the user's inputs: frame index -> FrameNote, the keyframes (None: all) and
     the method the user chose (None: not said, the silhouette method). ``method`` is a
     field beyond CONTRACT.md's: "track" makes frame 0's joints2d the tracking
-    method's marks."""
+    method's marks. So is ``background``, the empty scene for the silhouette method:
+    a photo or video file (relative to the annotation file) or the (first, last)
+    frames of the clip that show the stage empty; None: estimated from the clip."""
 
     frames: dict[int, FrameNote] = field(default_factory=dict)
     keyframes: tuple[int, ...] | None = None
     method: str | None = None
+    background: str | tuple[int, int] | None = None
 
     # -- editing (each returns a new, checked Annotations) --------------------------
 
@@ -104,6 +107,23 @@ class Annotations:
             raise MocapError(f"unknown method {method!r} (choose {', '.join(METHODS)})")
         return replace(self, method=method)
 
+    def with_background(self, background: str | tuple[int, int] | None) -> "Annotations":
+        """Give the empty scene (a file name, or first and last frames), or with None
+        let the clip's background be estimated."""
+        try:
+            checked = None if background is None else _background(
+                list(background) if isinstance(background, tuple) else background, None)
+        except Bad as exc:
+            raise MocapError(str(exc)) from None
+        return replace(self, background=checked)
+
+    def background_source(self, path: str | os.PathLike | None) -> str | tuple[int, int] | None:
+        """The empty scene with a file name made relative to the annotation file at
+        ``path`` (None: the current folder)."""
+        if isinstance(self.background, str) and path is not None:
+            return str(Path(path).parent / self.background)
+        return self.background
+
     # -- sticky resolution ----------------------------------------------------------
 
     def orientations(self, n_frames: int) -> list[str | None]:
@@ -139,6 +159,8 @@ class Annotations:
         out: dict = {"format": FORMAT, "version": VERSION}
         if self.method is not None:
             out["method"] = self.method
+        if self.background is not None:
+            out["background"] = self.background if isinstance(self.background, str) else list(self.background)
         if self.keyframes is not None:
             out["keyframes"] = list(self.keyframes)
         out["frames"] = {str(k): v.to_dict() for k, v in self.frames.items()}
@@ -178,6 +200,24 @@ def _keyframes(value, frame_count: int | None) -> tuple[int, ...]:
         if frame_count is not None and k >= frame_count:
             raise Bad(f"keyframes[{i}]", f"frame {k} is out of range (the video has {frame_count} frames)")
     return tuple(sorted(set(value)))
+
+
+def _background(value, frame_count: int | None) -> str | tuple[int, int]:
+    """The empty scene: a non-empty file name, or [first, last] frames of the clip."""
+    if isinstance(value, str):
+        if not value.strip():
+            raise Bad("background", "empty file name (leave it out to estimate the background)")
+        return value
+    if not (isinstance(value, list) and len(value) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) for v in value)):
+        got = json.dumps(value)[:40] if isinstance(value, list) else describe(value)
+        raise Bad("background", f"expected a file name or [first, last] frames, got {got}")
+    first, last = value
+    if not 0 <= first <= last:
+        raise Bad("background", f"frames {first}..{last} are not a range (0 <= first <= last)")
+    if frame_count is not None and last >= frame_count:
+        raise Bad("background", f"frame {last} is out of range (the video has {frame_count} frames)")
+    return (first, last)
 
 
 def _note(value, place: str) -> FrameNote:
@@ -221,6 +261,7 @@ def parse_annotations(data, frame_count: int | None = None) -> Annotations:
     method = data.get("method")
     if method is not None and method not in METHODS:
         raise Bad("method", f"expected one of {', '.join(METHODS)}, got {json.dumps(method)[:40]}")
+    background = _background(data["background"], frame_count) if "background" in data else None
     keyframes = _keyframes(data["keyframes"], frame_count) if "keyframes" in data else None
     frames = expect(data.get("frames", {}), dict, "frames",
                     'an object of notes by frame index (e.g. {"12": {"orientation": "left"}})')
@@ -229,7 +270,7 @@ def parse_annotations(data, frame_count: int | None = None) -> Annotations:
         place = f"frames[{json.dumps(key)[:40]}]"
         notes[_frame_index(key, frame_count, place)] = _note(value, place)
     return Annotations({k: v for k, v in sorted(notes.items()) if not v.is_empty()}, keyframes,
-                       method)
+                       method, background)
 
 
 def annotations_from_text(text: str, frame_count: int | None = None,

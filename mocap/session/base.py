@@ -143,6 +143,11 @@ class Session(ABC):
         return build_motion({k: self.pose3d(k) for k in keys}, self.n_frames, self.info.fps,
                             root=self.root(), smooth=self.smooth)
 
+    @property
+    def background_warning(self) -> str | None:
+        """What the user should know about the background (the silhouette method's)."""
+        return None
+
     def motion_frames(self, motion: Motion) -> list[dict]:
         """Motion-file entries (CONTRACT.md). A frame without a person stays
         ``person: false``; it gets interpolated joints3d when it lies between keyframes."""

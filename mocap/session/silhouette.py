@@ -10,7 +10,9 @@ changed (``SilhouetteSession.lifted``).
 
 from __future__ import annotations
 
+import os
 from functools import cached_property
+from pathlib import Path
 
 import numpy as np
 
@@ -19,9 +21,12 @@ from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs, resolve_inputs
+from mocap.lift.motion import Motion
 from mocap.lift.orientation import guess_orientations
 from mocap.session.base import Session
-from mocap.silhouette.passes import FrameFit, fit_arrays
+from mocap.silhouette.background import Background
+from mocap.silhouette.masks import held_warning, silhouette_confidence, write_masks
+from mocap.silhouette.passes import FrameFit, Silhouette, fit_arrays
 from mocap.track.marks import shoulders_as_hips
 
 
@@ -32,9 +37,12 @@ class SilhouetteSession(Session):
     score_name = "similarity S"
 
     def __init__(self, info: VideoInfo, fits: list[FrameFit],
-                 annotations: Annotations | None = None, smooth: float = 0.0):
+                 annotations: Annotations | None = None, smooth: float = 0.0, *,
+                 silhouettes: list[Silhouette | None] | None = None,
+                 background: Background | None = None):
         super().__init__(info, annotations, smooth)
         self.fits = fits
+        self.silhouettes, self.background = silhouettes, background
         self._inputs: Inputs | None = None
         # the inputs lifted last, their frames' lifts, and those smoothed over time
         self._lifted: tuple[Inputs, np.ndarray, np.ndarray] | None = None
@@ -47,6 +55,37 @@ class SilhouetteSession(Session):
     def _guessed(self) -> list[str | None]:
         """The orientations the fits alone suggest (once per session)."""
         return guess_orientations(*self._arrays, self.info.fps)
+
+    @cached_property
+    def silhouette_confidence(self) -> np.ndarray | None:
+        """(F,) each frame's silhouette confidence (mocap.silhouette.masks), None
+        when the session was made without its silhouettes and background."""
+        if self.silhouettes is None or self.background is None:
+            return None
+        return silhouette_confidence(self.silhouettes, self.background)
+
+    @property
+    def background_warning(self) -> str | None:
+        """The clip's warning when the performer never leaves much of their silhouette."""
+        confidence = self.silhouette_confidence
+        return None if confidence is None else held_warning(confidence)
+
+    def write_masks(self, folder: str | os.PathLike) -> Path:
+        """The silhouettes as mask files (masks.write_masks); the folder."""
+        if self.silhouettes is None or self.background is None:
+            raise MocapError("this fit kept no silhouettes to write")
+        return write_masks(folder, self.silhouettes, self.background.image.shape[:2],
+                           (self.info.width, self.info.height))
+
+    def motion_frames(self, motion: Motion) -> list[dict]:
+        """The base's entries, with each found frame's ``silhouette_confidence``."""
+        frames = super().motion_frames(motion)
+        confidence = self.silhouette_confidence
+        if confidence is not None:
+            for entry, value in zip(frames, confidence):
+                if entry["person"] and np.isfinite(value):
+                    entry["silhouette_confidence"] = float(value)
+        return frames
 
     @cached_property
     def scores(self) -> np.ndarray:

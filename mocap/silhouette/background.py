@@ -30,24 +30,29 @@ import numpy as np
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, sample_frames
 
-_MAD_TO_SIGMA = 1.4826
+MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
 _GAIN_SAMPLES = 1000  # pixels (on a regular grid) that estimate an exposure gain
+K_SIGMA = 3.0         # noise sigmas a difference must exceed to be foreground
+MIN_THRESHOLD = 12.0  # grey levels: compression artefacts of a very clean clip stay out
 
 
 @dataclass(frozen=True)
 class Background:
     """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel difference `threshold`
-    (HxW uint8 grey levels) and the clip's global noise `sigma` (grey levels)."""
+    (HxW uint8 grey levels) and the clip's global noise `sigma` (grey levels);
+    `held` (HxW bool, or None) marks the pixels the performer never left in the
+    samples, where `image` is a guess (mocap.silhouette.plate)."""
 
     image: np.ndarray
     threshold: np.ndarray
     sigma: float
+    held: np.ndarray | None = None
 
 
 def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
-                        scale: float = 1.0, k: float = 3.0,
-                        min_threshold: float = 12.0) -> Background:
+                        scale: float = 1.0, k: float = K_SIGMA,
+                        min_threshold: float = MIN_THRESHOLD) -> Background:
     """Temporal median of exposure-normalised frames (section 3.2: the regions that
     do not change), with a per-pixel threshold of `k` robust noise sigmas.
 
@@ -71,6 +76,11 @@ def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int
     return Background(background, threshold, sigma)
 
 
+def noise_floor(sigma: float) -> int:
+    """The smallest difference threshold (grey levels) of a clip with noise `sigma`."""
+    return int(np.clip(K_SIGMA * sigma, MIN_THRESHOLD, 255))
+
+
 def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float]:
     """Per-pixel noise level of the largest channel difference, and the global one.
 
@@ -80,11 +90,11 @@ def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float
     samples, then spread to the neighbours (texture edges) and floored at the global.
     """
     deviation = np.stack([cv2.absdiff(f, background).max(axis=2) for f in stack])
-    sigma = _MAD_TO_SIGMA * float(np.median(deviation))
+    sigma = MAD_TO_SIGMA * float(np.median(deviation))
     noise = np.full(background.shape[:2], sigma, np.float32)
     if len(stack) >= 5:
         quartile = np.quantile(deviation, 0.25, axis=0).astype(np.float32)
-        local = cv2.dilate(_MAD_TO_SIGMA * _MEDIAN_PER_QUARTILE * quartile, np.ones((3, 3)))
+        local = cv2.dilate(MAD_TO_SIGMA * _MEDIAN_PER_QUARTILE * quartile, np.ones((3, 3)))
         noise = np.maximum(noise, local)
     return noise, sigma
 
@@ -133,7 +143,8 @@ def extract_silhouette(frame: np.ndarray, background: Background,
     gain = exposure_gain(frame, background.image)
     frame = cv2.transform(frame, np.diag(gain))
     mask = foreground(frame, background)
-    return clean_mask(remove_shadows(mask, frame, background.image, shadow_ratio, shadow_chroma))
+    return clean_mask(remove_shadows(mask, frame, background.image, shadow_ratio, shadow_chroma,
+                                     background.sigma))
 
 
 def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
@@ -144,16 +155,19 @@ def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
 
 
 def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: np.ndarray,
-                   ratio: tuple[float, float], chroma: float) -> np.ndarray:
+                   ratio: tuple[float, float], chroma: float, sigma: float) -> np.ndarray:
     """`mask` without its soft-shadow areas (the paper's noted failure, section 3.2).
 
     A shadow pixel is the background darkened by one factor in `ratio` for all
     channels (same chromaticity, within `chroma` of the brightest background
-    channel). Only solid areas of such pixels go: thin runs of them inside the
-    person (dark hair on a grey wall) survive the opening and stay.
+    channel) that keeps the background's texture (``_textured_alike``: grey
+    clothes over a patterned floor are as dark, but flat). Only solid
+    areas of such pixels go: thin runs of them inside the person (dark hair on a
+    grey wall) survive the opening and stay.
     """
-    darker = cv2.compare(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY),
-                         cv2.cvtColor(background, cv2.COLOR_BGR2GRAY), cv2.CMP_LT)
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    grey_bg = cv2.cvtColor(background, cv2.COLOR_BGR2GRAY)
+    darker = cv2.bitwise_and(cv2.compare(grey, grey_bg, cv2.CMP_LT), _textured_alike(grey, grey_bg, sigma))
     index = np.flatnonzero(cv2.bitwise_and(mask, darker).view(bool))
     f = _channel_rows(np.take(frame.reshape(-1, 3), index, axis=0))
     b = _channel_rows(np.take(background.reshape(-1, 3), index, axis=0)) + 1.0
@@ -165,6 +179,22 @@ def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: np.ndarray,
     shadow.reshape(-1)[index[like]] = 255
     shadow = cv2.morphologyEx(shadow, cv2.MORPH_OPEN, _disk(mask.shape))
     return cv2.bitwise_and(mask, cv2.bitwise_not(shadow))
+
+
+def _textured_alike(grey: np.ndarray, grey_bg: np.ndarray, sigma: float) -> np.ndarray:
+    """255 where the frame keeps the background's texture over 5x5 pixels: its local
+    contrast is at least the background's darkened by the local level, less K_SIGMA
+    noise levels (a shadow scales the texture; cloth over a pattern hides it)."""
+    frame_mean, frame_spread = _local_spread(grey.astype(np.float32))
+    bg_mean, bg_spread = _local_spread(grey_bg.astype(np.float32))
+    expected = frame_mean / (bg_mean + 1.0) * bg_spread - K_SIGMA * sigma
+    return cv2.compare(frame_spread, expected, cv2.CMP_GE)
+
+
+def _local_spread(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard deviation over 5x5 neighbourhoods."""
+    mean = cv2.blur(image, (5, 5))
+    return mean, np.sqrt(np.maximum(cv2.blur(image * image, (5, 5)) - mean * mean, 0.0))
 
 
 def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001,

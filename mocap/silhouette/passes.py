@@ -15,8 +15,9 @@ import numpy as np
 
 from mocap.body import JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
-from mocap.silhouette.background import estimate_background, extract_silhouette
+from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
+from mocap.silhouette.plate import clip_background
 from mocap.silhouette.torso import torso_spread
 from mocap.silhouette.legchain import LAG_S, LegChain
 
@@ -68,9 +69,11 @@ class FrameFit:
     body_px: float | None = None    # video pixels of the model's 175-unit body height
 
 
-def iter_silhouettes(info: VideoInfo, scale: float) -> Iterator[Silhouette | None]:
-    """Pass one (section 3.2): the background, then every frame's silhouette in turn."""
-    background = estimate_background(info, scale=scale)
+def iter_silhouettes(info: VideoInfo, scale: float,
+                     background: Background | None = None) -> Iterator[Silhouette | None]:
+    """Pass one (section 3.2): the background (``plate.clip_background`` unless
+    given), then every frame's silhouette in turn."""
+    background = background or clip_background(info, scale)
     for _, frame in iter_frames(info, scale=scale):
         yield Silhouette.from_mask(extract_silhouette(frame, background), frame)
 

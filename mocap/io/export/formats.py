@@ -5,7 +5,7 @@ download buttons) both read, so that both offer every format."""
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
@@ -19,12 +19,14 @@ if TYPE_CHECKING:
 @dataclass(frozen=True, eq=False)
 class Clip:
     """What every format is made from: the clip's name (the video's stem), the motion
-    file's ``video`` entry and frames (CONTRACT.md), and the motion."""
+    file's ``video`` entry and frames (CONTRACT.md), the motion, and the motion file's
+    optional top-level fields (``extra``, e.g. CONTRACT.md's "masks")."""
 
     name: str
     video: dict
     frames: list[dict]
     motion: "Motion"
+    extra: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -44,7 +46,7 @@ class Format:
 
 def _json(clip: Clip) -> bytes:
     from mocap.io.export.motion_json import motion_text
-    return motion_text(clip.video, clip.frames).encode()
+    return motion_text(clip.video, clip.frames, clip.extra).encode()
 
 
 def _bvh(clip: Clip) -> bytes:

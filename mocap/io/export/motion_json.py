@@ -16,10 +16,11 @@ from mocap.io.jsoncheck import Bad, describe, expect, is_number
 FORMAT, VERSION = "mocap-motion", 1
 
 
-def motion_dict(video: dict, frames: list[dict]) -> dict:
-    """The motion file's content; frames hold numpy arrays or lists."""
+def motion_dict(video: dict, frames: list[dict], extra: dict | None = None) -> dict:
+    """The motion file's content; frames hold numpy arrays or lists; ``extra`` adds
+    optional top-level fields (CONTRACT.md: "masks")."""
     return {"format": FORMAT, "version": VERSION, "video": video, "joints": list(JOINTS),
-            "frames": [_frame_entry(f) for f in frames]}
+            **(extra or {}), "frames": [_frame_entry(f) for f in frames]}
 
 
 def _frame_entry(frame: dict) -> dict:
@@ -33,14 +34,15 @@ def _frame_entry(frame: dict) -> dict:
     return entry
 
 
-def motion_text(video: dict, frames: list[dict]) -> str:
+def motion_text(video: dict, frames: list[dict], extra: dict | None = None) -> str:
     """The motion file's text."""
-    return json.dumps(motion_dict(video, frames), indent=1) + "\n"
+    return json.dumps(motion_dict(video, frames, extra), indent=1) + "\n"
 
 
-def write_motion(path: str | os.PathLike, video: dict, frames: list[dict]) -> Path:
+def write_motion(path: str | os.PathLike, video: dict, frames: list[dict],
+                 extra: dict | None = None) -> Path:
     """Write the motion file atomically."""
-    return write_export(path, motion_text(video, frames).encode(), "motion")
+    return write_export(path, motion_text(video, frames, extra).encode(), "motion")
 
 
 def read_motion(path: str | os.PathLike) -> dict:

@@ -1,0 +1,229 @@
+"""A background that does not hold a performer who stays in place.
+
+The temporal median of ``background.estimate_background`` (section 3.2's "regions
+that do not change") shows the performer wherever they stand for more than half of
+the clip: there, the difference from it leaves only the moving slivers as the
+silhouette. This module finds those pixels and puts the empty scene back in them:
+
+1. foreground evidence on every sample: the difference from the median;
+2. the performer's region: pixels with evidence within a body part's radius on at
+   least half of the samples (the median's own breakdown point) -- the moving parts
+   surround whatever of the performer stands still -- closed to its convex hull;
+3. in that region, the median image is split into performer and scene by colour
+   (OpenCV's GrabCut: Rother et al., "GrabCut", SIGGRAPH 2004), the scene outside
+   the region being the background seed;
+4. a GrabCut piece is the performer only when most of its pixels have colours seen
+   more often in the evidence (the performer over the scene) than in the scene
+   itself, so a clip whose median is already empty keeps it;
+5. each such pixel takes the median of the samples that differ from the median
+   image there (the scene, uncovered), or, where the performer never leaves it,
+   the scene inpainted from around (Telea's method) -- ``held``, the pixels the
+   silhouettes there depend on a guess;
+6. in the performer's region the difference threshold is the clip's noise floor:
+   the per-pixel noise measured against a median that held the performer is not
+   the scene's.
+
+Or the user gives the empty scene (``clean_plate``): a photo, a video of it, or
+frames of the clip itself.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from mocap.errors import MocapError
+from mocap.io.video import VideoInfo, open_video, read_frame, sample_frames
+from mocap.silhouette.background import (MAD_TO_SIGMA, Background, estimate_background,
+                                         exposure_gain, foreground, noise_floor, remove_shadows)
+
+HALF = 0.5              # evidence on at least this fraction of samples: the performer stays
+RADIUS = 0.07           # of the evidence's height: a body part's reach around evidence
+GRABCUT_ITERATIONS = 4
+COLOUR_BINS = 16        # per channel, of the colour histograms that validate the pieces
+BACKGROUND_FRAMES = 30  # frames whose median is the background (of the clip, or of the scene)
+MIN_UNCOVERED = 3       # samples showing the scene before a pixel's scene is taken from them
+
+
+def clip_background(info: VideoInfo, scale: float,
+                    source: str | os.PathLike | tuple[int, int] | None = None) -> Background:
+    """A clip's background: the user's empty scene (``clean_plate``) when given, else
+    the temporal median of BACKGROUND_FRAMES samples without the performer who stays
+    in place (``performer_free``)."""
+    if source is not None:
+        return clean_plate(source, info, scale)
+    samples = [f for _, f in sample_frames(info, BACKGROUND_FRAMES, scale)]
+    return performer_free(estimate_background(samples), samples)
+
+
+def performer_free(background: Background, frames: list[np.ndarray]) -> Background:
+    """``background`` with the performer who stays in place taken out (module doc);
+    ``frames`` are the samples it was estimated from."""
+    frames = [cv2.transform(f, np.diag(exposure_gain(f, background.image))) for f in frames]
+    masks = [_evidence(f, background) for f in frames]
+    radius = _radius(masks)
+    region = performer_region(masks, radius)
+    if region is None:
+        return background
+    held_in_median = _median_holds(background.image, region, radius, frames, masks)
+    image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius)
+    threshold = background.threshold.copy()
+    threshold[cv2.dilate(region, _disk(radius)) > 0] = noise_floor(background.sigma)
+    return replace(background, image=image, threshold=threshold, held=held)
+
+
+def _evidence(frame: np.ndarray, background: Background) -> np.ndarray:
+    """Pixels that differ from the background, shadows and speckle removed (0/255)."""
+    mask = remove_shadows(foreground(frame, background), frame, background.image, (0.35, 0.95), 0.12,
+                          background.sigma)
+    return cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+
+
+def _radius(masks: list[np.ndarray]) -> int:
+    """A body part's reach: RADIUS of the median height of the samples' evidence."""
+    heights = []
+    for mask in masks:
+        rows = np.flatnonzero(mask.any(axis=1))
+        if len(rows):
+            heights.append(rows[-1] - rows[0] + 1)
+    return max(2, round(RADIUS * float(np.median(heights)))) if heights else 2
+
+
+def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
+    """The convex hull (0/1 uint8) of the pixels with evidence within ``radius`` on at
+    least HALF of the samples, or None when there are none (the performer moved on)."""
+    disk = _disk(radius)
+    count = np.zeros(masks[0].shape, np.float32)
+    for mask in masks:
+        count += cv2.dilate(mask, disk) > 0
+    points = cv2.findNonZero((count >= HALF * len(masks)).astype(np.uint8))
+    if points is None:
+        return None
+    region = np.zeros(masks[0].shape, np.uint8)
+    cv2.fillConvexPoly(region, cv2.convexHull(points), 1)
+    return region
+
+
+def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray],
+                  masks: list[np.ndarray]) -> np.ndarray:
+    """Pixels (bool) where the median image shows the performer: GrabCut's foreground
+    within the region, kept by pieces whose colours are the performer's (steps 3-4)."""
+    disk = _disk(radius)
+    around = cv2.dilate(region, disk)
+    cut = np.full(region.shape, cv2.GC_BGD, np.uint8)
+    cut[around > 0] = cv2.GC_PR_BGD
+    cut[region > 0] = cv2.GC_PR_FGD
+    x, y, w, h = cv2.boundingRect(cv2.dilate(around, disk))
+    window = cut[y:y + h, x:x + w].copy()
+    models = (np.zeros((1, 65)), np.zeros((1, 65)))
+    cv2.setRNGSeed(0)   # GrabCut's colour models start from k-means: the same clip, the same cut
+    cv2.grabCut(np.ascontiguousarray(image[y:y + h, x:x + w]), window, None, *models,
+                GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    cut_fg = np.zeros(region.shape, np.uint8)
+    cut_fg[y:y + h, x:x + w] = (window == cv2.GC_FGD) | (window == cv2.GC_PR_FGD)
+    if not cut_fg.any():
+        return cut_fg > 0
+    near = cv2.dilate(cut_fg, disk) > 0
+    performer = np.concatenate([f[(m > 0) & ~near] for f, m in zip(frames, masks)])
+    like = _colour_likelihood(performer, image) > _colour_likelihood(image[around == 0], image)
+    return _majority_pieces(cut_fg, like)
+
+
+def _colour_likelihood(samples: np.ndarray, image: np.ndarray) -> np.ndarray:
+    """Each pixel of ``image``: the frequency of its colour among ``samples`` (N, 3),
+    a COLOUR_BINS^3 histogram with one added to every bin (unseen colours stay possible)."""
+    step = 256 // COLOUR_BINS
+    hist = np.ones(COLOUR_BINS ** 3)
+    if len(samples):
+        hist += np.bincount(_colour_code(samples, step), minlength=COLOUR_BINS ** 3)
+    return (hist / hist.sum())[_colour_code(image.reshape(-1, 3), step)].reshape(image.shape[:2])
+
+
+def _colour_code(pixels: np.ndarray, step: int) -> np.ndarray:
+    q = pixels.astype(np.int64) // step
+    return (q[:, 0] * COLOUR_BINS + q[:, 1]) * COLOUR_BINS + q[:, 2]
+
+
+def _majority_pieces(pieces: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """The connected pieces (bool) of which more than half the pixels are ``like``."""
+    n, label = cv2.connectedComponents(pieces)
+    inside = pieces > 0
+    votes = np.bincount(label[inside], weights=like[inside], minlength=n)
+    sizes = np.maximum(np.bincount(label[inside], minlength=n), 1)
+    return inside & (votes / sizes > 0.5)[label]
+
+
+def _replate(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
+             radius: int) -> tuple[np.ndarray, np.ndarray]:
+    """Step 5: the median image with the scene put back where it ``holds`` the
+    performer, and the pixels where the scene had to be inpainted (bool)."""
+    index = np.flatnonzero(holds)
+    plate = image.copy()
+    held = np.zeros(holds.shape, bool)
+    if not len(index):
+        return plate, held
+    values = frames.reshape(len(frames), -1, 3)[:, index].astype(np.float32)
+    uncovered = masks.reshape(len(masks), -1)[:, index] > 0
+    seen = uncovered.sum(axis=0) >= MIN_UNCOVERED
+    values[~uncovered] = np.nan
+    scene = np.nanmedian(values[:, seen], axis=0)
+    plate.reshape(-1, 3)[index[seen]] = np.round(scene).astype(np.uint8)
+    held.reshape(-1)[index[~seen]] = True
+    if held.any():
+        plate = cv2.inpaint(plate, held.astype(np.uint8), radius, cv2.INPAINT_TELEA)
+    return plate, held
+
+
+def _disk(radius: int) -> np.ndarray:
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+
+
+# -- the empty scene given by the user -----------------------------------------------
+
+def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, scale: float) -> Background:
+    """The background from the empty scene the user gives: a photo, a video of it
+    (the median of its frames), or frames (first, last) of the clip itself; brought
+    to the clip's processing size. The threshold is the clip's noise floor, the noise
+    measured as the median difference of the clip's samples from the plate."""
+    if isinstance(source, tuple):
+        first, last = source
+        if not 0 <= first <= last < info.frame_count:
+            raise MocapError(f"background frames {first}..{last} are not within the video's "
+                             f"{info.frame_count} frames")
+        indices = np.unique(np.linspace(first, last, min(BACKGROUND_FRAMES, last - first + 1)).round())
+        image = _median([read_frame(info, int(i), scale) for i in indices])
+    else:
+        image = _plate_image(str(source), (info.width, info.height))
+    samples = [f for _, f in sample_frames(info, BACKGROUND_FRAMES, scale)]
+    if samples[0].shape != image.shape:
+        image = cv2.resize(image, samples[0].shape[1::-1], interpolation=cv2.INTER_AREA)
+    deviation = [cv2.absdiff(cv2.transform(f, np.diag(exposure_gain(f, image))), image).max(axis=2)
+                 for f in samples]
+    sigma = MAD_TO_SIGMA * float(np.median(np.stack(deviation)))
+    return Background(image, np.full(image.shape[:2], noise_floor(sigma), np.uint8), sigma)
+
+
+def _plate_image(path: str, size: tuple[int, int]) -> np.ndarray:
+    """A photo of the empty scene, or the median of a video of it, checked against the
+    clip's frame size (the same shape, any resolution)."""
+    if not os.path.isfile(path):
+        raise MocapError(f"{path}: no such background image or video")
+    if cv2.haveImageReader(path):
+        image = cv2.imread(path, cv2.IMREAD_COLOR)
+        if image is None:
+            raise MocapError(f"{path}: the background image cannot be read")
+    else:
+        plate_video = open_video(path)
+        image = _median([f for _, f in sample_frames(plate_video, BACKGROUND_FRAMES)])
+    h, w = image.shape[:2]
+    if abs(w * size[1] - h * size[0]) > max(w, h):
+        raise MocapError(f"{path}: the background is {w}x{h}, the video {size[0]}x{size[1]}: "
+                         f"not the same shape")
+    return image
+
+
+def _median(frames: list[np.ndarray]) -> np.ndarray:
+    return np.median(np.stack(frames), axis=0).round().astype(np.uint8)

@@ -1,0 +1,148 @@
+"""A performer who stays in place: the background without them, the clean plate the
+user gives, the silhouettes written out, their confidence and the clip's warning."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from mocap import synth
+from mocap.cli import main as mocap_main
+from mocap.errors import MocapError
+from mocap.io.video import open_video
+from mocap.silhouette.background import estimate_background, extract_silhouette
+from mocap.silhouette.masks import held_warning
+from mocap.silhouette.plate import clean_plate, performer_free
+from mocap.synth import RenderOptions
+from mocap.walk import walk_cycle
+
+OPTIONS = RenderOptions(size=(320, 240), fps=15.0, seed=3, view="three-quarter")
+
+
+def iou(a: np.ndarray, b: np.ndarray) -> float:
+    a, b = a > 0, b > 0
+    return float((a & b).sum() / max((a | b).sum(), 1))
+
+
+@pytest.fixture(scope="module")
+def in_place(tmp_path_factory):
+    """Two seconds of walking on the spot (the torso never leaves its pixels): the
+    video, its frames, the exact masks and the empty scene as a photo."""
+    folder = tmp_path_factory.mktemp("in_place")
+    joints = walk_cycle(2.0, OPTIONS.fps, in_place=True)
+    scene = synth.plan_scene(joints, OPTIONS)
+    exact = synth.plan_scene(joints, dataclasses.replace(OPTIONS, noise=0.0))
+    frames = [synth.draw_frame(scene, i) for i in range(len(joints))]
+    empty = synth.background(exact, 0)
+    masks = [cv2.absdiff(synth.draw_frame(exact, i), empty).max(axis=2) > 0 for i in range(len(joints))]
+    video, photo = folder / "in_place.mp4", folder / "empty.png"
+    synth.write_video(video, frames, OPTIONS.fps, OPTIONS.size)
+    cv2.imwrite(str(photo), empty)
+    return dict(folder=folder, video=video, photo=photo, frames=frames, masks=masks, empty=empty)
+
+
+def mean_iou(frames, masks, background) -> float:
+    return float(np.mean([iou(extract_silhouette(f, background), m) for f, m in zip(frames, masks)]))
+
+
+def test_the_median_holds_the_performer_and_the_plate_does_not(in_place):
+    frames, masks = in_place["frames"], in_place["masks"]
+    median = estimate_background(frames)
+    free = performer_free(median, frames)
+    assert np.mean(masks, axis=0).max() == 1.0    # some pixels are never uncovered
+    assert mean_iou(frames, masks, median) < 0.1
+    assert mean_iou(frames, masks, free) > 0.45
+    covered = np.mean(masks, axis=0) > 0
+    assert free.held.any() and (free.held & covered).sum() >= 0.8 * free.held.sum()
+
+
+def test_an_empty_median_is_kept(in_place):
+    """A clip whose median is already the empty scene (the walk across) keeps it."""
+    rng = np.random.default_rng(0)
+    empty = in_place["empty"]
+    frames = [np.clip(empty + rng.normal(0, 2, empty.shape), 0, 255).astype(np.uint8) for _ in range(12)]
+    for i, x in enumerate(range(20, 300, 24)):
+        cv2.rectangle(frames[i], (x, 60), (x + 20, 200), (40, 40, 200), -1)
+    median = estimate_background(frames)
+    free = performer_free(median, frames)
+    assert np.array_equal(free.image, median.image) and free.held is None or not free.held.any()
+
+
+def test_clean_plate_from_a_photo_and_from_empty_frames(in_place, tmp_path):
+    info = open_video(in_place["video"])
+    photo = clean_plate(in_place["photo"], info, 1.0)
+    assert mean_iou(in_place["frames"], in_place["masks"], photo) > 0.9
+    frames = [in_place["empty"]] * 5 + in_place["frames"]
+    video = tmp_path / "with_empty_stage.mp4"
+    synth.write_video(video, frames, OPTIONS.fps, OPTIONS.size)
+    stage = clean_plate((0, 4), open_video(video), 1.0)
+    assert mean_iou(in_place["frames"], in_place["masks"], stage) > 0.9
+
+
+def test_clean_plate_of_another_shape_or_range_is_refused(in_place, tmp_path):
+    info = open_video(in_place["video"])
+    odd = tmp_path / "square.png"
+    cv2.imwrite(str(odd), np.zeros((100, 100, 3), np.uint8))
+    with pytest.raises(MocapError, match="not the same shape"):
+        clean_plate(odd, info, 1.0)
+    with pytest.raises(MocapError, match="no such background"):
+        clean_plate(tmp_path / "absent.png", info, 1.0)
+    with pytest.raises(MocapError, match="not within the video"):
+        clean_plate((3, 1000), info, 1.0)
+
+
+def _fit(args: list[str], capsys) -> tuple[int, str]:
+    code = mocap_main(["fit", *args, "--quiet"])
+    return code, capsys.readouterr().err
+
+
+def test_fit_writes_masks_confidence_and_warns(in_place, capsys):
+    folder = in_place["folder"]
+    out, masks_dir = folder / "auto.json", folder / "auto_masks"
+    code, err = _fit([str(in_place["video"]), "--out", str(out), "--masks", str(masks_dir)], capsys)
+    assert code == 0 and "--background" in err and "never seen under" in err
+    motion = json.loads(out.read_text())
+    assert motion["masks"] == "auto_masks"
+    written = [cv2.imread(str(folder / motion["masks"] / f"{i:06d}.png"), cv2.IMREAD_UNCHANGED)
+               for i in range(len(motion["frames"]))]
+    assert all(m.dtype == np.uint8 and m.shape == (240, 320) and set(np.unique(m)) <= {0, 255}
+               for m in written)
+    assert np.mean([iou(w, m) for w, m in zip(written, in_place["masks"])]) > 0.45
+    confidence = [f["silhouette_confidence"] for f in motion["frames"] if f["person"]]
+    assert all(0.0 <= c < 1.0 for c in confidence)
+
+
+def test_fit_with_the_plate_is_confident_and_silent(in_place, capsys):
+    folder = in_place["folder"]
+    out = folder / "plate.json"
+    code, err = _fit([str(in_place["video"]), "--out", str(out), "--masks", str(folder / "plate_masks"),
+                      "--background", str(in_place["photo"])], capsys)
+    assert code == 0 and "warning" not in err
+    motion = json.loads(out.read_text())
+    written = [cv2.imread(str(folder / "plate_masks" / f"{i:06d}.png"), cv2.IMREAD_UNCHANGED)
+               for i in range(len(motion["frames"]))]
+    assert np.mean([iou(w, m) for w, m in zip(written, in_place["masks"])]) > 0.9
+    assert all(f["silhouette_confidence"] == 1.0 for f in motion["frames"] if f["person"])
+
+
+def test_fit_reads_the_plate_from_the_annotations(in_place, tmp_path, capsys):
+    notes = tmp_path / "notes.json"
+    (tmp_path / "empty.png").write_bytes(in_place["photo"].read_bytes())
+    notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "background": "empty.png"}))
+    code, err = _fit([str(in_place["video"]), "--out", str(tmp_path / "m.json"), "--annotations", str(notes)],
+                     capsys)
+    assert code == 0 and "warning" not in err
+    notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "background": "gone.png"}))
+    code, err = _fit([str(in_place["video"]), "--out", str(tmp_path / "m.json"), "--annotations", str(notes)],
+                     capsys)
+    assert code == 2 and "gone.png: no such background" in err
+
+
+def test_held_warning_needs_a_good_part_of_the_silhouettes():
+    assert held_warning(np.array([1.0, 0.95, np.nan])) is None
+    assert "--background" in held_warning(np.array([0.5, 0.6, 0.7, np.nan]))
+    assert held_warning(np.array([np.nan])) is None
