@@ -28,7 +28,7 @@ from mocap.batchtask import Outcome
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
-from mocap.library import FAILED, RECORD, is_finished, read_record, review_target
+from mocap.library import ANNOTATIONS, FAILED, RECORD, is_finished, read_record, review_target
 
 pytest.importorskip("dask.distributed")
 GOOD = ("walk_a", "walk_b", "walk_c")
@@ -317,3 +317,12 @@ def test_frames_per_second_counts_running_videos_until_they_end():
     tally.add(Outcome("a", frames=100, seconds=9.0))
     tally.running_frames((0.0, {"name": "a", "frames": 90}))    # a late report of a done video
     assert tally.fps == pytest.approx(12.0, rel=0.01) and tally.running == {"b": 20}
+
+
+def test_serve_takes_a_library_folder_or_a_file_in_it(library, videos, tmp_path, capsys):
+    out = library[0]
+    video, notes = review_target(out / "walk_a" / "motion.json")
+    assert video == str(videos / "walk_a.mp4") and notes == out / "walk_a" / ANNOTATIONS
+    assert review_target(videos / "walk_a.mp4") is None          # a video: served as before
+    assert main(["serve", str(tmp_path)]) == 2                   # a folder of something else
+    assert "not a folder of `mocap batch`" in capsys.readouterr().err
