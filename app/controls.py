@@ -97,6 +97,9 @@ class Controls:
     mark: object
     marks_from_fit: object
     track: object
+    stage: object
+    use_stage: object
+    stage_info: object
 
 
 def build_controls(gui, n_frames: int) -> Controls:
@@ -142,6 +145,14 @@ def build_controls(gui, n_frames: int) -> Controls:
     with tabs.add_tab("Review", icon="alert-triangle"):
         doubtful = gui.add_button("Next doubtful frame", icon="alert-triangle")
         review = gui.add_markdown("")
+    with tabs.add_tab("Stage", icon="photo"):
+        gui.add_markdown(STAGE_HELP)
+        stage = gui.add_text("Empty stage", initial_value="",
+                             hint="frames A-B of this video, or a photo or video file of the empty "
+                                  "stage beside the annotation file; empty: estimated from the clip")
+        use_stage = gui.add_button("Use as the empty stage", icon="photo-check",
+                                   hint="find the silhouettes again against it and refit")
+        stage_info = gui.add_markdown("")
     with tabs.add_tab("Export", icon="download"):
         play = gui.add_button("Play", icon="player-play", disabled=True)
         downloads = gui.add_button_group("Download", tuple(DOWNLOADS))
@@ -156,7 +167,7 @@ def build_controls(gui, n_frames: int) -> Controls:
     return Controls(progress, status, method, frame, frame_steps, key_steps, keyframe, frame_info,
                     orientation, orientation_note, segments, joint, clear_override, overrides,
                     edits, doubtful, review, play, downloads, commands, help_page, track_info,
-                    mark, marks_from_fit, track)
+                    mark, marks_from_fit, track, stage, use_stage, stage_info)
 
 
 # -- what the controls say about a frame ------------------------------------------------
@@ -196,6 +207,21 @@ def pins_by_frame(carried: dict[str, int]) -> dict[int, list[str]]:
     for joint, source in carried.items():
         out.setdefault(source, []).append(joint)
     return dict(sorted(out.items()))
+
+
+STAGE_HELP = ("The silhouettes are the frame's difference from the empty stage. When the "
+              "performer never leaves a spot, the stage there is only guessed: give frames of "
+              "this video where the stage is empty (e.g. `0-40`), or a photo or short video of it "
+              "filmed from the same place.")
+
+
+def stage_text(state) -> str:
+    """The empty stage in use and the fit's warning about it."""
+    background = state.annotations.background
+    used = ("estimated from the clip" if background is None else f"frames {background[0]}-{background[1]}"
+            if isinstance(background, tuple) else f"`{background}`")
+    warning = state.background_warning
+    return f"Empty stage: {used}." + (f"  \n**Warning:** {warning}." if warning else "")
 
 
 def orientation_text(view: FrameView) -> str:

@@ -21,7 +21,7 @@ import viser
 
 from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD_CHOICES, NO_JOINT,
                           Controls, build_controls, frame_text, orientation_text, review_text,
-                          sign_button, tracking_text)
+                          sign_button, stage_text, tracking_text)
 from app.state import AppState, FrameView
 from app.views import (FrameCache, Layout, SceneView, caption_image, silhouette_image, tracked_image,
                        video_image)
@@ -139,6 +139,7 @@ class App:
         c.mark.on_click(self._on(self._start_marking))
         c.marks_from_fit.on_click(self._on(state.marks_from_fit))
         c.track.on_click(self._on(state.start_tracking))
+        c.use_stage.on_click(self._on(lambda: state.set_background(c.stage.value)))
         c.clear_override.on_click(self._on(self._clear_override))
         c.downloads.on_click(lambda e: self._run(e.client, lambda: self._download(e)))
         for segment, button in c.segments.items():
@@ -289,6 +290,7 @@ class App:
         _set(c.review, content=review_text(self.state))
         _set(c.method, value=next(k for k, v in METHOD_CHOICES.items() if v == view.method))
         _set(c.track_info, content=tracking_text(self.state))
+        _set(c.stage_info, content=stage_text(self.state))
         _set(c.track, disabled=self.state.tracking)
 
     def _show_progress(self, view: FrameView) -> None:
@@ -299,6 +301,8 @@ class App:
             text = f"**Stopped:** {p.error}"
         elif p.ready:
             text = f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`."
+            if view.method != "track" and self.state.background_warning:
+                text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."
         elif view.method == "track" and not self.state.tracking:
             missing = len(self.state.unmarked())
             text = ("Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."

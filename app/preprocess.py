@@ -5,6 +5,8 @@ them), so the page shows them at once; the page hears at each whole percent."""
 
 from __future__ import annotations
 
+import os
+import re
 import sys
 import threading
 import traceback
@@ -27,6 +29,20 @@ class Throttle:
         if key != self.last:
             self.last = key
             self.report(done, stage)
+
+
+def stage_of(text: str, n_frames: int) -> str | tuple[int, int] | None:
+    """The empty stage a user typed: "A-B" (frames A to B of the video), a file name
+    (a photo or video of it, beside the annotation file), or nothing (None: the
+    background is estimated from the clip)."""
+    text = text.strip()
+    frames = re.fullmatch(r"(\d+)\s*(?:-|\.\.)\s*(\d+)", text)
+    if not frames:
+        return text or None
+    first, last = int(frames.group(1)), int(frames.group(2))
+    if not first <= last < n_frames:
+        raise MocapError(f"frames {first}-{last} are not a range within the video's {n_frames} frames")
+    return first, last
 
 
 class Preprocessing:
@@ -68,12 +84,38 @@ class Preprocessing:
             progress(p.done, p.total)
             report(p.done, p.stage)
 
-        session = open_session(self.info, self._annotations, method="silhouette", progress=step)
+        session = open_session(self.info, self._annotations, method="silhouette", progress=step,
+                               background=self._annotations.background_source(self.path))
         with self._lock:
             session.annotate(self._annotations)     # edits made while fitting
             self._fitted = session
             self._progress = Progress(2 * self.n_frames, 2 * self.n_frames, "ready")
         self._changed()
+
+    def set_background(self, text: str) -> None:
+        """Use the empty stage the user names (``stage_of``): saved in the annotations,
+        then the silhouettes are found again and refitted. Refused while fitting."""
+        background = stage_of(text, self.n_frames)
+        with self._lock:
+            if not self.ready.is_set():
+                raise MocapError("the fit is still running: set the empty stage when it is done")
+            notes = self._annotations.with_background(background)
+            source = notes.background_source(self.path)
+            if isinstance(source, str) and not os.path.isfile(source):
+                raise MocapError(f"{source}: no such photo or video of the empty stage")
+            self._apply(notes)
+            n = self.n_frames
+            self._silhouettes, self._silhouettes_done, self._fits = [None] * n, 0, [None] * n
+            self._fitted, self._progress = None, Progress(0, 2 * n, "waiting")
+            self.ready.clear()
+        self._changed()
+        self.start()
+
+    @property
+    def background_warning(self) -> str | None:
+        """The fit's warning when the background holds the performer (else None)."""
+        with self._lock:
+            return None if self._fitted is None else self._fitted.background_warning
 
     def _step(self, done: int, stage: str) -> None:
         with self._lock:

@@ -1,6 +1,6 @@
 """The review queue: which frames' fits deserve a look, and why (the app's Review).
 
-Four signs of a doubtful frame, each a short function over a session's resolved
+Five signs of a doubtful frame, each a short function over a session's resolved
 lifting inputs (anatomical 2D joints, overrides applied) and fits:
 
 - a low score: the silhouette similarity S (Eq. 3) of the fit, or the tracking
@@ -9,7 +9,9 @@ lifting inputs (anatomical 2D joints, overrides applied) and fits:
   direction and its depth (Eq. 5) are least sure;
 - a joint limit of Table 1 broken (waist, neck, hips);
 - a likely left/right swap: the left and right hands or feet each lie nearer where
-  the other one was on the frame before.
+  the other one was on the frame before;
+- a silhouette partly told from a guessed background (its confidence below
+  ``mocap.silhouette.masks.DOUBTFUL``: the performer never left those pixels).
 
 With the tracking method the review stops evenly, one frame in every stretch its
 pins cover, the most doubtful stretches first (``covering``).
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap.body import ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.silhouette.masks import DOUBTFUL
 
 LOW_SCORE = 0.7           # S below this is a doubtful fit
 END_ON_RATIO = 0.3        # seen length / length below this: the segment points at the camera
@@ -79,13 +82,18 @@ def review_queue(session) -> list[Doubt]:
     signs = (end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
              broken_limits(inputs.joints2d),
              likely_swaps(inputs.joints2d, inputs.px_per_unit))
+    guessed = session.silhouette_confidence
+    guessed = np.zeros(len(scores), bool) if guessed is None else guessed < DOUBTFUL
     queue = []
     for i in np.flatnonzero(np.isfinite(scores)):
         reasons = _reasons(f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE,
-                           *(sign[i] for sign in signs))
+                           *(sign[i] for sign in signs)) + (GUESSED,) * bool(guessed[i])
         if reasons:
             queue.append(Doubt(int(i), float(1.0 - scores[i] + REASON_WEIGHT * len(reasons)), reasons))
     return sorted(queue, key=lambda d: (-d.value, d.frame))
+
+
+GUESSED = "silhouette partly guessed (the performer never leaves those pixels: a clean plate helps)"
 
 
 def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:

@@ -13,6 +13,7 @@ import pytest
 from mocap import synth
 from mocap.cli import main as mocap_main
 from mocap.errors import MocapError
+from mocap.review import GUESSED
 from mocap.io.video import open_video
 from mocap.silhouette.background import estimate_background, extract_silhouette
 from mocap.silhouette.masks import held_warning
@@ -146,3 +147,25 @@ def test_held_warning_needs_a_good_part_of_the_silhouettes():
     assert held_warning(np.array([1.0, 0.95, np.nan])) is None
     assert "--background" in held_warning(np.array([0.5, 0.6, 0.7, np.nan]))
     assert held_warning(np.array([np.nan])) is None
+
+
+def test_the_app_takes_an_empty_stage_and_reviews_guessed_frames(in_place, tmp_path):
+    from app.state import AppState
+    video = tmp_path / "in_place.mp4"
+    video.write_bytes(in_place["video"].read_bytes())
+    (tmp_path / "empty.png").write_bytes(in_place["photo"].read_bytes())
+    state = AppState(video)
+    state.start()
+    assert state.ready.wait(300) and state.progress.error is None
+    assert "--background" in state.background_warning
+    assert any(GUESSED in d.reasons for d in state.review_queue())
+    with pytest.raises(MocapError, match="no such photo"):
+        state.set_background("gone.png")
+    with pytest.raises(MocapError, match="not a range"):
+        state.set_background("9-2")
+    state.set_background("empty.png")
+    assert state.ready.wait(300) and state.progress.error is None
+    assert state.background_warning is None
+    assert not any(GUESSED in d.reasons for d in state.review_queue())
+    assert json.loads(state.path.read_text())["background"] == "empty.png"
+    assert state.annotations.background == "empty.png"

@@ -144,6 +144,11 @@ class Session(ABC):
                             root=self.root(), smooth=self.smooth)
 
     @property
+    def silhouette_confidence(self) -> np.ndarray | None:
+        """(F,) each frame's silhouette confidence (the silhouette method's), or None."""
+        return None
+
+    @property
     def background_warning(self) -> str | None:
         """What the user should know about the background (the silhouette method's)."""
         return None
