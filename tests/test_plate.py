@@ -82,6 +82,10 @@ def test_clean_plate_from_a_photo_and_from_empty_frames(in_place, tmp_path):
     synth.write_video(video, frames, OPTIONS.fps, OPTIONS.size)
     stage = clean_plate((0, 4), open_video(video), 1.0)
     assert mean_iou(in_place["frames"], in_place["masks"], stage) > 0.9
+    empty_video = tmp_path / "empty_stage.mp4"     # a short video of the empty stage
+    synth.write_video(empty_video, [in_place["empty"]] * 5, OPTIONS.fps, OPTIONS.size)
+    filmed = clean_plate(empty_video, info, 1.0)
+    assert mean_iou(in_place["frames"], in_place["masks"], filmed) > 0.9
 
 
 def test_clean_plate_of_another_shape_or_range_is_refused(in_place, tmp_path):
