@@ -33,6 +33,7 @@ from tqdm import tqdm
 from mocap.batchtask import EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
 from mocap.errors import MocapError
 from mocap.library import ANNOTATIONS, is_finished, write_index
+from mocap.options import add_smooth, smooth_of
 
 VIDEO_SUFFIXES = {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv",
                   ".ogv"}
@@ -280,15 +281,12 @@ def add_batch_arguments(parser) -> None:
     parser.add_argument("--annotations-from", metavar="DIR",
                         help="annotations per video: DIR/<name>/annotations.json (a library "
                              "reviewed with `mocap serve DIR/<name>`) or DIR/<name>.annotations.json")
-    parser.add_argument("--smooth", type=float, default=0.0, metavar="SIGMA",
-                        help="Gaussian smoothing of the animation in frames, as `mocap fit`")
+    add_smooth(parser, "as `mocap fit`")
     parser.set_defaults(run=run_batch_command)
 
 
 def run_batch_command(args) -> int:
     """Exit code 1 when some video failed (each was reported with its error)."""
-    if args.smooth < 0:
-        raise MocapError(f"--smooth must be 0 or more, got {args.smooth}")
     tally = batch(args.inputs, args.out, scheduler=args.scheduler, workers=args.workers,
-                  exports=args.exports, annotations_from=args.annotations_from, smooth=args.smooth)
+                  exports=args.exports, annotations_from=args.annotations_from, smooth=smooth_of(args))
     return 1 if tally.failed else 0

@@ -9,6 +9,7 @@ import warnings
 
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
+from mocap.options import add_smooth, smooth_of
 from mocap.progressbar import Bar
 
 
@@ -32,20 +33,17 @@ def _add_fit(sub) -> None:
     p.add_argument("--masks", metavar="DIR",
                    help="also write each frame's silhouette as DIR/NNNNNN.png (255 = performer) and "
                         "name the folder in the motion file")
-    p.add_argument("--smooth", type=float, default=0.0, metavar="SIGMA",
-                   help="Gaussian smoothing of the animation in frames, keyframes kept (default 0)")
+    add_smooth(p, "keyframes kept (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(run=_run_fit)
 
 
 def _run_fit(args) -> None:
     from mocap.pipeline import fit_video_to_file
-    if args.smooth < 0:
-        raise MocapError(f"--smooth must be 0 or more, got {args.smooth}")
     paths = {key: getattr(args, "out" if key == "json" else key) for key in FORMATS}
     written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
                                 annotations=args.annotations, method=args.method,
-                                smooth=args.smooth, background=args.background, masks=args.masks,
+                                smooth=smooth_of(args), background=args.background, masks=args.masks,
                                 progress=_progress.step)
     print("wrote " + ", ".join(str(p) for p in written))
 
