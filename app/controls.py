@@ -100,6 +100,7 @@ class Controls:
     stage: object
     use_stage: object
     stage_info: object
+    foot_lock: object
 
 
 def build_controls(gui, n_frames: int) -> Controls:
@@ -155,6 +156,9 @@ def build_controls(gui, n_frames: int) -> Controls:
         stage_info = gui.add_markdown("")
     with tabs.add_tab("Export", icon="download"):
         play = gui.add_button("Play", icon="player-play", disabled=True)
+        foot_lock = gui.add_checkbox("Foot lock", initial_value=False,
+                                     hint="keep each planted foot in place through its contact "
+                                          "in the files downloaded")
         downloads = gui.add_button_group("Download", tuple(DOWNLOADS))
         gui.add_markdown("*HTML page*: the playback page, one HTML file that plays the "
                          "body in any browser, from disk, with no server.")
@@ -167,7 +171,8 @@ def build_controls(gui, n_frames: int) -> Controls:
     return Controls(progress, status, method, frame, frame_steps, key_steps, keyframe, frame_info,
                     orientation, orientation_note, segments, joint, clear_override, overrides,
                     edits, doubtful, review, play, downloads, commands, help_page, track_info,
-                    mark, marks_from_fit, track, stage, use_stage, stage_info)
+                    mark, marks_from_fit, track, stage, use_stage, stage_info,
+                    foot_lock)
 
 
 # -- what the controls say about a frame ------------------------------------------------

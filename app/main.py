@@ -190,7 +190,7 @@ class App:
         self.state.clear_overrides(self.state.frame, None if joint == NO_JOINT else joint)
 
     def _download(self, event) -> None:
-        name, data = self.state.export(DOWNLOADS[event.target.value])
+        name, data = self.state.export(DOWNLOADS[event.target.value], self.controls.foot_lock.value)
         event.client.send_file_download(name, data, save_immediately=True)
 
     # -- state -> page ------------------------------------------------------------

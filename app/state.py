@@ -187,10 +187,11 @@ class AppState(Preprocessing, Edits):
             motion = self._require_session().motion()
         return motion.joints3d, motion.fps
 
-    def export(self, key: str) -> tuple[str, bytes]:
-        """(file name, content) of the animation in a format of mocap.session.FORMATS."""
+    def export(self, key: str, foot_lock: bool = False) -> tuple[str, bytes]:
+        """(file name, content) of the animation in a format of mocap.session.FORMATS,
+        planted feet kept in place with ``foot_lock``."""
         with self._lock:
-            return self._require_session().export(key)
+            return self._require_session().export(key, foot_lock)
 
     def _require_session(self) -> Session:
         if self._session is not None:

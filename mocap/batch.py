@@ -30,8 +30,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from mocap.batchtask import EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
+from mocap.batchtask import DEFAULT_EXPORTS, EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
 from mocap.errors import MocapError
+from mocap.io.export.formats import require
 from mocap.library import ANNOTATIONS, is_finished, write_index
 from mocap.options import add_smooth, smooth_of
 
@@ -115,6 +116,9 @@ def parse_exports(text: str) -> list[str]:
     unknown = [n for n in names if n not in EXPORTS]
     if unknown:
         raise MocapError(f"--exports: unknown format {unknown[0]!r} (choose from {', '.join(EXPORTS)})")
+    missing = [n for n in names if n not in DEFAULT_EXPORTS]
+    if missing:
+        require(missing[0])                     # says what that format needs
     return names
 
 
@@ -232,7 +236,7 @@ def run_batch(jobs: list[Job], client, tally: Tally) -> None:
 
 
 def batch(inputs: list[str], out: str, *, scheduler: str | None = None, workers: int | None = None,
-          exports: str = ",".join(EXPORTS), annotations_from: str | None = None,
+          exports: str = ",".join(DEFAULT_EXPORTS), annotations_from: str | None = None,
           smooth: float = 0.0) -> Tally:
     """`mocap batch`: every video not already finished, then the library's index."""
     if workers is not None and (workers < 1 or scheduler):
@@ -275,8 +279,9 @@ def add_batch_arguments(parser) -> None:
                              "cluster, one process per core)")
     parser.add_argument("--workers", type=int, metavar="N",
                         help="processes of the local cluster (default: one per core)")
-    parser.add_argument("--exports", default=",".join(EXPORTS), metavar="LIST",
-                        help=f"comma-separated, of {', '.join(EXPORTS)} (default: all); the motion "
+    parser.add_argument("--exports", default=",".join(DEFAULT_EXPORTS), metavar="LIST",
+                        help=f"comma-separated, of {', '.join(EXPORTS)} (default: all that this "
+                             "installation writes); the motion "
                              "file, playback page and contact sheet are always written")
     parser.add_argument("--annotations-from", metavar="DIR",
                         help="annotations per video: DIR/<name>/annotations.json (a library "

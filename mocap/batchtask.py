@@ -34,6 +34,8 @@ from mocap.silhouette.passes import Silhouette, iter_silhouettes
 
 ALWAYS = {"json": "motion", "html": "playback"}     # registry format -> the library's name
 EXPORTS = (*(k for k in FORMATS if k not in ALWAYS), "masks")   # what --exports may name
+# the default: every one this installation writes (FBX needs the fbx extra)
+DEFAULT_EXPORTS = tuple(k for k in EXPORTS if k not in FORMATS or FORMATS[k].available())
 MOTION, SHEET, THUMB, MASKS = "motion.json", "sheet.png", "thumb.jpg", "masks"
 THUMB_WIDTH = 480                        # px: the library page shows hundreds of these
 

@@ -33,6 +33,9 @@ def _add_fit(sub) -> None:
     p.add_argument("--masks", metavar="DIR",
                    help="also write each frame's silhouette as DIR/NNNNNN.png (255 = performer) and "
                         "name the folder in the motion file")
+    p.add_argument("--foot-lock", action="store_true",
+                   help="keep each planted foot in place through its contact (the motion file "
+                        "says which frames: contacts), in every file written")
     add_smooth(p, "keyframes kept (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(run=_run_fit)
@@ -44,6 +47,7 @@ def _run_fit(args) -> None:
     written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
                                 annotations=args.annotations, method=args.method,
                                 smooth=smooth_of(args), background=args.background, masks=args.masks,
+                                foot_lock=args.foot_lock,
                                 progress=_progress.step)
     print("wrote " + ", ".join(str(p) for p in written))
 
@@ -112,6 +116,7 @@ def _add_export(sub) -> None:
 
 
 _progress = Bar()    # --quiet makes it quiet (main)
+_OPENCV_LOG_ERROR = 2             # OpenCV's LOG_LEVEL_ERROR
 
 
 def _quiet_video_libraries() -> None:
@@ -119,7 +124,12 @@ def _quiet_video_libraries() -> None:
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
     import cv2
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    # OpenCV 5 has cv2.utils.logging; 4.x (the one beside bpy's numpy 1.x) cv2.setLogLevel
+    logging = getattr(cv2.utils, "logging", None)
+    if logging is not None:
+        logging.setLogLevel(logging.LOG_LEVEL_ERROR)
+    else:
+        cv2.setLogLevel(_OPENCV_LOG_ERROR)
 
 
 def build_parser() -> argparse.ArgumentParser:

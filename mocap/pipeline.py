@@ -19,7 +19,7 @@ from typing import Callable
 
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.annotations import Annotations, load_annotations
-from mocap.io.export.formats import write_format
+from mocap.io.export.formats import require, write_format
 from mocap.io.fileio import check_writable
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
@@ -114,13 +114,18 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
 def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.PathLike], *,
                       annotations: str | os.PathLike | None = None, method: str | None = None,
                       smooth: float = 0.0, background: str | os.PathLike | None = None,
-                      masks: str | os.PathLike | None = None, progress: Report | None = None) -> list[Path]:
+                      masks: str | os.PathLike | None = None, foot_lock: bool = False,
+                      progress: Report | None = None) -> list[Path]:
     """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
     interpolate and write the files asked for, {format key: path} of
     mocap.io.export.formats (the motion file "json" always: VIDEO.motion.json unless
     given); returns the paths written. ``background``: the empty scene (else the
     annotations'); ``masks``: a folder for the silhouettes, named in the motion
-    file. A background that holds the performer is a MocapWarning."""
+    file; ``foot_lock``: planted feet kept in place. A background that holds the
+    performer is a MocapWarning; a format this installation cannot write is refused
+    before the video is read."""
+    for key in exports:
+        require(key)
     info = open_video(video)
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports
@@ -129,7 +134,7 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress)
     if session.background_warning:
         warnings.warn(session.background_warning, MocapWarning, stacklevel=2)
-    clip = session.clip()
+    clip = session.clip(foot_lock)
     folders = []
     if masks is not None:
         if not isinstance(session, SilhouetteSession):

@@ -241,7 +241,7 @@ def test_inputs_and_names(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["nowhere/*.mp4"], "nowhere/*.mp4: no file matches"),
     (["missing.mp4"], "missing.mp4: no such file or folder"),
-    (["{videos}", "--exports", "bvh,fbx"], "--exports: unknown format 'fbx'"),
+    (["{videos}", "--exports", "bvh,obj"], "--exports: unknown format 'obj'"),
     (["{videos}", "--workers", "0"], "--workers must be 1 or more"),
     (["{videos}", "--annotations-from", "nowhere"], "--annotations-from nowhere: no such folder"),
 ])

@@ -1,7 +1,8 @@
 """Exports read back by independent readers: BVH by bvhio, GLB by pygltflib and
-trimesh, CSV by the csv module."""
+trimesh, CSV by the csv module (Blender's own imports: test_blender.py)."""
 
 import csv
+import importlib.util
 from pathlib import Path
 
 import bvhio
@@ -13,16 +14,19 @@ from scipy.spatial.transform import Rotation
 
 from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
+from mocap.cli import main
 from mocap.errors import MocapError
 from mocap.io.export.formats import FORMATS, Clip, write_format
 from mocap.lift.motion import build_motion
+from mocap.lift.skeleton import BONES, JOINT_BONES
 from mocap.synth import resample_indices
 from mocap.walk import walk_cycle
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 FPS = 30.0
-_COMPONENTS = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}
-_DTYPES = {pygltflib.FLOAT: np.float32, pygltflib.UNSIGNED_SHORT: np.uint16}
+_COMPONENTS = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+_DTYPES = {pygltflib.FLOAT: np.float32, pygltflib.UNSIGNED_SHORT: np.uint16,
+           pygltflib.UNSIGNED_INT: np.uint32}
 
 
 @pytest.fixture(scope="module")
@@ -51,11 +55,21 @@ def bvhio_joints(path: Path) -> tuple[np.ndarray, float]:
     root = bvhio.readAsHierarchy(str(path))
     by_name = {joint.Name: joint for joint, _, _ in root.layout()}
     frames = bvhio.readAsBvh(str(path), loadKeyFrames=False)
+    head_end = next(j for j in _tree(frames.Root) if j.Name == "Head").EndSite
     out = np.empty((frames.FrameCount, len(body.JOINTS), 3))
     for f in range(frames.FrameCount):
         root.loadPose(f)
-        out[f] = [by_name[name].PositionWorld for name in body.JOINTS]
+        # bvhio keeps End Sites apart: the head top is the Head's, in the Head's frame
+        out[f] = [by_name["Head"].pointToWorld(head_end) if BONES[b] == "Head_End"
+                  else by_name[BONES[b]].PositionWorld for b in JOINT_BONES]
     return out / 100.0, frames.FrameTime          # the file is in centimetres
+
+
+def _tree(joint):
+    """A bvhio BVH joint and all below it."""
+    yield joint
+    for child in joint.Children:
+        yield from _tree(child)
 
 
 @pytest.mark.parametrize("which", ["walk_motion", "cmu_motion"])
@@ -89,74 +103,110 @@ class Gltf:
                              view.byteOffset + (acc.byteOffset or 0))
         return flat.reshape(acc.count, width).astype(float)
 
-    def world_matrices(self, sample: int) -> list[np.ndarray]:
-        """4x4 world transform of every node at one animation sample."""
+    def world_matrices(self, sample: int | None) -> dict[int, np.ndarray]:
+        """4x4 world transform of every node at one animation sample (None: at rest)."""
         local = {}
         for i, node in enumerate(self.doc.nodes):
             local[i] = {"translation": node.translation or [0, 0, 0],
                         "rotation": node.rotation or [0, 0, 0, 1]}
         animation = self.doc.animations[0]
-        for channel in animation.channels:
+        for channel in animation.channels if sample is not None else ():
             sampler = animation.samplers[channel.sampler]
             local[channel.target.node][channel.target.path] = self.accessor(sampler.output)[sample]
-        world: list[np.ndarray] = []
-        for i in range(len(self.doc.nodes)):      # parents come first in our files
-            m = np.eye(4)
-            m[:3, :3] = Rotation.from_quat(local[i]["rotation"]).as_matrix()
-            m[:3, 3] = local[i]["translation"]
-            world.append(world[self.parent[i]] @ m if i in self.parent else m)
+        world: dict[int, np.ndarray] = {}
+
+        def place(i: int) -> np.ndarray:
+            if i not in world:
+                m = np.eye(4)
+                m[:3, :3] = Rotation.from_quat(local[i]["rotation"]).as_matrix()
+                m[:3, 3] = local[i]["translation"]
+                world[i] = place(self.parent[i]) @ m if i in self.parent else m
+            return world[i]
+
+        for i in range(len(self.doc.nodes)):
+            place(i)
         return world
 
 
-def test_glb_animation_puts_cylinders_on_the_joints(walk_motion, tmp_path):
+def test_glb_is_one_skinned_character(walk_motion, tmp_path):
+    """One mesh, one skin over every bone, one animation; on sampled frames the joints
+    are the motion's and the skinned cylinders' ends sit on their joints."""
     gltf = Gltf(write_format("glb", tmp_path / "m.glb", Clip("m", {}, [], walk_motion)))
     doc = gltf.doc
-    assert len(doc.animations) == 1 and len(doc.meshes) == 10
+    assert len(doc.animations) == len(doc.meshes) == len(doc.skins) == len(doc.materials) == 1
+    skin, primitive = doc.skins[0], doc.meshes[0].primitives[0]
+    names = [doc.nodes[j].name for j in skin.joints]
+    assert names == list(BONES)
     times = gltf.accessor(doc.animations[0].samplers[0].input)[:, 0]
     assert len(times) == walk_motion.n_frames
     assert times[-1] == pytest.approx((walk_motion.n_frames - 1) / FPS)
-    names = [node.name for node in doc.nodes]
+    inverse_bind = gltf.accessor(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
+    rest = gltf.world_matrices(None)
+    assert np.abs(inverse_bind @ np.array([rest[j] for j in skin.joints]) - np.eye(4)).max() < 1e-5
+    vertices = gltf.accessor(primitive.attributes.POSITION)
+    joints = gltf.accessor(primitive.attributes.JOINTS_0).astype(int)
+    weights = gltf.accessor(primitive.attributes.WEIGHTS_0)
+    assert np.allclose(weights.sum(1), 1.0)
+    per_segment = len(vertices) // len(body.SEGMENTS)
     world = walk_motion.world_joints
     for sample in (0, 17, walk_motion.n_frames - 1):
         matrices = gltf.world_matrices(sample)
-        at = {name: matrices[i][:3, 3] for i, name in enumerate(names)}
-        assert np.abs([at[j] - world[sample, k] for k, j in enumerate(body.JOINTS)]).max() < 1e-5
-        for i, node in enumerate(doc.nodes):
-            if node.mesh is None:
-                continue
-            mesh = doc.meshes[node.mesh]
-            start, end = body.SEGMENTS[mesh.name]
-            vertices = gltf.accessor(mesh.primitives[0].attributes.POSITION)
-            centre = matrices[i][:3, :3] @ vertices.mean(0) + matrices[i][:3, 3]
-            middle = world[sample, [body.JOINT_INDEX[start], body.JOINT_INDEX[end]]].mean(0)
-            assert np.abs(centre - middle).max() < 1e-5, mesh.name
+        at = {doc.nodes[j].name: matrices[j][:3, 3] for j in skin.joints}
+        assert np.abs([at[BONES[b]] - world[sample, k] for k, b in enumerate(JOINT_BONES)]).max() < 1e-5
+        skinning = np.array([matrices[j] for j in skin.joints]) @ inverse_bind
+        moved = np.einsum("vk,vkij,vj->vi", weights, skinning[joints],
+                          np.c_[vertices, np.ones(len(vertices))])[:, :3]
+        for k, (start, end) in enumerate(body.SEGMENTS.values()):
+            part = slice(k * per_segment, (k + 1) * per_segment)
+            ends = world[sample, [body.JOINT_INDEX[start], body.JOINT_INDEX[end]]]
+            along = _along(vertices[part], rest, skin, start, end)
+            for end_at, joint in ((0.0, ends[0]), (1.0, ends[1])):
+                ring = moved[part][np.abs(along - end_at) < 1e-4]
+                assert np.abs(ring.mean(0) - joint).max() < 1e-5, (start, end)
+
+
+def _along(vertices, rest, skin, start: str, end: str) -> np.ndarray:
+    """Where rest-pose vertices lie along the segment from one joint to the other (0..1)."""
+    a, b = (rest[skin.joints[JOINT_BONES[body.JOINT_INDEX[j]]]][:3, 3] for j in (start, end))
+    return (vertices - a) @ (b - a) / np.sum((b - a) ** 2)
 
 
 def test_glb_loads_in_trimesh(walk_motion, tmp_path):
     scene = trimesh.load(write_format("glb", tmp_path / "m.glb", Clip("m", {}, [], walk_motion)))
-    assert len(scene.geometry) == 10
-    assert all(m.is_watertight and m.volume > 0 for m in scene.geometry.values())
-    torso = scene.geometry["torso"]
-    radii = body.semi_axes(body.BODY_HEIGHT_M)[body.SEGMENT_INDEX["torso"]]
-    assert np.ptp(torso.vertices, axis=0)[[0, 2]] == pytest.approx(2 * radii, rel=0.01)
-    # trimesh places the nodes by their static transforms, the first frame
-    neck, _ = scene.graph.get("neck")
-    assert np.abs(neck[:3, 3] - walk_motion.world_joints[0, body.JOINT_INDEX["neck"]]).max() < 1e-5
+    assert list(scene.geometry) == ["body"]
+    mesh = scene.geometry["body"]
+    assert mesh.body_count == len(body.SEGMENTS) and mesh.volume > 0
+    assert all(part.is_watertight for part in mesh.split(only_watertight=False))
 
 
 def test_csv_round_trip(walk_motion, tmp_path):
-    with open(write_format("csv", tmp_path / "m.csv", Clip("m", {}, [], walk_motion)), newline="") as f:
+    joints2d = np.random.default_rng(0).uniform(0, 640, (walk_motion.n_frames, 16, 2))
+    frames = [{"index": i, "joints2d": joints2d[i], "score": 0.5} for i in range(walk_motion.n_frames)]
+    del frames[3]["joints2d"], frames[3]["score"]                   # nobody on frame 3
+    path = write_format("csv", tmp_path / "m.csv", Clip("m", {}, frames, walk_motion))
+    with open(path, newline="") as f:
         rows = list(csv.reader(f))
-    assert rows[0][:5] == ["frame", "time", "head_top_x", "head_top_y", "head_top_z"]
-    assert len(rows[0]) == 2 + 3 * 16 and len(rows) == 1 + walk_motion.n_frames
-    values = np.array(rows[1:], dtype=float)
+    head = rows[0]
+    assert head[:6] == ["frame", "time_s", "keyframe", "score", "head_top_u_right_px",
+                        "head_top_v_down_px"]
+    assert head[36:39] == ["head_top_x_right_m", "head_top_y_up_m", "head_top_z_toward_camera_m"]
+    assert head[-2:] == ["ankle_l_contact", "ankle_r_contact"]
+    assert len(head) == 4 + 5 * 16 + 2 and len(rows) == 1 + walk_motion.n_frames
+    assert rows[4][3:36] == [""] * 33
+    values = np.array([[float(v) if v else np.nan for v in row] for row in rows[1:]])
     assert values[:, 0].tolist() == list(range(walk_motion.n_frames))
     assert np.allclose(values[:, 1], walk_motion.times, atol=1e-6)
-    assert np.abs(values[:, 2:].reshape(-1, 16, 3) - walk_motion.world_joints).max() < 1e-6
+    assert np.allclose(values[:, 2], walk_motion.keyframes)
+    keep = np.arange(walk_motion.n_frames) != 3
+    assert np.abs(values[keep, 4:36].reshape(-1, 16, 2) - joints2d[keep]).max() < 1e-3
+    assert np.abs(values[:, 36:84].reshape(-1, 16, 3) - walk_motion.world_joints).max() < 1e-6
+    assert (values[:, -2:] == walk_motion.contacts).all()
 
 
 @pytest.mark.parametrize("key", list(FORMATS))
 def test_unwritable_path_is_refused(key, walk_motion, tmp_path):
+    if not FORMATS[key].available():
+        pytest.skip(f"{key}: not available here")
     clip = Clip("m", {}, [], walk_motion)
     with pytest.raises(MocapError, match="cannot write"):
         write_format(key, tmp_path / "missing" / "out", clip)
@@ -165,6 +215,22 @@ def test_unwritable_path_is_refused(key, walk_motion, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_fit_without_blender_refuses_fbx_in_one_line(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None)
+    assert main(["fit", str(tmp_path / "walk.mp4"), "--fbx", str(tmp_path / "m.fbx")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "mocap: error: FBX export needs Blender as a Python module: pip install " \
+                  "'mocap[fbx]' (Python 3.11)"
+
+
 def test_unknown_format_is_refused(walk_motion, tmp_path):
-    with pytest.raises(MocapError, match="no export format 'fbx'"):
+    with pytest.raises(MocapError, match="no export format 'obj'"):
+        write_format("obj", tmp_path / "m.obj", Clip("m", {}, [], walk_motion))
+
+
+def test_fbx_without_blender_says_how_to_get_it(walk_motion, tmp_path, monkeypatch):
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None)
+    assert not FORMATS["fbx"].available()
+    with pytest.raises(MocapError, match=r"pip install 'mocap\[fbx\]'"):
         write_format("fbx", tmp_path / "m.fbx", Clip("m", {}, [], walk_motion))
+    assert list(tmp_path.iterdir()) == []

@@ -11,6 +11,7 @@ from scipy.ndimage import gaussian_filter1d, median_filter
 from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_NAMES
 from mocap.smoothest import DEPTH_SMOOTH_S
+from mocap.track.calibration import default_camera
 from mocap.lift.taylor import (LENGTH, anatomical_joints, clip_lengths, exchange_legs, known_sides, lift_pose,
                         runs, track_sides)
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
@@ -161,13 +162,17 @@ def _held_signs(joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values
     return held
 
 
-def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """(F, 3) pelvis trajectory in metres (NaN where nobody is): x from the image
-    centre, y above the clip's ground (its lowest ankles), z = 0 (orthographic
-    projection says nothing about distance)."""
+def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int],
+               focal_px: float | None = None) -> np.ndarray:
+    """(F, 3) the pelvis in metres in the camera's frame (x right, y up, z toward the
+    camera; NaN where nobody is) under the silhouette method's scaled orthographic
+    projection: the body's image scale (``px_per_unit``, from its height in the image)
+    is focal / depth, so depth = focal * metres-per-unit / px_per_unit and a performer
+    who walks away gets smaller and farther. The focal length (pixels) is the assumed
+    camera's (``default_camera``: the frame's width) unless given; it scales the
+    depth, not its changes' shape."""
+    focal = default_camera(*size, focal_px).focal
     per_m = px_per_unit * BODY_HEIGHT / BODY_HEIGHT_M
     pelvis = joints2d[:, JOINT_INDEX["pelvis"]]
-    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]], 1]
-    ground = np.nanpercentile(ankles, 98) if np.isfinite(ankles).any() else size[1]
-    return np.stack([(pelvis[:, 0] - size[0] / 2) / per_m, (ground - pelvis[:, 1]) / per_m,
-                     np.zeros(len(pelvis))], axis=-1)
+    return np.stack([(pelvis[:, 0] - size[0] / 2) / per_m, (size[1] / 2 - pelvis[:, 1]) / per_m,
+                     -focal / per_m], axis=-1)

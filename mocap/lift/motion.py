@@ -1,27 +1,21 @@
 """Keyframe poses -> an animation of every frame: joint rotations, slerp, smoothing.
 
-The skeleton is data (VideoPose3D style): ``BONES`` and ``PARENTS`` describe a tree
-rooted at the pelvis whose every bone has a fixed ``offset`` from its parent (in the
-parent's frame, metres) and a rotation per frame relative to its parent. The rest
-pose (all rotations identity) is the model standing, facing +z, left = +x. Besides
-the 16 contract joints the tree holds two helper joints, so that one rotation per
-bone can reproduce any pose of the contract body exactly:
+The skeleton is data (``mocap.lift.skeleton``: the bone names and hierarchy that
+animation tools expect, a T-pose rest): every bone has a fixed offset from its parent
+(one symmetric body per clip) and a rotation per frame relative to its parent. A
+frame bone (Hips, Spine, Spine1) gets a full orientation from two body directions; a
+limb bone (and the neck) gets the smallest rotation ("swing") that turns its rest
+direction onto its bone. Slerp between two swings about the same rest direction is
+again a swing, so interpolated limbs never pick up a twist.
 
-* ``waist`` sits at the pelvis and turns the torso against the hips (the paper's
-  waist joint, Table 1): the pelvis' own frame follows the hip line.
-* ``collar`` sits at the shoulders' midpoint and tilts the shoulder line against
-  the torso axis; ``chest`` twists the shoulders about that axis.
-
-A frame bone (pelvis, waist, chest, collar) gets a full orientation from two body
-directions; a limb bone (and the neck) gets the smallest rotation ("swing") that
-turns its rest direction (down for limbs, up for the head) onto its bone. Slerp
-between two swings about the same rest direction is again a swing, so interpolated
-limbs never pick up a twist.
+The root trajectory is the pelvis in the camera's frame (CONTRACT.md's ``root``); the
+exports' world (``Motion.world_joints``) is that frame moved so that the floor is at
+y = 0 and the first frame's pelvis stands above the origin (``Motion.origin``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -30,42 +24,13 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
+from mocap.lift.contacts import foot_contacts, foot_lock
+from mocap.lift.skeleton import (ANKLE_HEIGHT, JOINT_BONES, UNIT_M, clip_offsets,
+                                 forward_kinematics, pose_rotations)
 
-# depth-first (a parent before its subtree), the order of a BVH HIERARCHY
-BONES: tuple[str, ...] = (
-    "pelvis", "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r",
-    "waist", "chest", "neck", "head_top", "collar",
-    "shoulder_l", "elbow_l", "wrist_l", "shoulder_r", "elbow_r", "wrist_r",
-)
-_PARENT_NAMES = {
-    "hip_l": "pelvis", "knee_l": "hip_l", "ankle_l": "knee_l",
-    "hip_r": "pelvis", "knee_r": "hip_r", "ankle_r": "knee_r",
-    "waist": "pelvis", "chest": "waist", "neck": "chest", "head_top": "neck",
-    "collar": "chest", "shoulder_l": "collar", "elbow_l": "shoulder_l", "wrist_l": "elbow_l",
-    "shoulder_r": "collar", "elbow_r": "shoulder_r", "wrist_r": "elbow_r",
-}
-PARENTS = np.array([BONES.index(_PARENT_NAMES[b]) if b in _PARENT_NAMES else -1 for b in BONES])
-# where each contract joint is among the bones
-JOINT_BONES = np.array([BONES.index(j) for j in JOINTS])
-
-_UP, _DOWN = np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])
-_AXES = np.eye(3)
-_TORSO_AXIS, _HIP_LINE = ("pelvis", "neck"), ("hip_r", "hip_l")
-_SHOULDER_LINE = ("shoulder_r", "shoulder_l")
-# frame bones: (axis 0 = x / 1 = y that points exactly along a body direction,
-#               that direction, the direction the other axis leans toward)
-_FRAMES = {
-    "pelvis": (0, _HIP_LINE, _TORSO_AXIS),
-    "waist": (1, _TORSO_AXIS, _HIP_LINE),
-    "chest": (1, _TORSO_AXIS, _SHOULDER_LINE),
-    "collar": (0, _SHOULDER_LINE, _TORSO_AXIS),
-}
-# swing bones: the joint the bone points at, and its rest direction
-_SWINGS = {"neck": ("head_top", _UP)} | {
-    f"{a}_{s}": (f"{b}_{s}", _DOWN) for s in "lr"
-    for a, b in (("shoulder", "elbow"), ("elbow", "wrist"), ("hip", "knee"), ("knee", "ankle"))}
-# helper joints lie at the midpoint of two contract joints
-_HELPERS = {"waist": ("pelvis", "pelvis"), "collar": ("shoulder_l", "shoulder_r")}
+# the floor: this low percentile of the lower ankle's height over the clip, less the
+# ankle's height above the sole (a percentile, not the minimum: a fit's stray frame)
+FLOOR_PERCENTILE = 5.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,10 +38,12 @@ class Motion:
     """An animation of the contract body, every frame.
 
     ``joints3d`` (F, 16, 3) metres, contract frame, origin at the pelvis;
-    ``root`` (F, 3) world position of the pelvis; ``keyframes`` (F,) which frames
-    were given; ``rotations`` (F, len(BONES), 4) each bone's rotation relative to its
-    parent as quaternions (x, y, z, w), sign-continuous in time; ``offsets``
-    (len(BONES), 3) each bone's fixed offset from its parent in the parent's frame.
+    ``root`` (F, 3) position of the pelvis (the camera's frame where the method knows
+    it); ``keyframes`` (F,) which frames were given; ``rotations`` (F, len(BONES), 4)
+    each bone's rotation relative to its parent as quaternions (x, y, z, w),
+    sign-continuous in time; ``offsets`` (len(BONES), 3) each bone's fixed offset
+    from its parent in the parent's frame; ``origin`` (3,) the exports' world origin
+    in the root's frame (on the floor, below the first frame's pelvis).
     """
 
     fps: float
@@ -85,6 +52,7 @@ class Motion:
     root: np.ndarray
     rotations: np.ndarray
     offsets: np.ndarray
+    origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     @property
     def n_frames(self) -> int:
@@ -97,17 +65,46 @@ class Motion:
         return np.arange(self.n_frames) / self.fps
 
     @property
-    def world_joints(self) -> np.ndarray:
-        """(F, 16, 3) joints in the world: joints3d moved by the root trajectory."""
+    def rooted_joints(self) -> np.ndarray:
+        """(F, 16, 3) joints in the root's frame: joints3d moved by the root."""
         return self.joints3d + self.root[:, None, :]
+
+    @property
+    def world_root(self) -> np.ndarray:
+        """(F, 3) the pelvis in the exports' world: the root less the origin."""
+        return self.root - self.origin
+
+    @property
+    def world_joints(self) -> np.ndarray:
+        """(F, 16, 3) joints in the exports' world: joints3d moved by the world root."""
+        return self.joints3d + self.world_root[:, None, :]
+
+    @property
+    def contacts(self) -> np.ndarray:
+        """(F, 2) bool: the left and right foot planted (``mocap.lift.contacts``)."""
+        return foot_contacts(self.world_joints, self.fps)
+
+    def foot_locked(self) -> "Motion":
+        """This motion with every planted foot kept in place through its contact."""
+        world = foot_lock(self.world_joints, self.contacts, self.fps)
+        return self.with_joints(world - self.world_root[:, None, :])
+
+    def with_joints(self, joints3d: np.ndarray) -> "Motion":
+        """This motion posed as other pelvis-relative joints (F, 16, 3) on every frame
+        (same body, root, origin and keyframes)."""
+        rotations, _ = pose_rotations(joints3d, self.offsets)
+        rotations = _continuous(rotations)
+        positions = forward_kinematics(self.offsets, rotations)
+        return Motion(self.fps, positions[:, JOINT_BONES], self.keyframes, self.root, rotations,
+                      self.offsets, self.origin)
 
 
 def build_motion(joints3d_keyframes: dict[int, np.ndarray], n_frames: int, fps: float,
                  root: np.ndarray | None = None, smooth: float = 0.0) -> Motion:
     """A Motion of ``n_frames`` frames from the 3D joints (16, 3) of some keyframes.
 
-    Bone offsets are the median over the keyframes (so bones keep one length);
-    every frame's rotations are slerped between the nearest keyframes and held
+    Bone offsets are the median over the keyframes, left and right the same (one
+    symmetric body: ``skeleton.clip_offsets``); every frame's rotations are slerped between the nearest keyframes and held
     before the first and after the last. ``root`` (n_frames, 3) is the pelvis track,
     NaN rows filled linearly; without it the keyframes' own pelvis positions are
     interpolated. ``smooth`` > 0 is a Gaussian sigma in frames applied to rotations
@@ -115,7 +112,8 @@ def build_motion(joints3d_keyframes: dict[int, np.ndarray], n_frames: int, fps: 
     """
     keys, joints = _check_keyframes(joints3d_keyframes, n_frames, fps, smooth)
     pelvis = joints[:, JOINT_INDEX["pelvis"]]
-    local, offsets = keyframe_rotations(joints - pelvis[:, None])
+    offsets = clip_offsets(pose_rotations(joints - pelvis[:, None])[1])
+    local, _ = pose_rotations(joints - pelvis[:, None], offsets)
     rotations = _continuous(_slerp_frames(keys, local, n_frames))
     track = _root_track(keys, pelvis, root, n_frames)
     if smooth > 0:
@@ -125,8 +123,9 @@ def build_motion(joints3d_keyframes: dict[int, np.ndarray], n_frames: int, fps: 
     positions = forward_kinematics(offsets, rotations)
     is_key = np.zeros(n_frames, dtype=bool)
     is_key[keys] = True
-    return Motion(fps=float(fps), joints3d=positions[:, JOINT_BONES], keyframes=is_key,
-                  root=track, rotations=rotations, offsets=offsets)
+    joints3d = positions[:, JOINT_BONES]
+    return Motion(fps=float(fps), joints3d=joints3d, keyframes=is_key, root=track,
+                  rotations=rotations, offsets=offsets, origin=stage_origin(joints3d + track[:, None]))
 
 
 def _check_keyframes(joints3d_keyframes, n_frames, fps, smooth) -> tuple[np.ndarray, np.ndarray]:
@@ -141,69 +140,6 @@ def _check_keyframes(joints3d_keyframes, n_frames, fps, smooth) -> tuple[np.ndar
     if joints.shape[1:] != (len(JOINTS), 3) or not np.isfinite(joints).all():
         raise MocapError(f"keyframe joints must be finite arrays of shape ({len(JOINTS)}, 3)")
     return keys, joints
-
-
-def keyframe_rotations(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Local bone rotations (K, len(BONES), 4) and median offsets (len(BONES), 3)
-    that pose the skeleton as the pelvis-relative joints (K, 16, 3)."""
-    at = {**{j: joints[:, i] for i, j in enumerate(JOINTS)},
-          **{h: (joints[:, JOINT_INDEX[a]] + joints[:, JOINT_INDEX[b]]) / 2
-             for h, (a, b) in _HELPERS.items()}}
-    glob: list[Rotation] = []
-    local = np.empty((len(joints), len(BONES), 4))
-    offsets = np.zeros((len(BONES), 3))
-    for b, name in enumerate(BONES):
-        parent = glob[PARENTS[b]] if PARENTS[b] >= 0 else Rotation.identity(len(joints))
-        if name in _FRAMES:
-            axis, exact, lean = _FRAMES[name]
-            rot = parent.inv() * Rotation.from_matrix(
-                _frame(at[exact[1]] - at[exact[0]], at[lean[1]] - at[lean[0]], axis))
-        elif name in _SWINGS:
-            target, rest = _SWINGS[name]
-            rot = _swing(rest, parent.inv().apply(at[target] - at[name]))
-        else:
-            rot = Rotation.identity(len(joints))
-        if PARENTS[b] >= 0:
-            offsets[b] = _median_offset(parent.inv().apply(at[name] - at[BONES[PARENTS[b]]]))
-        glob.append(parent * rot)
-        local[:, b] = rot.as_quat()
-    return local, offsets
-
-
-def _median_offset(vectors: np.ndarray) -> np.ndarray:
-    """The median (K, 3) -> (3,) of a bone's offsets, ignoring keyframes where the
-    bone collapsed to zero length (a joint placed on its parent)."""
-    real = np.linalg.norm(vectors, axis=-1) > 1e-9
-    return np.median(vectors[real] if real.any() else vectors, axis=0)
-
-
-def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """Normalise along the last axis; (near) zero vectors become ``fallback``."""
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    return np.where(n > 1e-9, v / np.maximum(n, 1e-12), fallback)
-
-
-def _frame(exact: np.ndarray, lean: np.ndarray, axis: int) -> np.ndarray:
-    """(K, 3, 3) rotation matrices whose column ``axis`` (0 = x, 1 = y) points along
-    ``exact`` and whose other x/y column lies in the plane of ``exact`` and ``lean``.
-    Degenerate directions fall back to the rest pose's axes."""
-    other = 1 - axis
-    a = _unit(exact, _AXES[axis])
-    rest_other = _unit(_AXES[other] - (a @ _AXES[other])[:, None] * a, _AXES[2])
-    b = _unit(lean - (a * lean).sum(-1, keepdims=True) * a, rest_other)
-    cols = [a, b] if axis == 0 else [b, a]
-    return np.stack([*cols, np.cross(cols[0], cols[1])], axis=-1)
-
-
-def _swing(rest: np.ndarray, direction: np.ndarray) -> Rotation:
-    """The smallest rotations taking the unit ``rest`` onto ``direction`` (K, 3); a
-    zero direction gives the identity, an opposite one a half turn about a normal."""
-    d = _unit(direction, rest)
-    cross = np.cross(rest, d)
-    sin, cos = np.linalg.norm(cross, axis=-1), d @ rest
-    perpendicular = _unit(np.cross(rest, _AXES[np.argmin(np.abs(rest))]), _AXES[0])
-    axis = np.where((sin > 1e-12)[:, None], cross / np.maximum(sin, 1e-12)[:, None], perpendicular)
-    return Rotation.from_rotvec(axis * np.arctan2(sin, cos)[:, None])
 
 
 def _slerp_frames(keys: np.ndarray, local: np.ndarray, n_frames: int) -> np.ndarray:
@@ -261,18 +197,11 @@ def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndar
     return smooth + CubicSpline(keys, residual, axis=0, bc_type="natural")(times)
 
 
-def forward_kinematics(offsets: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """(F, len(BONES), 3) bone positions relative to the pelvis from the offsets
-    (len(BONES), 3) and local rotations (F, len(BONES), 4)."""
-    n = len(rotations)
-    glob: list[Rotation] = []
-    pos = np.zeros((n, len(BONES), 3))
-    for b in range(len(BONES)):
-        local = Rotation.from_quat(rotations[:, b])
-        p = PARENTS[b]
-        if p < 0:
-            glob.append(local)
-        else:
-            pos[:, b] = pos[:, p] + glob[p].apply(offsets[b])
-            glob.append(glob[p] * local)
-    return pos
+def stage_origin(world: np.ndarray) -> np.ndarray:
+    """(3,) the exports' origin for joints (F, 16, 3) in the root's frame: below the
+    first frame's pelvis on the floor (FLOOR_PERCENTILE of the lower ankle's height
+    less the ankle's height above the sole), so that exports stand on y = 0."""
+    ankles = world[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]], 1].min(axis=1)
+    floor = np.percentile(ankles, FLOOR_PERCENTILE) - ANKLE_HEIGHT * UNIT_M
+    pelvis = world[0, JOINT_INDEX["pelvis"]]
+    return np.array([pelvis[0], floor, pelvis[2]])

@@ -15,8 +15,10 @@ from typing import Callable
 
 import numpy as np
 
+from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, FrameNote
+from mocap.lift.contacts import FEET
 from mocap.io.export.formats import Clip, export_file
 from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs, root_track
@@ -76,11 +78,24 @@ class Session(ABC):
         without a person."""
 
     def root(self) -> np.ndarray:
-        """(F, 3) the pelvis in metres (CONTRACT.md's ``root``), NaN where nobody is:
-        here across the image and above the clip's ground, without depth (the
-        orthographic view says nothing about distance: lift.inputs.root_track)."""
+        """(F, 3) the pelvis in metres in the camera's frame (CONTRACT.md's ``root``),
+        NaN where nobody is: here its depth from the body's image scale
+        (lift.inputs.root_track)."""
         inputs = self.inputs
         return root_track(inputs.joints2d, inputs.px_per_unit, (self.info.width, self.info.height))
+
+    def joint_scores(self) -> np.ndarray:
+        """(F, 16) what the method knows of each joint in [0, 1]: here the frame's score."""
+        return np.repeat(np.nan_to_num(self.scores)[:, None], len(JOINT_INDEX), axis=1)
+
+    def confidence(self) -> np.ndarray:
+        """(F, 16) each joint's confidence in [0, 1] (CONTRACT.md): the method's
+        ``joint_scores``, 1 for a joint the user placed."""
+        conf = np.clip(self.joint_scores(), 0.0, 1.0)
+        for i, points in self._annotations.overrides().items():
+            if i < self.n_frames:
+                conf[i, [JOINT_INDEX[j] for j in points]] = 1.0
+        return conf
 
     def far_arm(self) -> str | None:
         """"l" or "r": the arm to check first, where the method knows one."""
@@ -158,6 +173,7 @@ class Session(ABC):
         ``person: false``; it gets interpolated joints3d when it lies between keyframes."""
         keys = np.flatnonzero(motion.keyframes)
         person, scores, inputs = self.person, self.scores, self.inputs
+        contacts, confidence = motion.contacts, self.confidence()
         frames = []
         for i in range(self.n_frames):
             entry: dict = {"index": i, "keyframe": bool(motion.keyframes[i]),
@@ -167,22 +183,26 @@ class Session(ABC):
                     entry["score"] = float(scores[i])
                 entry["orientation"] = inputs.orientation[i]
                 entry["joints2d"] = inputs.joints2d[i]
+                entry["confidence"] = confidence[i]
             if person[i] or keys[0] < i < keys[-1]:
                 entry["joints3d"] = motion.joints3d[i]
                 entry["root"] = motion.root[i]
+                entry["contacts"] = dict(zip(FEET, map(bool, contacts[i])))
             frames.append(entry)
         return frames
 
-    def clip(self) -> Clip:
-        """The motion and its motion-file frames, what every export format is made of."""
+    def clip(self, foot_lock: bool = False) -> Clip:
+        """The motion and its motion-file frames, what every export format is made of;
+        ``foot_lock``: planted feet kept in place (Motion.foot_locked)."""
         motion, info = self.motion(), self.info
+        motion = motion.foot_locked() if foot_lock else motion
         video = {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
                  "frame_count": info.frame_count}
         return Clip(Path(info.path).stem, video, self.motion_frames(motion), motion)
 
-    def export(self, key: str) -> tuple[str, bytes]:
+    def export(self, key: str, foot_lock: bool = False) -> tuple[str, bytes]:
         """(file name, content) of the animation in a format of mocap.io.export.formats."""
-        return export_file(key, self.clip())
+        return export_file(key, self.clip(foot_lock))
 
 
 def entry_frame(notes: Annotations, frame: int, has: Callable[[FrameNote], object]) -> int | None:

@@ -83,6 +83,10 @@ class TrackSession(Session):
         """(F,) each frame's mean joint reliability (every frame shows the performer)."""
         return self.tracked.reliability.mean(axis=1).astype(float)
 
+    def joint_scores(self) -> np.ndarray:
+        """(F, 16) each joint's tracking reliability."""
+        return self.tracked.reliability.astype(float)
+
     def annotate(self, annotations: Annotations) -> None:
         super().annotate(annotations)
         self._resolution = None

@@ -1,10 +1,12 @@
-"""BVH export of a Motion: the skeleton of ``mocap.lift.motion`` as a BVH hierarchy.
+"""BVH export of a Motion: the skeleton of ``mocap.lift.skeleton`` as a BVH hierarchy.
 
-Joints are named after the contract joints, plus the helper joints ``waist`` and
-``collar`` (see ``mocap.lift.motion``). Lengths are in centimetres: OFFSETs are the
-motion's fixed bone offsets, the root (pelvis) has 6 channels (its world position,
-then its rotation) and every other joint 3 rotation channels, all in the order
-Z, X, Y (intrinsic, degrees, as in the CMU files). Leaves end in a zero End Site.
+Bones carry the names most tools map by themselves (Hips, Spine, Spine1, Neck, Head,
+LeftShoulder/LeftArm/LeftForeArm/LeftHand, LeftUpLeg/LeftLeg/LeftFoot/LeftToeBase,
+the right side's); End Sites at the head top, the finger tips and the toe tips.
+OFFSETs (centimetres) are the clip's one symmetric body in its T-pose rest (arms out
+sideways, facing +z, y up). The root (Hips) has 6 channels (its position in the
+exports' world: the floor at y = 0, then its rotation), every other joint 3 rotation
+channels, all in the order Z, X, Y (intrinsic, degrees, as in the CMU files).
 """
 
 from __future__ import annotations
@@ -15,11 +17,13 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from mocap.lift.motion import BONES, PARENTS, Motion
+from mocap.lift.motion import Motion
+from mocap.lift.skeleton import BONES, END_SITE, PARENTS
 
 CM_PER_M = 100.0
 _ORDER = "ZXY"
 _ROTATION_CHANNELS = " ".join(f"{axis}rotation" for axis in _ORDER)
+_JOINTS = np.flatnonzero(~END_SITE)      # the bones with channels, depth-first
 
 
 def bvh_text(motion: Motion) -> str:
@@ -31,29 +35,31 @@ def bvh_text(motion: Motion) -> str:
     return "\n".join(lines) + "\n" + out.getvalue()
 
 
+def _offset(offset_cm: np.ndarray) -> str:
+    return "OFFSET " + " ".join(f"{v:.6f}" for v in offset_cm + 0.0)     # no "-0.000000"
+
+
 def _joint_lines(bone: int, offsets_cm: np.ndarray, depth: int) -> list[str]:
     """The HIERARCHY lines of one joint and, recursively, its children."""
     pad = "  " * depth
+    if END_SITE[bone]:
+        return [f"{pad}End Site", f"{pad}{{", f"{pad}  {_offset(offsets_cm[bone])}", f"{pad}}}"]
     head = "ROOT" if PARENTS[bone] < 0 else "JOINT"
     channels = (f"6 Xposition Yposition Zposition {_ROTATION_CHANNELS}" if PARENTS[bone] < 0
                 else f"3 {_ROTATION_CHANNELS}")
-    lines = [f"{pad}{head} {BONES[bone]}", f"{pad}{{",
-             f"{pad}  OFFSET {' '.join(f'{v:.6f}' for v in offsets_cm[bone] + 0.0)}",
+    lines = [f"{pad}{head} {BONES[bone]}", f"{pad}{{", f"{pad}  {_offset(offsets_cm[bone])}",
              f"{pad}  CHANNELS {channels}"]
-    children = np.flatnonzero(PARENTS == bone)
-    for child in children:
+    for child in np.flatnonzero(PARENTS == bone):
         lines += _joint_lines(child, offsets_cm, depth + 1)
-    if not len(children):
-        lines += [f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET 0 0 0", f"{pad}  }}"]
     return lines + [f"{pad}}}"]
 
 
 def _channel_values(motion: Motion) -> np.ndarray:
-    """(F, 6 + 3 * (len(BONES) - 1)) channel values in hierarchy (depth-first) order."""
-    rot = Rotation.from_quat(motion.rotations.reshape(-1, 4))
+    """(F, 6 + 3 * (joints - 1)) channel values in hierarchy (depth-first) order."""
+    rot = Rotation.from_quat(motion.rotations[:, _JOINTS].reshape(-1, 4))
     with warnings.catch_warnings():
         # at gimbal lock scipy still returns angles that give the same rotation
         warnings.filterwarnings("ignore", message="Gimbal lock")
-        euler = rot.as_euler(_ORDER, degrees=True).reshape(motion.n_frames, len(BONES), 3)
+        euler = rot.as_euler(_ORDER, degrees=True).reshape(motion.n_frames, -1)
     # BONES are listed depth-first, the order of the HIERARCHY and of its channels
-    return np.concatenate([motion.root * CM_PER_M, euler.reshape(motion.n_frames, -1)], axis=1)
+    return np.concatenate([motion.world_root * CM_PER_M, euler], axis=1)

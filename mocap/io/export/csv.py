@@ -1,26 +1,52 @@
-"""CSV export of a Motion: one row per frame of world joint positions in metres.
+"""CSV export of a clip: one row per frame, a header naming every column with its
+unit and axes.
 
-Columns: ``frame``, ``time`` (seconds), then ``<joint>_x``, ``<joint>_y``,
-``<joint>_z`` for the 16 contract joints in canonical order (joints3d + root).
+Columns: ``frame``, ``time_s`` (seconds), ``keyframe`` (1 fitted, 0 interpolated),
+``score`` (the fit's score in [0, 1], empty on interpolated frames), then for the 16
+contract joints in canonical order their image position ``<joint>_u_right_px``,
+``<joint>_v_down_px`` (pixels from the frame's top-left corner; empty where nobody
+is), then their world position ``<joint>_x_right_m``, ``<joint>_y_up_m``,
+``<joint>_z_toward_camera_m`` (metres, the exports' world: right-handed, axes
+parallel to the camera's, the floor at y = 0, the first frame's pelvis above the
+origin), then ``ankle_l_contact``, ``ankle_r_contact`` (1 where the foot is planted).
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import numpy as np
 
 from mocap.body import JOINTS
+from mocap.lift.contacts import FEET
 from mocap.lift.motion import Motion
 
-HEADER = ["frame", "time"] + [f"{j}_{axis}" for j in JOINTS for axis in "xyz"]
+HEADER = (["frame", "time_s", "keyframe", "score"]
+          + [f"{j}_{axis}" for j in JOINTS for axis in ("u_right_px", "v_down_px")]
+          + [f"{j}_{axis}" for j in JOINTS for axis in ("x_right_m", "y_up_m", "z_toward_camera_m")]
+          + [f"{foot}_contact" for foot in FEET])
 
 
-def csv_text(motion: Motion) -> str:
-    """The motion's world joint positions as CSV text."""
+def _cells(values, fmt: str) -> list[str]:
+    """Numbers as text, NaN as an empty cell, never "-0.000000"."""
+    return ["" if not np.isfinite(v) else format(v + 0.0, fmt) for v in values]
+
+
+def csv_text(motion: Motion, frames: list[dict]) -> str:
+    """A motion and its motion-file frames (for the 2D joints and scores) as CSV text."""
+    n = motion.n_frames
+    joints2d = np.full((n, len(JOINTS), 2), np.nan)
+    score = np.full(n, np.nan)
+    for i, frame in enumerate(frames[:n]):
+        if "joints2d" in frame:
+            joints2d[i] = frame["joints2d"]
+        score[i] = frame.get("score", np.nan)
+    world, contacts = motion.world_joints.reshape(n, -1), motion.contacts.astype(int)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(HEADER)
-    world = motion.world_joints.reshape(motion.n_frames, -1) + 0.0   # no "-0.000000"
-    for i, (time, row) in enumerate(zip(motion.times, world)):
-        writer.writerow([i, f"{time:.6f}"] + [f"{v:.6f}" for v in row])
+    for i in range(n):
+        writer.writerow([i, f"{motion.times[i]:.6f}", int(motion.keyframes[i])]
+                        + _cells([score[i]], ".4f") + _cells(joints2d[i].ravel(), ".3f")
+                        + _cells(world[i], ".6f") + contacts[i].tolist())
     return out.getvalue()

@@ -29,16 +29,23 @@ class Clip:
     extra: dict = field(default_factory=dict)
 
 
+def _always() -> bool:
+    return True
+
+
 @dataclass(frozen=True)
 class Format:
     """A file format: its key (the command line's option, the app's), the app's
-    button label, the file name's ending, what it holds, and its bytes of a clip."""
+    button label, the file name's ending, what it holds, its bytes of a clip, and
+    whether this installation can write it (without, ``render`` says how to get it)."""
 
     key: str
     label: str
     suffix: str
     holds: str
     render: Callable[[Clip], bytes]
+    available: Callable[[], bool] = _always
+    needs: str = ""                     # how to make it available, where it is not
 
 
 # Each format's module is imported when it is first written: the command line reads
@@ -46,7 +53,9 @@ class Format:
 
 def _json(clip: Clip) -> bytes:
     from mocap.io.export.motion_json import motion_text
-    return motion_text(clip.video, clip.frames, clip.extra).encode()
+    # the exports' world origin (Motion.origin) with what the run adds (CONTRACT.md)
+    extra = {"origin": [round(float(v), 4) for v in clip.motion.origin]} | clip.extra
+    return motion_text(clip.video, clip.frames, extra).encode()
 
 
 def _bvh(clip: Clip) -> bytes:
@@ -59,9 +68,19 @@ def _glb(clip: Clip) -> bytes:
     return glb_bytes(clip.motion)
 
 
+def _fbx(clip: Clip) -> bytes:
+    from mocap.io.export.fbx import fbx_bytes
+    return fbx_bytes(clip.motion)
+
+
+def _has_blender() -> bool:
+    from mocap.io.export.fbx import has_blender
+    return has_blender()
+
+
 def _csv(clip: Clip) -> bytes:
     from mocap.io.export.csv import csv_text
-    return csv_text(clip.motion).encode()
+    return csv_text(clip.motion, clip.frames).encode()
 
 
 def _html(clip: Clip) -> bytes:
@@ -73,7 +92,11 @@ FORMATS: dict[str, Format] = {f.key: f for f in (
     Format("json", "motion JSON", ".motion.json", "the motion file (CONTRACT.md)", _json),
     Format("bvh", "BVH", ".bvh", "the animation as BVH", _bvh),
     Format("glb", "GLB", ".glb", "the animated cylinder body as GLB", _glb),
-    Format("csv", "CSV", ".csv", "the world joint positions as CSV", _csv),
+    Format("fbx", "FBX", ".fbx", "the skinned character as FBX (needs the fbx extra: Blender)",
+           _fbx, _has_blender, "FBX export needs Blender as a Python module: "
+                               "pip install 'mocap[fbx]' (Python 3.11)"),
+    Format("csv", "CSV", ".csv", "every frame's 2D and world joints, score and foot contacts as "
+           "CSV", _csv),
     Format("html", "HTML page", ".html", "the playback page (one file, opens without a server)",
            _html),
 )}
@@ -86,13 +109,22 @@ def export_format(key: str) -> Format:
     return FORMATS[key]
 
 
+def require(key: str) -> Format:
+    """The format of ``key`` if this installation can write it, else a MocapError
+    saying what it needs."""
+    fmt = export_format(key)
+    if not fmt.available():
+        raise MocapError(fmt.needs)
+    return fmt
+
+
 def export_file(key: str, clip: Clip) -> tuple[str, bytes]:
     """(file name, content) of a clip in a format."""
-    fmt = export_format(key)
+    fmt = require(key)
     return clip.name + fmt.suffix, fmt.render(clip)
 
 
 def write_format(key: str, path: str | os.PathLike, clip: Clip) -> Path:
     """Write a clip in a format, atomically; an unwritable path is a MocapError."""
-    fmt = export_format(key)
+    fmt = require(key)
     return write_export(path, fmt.render(clip), fmt.label)

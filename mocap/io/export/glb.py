@@ -1,140 +1,163 @@
-"""GLB export of a Motion: the animated 10-cylinder body (glTF 2.0, binary).
+"""GLB export of a Motion: a skinned character (glTF 2.0, binary) that Blender, Unity
+and Unreal import as one armature, one mesh and one animation.
 
-One node per bone of ``mocap.lift.motion`` (same names, same hierarchy, translation =
-the bone's offset, metres, y up). Each of the 10 cylinders is a mesh on the node
-of its proximal joint (the torso on ``waist``, whose x axis follows the hips), its
-cross-section the model's (``body.semi_axes`` at 1.75 m). One animation, one
-sample per motion frame at 1/fps: a rotation channel per node and the root's
-world translation; glTF's LINEAR interpolation of rotations is slerp.
+The armature is the skeleton of ``mocap.lift.skeleton`` (same bone names as the BVH,
+End Sites as leaf joints), one node per bone under an ``Armature`` node, resting in
+its T-pose (node translations = the bones' offsets, metres, y up) at the first
+frame's root. The body is one mesh of the model's 10 cylinders (their cross-sections
+``body.semi_axes`` at 1.75 m, built by trimesh), skinned to it with JOINTS_0/WEIGHTS_0:
+each limb cylinder rides its proximal bone, the torso blends from Hips at the pelvis to
+Spine1 at the neck; one material. ``skin.inverseBindMatrices`` are the rest pose's.
+One animation: a sample per motion frame at 1/fps, a rotation channel per bone and the
+root's translation in the exports' world (the floor at y = 0); glTF's LINEAR
+interpolation of rotations is slerp. pygltflib writes the document and its binary.
 """
 
 from __future__ import annotations
 
-import json
-import struct
-
 import numpy as np
+import pygltflib as gl
+import trimesh
 
 from mocap import body
-from mocap.lift.motion import BONES, PARENTS, Motion, forward_kinematics
+from mocap.lift.motion import Motion
+from mocap.lift.skeleton import BONE_INDEX, BONES, END_SITE, JOINT_BONES, PARENTS, rest_positions
 
 SIDES = 16                                      # facets around each cylinder
-_OWNERS = {s: "waist" if s == "torso" else a for s, (a, _) in body.SEGMENTS.items()}
-_FLOAT, _UINT16 = 5126, 5123
-_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+COLOUR = [0.55, 0.62, 0.75, 1.0]                # the body's base colour (linear RGBA)
+_JOINT = {j: BONES[b] for j, b in zip(body.JOINTS, JOINT_BONES)}
+# the bones a segment's start and end rings follow
+_RIDERS = {s: (_JOINT[a], _JOINT[a]) for s, (a, _) in body.SEGMENTS.items()} | {
+    "torso": ("Hips", "Spine1"), "head": ("Neck", "Neck")}
+_ANIMATED = np.flatnonzero(~END_SITE)           # End Sites never turn
 
 
 def glb_bytes(motion: Motion) -> bytes:
-    """The whole GLB file: header, JSON chunk, binary chunk."""
+    """The whole GLB file."""
     doc = _Document()
-    rest = rest_pose(motion.offsets)
-    radii = body.semi_axes(body.BODY_HEIGHT_M)
-    mesh_of = {}
-    for i, (segment, (a, b)) in enumerate(body.SEGMENTS.items()):
-        owner = BONES.index(_OWNERS[segment])
-        mesh_of[owner] = doc.cylinder(segment, rest[BONES.index(a)] - rest[owner],
-                                      rest[BONES.index(b)] - rest[owner], radii[i])
-    doc.gltf.update(scene=0, scenes=[{"name": "mocap", "nodes": [0]}],
-                    nodes=[_node(motion, b, mesh_of.get(b)) for b in range(len(BONES))],
-                    animations=[doc.animation(motion)])
+    rest = rest_positions(motion.offsets) + motion.world_root[0]
+    nodes = [_bone_node(motion, b) for b in range(len(BONES))]
+    skin_node = len(nodes)
+    nodes.append(gl.Node(name="body", mesh=0, skin=0))
+    nodes.append(gl.Node(name="Armature", children=[0, skin_node]))
+    ibm = np.tile(np.eye(4, dtype=np.float32), (len(BONES), 1, 1))
+    ibm[:, 3, :3] = -rest                        # glTF matrices are column-major
+    doc.gltf.nodes = nodes
+    doc.gltf.skins = [gl.Skin(name="Armature", joints=list(range(len(BONES))), skeleton=0,
+                              inverseBindMatrices=doc.accessor(ibm, gl.MAT4))]
+    doc.gltf.meshes = [doc.body_mesh(rest)]
+    doc.gltf.materials = [gl.Material(name="body", doubleSided=False,
+                                      pbrMetallicRoughness=gl.PbrMetallicRoughness(
+                                          baseColorFactor=COLOUR, metallicFactor=0.0,
+                                          roughnessFactor=0.8))]
+    doc.gltf.animations = [doc.animation(motion)]
+    doc.gltf.scenes = [gl.Scene(name="mocap", nodes=[skin_node + 1])]
+    doc.gltf.scene = 0
     return doc.glb()
 
 
-def _node(motion: Motion, bone: int, mesh: int | None) -> dict:
-    """A bone's glTF node, posed as in the first frame (for viewers that do not play)."""
-    translation = motion.root[0] if bone == 0 else motion.offsets[bone]
-    node = {"name": BONES[bone], "translation": translation.tolist(),
-            "rotation": motion.rotations[0, bone].tolist()}
+def _bone_node(motion: Motion, bone: int) -> gl.Node:
+    """A bone's glTF node in the rest pose (rotation identity)."""
+    translation = motion.world_root[0] if bone == 0 else motion.offsets[bone]
     children = np.flatnonzero(PARENTS == bone).tolist()
-    if children:
-        node["children"] = children
-    if mesh is not None:
-        node["mesh"] = mesh
-    return node
+    return gl.Node(name=BONES[bone], translation=[float(v) for v in translation],
+                   children=children)
 
 
-def rest_pose(offsets: np.ndarray) -> np.ndarray:
-    """(len(BONES), 3) bone positions with every rotation identity: a mesh drawn
-    there in its node's frame follows the node's rotation."""
-    identity = np.tile([0.0, 0.0, 0.0, 1.0], (1, len(BONES), 1))
-    return forward_kinematics(offsets, identity)[0]
+def body_parts(rest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The body's mesh in the rest pose: vertices (V, 3), normals (V, 3), triangles
+    (T, 3), and per vertex the two bones it follows with the end bone's weight
+    (V, 3: start bone, end bone, weight)."""
+    radii = body.semi_axes(body.BODY_HEIGHT_M)
+    meshes, riders = [], []
+    for i, (segment, (a, b)) in enumerate(body.SEGMENTS.items()):
+        start, end = rest[BONE_INDEX[_JOINT[a]]], rest[BONE_INDEX[_JOINT[b]]]
+        mesh = _cylinder(start, end, radii[i])
+        along = (mesh.vertices - start) @ (end - start) / max(np.sum((end - start) ** 2), 1e-12)
+        first, last = (BONE_INDEX[r] for r in _RIDERS[segment])
+        riders.append(np.stack([np.full(len(along), first), np.full(len(along), last),
+                                np.clip(along, 0, 1)], axis=1))
+        meshes.append(mesh)
+    whole = trimesh.util.concatenate(meshes)
+    return (np.asarray(whole.vertices), np.asarray(whole.vertex_normals), np.asarray(whole.faces),
+            np.concatenate(riders))
+
+
+def _cylinder(start: np.ndarray, end: np.ndarray, radii: np.ndarray) -> trimesh.Trimesh:
+    """A closed elliptic cylinder from start to end, radii[0] across the body (x made
+    perpendicular to the axis) and radii[1] front to back."""
+    axis = end - start
+    length = max(np.linalg.norm(axis), 1e-9)
+    unit = axis / length
+    lateral = np.array([1.0, 0.0, 0.0]) - unit[0] * unit
+    if np.linalg.norm(lateral) < 1e-6:                # a segment along x: any normal
+        lateral = np.array([0.0, 0.0, 1.0]) - unit[2] * unit
+    lateral /= np.linalg.norm(lateral)
+    transform = np.eye(4)
+    transform[:3, :3] = np.stack([lateral * radii[0], np.cross(unit, lateral) * radii[1],
+                                  unit * length], axis=1)
+    transform[:3, 3] = (start + end) / 2
+    return trimesh.creation.cylinder(radius=1.0, height=1.0, sections=SIDES, transform=transform)
 
 
 class _Document:
-    """A glTF document being built: its JSON and one binary buffer."""
+    """A glTF document being built and its one binary buffer."""
 
     def __init__(self) -> None:
-        self.gltf: dict = {"asset": {"version": "2.0", "generator": "mocap"},
-                           "bufferViews": [], "accessors": [], "meshes": []}
+        self.gltf = gl.GLTF2(asset=gl.Asset(version="2.0", generator="mocap"))
         self.blob = bytearray()
 
     def accessor(self, array: np.ndarray, kind: str, target: int | None = None,
                  bounds: bool = False) -> int:
-        """Store an array (float32 or uint16) in its own buffer view; its accessor index."""
+        """Store an array in its own buffer view (4-byte aligned); its accessor index."""
         self.blob += b"\0" * (-len(self.blob) % 4)
-        view = {"buffer": 0, "byteOffset": len(self.blob), "byteLength": array.nbytes}
-        view.update({"target": target} if target else {})
-        self.blob += array.tobytes()
-        self.gltf["bufferViews"].append(view)
-        acc = {"bufferView": len(self.gltf["bufferViews"]) - 1, "count": len(array), "type": kind,
-               "componentType": _UINT16 if array.dtype == np.uint16 else _FLOAT}
+        self.gltf.bufferViews.append(gl.BufferView(buffer=0, byteOffset=len(self.blob),
+                                                   byteLength=array.nbytes, target=target))
+        self.blob += np.ascontiguousarray(array).tobytes()
+        component = {np.dtype(np.float32): gl.FLOAT, np.dtype(np.uint16): gl.UNSIGNED_SHORT,
+                     np.dtype(np.uint32): gl.UNSIGNED_INT}[array.dtype]
+        acc = gl.Accessor(bufferView=len(self.gltf.bufferViews) - 1, componentType=component,
+                          count=len(array), type=kind)
         if bounds:
             flat = array.reshape(len(array), -1)
-            acc.update(min=flat.min(0).tolist(), max=flat.max(0).tolist())
-        self.gltf["accessors"].append(acc)
-        return len(self.gltf["accessors"]) - 1
+            acc.min, acc.max = flat.min(0).tolist(), flat.max(0).tolist()
+        self.gltf.accessors.append(acc)
+        return len(self.gltf.accessors) - 1
 
-    def cylinder(self, name: str, start: np.ndarray, end: np.ndarray, radii: np.ndarray) -> int:
-        """Add a closed elliptic cylinder from start to end; its mesh index."""
-        vertices, triangles = cylinder_mesh(start, end, radii)
-        position = self.accessor(vertices.astype(np.float32), "VEC3", _ARRAY_BUFFER, bounds=True)
-        indices = self.accessor(triangles.astype(np.uint16).ravel(), "SCALAR",
-                                _ELEMENT_ARRAY_BUFFER)
-        self.gltf["meshes"].append({"name": name, "primitives": [
-            {"attributes": {"POSITION": position}, "indices": indices}]})
-        return len(self.gltf["meshes"]) - 1
+    def body_mesh(self, rest: np.ndarray) -> gl.Mesh:
+        """The skinned body: positions, normals, two joint influences per vertex."""
+        vertices, normals, faces, riders = body_parts(rest)
+        joints = np.zeros((len(vertices), 4), np.uint16)
+        weights = np.zeros((len(vertices), 4), np.float32)
+        joints[:, :2] = riders[:, :2]
+        weights[:, 0], weights[:, 1] = 1 - riders[:, 2], riders[:, 2]
+        same = riders[:, 0] == riders[:, 1]                  # one bone: all its weight
+        weights[same] = [1.0, 0.0, 0.0, 0.0]
+        buf = gl.ARRAY_BUFFER
+        attributes = gl.Attributes(
+            POSITION=self.accessor(vertices.astype(np.float32), gl.VEC3, buf, bounds=True),
+            NORMAL=self.accessor(normals.astype(np.float32), gl.VEC3, buf),
+            JOINTS_0=self.accessor(joints, gl.VEC4, buf),
+            WEIGHTS_0=self.accessor(weights, gl.VEC4, buf))
+        indices = self.accessor(faces.astype(np.uint32).ravel(), gl.SCALAR, gl.ELEMENT_ARRAY_BUFFER)
+        return gl.Mesh(name="body", primitives=[gl.Primitive(attributes=attributes,
+                                                             indices=indices, material=0)])
 
-    def animation(self, motion: Motion) -> dict:
-        """The one animation: root translation and every node's rotation per frame."""
-        times = self.accessor(motion.times.astype(np.float32), "SCALAR", bounds=True)
-        tracks = [(0, "translation", motion.root, "VEC3")] + [
-            (b, "rotation", motion.rotations[:, b], "VEC4") for b in range(len(BONES))]
+    def animation(self, motion: Motion) -> gl.Animation:
+        """The one animation: the root's translation and every bone's rotation per frame."""
+        times = self.accessor(motion.times.astype(np.float32), gl.SCALAR, bounds=True)
+        tracks = [(0, "translation", motion.world_root, gl.VEC3)] + [
+            (int(b), "rotation", motion.rotations[:, b], gl.VEC4) for b in _ANIMATED]
         samplers, channels = [], []
         for node, path, values, kind in tracks:
-            samplers.append({"input": times, "interpolation": "LINEAR",
-                             "output": self.accessor(values.astype(np.float32), kind)})
-            channels.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": path}})
-        return {"name": "motion", "samplers": samplers, "channels": channels}
+            samplers.append(gl.AnimationSampler(input=times, interpolation="LINEAR",
+                                                output=self.accessor(values.astype(np.float32), kind)))
+            channels.append(gl.AnimationChannel(sampler=len(samplers) - 1,
+                                                target=gl.AnimationChannelTarget(node=node, path=path)))
+        return gl.Animation(name="motion", samplers=samplers, channels=channels)
 
     def glb(self) -> bytes:
-        """Pack the JSON and the buffer into GLB chunks (each 4-byte aligned)."""
-        self.blob += b"\0" * (-len(self.blob) % 4)
-        self.gltf["buffers"] = [{"byteLength": len(self.blob)}]
-        text = json.dumps(self.gltf, separators=(",", ":")).encode()
-        text += b" " * (-len(text) % 4)
-        length = 12 + 8 + len(text) + 8 + len(self.blob)
-        return (struct.pack("<4sII", b"glTF", 2, length) + struct.pack("<I4s", len(text), b"JSON")
-                + text + struct.pack("<I4s", len(self.blob), b"BIN\0") + bytes(self.blob))
-
-
-def cylinder_mesh(start: np.ndarray, end: np.ndarray, radii: np.ndarray,
-                  sides: int = SIDES) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (2 * sides + 2, 3) and outward-facing triangles (4 * sides, 3) of a
-    capped cylinder whose ellipse has radii[0] along x (made perpendicular to the
-    axis) and radii[1] across; the two cap centres are the last two vertices."""
-    axis = end - start
-    unit = axis / max(np.linalg.norm(axis), 1e-12)
-    lateral = np.array([1.0, 0.0, 0.0]) - unit[0] * unit
-    if np.linalg.norm(lateral) < 1e-6:                # a segment along x: any normal
-        lateral = np.array([0.0, 0.0, 1.0])
-    lateral /= np.linalg.norm(lateral)
-    across = np.cross(unit, lateral)
-    angle = 2 * np.pi * np.arange(sides) / sides
-    ring = np.outer(np.cos(angle) * radii[0], lateral) + np.outer(np.sin(angle) * radii[1], across)
-    vertices = np.concatenate([start + ring, end + ring, [start, end]])
-    i, j = np.arange(sides), (np.arange(sides) + 1) % sides
-    bottom, top = np.full(sides, 2 * sides), np.full(sides, 2 * sides + 1)
-    triangles = np.concatenate([
-        np.stack([i, j, sides + j], 1), np.stack([i, sides + j, sides + i], 1),     # wall
-        np.stack([bottom, j, i], 1), np.stack([top, sides + i, sides + j], 1)])     # caps
-    return vertices, triangles
+        """The document and its buffer as GLB bytes (pygltflib lays out the chunks)."""
+        self.gltf.buffers = [gl.Buffer(byteLength=len(self.blob))]
+        self.gltf.set_binary_blob(bytes(self.blob))
+        return b"".join(self.gltf.save_to_bytes())

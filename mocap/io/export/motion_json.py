@@ -14,6 +14,7 @@ from mocap.io.export.atomic import write_export
 from mocap.io.jsoncheck import Bad, describe, expect, is_number
 
 FORMAT, VERSION = "mocap-motion", 1
+_METRES = ("joints3d", "root")
 
 
 def motion_dict(video: dict, frames: list[dict], extra: dict | None = None) -> dict:
@@ -27,7 +28,8 @@ def _frame_entry(frame: dict) -> dict:
     entry = {}
     for key, value in frame.items():
         if isinstance(value, np.ndarray):
-            value = np.round(value.astype(float), 3).tolist()
+            # metres to 0.1 mm (the exports are checked against them to 1 mm), pixels to 0.001
+            value = np.round(value.astype(float), 4 if key in _METRES else 3).tolist()
         elif isinstance(value, (np.floating, float)):
             value = round(float(value), 4)
         entry[key] = value

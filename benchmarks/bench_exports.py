@@ -1,0 +1,73 @@
+"""Root depth and foot contacts of the silhouette method on walks rendered with a
+perspective camera from real motion capture (../shared/data/bvh/cmu_walk.bvh, 640x480,
+30 fps), against their exact truth.
+
+For each view it prints the correlation of the root's depth (-z of the motion file's
+``root``) with the true pelvis depth, the depth range of both, and how often each
+foot's contact flag agrees with the same rule (mocap.lift.contacts) applied to the
+true ankles (the exports in Blender: tests/test_blender.py).
+
+    python benchmarks/bench_exports.py [--focal 500]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from mocap.cli import main as mocap
+from mocap.lift.contacts import foot_contacts
+from mocap.truth import load_truth
+
+CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
+# camera yaw from the performer's right side: 45 = walks toward the camera at 45 degrees
+VIEWS = {"side (depth constant)": 0.0, "toward, 45 degrees": 45.0, "toward, 60 degrees": 60.0}
+
+
+def measure(folder: Path, yaw: float, focal: float) -> dict:
+    """Render, fit and compare one view."""
+    video = folder / f"walk{int(yaw)}.mp4"
+    motion = folder / f"walk{int(yaw)}.motion.json"
+    assert mocap(["synth", str(CMU_WALK), str(video), "--yaw", str(yaw),
+                  "--perspective", str(focal)]) == 0
+    assert mocap(["fit", str(video), "--quiet", "--out", str(motion)]) == 0
+    truth = load_truth(video.with_suffix(".truth.json"))
+    frames = json.loads(motion.read_text())["frames"]
+    have = np.array(["root" in f for f in frames])
+    depth = np.array([-f["root"][2] if "root" in f else np.nan for f in frames])
+    true_depth = -truth.pelvis_camera[:, 2]
+    contacts = np.array([[f["contacts"][a] for a in ("ankle_l", "ankle_r")] if "contacts" in f
+                         else [False, False] for f in frames])
+    true_contacts = foot_contacts(truth.joints3d + truth.pelvis_camera[:, None], truth.fps)
+    return {"frames": len(frames), "with root": int(have.sum()),
+            "corr": float(np.corrcoef(depth[have], true_depth[have])[0, 1]),
+            "depth": (np.nanmin(depth), np.nanmax(depth)),
+            "true": (true_depth.min(), true_depth.max()),
+            "agree": (contacts[have] == true_contacts[have]).mean(axis=0)}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--focal", type=float, default=500.0, help="the render's focal length (px)")
+    args = parser.parse_args()
+    if not CMU_WALK.exists():
+        print(f"{CMU_WALK} absent", file=sys.stderr)
+        return 1
+    print(f"{'view':24} {'frames':>6} {'depth r':>8} {'depth (m)':>12} {'true (m)':>12} "
+          f"{'contacts L/R agree':>19}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, yaw in VIEWS.items():
+            r = measure(Path(tmp), yaw, args.focal)
+            print(f"{name:24} {r['frames']:>6} {r['corr']:>8.3f} "
+                  f"{r['depth'][0]:>5.2f}-{r['depth'][1]:<5.2f}  {r['true'][0]:>5.2f}-{r['true'][1]:<5.2f} "
+                  f"{100 * r['agree'][0]:>8.1f}% {100 * r['agree'][1]:>6.1f}%")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,100 @@
+"""Foot contacts: when a foot is planted on the floor, and pinning it there.
+
+A foot is planted while its ankle is near the floor and hardly moves: both read from
+the ankle's track in the world (metres, x right and y up across the camera's image
+plane, z toward it), smoothed, and held for a short while at least (a step's contact
+lasts far longer than a frame). The floor is the lower ankle's level around each
+frame (a running low percentile: a reconstructed floor drifts as the depth's scale
+does). The speed is the ankle's across the image plane: a single joint's depth is
+the reconstruction's least certain coordinate, and a planted foot stands still in the
+image of a fixed camera. ``foot_lock`` keeps a planted ankle where it is for its whole contact
+(the leg reaching it by two-bone inverse kinematics), so that exports do not slide.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import binary_closing, binary_opening, gaussian_filter1d, percentile_filter
+
+from mocap.body import JOINT_INDEX
+
+FEET = ("ankle_l", "ankle_r")
+_ANKLES = [JOINT_INDEX[a] for a in FEET]
+# thresholds for a 1.75 m body: a planted foot's ankle stays within a few cm of the
+# floor level (heel to toe roll lifts it) and creeps, where a swinging one travels at
+# one to three times the walking speed (chosen on rendered CMU walks: contacts of the
+# fitted motion against the same rule on the truth, benchmarks/bench_exports.py)
+CONTACT_HEIGHT_M = 0.15
+CONTACT_SPEED_M_S = 1.0
+SMOOTH_S = 0.08          # Gaussian sigma of the ankle track before differencing
+MIN_RUN_S = 0.1          # shorter contacts and gaps are noise
+FLOOR_PERCENTILE = 10.0  # of the lower ankle's height around a frame: the floor's level
+FLOOR_WINDOW_S = 1.0     # that running window (a walk plants a foot several times in it)
+BLEND_S = 0.1            # a pin fades in and out over this much time around its contact
+
+
+def foot_contacts(world: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 2) bool: the left and right foot planted on each frame of world joints
+    (F, 16, 3; metres, y up)."""
+    ankles = gaussian_filter1d(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6), axis=0,
+                               mode="nearest")
+    floor = percentile_filter(ankles[..., 1].min(axis=1), FLOOR_PERCENTILE,
+                              size=int(round(FLOOR_WINDOW_S * fps)) | 1, mode="nearest")
+    speed = np.linalg.norm(np.gradient(ankles[..., :2], axis=0), axis=-1) * fps
+    planted = (ankles[..., 1] - floor[:, None] < CONTACT_HEIGHT_M) & (speed < CONTACT_SPEED_M_S)
+    width = max(1, int(round(MIN_RUN_S * fps)))
+    structure = np.ones((width, 1), bool)
+    return binary_opening(binary_closing(planted, structure, border_value=0), structure)
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of each stretch of True."""
+    edges = np.diff(np.concatenate([[0], flags.astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def pinned_targets(ankle: np.ndarray, planted: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 3) where an ankle (F, 3) should be: on each contact its mean position there,
+    the shift fading linearly to nothing within BLEND_S around it."""
+    shift = np.zeros_like(ankle)
+    weight = np.zeros(len(ankle))
+    blend = max(1, int(round(BLEND_S * fps)))
+    frames = np.arange(len(ankle))
+    for start, stop in _runs(planted):
+        pin = ankle[start:stop].mean(axis=0)
+        # how much of this pin each frame takes: 1 on the contact, fading outside it
+        w = np.clip(1 - np.maximum(start - frames, frames - (stop - 1)) / (blend + 1), 0, 1)
+        near = w > weight
+        shift[near] = (pin - ankle[np.clip(frames[near], start, stop - 1)]) * w[near, None]
+        weight[near] = w[near]
+    return ankle + shift
+
+
+def two_bone_ik(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """(knee, ankle) (F, 3) of a leg whose ankle reaches ``target`` (as near as its
+    length allows) with the thigh and shin lengths kept, the knee in the plane of the
+    hip, the target and the old knee (law of cosines)."""
+    thigh = np.linalg.norm(knee - hip, axis=-1, keepdims=True)
+    shin = np.linalg.norm(ankle - knee, axis=-1, keepdims=True)
+    reach = target - hip
+    dist = np.linalg.norm(reach, axis=-1, keepdims=True)
+    dist_c = np.clip(dist, np.abs(thigh - shin) + 1e-9, thigh + shin - 1e-9)
+    along = reach / np.maximum(dist, 1e-12)
+    pole = (knee - hip) - ((knee - hip) * along).sum(-1, keepdims=True) * along
+    pole /= np.maximum(np.linalg.norm(pole, axis=-1, keepdims=True), 1e-12)
+    a = (thigh ** 2 - shin ** 2 + dist_c ** 2) / (2 * dist_c)
+    new_knee = hip + a * along + np.sqrt(np.maximum(thigh ** 2 - a ** 2, 0)) * pole
+    return new_knee, hip + along * dist_c
+
+
+def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
+    """World joints (F, 16, 3) with each planted ankle kept where it is through its
+    contact (``pinned_targets``), the knee and ankle moved by ``two_bone_ik``."""
+    out = world.copy()
+    for side, planted in zip("lr", contacts.T):
+        hip, knee, ankle = (JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle"))
+        target = pinned_targets(world[:, ankle], planted, fps)
+        out[:, knee], out[:, ankle] = two_bone_ik(world[:, hip], world[:, knee], world[:, ankle],
+                                                  target)
+    return out

@@ -1,0 +1,80 @@
+"""The root trajectory's depth and the foot contacts, on walks rendered from real motion
+capture with a perspective camera against their exact truth; the foot lock."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mocap.body import JOINT_INDEX
+from mocap.lift.contacts import FEET, foot_contacts
+from mocap.lift.motion import build_motion
+from mocap.lift.skeleton import PARENTS, forward_kinematics
+from mocap.pipeline import open_session
+from mocap.synth import RenderOptions, render_motion
+from mocap.walk import walk_cycle
+
+CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
+SIZE = (320, 240)
+FOCAL = 250.0                    # px at 320 wide: the performer walks from 6.6 to 3.6 m
+
+
+def fitted(tmp_path: Path, yaw: float):
+    """(truth, motion-file frames) of the CMU walk seen from ``yaw`` (0: from the right
+    side; 45: walking toward the camera at 45 degrees), fitted by the silhouette method."""
+    if not CMU_WALK.exists():
+        pytest.skip(f"{CMU_WALK} absent")
+    video = tmp_path / f"walk{int(yaw)}.mp4"
+    truth = render_motion(CMU_WALK, video, RenderOptions(yaw=yaw, perspective=FOCAL, size=SIZE))
+    return truth, open_session(video).clip().frames
+
+
+def test_a_walk_toward_the_camera_comes_nearer(tmp_path):
+    truth, frames = fitted(tmp_path, 45.0)
+    have = np.array(["root" in f for f in frames])
+    depth = np.array([-f["root"][2] for f in frames if "root" in f])
+    true_depth = -truth.pelvis_camera[have, 2]
+    assert have.mean() > 0.9 and np.ptp(true_depth) > 2.5
+    assert np.corrcoef(depth, true_depth)[0, 1] >= 0.9
+    assert depth[-5:].mean() < 0.75 * depth[:5].mean()
+
+
+def test_foot_contacts_agree_with_the_true_ankles(tmp_path):
+    truth, frames = fitted(tmp_path, 0.0)
+    have = np.array(["contacts" in f for f in frames])
+    found = np.array([[f["contacts"][foot] for foot in FEET] for f in frames if "contacts" in f])
+    true = foot_contacts(truth.joints3d + truth.pelvis_camera[:, None], truth.fps)[have]
+    assert have.mean() > 0.9 and 0.3 < true.mean() < 0.7           # a walk: feet take turns
+    assert (found == true).mean() >= 0.9
+
+
+def test_foot_lock_keeps_planted_feet_still_and_bones_whole():
+    """The procedural walk's planted feet slide (up to 0.9 m in a contact); locked, they
+    move no more than the legs' reach forces (a tenth of that), the bones unchanged."""
+    joints = walk_cycle(3.0, 30.0)
+    pelvis = joints[:, JOINT_INDEX["pelvis"]]
+    wobble = 0.01 * np.sin(np.arange(len(joints)) * 2.1)[:, None]    # a fit's jitter
+    motion = build_motion(dict(enumerate(joints - pelvis[:, None] + wobble[:, None])),
+                          len(joints), 30.0, root=pelvis)
+    locked = motion.foot_locked()
+    contacts = motion.contacts
+    assert contacts.mean() > 0.3
+    slide = {"before": 0.0, "after": 0.0}
+    for k, foot in enumerate(FEET):
+        ankle = JOINT_INDEX[foot]
+        for start, stop in _runs(contacts[:, k]):
+            slide["before"] += np.ptp(motion.world_joints[start:stop, ankle], axis=0).max()
+            slide["after"] += np.ptp(locked.world_joints[start:stop, ankle], axis=0).max()
+    assert slide["after"] < 0.15 * slide["before"]
+    for m in (motion, locked):
+        positions = forward_kinematics(m.offsets, m.rotations)
+        lengths = np.linalg.norm(positions[:, 1:] - positions[:, PARENTS[1:]], axis=-1)
+        assert np.ptp(lengths, axis=0).max() < 1e-9
+    assert np.abs(locked.offsets - motion.offsets).max() == 0
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    edges = np.diff(np.concatenate([[0], flags.astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
