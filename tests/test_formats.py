@@ -20,6 +20,7 @@ from mocap.cli import main
 from mocap import body
 from mocap.io.bvh import read_bvh
 from mocap.io.export.formats import FORMATS
+from mocap.io.export.html import motion_file_html
 
 
 @pytest.fixture(scope="module")
@@ -79,6 +80,15 @@ def test_the_foot_lock_from_both_faces(both):
     moved = np.abs(joints[1] - joints[0]).max(axis=(0, 2)) > 1e-3
     legs = [body.JOINT_INDEX[f"{j}_{s}"] for j in ("knee", "ankle") for s in "lr"]
     assert not moved[np.setdiff1d(np.arange(16), legs)].any()
+
+
+def test_the_page_of_the_motion_file_is_the_fits_page(both):
+    """`mocap export --html` of the motion file shows what `mocap fit --html` does (the
+    exports' world: the file's origin taken off)."""
+    motion_path, html_path = both["json"][0], both["html"][0]
+    mine = page_data(motion_file_html(motion_path))["frames"]
+    fits = page_data(html_path.read_text(encoding="utf-8"))["frames"]
+    assert np.abs(np.array(mine, float) - np.array(fits, float)).max() < 1.5e-3   # pages keep mm
 
 
 def test_the_app_offers_every_format():

@@ -55,13 +55,15 @@ def motion_html(motion: Motion, name: str) -> str:
 
 def motion_file_html(path: str | os.PathLike) -> str:
     """The page of a motion file: joints3d moved by the frame's ``root`` (the pelvis
-    path) where the file has one; frames without joints3d stay empty."""
+    path) where the file has one, less the file's ``origin`` (the exports' world, as
+    `mocap fit --html` shows it); frames without joints3d stay empty."""
     doc = read_motion(path)
     frames = doc.get("frames", [])
     joints = np.full((len(frames), len(body.JOINTS), 3), np.nan)
+    origin = np.asarray(doc.get("origin", np.zeros(3)), float)
     for i, frame in enumerate(frames):
         if "joints3d" in frame:
-            joints[i] = frame["joints3d"] + np.asarray(frame.get("root", np.zeros(3)), float)
+            joints[i] = frame["joints3d"] + np.asarray(frame.get("root", np.zeros(3)), float) - origin
     video = doc.get("video", {})
     name = Path(str(video.get("path") or path)).stem
     if name.endswith(".motion"):
