@@ -147,13 +147,7 @@ def build_controls(gui, n_frames: int) -> Controls:
         doubtful = gui.add_button("Next doubtful frame", icon="alert-triangle")
         review = gui.add_markdown("")
     with tabs.add_tab("Stage", icon="photo"):
-        gui.add_markdown(STAGE_HELP)
-        stage = gui.add_text("Empty stage", initial_value="",
-                             hint="frames A-B of this video, or a photo or video file of the empty "
-                                  "stage beside the annotation file; empty: estimated from the clip")
-        use_stage = gui.add_button("Use as the empty stage", icon="photo-check",
-                                   hint="find the silhouettes again against it and refit")
-        stage_info = gui.add_markdown("")
+        stage, use_stage, stage_info = _stage_tab(gui)
     with tabs.add_tab("Export", icon="download"):
         play = gui.add_button("Play", icon="player-play", disabled=True)
         foot_lock = gui.add_checkbox("Foot lock", initial_value=False,
@@ -173,6 +167,19 @@ def build_controls(gui, n_frames: int) -> Controls:
                     edits, doubtful, review, play, downloads, commands, help_page, track_info,
                     mark, marks_from_fit, track, stage, use_stage, stage_info,
                     foot_lock)
+
+
+
+def _stage_tab(gui) -> tuple[object, object, object]:
+    """The Stage tab's controls: the empty stage's source, the button that uses it,
+    and what it says."""
+    gui.add_markdown(STAGE_HELP)
+    stage = gui.add_text("Empty stage", initial_value="",
+                         hint="frames A-B of this video, or a photo or video file of the empty "
+                              "stage beside the annotation file; empty: estimated from the clip")
+    use_stage = gui.add_button("Use as the empty stage", icon="photo-check",
+                               hint="find the silhouettes again against it and refit")
+    return stage, use_stage, gui.add_markdown("")
 
 
 # -- what the controls say about a frame ------------------------------------------------
