@@ -135,14 +135,7 @@ def build_controls(gui, n_frames: int) -> Controls:
                                         hint="the chosen joint's, or every one on this frame")
         overrides = gui.add_markdown("")
     with tabs.add_tab("Tracking", icon="route"):
-        gui.add_markdown(MARKING_HELP)
-        mark = gui.add_button("Mark joints", icon="pointer",
-                              hint="go to frame 0 and place each joint not yet marked")
-        marks_from_fit = gui.add_button("Marks from the silhouette fit", icon="wand",
-                                        hint="place all 16 marks where frame 0's fit has them")
-        track = gui.add_button("Track", icon="player-track-next",
-                               hint="track the marked joints through the video")
-        track_info = gui.add_markdown("")
+        mark, marks_from_fit, track, track_info = _tracking_tab(gui)
     with tabs.add_tab("Review", icon="alert-triangle"):
         doubtful = gui.add_button("Next doubtful frame", icon="alert-triangle")
         review = gui.add_markdown("")
@@ -168,6 +161,18 @@ def build_controls(gui, n_frames: int) -> Controls:
                     mark, marks_from_fit, track, stage, use_stage, stage_info,
                     foot_lock)
 
+
+
+def _tracking_tab(gui) -> tuple[object, object, object, object]:
+    """The Tracking tab's controls: marking, marks from the fit, Track, what it says."""
+    gui.add_markdown(MARKING_HELP)
+    mark = gui.add_button("Mark joints", icon="pointer",
+                          hint="go to frame 0 and place each joint not yet marked")
+    marks_from_fit = gui.add_button("Marks from the silhouette fit", icon="wand",
+                                    hint="place all 16 marks where frame 0's fit has them")
+    track = gui.add_button("Track", icon="player-track-next",
+                           hint="track the marked joints through the video")
+    return mark, marks_from_fit, track, gui.add_markdown("")
 
 
 def _stage_tab(gui) -> tuple[object, object, object]:
