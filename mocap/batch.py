@@ -164,6 +164,7 @@ class Tally:
     skipped: int = 0
     done: int = 0
     frames: int = 0
+    cpu: float = 0.0              # the workers' CPU seconds on the videos done
     failed: list[Outcome] = field(default_factory=list)
     start: float = field(default_factory=time.perf_counter)
     end: float | None = None      # when the last video came back
@@ -198,6 +199,7 @@ class Tally:
             text = f"FAILED {outcome.name}: {outcome.error}"
         else:
             self.frames += outcome.frames
+            self.cpu += outcome.cpu
             text = f"done {outcome.name}: {outcome.frames} frames in {outcome.seconds:.1f} s"
         counts = self.counts()
         if self.bar is None:

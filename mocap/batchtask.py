@@ -56,23 +56,25 @@ class Job:
 
 @dataclass(frozen=True)
 class Outcome:
-    """What became of a job: frames done and seconds taken, or its one-line error."""
+    """What became of a job: frames done, seconds taken (and of them the worker's CPU
+    seconds: the work itself, whatever else the machine runs), or its one-line error."""
 
     name: str
     frames: int = 0
     seconds: float = 0.0
     error: str | None = None
+    cpu: float = 0.0
 
 
 def run_job(job: Job) -> Outcome:
     """Do one video; its error, if any, is returned (and recorded), never raised."""
     cv2.setNumThreads(1)   # one worker process per core: OpenCV's own threads would contend
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     folder = Path(job.folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
         frames = _make(job, folder)
-        return Outcome(job.name, frames, time.perf_counter() - start)
+        return Outcome(job.name, frames, time.perf_counter() - start, cpu=time.process_time() - cpu)
     except MocapError as exc:
         error = str(exc)
     except Exception as exc:  # noqa: BLE001 - whatever breaks on one video must not stop the rest
