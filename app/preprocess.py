@@ -15,7 +15,7 @@ from typing import Callable
 
 from mocap.errors import MocapError
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
-from mocap.session import Annotations, check_tracking_marks, marks_of
+from mocap.session import Annotations, check_tracking_marks, marks_of, remarks_of
 
 
 class Throttle:
@@ -152,7 +152,7 @@ class Preprocessing:
             with self._lock:
                 if self._annotations != notes:      # edits made while tracking
                     session.annotate(self._annotations)
-                self._tracked, self._tracked_from = session, marks_of(notes)
+                self._tracked, self._tracked_from = session, (marks_of(notes), remarks_of(notes))
                 self._track_progress = Progress(self.n_frames, self.n_frames, "tracked")
         except Exception as exc:  # the page must say so; the terminal gets the traceback
             if not isinstance(exc, MocapError):

@@ -32,7 +32,7 @@ from app.preprocess import Preprocessing
 from mocap.errors import MocapError
 from mocap.pipeline import Progress
 from mocap.session import (Annotations, Doubt, FrameFit, Session, Silhouette, SilhouetteSession,
-                           TrackSession, open_video, processing_scale)
+                           TrackSession, open_video, processing_scale, remarks_of)
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,9 +128,11 @@ class AppState(Preprocessing, Edits):
 
     @property
     def marks_changed(self) -> bool:
-        """Whether frame 0's marks differ from those the tracking used."""
+        """Whether frame 0's marks, or the frames the body is marked again on
+        (remarks_of), differ from those the tracking used."""
         with self._lock:
-            return self._tracked is not None and placed(self._annotations, 0) != self._tracked_from
+            marks = (placed(self._annotations, 0), remarks_of(self._annotations))
+            return self._tracked is not None and marks != self._tracked_from
 
     @property
     def undo_depth(self) -> int:

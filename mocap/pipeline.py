@@ -22,11 +22,11 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import require, write_format
 from mocap.io.fileio import check_writable
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.session import Session, SilhouetteSession, TrackSession, marks_of
+from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
 from mocap.silhouette.passes import FrameFit, Silhouette, body_heights, iter_fits, iter_silhouettes
 from mocap.silhouette.plate import clip_background
-from mocap.track.tracking import TrackResult, track_video
+from mocap.track.tracking import TrackResult
 
 SILHOUETTES = "finding the performer's silhouette"
 FITTING = "fitting the body model"
@@ -87,11 +87,11 @@ def fit_video(video: str | os.PathLike | VideoInfo,
 
 
 def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
-    """The tracking method's pass: the marks on frame 0 of ``notes`` (marks_of) and
-    frame 0's orientation followed through the video."""
+    """The tracking method's pass: the marks on frame 0 of ``notes`` (marks_of), and
+    on every frame they mark the whole body again, followed through the video
+    (mocap.session.tracking.tracked_video)."""
     report = progress or _quiet
-    return track_video(info, marks_of(notes), lambda done, total: report(Progress(done, total, TRACKING)),
-                       orientation=notes.orientations(1)[0])
+    return tracked_video(info, notes, lambda done, total: report(Progress(done, total, TRACKING)))
 
 
 def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None = None, *,

@@ -13,8 +13,11 @@ lifting inputs (anatomical 2D joints, overrides applied) and fits:
 - a silhouette partly told from a guessed background (its confidence below
   ``mocap.silhouette.masks.DOUBTFUL``: the performer never left those pixels).
 
-With the tracking method the review stops evenly, one frame in every stretch its
-pins cover, the most doubtful stretches first (``covering``).
+Frames where the tracking lost the body come before all of these, one stop at the
+start of every lost stretch, asking for the body to be marked there
+(``lost_stretches``). With the tracking method the review otherwise stops evenly,
+one frame in every stretch its pins cover, the most doubtful stretches first
+(``covering``).
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mocap.track.loss import stretches
 from mocap.body import ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
 from mocap.silhouette.masks import DOUBTFUL
 
@@ -31,6 +35,7 @@ END_ON_RATIO = 0.3        # seen length / length below this: the segment points 
 SWAP_MARGIN = 0.5         # crossed distances below this fraction of the kept ones: a swap
 SWAP_MIN_MOVE = 0.03      # of the body height: smaller motions say nothing about sides
 REASON_WEIGHT = 0.3       # doubt added by each reason beyond the score's own 1 - S
+LOST_DOUBT = 10.0         # doubt of a lost stretch: above every other reason's
 _PAIRS = (("wrist_l", "wrist_r"), ("ankle_l", "ankle_r"))
 
 
@@ -75,8 +80,19 @@ def likely_swaps(joints2d: np.ndarray, px_per_unit: np.ndarray) -> np.ndarray:
     return out
 
 
+def lost_stretches(session) -> list[Doubt]:
+    """A stop at the first frame of every stretch where the body was lost
+    (Session.lost), the longest first: a body marked there again is tracked from
+    there on (mocap.track.reseed)."""
+    out = [Doubt(first, LOST_DOUBT + (stop - first) / session.n_frames,
+                 (f"body lost on frames {first}-{stop - 1}: mark the body here",))
+           for first, stop in stretches(session.lost)]
+    return sorted(out, key=lambda d: (-d.value, d.frame))
+
+
 def review_queue(session) -> list[Doubt]:
-    """Every doubtful frame with a person of a session (mocap.session), most doubtful first."""
+    """Every doubtful frame with a person of a session (mocap.session), most doubtful
+    first, after the lost stretches (``lost_stretches``)."""
     inputs = session.inputs
     scores = session.scores
     signs = (end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
@@ -90,7 +106,7 @@ def review_queue(session) -> list[Doubt]:
                            *(sign[i] for sign in signs)) + (GUESSED,) * bool(guessed[i])
         if reasons:
             queue.append(Doubt(int(i), float(1.0 - scores[i] + REASON_WEIGHT * len(reasons)), reasons))
-    return sorted(queue, key=lambda d: (-d.value, d.frame))
+    return lost_stretches(session) + sorted(queue, key=lambda d: (-d.value, d.frame))
 
 
 GUESSED = "silhouette partly guessed (the performer never leaves those pixels: a clean plate helps)"
@@ -109,8 +125,11 @@ def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:
     60.7 mm over the 8 clips of benchmarks/bench_track_budget.py (94 visits); at
     the worst frame of each stretch instead of its middle, 62.7; at one frame per
     doubtful stretch only, 64.2 (55 visits; the even stops' first 52: 63.8).
+    The lost stretches of ``queue`` (lost_stretches) stay first, as they are.
     """
     width = 2 * spacing
+    lost = [d for d in queue if d.value >= LOST_DOUBT]
+    queue = [d for d in queue if d.value < LOST_DOUBT]
     by_frame = {d.frame: d for d in queue}
     stops = []
     for start in range(0, n_frames, width):
@@ -120,7 +139,7 @@ def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:
         reasons = ("nothing doubtful nearby",) if top is None else tuple(
             r if top.frame == middle else f"{r} (frame {top.frame})" for r in top.reasons)
         stops.append(Doubt(middle, 0.0 if top is None else top.value, reasons))
-    return sorted(stops, key=lambda d: (-d.value, d.frame))
+    return lost + sorted(stops, key=lambda d: (-d.value, d.frame))
 
 
 def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray,

@@ -34,11 +34,12 @@ def render_walk(path: str | Path, view: str = "side", seed: int = 1, **overrides
     return synth.render_clip(joints, path, view=view, seed=seed, **opts)
 
 
-def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2) -> Truth:
+def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, **overrides) -> Truth:
     """The walk with the performer stepped far out of the frame (20 m to the image
-    right) on the frames of `gone`; the camera frames the walk as if they had stayed."""
+    right) on the frames of `gone`; the camera frames the walk as if they had stayed.
+    Keyword ``overrides`` set RenderOptions fields (e.g. yaw, perspective)."""
     fps, seconds = CLIP["fps"], CLIP["seconds"]
-    opts = RenderOptions(size=CLIP["size"], fps=fps, seed=seed)
+    opts = RenderOptions(size=CLIP["size"], fps=fps, seed=seed, **overrides)
     scene = synth.plan_scene(walk_cycle(seconds, fps), opts)
     joints_cam = scene.joints_cam.copy()
     joints_cam[gone, :, 0] += 20.0

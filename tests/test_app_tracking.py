@@ -214,3 +214,16 @@ def test_a_pin_moves_the_frames_around_it_and_says_so(tracked):
     assert "ankle_l moved by the pin on frame 10" in frame_text(state.view(9))
     state.set_override(12, "ankle_l", tuple(before[12]))
     assert state.view(11).carried == {"ankle_l": 10} and state.view(13).carried == {"ankle_l": 12}
+
+
+def test_the_body_marked_again_on_a_later_frame_asks_for_a_tracking_that_starts_there_too(tracked):
+    state, truth = tracked
+    frame = 5
+    for name in JOINTS:
+        state.set_override(frame, name, tuple(truth.joints2d[frame, JOINTS.index(name)] + 2.0))
+    assert state.marks_changed
+    state.start_tracking().join()
+    assert state.progress.ready and not state.marks_changed
+    seeded = state._tracked.tracked
+    assert np.allclose(seeded.joints2d[frame], truth.joints2d[frame] + 2.0, atol=0.01)
+    assert np.all(seeded.confidence[frame] == 1.0)

@@ -14,10 +14,12 @@ from mocap.overlay import draw_skeleton, segment_colour, silhouette_view
 from mocap.review import Doubt
 from mocap.session.base import Session
 from mocap.session.silhouette import SilhouetteSession
-from mocap.session.tracking import MARKS_NEEDED, TrackSession, check_tracking_marks, marks_of
+from mocap.session.tracking import (MARKS_NEEDED, TrackSession, check_tracking_marks, marks_of, remarks_of,
+                                    tracked_video)
 from mocap.silhouette.passes import FrameFit, Silhouette
 
 __all__ = ["FORMATS", "MARKS_NEEDED", "Annotations", "Doubt", "FrameFit", "Session", "Silhouette",
            "SilhouetteSession", "TrackSession", "VideoInfo", "check_tracking_marks",
            "draw_skeleton", "load_annotations", "marks_of", "open_video", "processing_scale",
-           "read_frame", "save_annotations", "segment_colour", "silhouette_view"]
+           "read_frame", "save_annotations", "segment_colour", "silhouette_view", "remarks_of",
+           "tracked_video"]

@@ -97,6 +97,13 @@ class Session(ABC):
                 conf[i, [JOINT_INDEX[j] for j in points]] = 1.0
         return conf
 
+    @property
+    def lost(self) -> np.ndarray:
+        """(F,) bool: frames where the method lost the performer it followed and
+        gives no answer (the motion file says ``lost``; no method but the tracking
+        loses anyone)."""
+        return np.zeros(self.n_frames, bool)
+
     def far_arm(self) -> str | None:
         """"l" or "r": the arm to check first, where the method knows one."""
         return None
@@ -170,21 +177,24 @@ class Session(ABC):
 
     def motion_frames(self, motion: Motion) -> list[dict]:
         """Motion-file entries (CONTRACT.md). A frame without a person stays
-        ``person: false``; it gets interpolated joints3d when it lies between keyframes."""
+        ``person: false``; it gets interpolated joints3d when it lies between keyframes.
+        A frame where the performer was lost says ``lost: true`` and gives no joints."""
         keys = np.flatnonzero(motion.keyframes)
-        person, scores, inputs = self.person, self.scores, self.inputs
+        person, scores, inputs, lost = self.person, self.scores, self.inputs, self.lost
         contacts, confidence = motion.contacts, self.confidence()
         frames = []
         for i in range(self.n_frames):
             entry: dict = {"index": i, "keyframe": bool(motion.keyframes[i]),
                            "person": bool(person[i])}
+            if lost[i]:
+                entry["lost"] = True
             if person[i]:
                 if entry["keyframe"]:
                     entry["score"] = float(scores[i])
                 entry["orientation"] = inputs.orientation[i]
                 entry["joints2d"] = inputs.joints2d[i]
                 entry["confidence"] = confidence[i]
-            if person[i] or keys[0] < i < keys[-1]:
+            if (person[i] or keys[0] < i < keys[-1]) and not lost[i]:
                 entry["joints3d"] = motion.joints3d[i]
                 entry["root"] = motion.root[i]
                 entry["contacts"] = dict(zip(FEET, map(bool, contacts[i])))

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.io.annotations import Annotations
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_JOINTS
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_JOINTS
 from mocap.errors import MocapError
 from mocap.lift.inputs import Inputs
 from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
@@ -34,7 +34,7 @@ from mocap.silhouette.passes import SCALE_PERCENTILE
 from mocap.track.parts import far_arm
 from mocap.track.marks import check_marks
 from mocap.track.tracking import (TrackResult, carried_pins, guessed_turn, spread_corrections,
-                                  spread_frames, steady_joints, turn_of)
+                                  spread_frames, steady_joints, track_video, turn_of)
 from mocap.io.video import VideoInfo
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
@@ -47,6 +47,20 @@ def marks_of(notes: Annotations) -> dict[str, tuple[float, float]]:
     if first is None or not first.joints2d:
         raise MocapError(MARKS_NEEDED)
     return dict(first.joints2d)
+
+
+def remarks_of(notes: Annotations) -> dict[int, dict[str, tuple[float, float]]]:
+    """frame -> the joints of every later frame where the annotations place all 16:
+    the body marked again, which seeds the tracker anew (mocap.track.reseed)."""
+    return {f: dict(n.joints2d) for f, n in sorted(notes.frames.items())
+            if f > 0 and n.joints2d and len(n.joints2d) == len(JOINTS)}
+
+
+def tracked_video(info: VideoInfo, notes: Annotations, progress=None, focal_px: float | None = None) -> TrackResult:
+    """The video tracked from the marks of ``notes`` (marks_of; frame 0's orientation)
+    and from every frame they mark the body again on (remarks_of)."""
+    return track_video(info, marks_of(notes), progress, focal_px=focal_px,
+                       orientation=notes.orientations(1)[0], remarks=remarks_of(notes))
 
 
 def check_tracking_marks(info: VideoInfo, notes: Annotations) -> None:
@@ -80,14 +94,24 @@ class TrackSession(Session):
 
     @property
     def scores(self) -> np.ndarray:
-        """(F,) each frame's mean joint reliability (every frame shows the performer)."""
-        return self.tracked.reliability.mean(axis=1).astype(float)
+        """(F,) each frame's mean joint reliability, NaN where the body was lost."""
+        scores = self.tracked.reliability.mean(axis=1).astype(float)
+        scores[self.lost] = np.nan
+        return scores
+
+    @property
+    def lost(self) -> np.ndarray:
+        """(F,) bool: the frames the tracking lost the body on (TrackResult.lost)."""
+        return self.tracked.lost
 
     def joint_scores(self) -> np.ndarray:
-        """(F, 16) each joint's tracking reliability."""
-        return self.tracked.reliability.astype(float)
+        """(F, 16) the tracking's confidence in each joint: whether it is still on
+        the body (mocap.track.loss.joint_confidence)."""
+        return self.tracked.confidence.astype(float)
 
     def annotate(self, annotations: Annotations) -> None:
+        """Take new annotations (marks on frame 0 or the body marked again on another
+        frame change the tracking itself: a new session, tracked_video)."""
         super().annotate(annotations)
         self._resolution = None
 

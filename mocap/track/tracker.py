@@ -53,6 +53,7 @@ from mocap.track import blocks
 from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
 from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
+from mocap.track.loss import body_lost, part_confidence
 from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVERLAP, TrunkDepth, added,
                                arm_limits_cost, around_root, limb_cost, limb_penalty, outline_cost,
                                settled_knee, twin_overlap)
@@ -76,11 +77,13 @@ class BodyTracker:
     the last frame (constant-velocity prediction), the colour models and the
     similarities of the last HISTORY frames, the head's adaptive threshold p, the
     last frame and the trunk in 3D (``TrunkDepth``, seen by ``camera``, default the
-    frame's (mocap.track.calibration.default_camera), and turned to ``turn``)."""
+    frame's (mocap.track.calibration.default_camera), and turned to ``turn``), and
+    every part's confidence on the last frame (mocap.track.loss, at ``fps``)."""
 
     def __init__(self, frame0: np.ndarray, marks: np.ndarray, camera: Pinhole | None = None,
-                 turn: str | None = None):
+                 turn: str | None = None, fps: float = 25.0):
         scale = body_scale(marks)
+        self.fps = fps
         self.trunk = TrunkDepth(marks, camera or default_camera(frame0.shape[1], frame0.shape[0]), turn)
         self.limb_costs: dict[int, tuple[blocks.Penalty, blocks.Penalty]] = {}
         self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]],
@@ -91,6 +94,8 @@ class BodyTracker:
         self.widths = np.outer(self.blocks[:, N], ZOOM_RANGE)
         # usual lengths (around_root): as marked, unless marked much foreshortened
         self.lengths = np.maximum(self.blocks[:, M], USUAL_MIN * self.longest / MAX_STRETCH)
+        self.confidence = np.ones(len(PARTS))
+        self.lost = False
         self.velocity = np.zeros_like(self.blocks)
         self.grids = [blocks.make_grid(b[M], b[N], 0.0 if k == HEAD else BEYOND)
                       for k, b in enumerate(self.blocks)]
@@ -116,8 +121,16 @@ class BodyTracker:
         for twins in TWINS:
             self._part_twins(frame, new, s, twins)
         new = self._bounded(new, frame.shape)
-        self._update(frame, new, s)
+        self.confidence = self._confidence(new, s, frame.shape)
+        self.lost = bool(body_lost(self.confidence, self.lost))
+        self._update(frame, new, s, self.lost)
         return skeleton(new, self.chest), s
+
+    def _confidence(self, new: np.ndarray, s: np.ndarray, shape: tuple) -> np.ndarray:
+        """(10,) the parts' confidence on a frame (mocap.track.loss.part_confidence);
+        a part's calibrated length follows the head's zoom."""
+        expected = self.longest / MAX_STRETCH * new[HEAD, N] / self.head_width
+        return part_confidence(new, self.blocks, s, self._usual(), expected, shape, self.fps)
 
     def _bounded(self, new: np.ndarray, shape: tuple) -> np.ndarray:
         """The blocks kept sane where the match ran off (a body too small or lost):
@@ -255,15 +268,19 @@ class BodyTracker:
         """(10,) every part's median S over the last HISTORY frames (inf before any)."""
         return np.median(self.history, axis=0) if self.history else np.full(len(PARTS), np.inf)
 
-    def _update(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> None:
+    def _update(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, lost: bool) -> None:
         """Velocities; colour models by linear weighting (matches at least UPDATE_MIN
-        of the part's median S only, so an occluder's colours stay out)."""
+        of the part's median S only, so an occluder's colours stay out). A frame where
+        the body is ``lost`` changes neither the usual S nor the models (a lost
+        tracker's matches would teach them the clutter it follows)."""
         self.velocity = new - self.blocks
         self.velocity[:, THETA] = (self.velocity[:, THETA] + np.pi) % (2 * np.pi) - np.pi
         self.blocks = new
+        self.frame = frame
+        if lost:
+            return
         self.history.append(s)
         for k in np.flatnonzero(s >= UPDATE_MIN * self._usual()):
             seen = blocks.sample_blocks(frame, new[k], self.grids[k])[0]
             adapted = (1 - UPDATE_RATE) * self.models[k] + UPDATE_RATE * seen
             self.models[k] = ANCHOR * self.marked[k] + (1 - ANCHOR) * adapted
-        self.frame = frame

@@ -29,7 +29,8 @@ from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.keydepths import Turns
 from mocap.track.perspective import reconstruct, steady_depths, to_contract
 from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO
-from mocap.track.tracker import BodyTracker
+from mocap.track.loss import GAP_S, bridged, joint_confidence
+from mocap.track.reseed import Track, track_seeded
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
 
 Progress = Callable[[int, int], None]
@@ -71,7 +72,11 @@ class TrackResult:
     [0, 1]: the similarity of the match that placed each joint over that part's
     median similarity in the clip (1 on the marked frame 0; below LOW_RELIABILITY the
     joint was interpolated where reliable frames surround it); ``joints3d``
-    (F, 16, 3): metres, CONTRACT.md's frame; ``focal_px``: the focal length assumed.
+    (F, 16, 3): metres, CONTRACT.md's frame; ``focal_px``: the focal length assumed;
+    ``confidence`` (F, 16) in [0, 1]: whether each joint was still on the body
+    (mocap.track.loss.joint_confidence); ``lost`` (F,) bool: the frames where the
+    body was lost and could not be bridged (mocap.track.loss.bridged), whose joints
+    are no answer.
     """
 
     info: VideoInfo
@@ -79,32 +84,29 @@ class TrackResult:
     reliability: np.ndarray
     joints3d: np.ndarray
     focal_px: float
+    confidence: np.ndarray
+    lost: np.ndarray
 
 
 def track_frames(frames: Iterable[np.ndarray], marks: np.ndarray,
                  progress: Callable[[int], None] | None = None, camera: Pinhole | None = None,
-                 turn: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Track checked ``marks`` (16, 2) of the first frame through ``frames`` (BGR,
-    consumed one at a time) seen by ``camera`` (default the frame's), the body turned
-    to ``turn``: (F, 16, 2) joints and (F, 10) similarities S of the parts (frame 0:
-    the marks, S = inf)."""
-    it = iter(frames)
-    tracker = BodyTracker(next(it), marks, camera, turn)
-    joints, similarity = [marks], [np.full(len(PARTS), np.inf)]
-    for frame in it:
-        found, s = tracker.step(frame)
-        joints.append(found)
-        similarity.append(s)
-        if progress:
-            progress(len(joints))
-    return np.array(joints), np.array(similarity)
+                 turn: str | None = None, fps: float = 25.0,
+                 remarks: dict[int, np.ndarray] | None = None) -> Track:
+    """Track checked ``marks`` (16, 2) of the first frame, and the body marked again
+    on later frames (``remarks``, frame -> checked marks; mocap.track.reseed), through
+    ``frames`` (BGR) seen by ``camera`` (default the frame's), the body turned to
+    ``turn``: (F, 16, 2) joints, (F, 10) similarities S of the parts (inf on a
+    marked frame), (F, 10) their confidence (mocap.track.loss; 1 on a marked frame)
+    and (F,) whether the body was lost (mocap.track.loss.body_lost)."""
+    return track_seeded(frames, {**(remarks or {}), 0: marks}, progress, camera, turn, fps)
 
 
 def joint_reliability(similarity: np.ndarray) -> np.ndarray:
     """(F, 16) reliability of every joint from the parts' similarities (F, 10): each
     part's S over its median S in the clip, at most 1; a joint's is the least of its
     parts' (JOINT_PARTS)."""
-    usual = np.median(similarity[1:], axis=0) if len(similarity) > 1 else np.ones(len(PARTS))
+    tracked = np.where(np.isfinite(similarity[1:]), similarity[1:], np.nan)   # marked frames aside
+    usual = np.nanmedian(tracked, axis=0) if np.isfinite(tracked).any() else np.ones(len(PARTS))
     part = np.minimum(similarity / usual, 1.0)
     return np.stack([part[:, list(parts)].min(axis=1) for parts in JOINT_PARTS], axis=1)
 
@@ -217,7 +219,8 @@ def turn_of(orientation: str | None) -> str | None:
 
 
 def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None,
-                *, focal_px: float | None = None, orientation: str | None = None) -> TrackResult:
+                *, focal_px: float | None = None, orientation: str | None = None,
+                remarks: dict | None = None) -> TrackResult:
     """Track a video (a path or an opened one) from the 16 joints marked on its frame 0
     and reconstruct 3D.
 
@@ -227,24 +230,27 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     frame width, see mocap.track.perspective). ``orientation``: the performer's orientation
     on frame 0 in CONTRACT.md's words; its side ("right" of forward_right) tells
     which way the body is turned, which the key triangle alone cannot (None: the
-    knees tell, ``guessed_turn``).
-    ``progress(done, total)`` is called after every frame.
+    knees tell, ``guessed_turn``). ``remarks``: frame -> the 16 joints marked
+    again there (as ``marks``), each seeding the tracker anew (mocap.track.reseed).
+    ``progress(done, total)`` is called after every frame of every pass.
     """
     info = video if isinstance(video, VideoInfo) else open_video(video)
-    marks = check_marks(marks, info.width, info.height)
+    marks, scale = check_marks(marks, info.width, info.height), processing_scale(info)
+    seeds = {f: (check_marks(m, info.width, info.height) + 0.5) * scale - 0.5
+             for f, m in (remarks or {}).items() if 0 < f < info.frame_count}
     turn = turn_of(orientation)
-    scale = processing_scale(info)
-    step = (lambda done: progress(done, info.frame_count)) if progress else None
+    step = (lambda done: progress(done, info.frame_count + max(seeds, default=0))) if progress else None
     frames = (frame for _, frame in iter_frames(info, scale=scale))
     camera = default_camera(info.width, info.height, focal_px)
-    joints, similarity = track_frames(frames, (marks + 0.5) * scale - 0.5, step,
-                                      camera.scaled(scale), turn)
+    joints, similarity, parts, lost = track_frames(frames, (marks + 0.5) * scale - 0.5, step,
+                                                   camera.scaled(scale), turn, info.fps, seeds)
     joints = (joints + 0.5) / scale - 0.5
     reliability = joint_reliability(similarity)
+    joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
     joints2d = fill_unreliable(joints, reliability)
     turn = turn or guessed_turn(joints2d, info.fps)
     joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps))
-    return TrackResult(info, joints2d, reliability, joints3d, camera.focal)
+    return TrackResult(info, joints2d, reliability, joints3d, camera.focal, joint_confidence(parts), lost)
 
 
 def guessed_turn(joints2d: np.ndarray, fps: float) -> str:

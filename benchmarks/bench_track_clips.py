@@ -1,0 +1,117 @@
+"""The tracking method on the perspective development clips, scored by the shared scorer.
+
+Clips: the perspective clips of ../shared/data/clips (track_salsa, track_walk: real
+motion capture over a panning background, frame 0 marked from the truth in their
+oracle_track.json), and clips rendered here with `mocap synth` from the real motion
+capture of ../shared/data/bvh where the body is hard to keep: laugh_arms_up (CMU
+13_14, the arms thrown over the head, bending and turning) and salsa_spin (CMU 60_05,
+a full spin), perspective camera, moving background, frame 0 marked from the truth.
+
+Each clip runs `mocap fit --method track VIDEO --annotations MARKS` in-process
+(mocap.pipeline.fit_video_to_file) and is scored with ../shared/bench/score.py. A
+frame the tracker marks as lost carries no joints and counts there as a failure
+(the "failed" column); the 2D errors (% of body height) and PA-MPJPE (mm) are over
+the frames answered. "lost" counts the frames the motion file marks lost.
+
+    python benchmarks/bench_track_clips.py [--clips track_salsa laugh_arms_up] [--keep DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT.parent / "shared" / "data"
+sys.path.insert(0, str(ROOT.parent / "shared" / "bench"))
+
+import contract  # noqa: E402
+from score import score  # noqa: E402
+
+from mocap.body import JOINTS  # noqa: E402
+from mocap.lift.taylor import orientation_of_yaw, yaw_of  # noqa: E402
+from mocap.pipeline import fit_video_to_file  # noqa: E402
+from mocap.synth import RenderOptions, render_motion  # noqa: E402
+
+SHARED = ("track_salsa", "track_walk")
+# name: (BVH, source frames A:B, render yaw, seed)
+RENDERED = {"laugh_arms_up": ("cmu_13_14_laugh.bvh", (1080, 1560), 30.0, 7),
+            "salsa_spin": ("cmu_60_05_salsa.bvh", (600, 840), 0.0, 11)}
+SIZE, FOCAL = (480, 360), 600.0
+
+
+def scored_truth(truth: dict) -> dict:
+    """A `mocap synth` truth with the fields score.py reads (each segment's
+    foreshortening and |dz|/length from the true 3D, contract.signs)."""
+    toward, ratio = contract.signs(np.array([f["joints3d"] for f in truth["frames"]]))
+    for f, t, r in zip(truth["frames"], toward, ratio):
+        f["foreshortening"] = {s: ("toward" if x else "away") for s, x in zip(contract.SEGMENTS, t)}
+        f["foreshortening_ratio"] = dict(zip(contract.SEGMENTS, r.tolist()))
+    return truth
+
+
+def render(name: str, folder: Path) -> tuple[Path, Path, Path]:
+    """Render a clip of RENDERED into ``folder``: (video, truth, frame-0 marks)."""
+    bvh, frames, yaw, seed = RENDERED[name]
+    video, truth_path = folder / f"{name}.mp4", folder / f"{name}.truth.json"
+    if not video.exists():
+        opts = RenderOptions(yaw=yaw, size=SIZE, fps=25.0, perspective=FOCAL, moving_background=True,
+                             seed=seed)
+        render_motion(DATA / "bvh" / bvh, video, opts, frames=frames, truth_path=truth_path)
+    truth = scored_truth(json.loads(truth_path.read_text()))
+    truth_path.write_text(json.dumps(truth))
+    first = truth["frames"][0]
+    marks = {"format": "mocap-annotations", "version": 1, "frames": {"0": {
+        "orientation": orientation_of_yaw(yaw_of(np.array(first["joints3d"]))),
+        "joints2d": dict(zip(JOINTS, first["joints2d"]))}}}
+    marks_path = folder / f"{name}.marks.json"
+    marks_path.write_text(json.dumps(marks))
+    return video, truth_path, marks_path
+
+
+def clip_files(name: str, folder: Path) -> tuple[Path, Path, Path]:
+    """(video, truth, marks) of a shared clip or a rendered one."""
+    if name in SHARED:
+        base = DATA / "clips" / name
+        return base / "video.mp4", base / "truth.json", base / "oracle_track.json"
+    return render(name, folder)
+
+
+def run(name: str, folder: Path) -> dict:
+    """Track and score one clip."""
+    video, truth, marks = clip_files(name, folder)
+    out = folder / f"{name}.track.json"
+    start = time.perf_counter()
+    fit_video_to_file(video, {"json": out}, annotations=marks, method="track")
+    seconds = time.perf_counter() - start
+    result = score(out, truth)
+    frames = json.loads(out.read_text())["frames"]
+    result["lost"] = sum(bool(f.get("lost")) for f in frames)
+    result["seconds"] = seconds
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--clips", nargs="+", default=[*SHARED, *RENDERED])
+    parser.add_argument("--keep", type=Path, help="folder for the renders and motion files")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = args.keep or Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        print(f"{'clip':<15} {'frames':>6} {'failed':>6} {'lost':>5} {'2D med %':>8} {'2D mean %':>9} "
+              f"{'PA-MPJPE mm':>11} {'s':>5}")
+        for name in args.clips:
+            r = run(name, folder)
+            print(f"{name:<15} {r['frames']:>6} {r['failed']:>6} {r['lost']:>5} {r['err2d_median_pct']:>8.2f} "
+                  f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['seconds']:>5.0f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
