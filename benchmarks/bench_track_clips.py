@@ -42,7 +42,7 @@ from mocap.synth import RenderOptions, render_motion  # noqa: E402
 SHARED = ("track_salsa", "track_walk")
 # name: (BVH, source frames A:B, render yaw, seed)
 RENDERED = {"laugh_arms_up": ("cmu_13_14_laugh.bvh", (1080, 1560), 30.0, 7),
-            "salsa_spin": ("cmu_60_05_salsa.bvh", (600, 840), 0.0, 11)}
+            "salsa_spin": ("cmu_60_05_salsa.bvh", (600, 840), 90.0, 11)}
 SIZE, FOCAL = (480, 360), 600.0
 
 
