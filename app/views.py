@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, semi_axes
+from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
 from mocap.session import (Silhouette, VideoInfo, draw_skeleton, read_frame, segment_colour,
                            silhouette_view)
 
@@ -75,7 +75,7 @@ def segment_transforms(joints3d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     length = np.linalg.norm(axis, axis=-1)
     z = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 1.0, 0.0])
     j = np.asarray(joints3d, float)
-    left = j[_J["shoulder_l"]] - j[_J["shoulder_r"]] + j[_J["hip_l"]] - j[_J["hip_r"]]
+    left = left_direction(j)
     x = left[None] - (z @ left)[:, None] * z
     # a segment along the body's left-right line: any direction across it will do
     across = np.cross(z, np.eye(3)[np.argmin(np.abs(z), axis=1)])

@@ -14,6 +14,7 @@ side (paper, section 3.3); anatomical sides are decided when lifting to 3D.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -94,12 +95,86 @@ ANGLE_LIMITS: dict[str, tuple[float, float]] = {
     "upper_leg_r": (240.0, 300.0),
 }
 
+# -- the skeleton as data (VideoPose3D style: a parents array, left and right joints) --
+
+# Every joint's parent (the contract's joints; the pelvis is the root).
+JOINT_PARENT: dict[str, str | None] = {
+    "head_top": "neck", "neck": "chest", "chest": "pelvis", "pelvis": None,
+    "shoulder_l": "chest", "elbow_l": "shoulder_l", "wrist_l": "elbow_l",
+    "shoulder_r": "chest", "elbow_r": "shoulder_r", "wrist_r": "elbow_r",
+    "hip_l": "pelvis", "knee_l": "hip_l", "ankle_l": "knee_l",
+    "hip_r": "pelvis", "knee_r": "hip_r", "ankle_r": "knee_r",
+}
+JOINT_PARENTS = np.array([JOINT_INDEX[JOINT_PARENT[j]] if JOINT_PARENT[j] else -1 for j in JOINTS])
+SIDES = ("l", "r")
+SIDE_SIGN = {"l": 1.0, "r": -1.0}       # the performer's left is +x in the body frame
+JOINTS_LEFT: tuple[int, ...] = tuple(i for i, j in enumerate(JOINTS) if j.endswith("_l"))
+JOINTS_RIGHT: tuple[int, ...] = tuple(i for i, j in enumerate(JOINTS) if j.endswith("_r"))
 # Anatomical pairs swapped when mirroring left and right.
 LEFT_RIGHT_PAIRS: tuple[tuple[str, str], ...] = tuple(
-    (f"{j}_l", f"{j}_r") for j in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle"))
+    (JOINTS[i], JOINTS[i][:-1] + "r") for i in JOINTS_LEFT)
 MIRROR_JOINTS = np.arange(len(JOINTS))
-for _l, _r in LEFT_RIGHT_PAIRS:
-    MIRROR_JOINTS[JOINT_INDEX[_l]], MIRROR_JOINTS[JOINT_INDEX[_r]] = JOINT_INDEX[_r], JOINT_INDEX[_l]
+MIRROR_JOINTS[list(JOINTS_LEFT)], MIRROR_JOINTS[list(JOINTS_RIGHT)] = JOINTS_RIGHT, JOINTS_LEFT
+SEGMENT_OF_BONE: dict[tuple[str, str], str] = {ends: s for s, ends in SEGMENTS.items()}
+
+
+class Limb(NamedTuple):
+    """An arm or a leg: three joints, root (shoulder or hip) to end (wrist or ankle),
+    and the two segments between them."""
+
+    kind: str                           # "arm" or "leg"
+    side: str                           # "l" or "r"
+    joints: tuple[str, str, str]
+    segments: tuple[str, str]
+
+
+def _limbs() -> tuple[Limb, ...]:
+    """Every limb, each side's in joint order: a chain of two bones down the tree from a
+    joint of that side whose parent is on neither side."""
+    out = []
+    for side in SIDES:
+        for root in JOINTS:
+            if root.endswith("_" + side) and not JOINT_PARENT[root].endswith(("_l", "_r")):
+                middle = next(j for j in JOINTS if JOINT_PARENT[j] == root)
+                end = next(j for j in JOINTS if JOINT_PARENT[j] == middle)
+                segments = (SEGMENT_OF_BONE[root, middle], SEGMENT_OF_BONE[middle, end])
+                kind = segment_kind(segments[0]).split("_")[1]
+                out.append(Limb(kind, side, (root, middle, end), segments))
+    return tuple(out)
+
+
+LIMBS = _limbs()
+
+
+# each kind of limb's joints, root to end, without their side: "arm" -> (shoulder, elbow, wrist)
+LIMB_JOINTS: dict[str, tuple[str, ...]] = {
+    one.kind: tuple(j.removesuffix("_" + one.side) for j in one.joints) for one in LIMBS}
+
+
+def limb(kind: str, side: str) -> Limb:
+    """The ``kind`` ("arm" or "leg") limb of ``side`` ("l" or "r")."""
+    return next(one for one in LIMBS if one.kind == kind and one.side == side)
+
+
+def bones_from(known: tuple[str, ...]) -> tuple[tuple[str, str], ...]:
+    """(placed joint, joint placed from it) for every contract joint not ``known``,
+    through the contract tree: the trunk's first, depth first from the known joints
+    (neighbours in joint order), then each limb's from its root, in joint order."""
+    limb_joints = {j for one in LIMBS for j in one.joints[1:]}
+    placed, out = set(known), []
+
+    def visit(joint: str) -> None:
+        for other in JOINTS:
+            near = JOINT_PARENT[other] == joint or JOINT_PARENT[joint] == other
+            if near and other not in placed and other not in limb_joints:
+                placed.add(other)
+                out.append((joint, other))
+                visit(other)
+    for joint in known:
+        visit(joint)
+    for one in sorted(LIMBS, key=lambda one: JOINT_INDEX[one.joints[0]]):
+        out += [one.joints[:2], one.joints[1:]]
+    return tuple(out)
 
 
 # neck = pelvis + NECK_PER_SHOULDER * (shoulder midpoint - pelvis)
@@ -187,7 +262,7 @@ def _kinematic_matrix() -> np.ndarray:
     m[JOINT_INDEX["chest"], 1 + SEGMENT_INDEX["torso"]] = CHEST_FRACTION
     m[JOINT_INDEX["head_top"]] = m[JOINT_INDEX["neck"]]
     m[JOINT_INDEX["head_top"], 1 + SEGMENT_INDEX["head"]] = 1.0
-    for side, sign in (("l", 1.0), ("r", -1.0)):
+    for side, sign in SIDE_SIGN.items():
         m[JOINT_INDEX[f"shoulder_{side}"]] = m[JOINT_INDEX["neck"]]
         m[JOINT_INDEX[f"shoulder_{side}"], 1 + SEGMENT_INDEX["torso"]] -= SHOULDER_DROP / LENGTH[SEGMENT_INDEX["torso"]]
         m[JOINT_INDEX[f"shoulder_{side}"], 11] = sign * SHOULDER_HALF_SPAN
@@ -254,15 +329,22 @@ TOWARD, AWAY = 1, -1
 ARM_REST = 0.15            # sine of the upper arms' rest angle out from the sagittal plane
 
 
+def left_direction(joints: np.ndarray) -> np.ndarray:
+    """(..., D) the body's right-to-left direction of joints (..., 16, D): the limbs'
+    roots (shoulders, hips), each pair's left minus right, summed."""
+    return sum(joints[..., JOINT_INDEX[f"{names[0]}_l"], :] - joints[..., JOINT_INDEX[f"{names[0]}_r"], :]
+               for names in LIMB_JOINTS.values())
+
+
 def knee_facing(joints2d: np.ndarray) -> str:
     """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward
     over the frames given (knees bend forward)."""
-    return "right" if sum(knee_bend(joints2d, side) for side in "lr").sum() >= 0 else "left"
+    return "right" if sum(knee_bend(joints2d, side) for side in SIDES).sum() >= 0 else "left"
 
 
 def knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
     """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
-    hip, knee, ankle = (joints2d[:, JOINT_INDEX[f"{n}_{side}"]] for n in ("hip", "knee", "ankle"))
+    hip, knee, ankle = (joints2d[:, JOINT_INDEX[j]] for j in limb("leg", side).joints)
     along = ankle - hip
     t = np.clip(((knee - hip) * along).sum(-1) / np.maximum((along ** 2).sum(-1), 1e-9), 0, 1)
     return (knee - hip - t[:, None] * along)[:, 0]

@@ -6,11 +6,10 @@ from itertools import permutations
 
 import numpy as np
 
-from mocap.body import JOINT_INDEX
+from mocap.body import JOINT_INDEX, LIMB_JOINTS
 from mocap.lift.taylor import yaw_of
 
-LIMBS = tuple(tuple((f"{j}_l", f"{j}_r") for j in names)
-              for names in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")))
+LIMBS = tuple(tuple((f"{j}_l", f"{j}_r") for j in names) for names in LIMB_JOINTS.values())
 
 
 def side_matched_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:

@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap.track.loss import stretches
-from mocap.body import ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.body import (ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS,
+                        SEGMENT_NAMES)
 from mocap.silhouette.masks import DOUBTFUL
 
 LOW_SCORE = 0.7           # S below this is a doubtful fit
@@ -36,7 +37,7 @@ SWAP_MARGIN = 0.5         # crossed distances below this fraction of the kept on
 SWAP_MIN_MOVE = 0.03      # of the body height: smaller motions say nothing about sides
 REASON_WEIGHT = 0.3       # doubt added by each reason beyond the score's own 1 - S
 LOST_DOUBT = 10.0         # doubt of a lost stretch: above every other reason's
-_PAIRS = (("wrist_l", "wrist_r"), ("ankle_l", "ankle_r"))
+_PAIRS = tuple((f"{names[-1]}_l", f"{names[-1]}_r") for names in LIMB_JOINTS.values())   # limb ends
 
 
 @dataclass(frozen=True)

@@ -75,9 +75,7 @@ class RenderOptions:
 
 def _rotation(yaw_deg: float, pitch_deg: float, joints0: np.ndarray) -> np.ndarray:
     """World -> camera rotation for a yaw from the performer's initial lateral axis."""
-    j = body.JOINT_INDEX
-    pairs = joints0[[j["hip_l"], j["shoulder_l"]]] - joints0[[j["hip_r"], j["shoulder_r"]]]
-    left = pairs.sum(axis=0)
+    left = body.left_direction(joints0)
     left = _unit(left - _UP * left[1], np.array([1.0, 0.0, 0.0]))
     yaw, pitch = np.radians(yaw_deg), np.radians(pitch_deg)
     look = np.cos(yaw) * left - np.sin(yaw) * np.cross(left, _UP)
@@ -121,7 +119,7 @@ def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarra
     axis = _unit(ends[..., 1, :] - ends[..., 0, :], _UP)
     across = _unit(np.cross(axis, [0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
     lateral = np.broadcast_to(across, axis.shape).copy()
-    lateral[..., _TORSO, :] = _torso_lateral(joints_cam)
+    lateral[..., _TORSO, :] = body.left_direction(joints_cam)
     lateral = _unit(lateral - (lateral * axis).sum(-1, keepdims=True) * axis, across)
     sagittal = np.cross(axis, lateral)
     light = _unit(_LIGHT - (axis @ _LIGHT)[..., None] * axis, across)
@@ -132,13 +130,6 @@ def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarra
     centres = ends[..., None, :, None, :] + shift[..., None, None, :]    # (..., 10, L, 2, 1, 3)
     pts = centres + ring                                             # (..., 10, L, 2, R, 3)
     return pts.reshape(*pts.shape[:-3], 2 * len(_RING), 3)
-
-
-def _torso_lateral(joints: np.ndarray) -> np.ndarray:
-    """(..., 3) the body's right-to-left direction from hips and shoulders."""
-    j = body.JOINT_INDEX
-    return (joints[..., j["hip_l"], :] - joints[..., j["hip_r"], :]
-            + joints[..., j["shoulder_l"], :] - joints[..., j["shoulder_r"], :])
 
 
 def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:

@@ -33,9 +33,9 @@ def walk_cycle(seconds: float = 4.0, fps: float = 30.0, *, in_place: bool = Fals
         hip_at = pose["pelvis"] + [sign * body.HIP_HALF_SPAN * unit, 0.0, 0.0]
         shoulder_at = pose["neck"] / body.NECK_PER_SHOULDER + [
             sign * body.SHOULDER_HALF_SPAN * unit, 0.0, 0.0]
-        _chain(pose, (f"hip_{side}", f"knee_{side}", f"ankle_{side}"), hip_at,
+        _chain(pose, body.limb("leg", side).joints, hip_at,
                (seg["upper_leg_l"], seg["lower_leg_l"]), (hip, hip - knee), 0.0)
-        _chain(pose, (f"shoulder_{side}", f"elbow_{side}", f"wrist_{side}"), shoulder_at,
+        _chain(pose, body.limb("arm", side).joints, shoulder_at,
                (seg["upper_arm_l"], seg["lower_arm_l"]), (arm, arm + elbow), 0.1 * sign)
     out = np.stack([pose[name] for name in body.JOINTS], axis=1)
     ankles = out[:, [body.JOINT_INDEX["ankle_l"], body.JOINT_INDEX["ankle_r"]], 1]

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
+from mocap.body import JOINTS, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.io.fileio import atomic_write_json
 from mocap.io.jsoncheck import Bad, describe, expect, is_number
@@ -327,7 +327,8 @@ def _side_anchors(notes: Annotations, joints2d: np.ndarray, start: int, names: l
     stop = start
     while stop < min(len(names), start + 30) and names[stop] == names[start]:
         stop += 1
-    for joint in ("wrist_l", "ankle_l"):
+    for kind in LIMB_JOINTS.values():                   # each limb's end, left
+        joint = f"{kind[-1]}_l"
         j, k = JOINTS.index(joint), JOINTS.index(joint[:-1] + "r")
         gap = np.linalg.norm(joints2d[start:stop, j] - joints2d[start:stop, k], axis=-1)
         i = start + int(np.argmax(gap))

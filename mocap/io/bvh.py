@@ -178,7 +178,7 @@ def _parse_motion(text: str, n_channels: int, source: str) -> tuple[float, np.nd
 
 _SIDE_PREFIXES = {"l": ("left", "l"), "r": ("right", "r")}
 _LIMB_ENDS = {"wrist": ("wrist", "hand"), "ankle": ("ankle", "foot")}
-_LIMB_CHAINS = {"wrist": ("shoulder", "elbow"), "ankle": ("hip", "knee")}
+_LIMB_CHAINS = {names[-1]: names[:-1] for names in body.LIMB_JOINTS.values()}   # end -> its chain
 
 
 def _key(name: str) -> str:

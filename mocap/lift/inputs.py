@@ -9,7 +9,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
 from mocap.io.annotations import Annotations
-from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_NAMES
+from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
 from mocap.lift.taylor import (LENGTH, anatomical_joints, clip_lengths, exchange_legs, known_sides, lift_pose,
@@ -117,7 +117,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     if person.any():
         seen = clip_lengths(joints_image[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
         held = _held_signs(joints, ppu, seen, values, since, person)
-        placed = np.array([any(j.startswith(("knee", "ankle")) for j in overrides.get(i, ()))
+        placed = np.array([any(j.startswith(LIMB_JOINTS["leg"][1:]) for j in overrides.get(i, ()))
                            for i in range(n)], bool)
         crossed = np.zeros(n, bool)
         crossed[person] = legs_crossed(joints[person], held[person], yaw[person], ppu[person], seen,
@@ -146,7 +146,7 @@ def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndar
     image sides change as the arms pass the trunk's axis)."""
     out = joints.copy()
     width = 2 * int(round(ARM_MEDIAN_S * fps / 2)) + 1
-    arms = [JOINT_INDEX[f"{n}_{s}"] for n in ("elbow", "wrist") for s in "lr"]
+    arms = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["arm"][1:] for s in SIDES]
     for r in runs(person):
         out[r, arms] = median_filter(joints[r, arms], size=(width, 1, 1), mode="nearest")
     return out

@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import median_filter
 
-from mocap.body import (ARM_REST, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, knee_bend, limb_penalty,
-                        unit)
+from mocap.body import (JOINT_INDEX, LIMB_JOINTS, LIMBS, SEGMENT_INDEX, SEGMENT_JOINTS, SIDE_SIGN, SIDES,
+                        knee_bend, limb, limb_penalty, unit)
 from mocap.lift.taylor import (LENGTH, TOWARD, exchange_legs, facing_yaw, lateral_axis, relative_depths,
                         runs)
 from mocap.smoothest import smoothest_states
@@ -45,13 +45,10 @@ LIMIT_WEIGHT = 30.0        # model units of acceleration per unit of joint-limit
 DEPTH_FILTER_S = 0.15      # seconds: a running median of each |dZ| the signs are chosen on
 SAGITTAL_WEIGHT = 0.5      # limit units per length of depth against the sagittal-plane prior
 _J = JOINT_INDEX
-_LIMBS = {  # limb -> (upper segment, lower segment, side sign: +1 left, -1 right)
-    "arm_l": ("upper_arm_l", "lower_arm_l", 1.0), "arm_r": ("upper_arm_r", "lower_arm_r", -1.0),
-    "leg_l": ("upper_leg_l", "lower_leg_l", 1.0), "leg_r": ("upper_leg_r", "lower_leg_r", -1.0)}
 SWITCH_WEIGHT = 2.0        # per leg length apart: exchanging the legs' names between frames
 SAGITTAL_SHOWS = 0.5       # |sin yaw| from which image x shows the legs' swing (yaw 30-150)
 KEEP_RULE = 0.1            # per frame: overruling the image-side rule without a sign against it
-_LEG_SEGMENTS = [SEGMENT_INDEX[s] for s in ("upper_leg_l", "lower_leg_l", "upper_leg_r", "lower_leg_r")]
+_LEG_SEGMENTS = [SEGMENT_INDEX[s] for side in SIDES for s in limb("leg", side).segments]
 _SIGN_PAIRS = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
 
 
@@ -65,7 +62,7 @@ def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> n
     pelvis = joints2d[:, _J["pelvis"], 0] / body_px
     speed = np.gradient(pelvis) * fps if len(pelvis) > 1 else np.zeros(1)
     walk = np.where(np.abs(speed) > WALK_SPEED, np.sign(speed), 0.0)
-    knees = sum(knee_bend(joints2d, side) for side in "lr") / body_px
+    knees = sum(knee_bend(joints2d, side) for side in SIDES) / body_px
     return 2.0 * walk + np.clip(10.0 * knees, -1.0, 1.0)
 
 
@@ -170,10 +167,10 @@ def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
                 + SAGITTAL_WEIGHT * np.maximum(0, -states * sagittal[:, [k]]))
         allowed = (fixed[:, [k]] == 0) | (fixed[:, [k]] == states)
         out[:, k] = states[0, smoothest_states(z[..., None], LIMIT_WEIGHT * cost, allowed)]
-    for upper, lower, side in _LIMBS.values():
-        ku, kl = SEGMENT_INDEX[upper], SEGMENT_INDEX[lower]
+    for one in LIMBS:
+        ku, kl = (SEGMENT_INDEX[s] for s in one.segments)
         pick = _limb_signs(vec[:, [ku, kl]], depth[:, [ku, kl]], sagittal[:, [ku, kl]],
-                           fixed[:, [ku, kl]], facing, left, side, "leg" in upper)
+                           fixed[:, [ku, kl]], facing, left, SIDE_SIGN[one.side], one.kind == "leg")
         out[:, ku], out[:, kl] = _SIGN_PAIRS[pick, 0], _SIGN_PAIRS[pick, 1]
     return out
 
@@ -250,7 +247,7 @@ def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
         return ~crossed
     costs[:, 1] += KEEP_RULE
     costs[pinned, 1] = np.inf
-    legs = joints[:, [[_J[f"{n}_{s}"] for n in ("knee", "ankle")] for s in "lr"]]
+    legs = joints[:, [[_J[f"{n}_{s}"] for n in LIMB_JOINTS["leg"][1:]] for s in SIDES]]
     apart = np.linalg.norm(legs[:, 0] - legs[:, 1], axis=-1).sum(-1) / (
         px_per_unit * (lengths[SEGMENT_INDEX["upper_leg_l"]] + lengths[SEGMENT_INDEX["lower_leg_l"]]))
     switch = SWITCH_WEIGHT * np.minimum(apart[1:], apart[:-1])

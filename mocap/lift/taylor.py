@@ -27,9 +27,9 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, CHEST_FRACTION, HIP_HALF_SPAN,
-                        JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS,
-                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN, AWAY, FORESHORTENING,
-                        ORIENTATIONS, TOWARD)
+                        JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS,
+                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN, SIDE_SIGN, SIDES, AWAY,
+                        ORIENTATIONS, TOWARD, left_direction)
 
 UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT            # metres per model unit
 SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)     # model half-spans: shoulders, hips
@@ -42,7 +42,8 @@ _J = JOINT_INDEX
 _TORSO, _HEAD = SEGMENT_INDEX["torso"], SEGMENT_INDEX["head"]
 # limb segments in chain order (each one's proximal joint is placed before it)
 _LIMB_SEGMENTS = [SEGMENT_INDEX[s] for s in SEGMENT_NAMES if s not in ("torso", "head")]
-_PAIR_JOINTS = {"arms": ("elbow", "wrist"), "legs": ("knee", "ankle")}
+# the joints whose image sides the arms' and the legs' parities swap
+_PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 
 
 # -- orientation ----------------------------------------------------------------------
@@ -127,17 +128,17 @@ def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray) -
     out = np.zeros(known.shape, bool)
     ok = np.isfinite(joints2d).all(axis=(1, 2))
     for r in runs(ok):
-        legs = _limb_pair(joints2d[r], ("knee", "ankle"))
-        parity = _anchored(bridge_parity(legs, _limb_px(joints2d[r], "hip", "ankle")), known[r, 1])
+        legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
+        parity = _anchored(bridge_parity(legs, _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])), known[r, 1])
         out[r, 1] = np.where(known[r, 1] >= 0, known[r, 1] == 1, parity)
-        arms = _counter_phase(legs, out[r, 1], _limb_pair(joints2d[r], ("elbow", "wrist")), facing_x[r])
+        arms = _counter_phase(legs, out[r, 1], _limb_pair(joints2d[r], _PAIR_JOINTS["arms"]), facing_x[r])
         out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, arms)
     return out
 
 
 def _limb_pair(joints2d: np.ndarray, names: tuple[str, str]) -> np.ndarray:
     """(F, 2, 2, 2): image-left/right limb, (middle, distal) joint, xy about the pelvis."""
-    idx = [[_J[f"{n}_{s}"] for n in names] for s in "lr"]
+    idx = [[_J[f"{n}_{s}"] for n in names] for s in SIDES]
     return joints2d[:, idx] - joints2d[:, None, None, _J["pelvis"]]
 
 
@@ -258,14 +259,14 @@ def known_sides(orientations: list[str | None], overrides: dict[int, dict[str, t
 
 def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
     """(F, 16, 2) image-side joints with each frame's arms and legs swapped as told."""
-    out = _exchanged(joints_image, swap[:, 0], ("shoulder", "elbow", "wrist"))
-    return _exchanged(out, swap[:, 1], ("hip", "knee", "ankle"))
+    out = _exchanged(joints_image, swap[:, 0], LIMB_JOINTS["arm"])
+    return _exchanged(out, swap[:, 1], LIMB_JOINTS["leg"])
 
 
 def exchange_legs(joints2d: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """(F, 16, 2) with the knees and ankles of the ``rows`` (F,) bool frames exchanged
     between the hips: legs crossed in the image, the hips where they were."""
-    return _exchanged(joints2d, rows, ("knee", "ankle"))
+    return _exchanged(joints2d, rows, _PAIR_JOINTS["legs"])
 
 
 def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
@@ -317,7 +318,7 @@ def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: n
     z[_J["head_top"]] = dz[_TORSO] + dz[_HEAD]
     across = lateral_axis(yaw_deg)[2]                    # z of the performer's left
     axis_z = dz[_TORSO] * (1.0 - SHOULDER_DROP / LENGTH[_TORSO])
-    for side, sign in (("l", 1.0), ("r", -1.0)):
+    for side, sign in SIDE_SIGN.items():
         z[_J[f"shoulder_{side}"]] = axis_z + sign * across * spans[0]
         z[_J[f"hip_{side}"]] = sign * across * spans[1]
     for k in _LIMB_SEGMENTS:
@@ -332,7 +333,7 @@ def yaw_of(joints3d: np.ndarray) -> float:
     """The facing yaw (degrees) of a 3D pose in the contract frame, from its hips'
     and shoulders' right-to-left direction (the inverse of ``lateral_axis``)."""
     j = np.asarray(joints3d, float)
-    left = j[_J["hip_l"]] - j[_J["hip_r"]] + j[_J["shoulder_l"]] - j[_J["shoulder_r"]]
+    left = left_direction(j)
     return float(np.degrees(np.arctan2(-left[2], left[0])))
 
 

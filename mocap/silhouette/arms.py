@@ -14,13 +14,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D,
-                        forward_kinematics_2d, forward_kinematics_2d_batch, image_angle, knee_bend)
+from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, Pose2D,
+                        forward_kinematics_2d, forward_kinematics_2d_batch, image_angle, knee_bend, limb)
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
 from mocap.silhouette.raster import Canvas, joint_quads, sweep_scorer
 from mocap.silhouette.search import Knob, span, refine_limb, search_angle
 
-ARM = {"l": ("upper_arm_l", "lower_arm_l"), "r": ("upper_arm_r", "lower_arm_r")}
+ARM = {side: limb("arm", side).segments for side in SIDES}
 ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
 KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
 ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
@@ -132,7 +132,7 @@ def facing_of_knees(pose: Pose2D) -> int:
     the performer faces that way), -1 toward image left, 0 if both legs are straight
     (less than KNEE_FACING of body height from their hip-ankle lines)."""
     joints = forward_kinematics_2d(pose)[None]
-    bend = sum(float(knee_bend(joints, side)[0]) for side in "lr") / (BODY_HEIGHT * pose.scale)
+    bend = sum(float(knee_bend(joints, side)[0]) for side in SIDES) / (BODY_HEIGHT * pose.scale)
     return 0 if abs(bend) < KNEE_FACING else int(np.sign(bend))
 
 

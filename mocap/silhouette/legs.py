@@ -14,17 +14,16 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (JOINT_INDEX, LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d,
-                        image_angle)
+from mocap.body import (JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, Pose2D,
+                        forward_kinematics_2d, image_angle, limb)
 from mocap.silhouette.contour import find_angle, lower_leg_curves, lower_legs_cross
 from mocap.silhouette.raster import Canvas, pose_quads, sweep_scorer
 from mocap.silhouette.search import (RATIO_RANGE, TRACK_HALF_RANGE, Knob, around, span,
                                      refine_limb, search_angle)
 
-LEG = {"l": ("upper_leg_l", "lower_leg_l"), "r": ("upper_leg_r", "lower_leg_r")}
+LEG = {side: limb("leg", side).segments for side in SIDES}
 LEGS = LEG["l"] + LEG["r"]
-UPPER_LEGS = ("upper_leg_l", "upper_leg_r")
-LOWER_LEGS = ("lower_leg_l", "lower_leg_r")
+UPPER_LEGS, LOWER_LEGS = tuple(zip(LEG["l"], LEG["r"]))
 # Wider than Table 1's walking limits (240-300) so that runs and crouches can be
 # fitted; frames outside Table 1 are flagged for review instead of forced inside.
 THIGH_RANGE = (200.0, 340.0)
@@ -45,10 +44,10 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
         default = (prev or pose).angle[SEGMENT_INDEX[LEG[side][1]]]
         pose = Knob("angle", (LEG[side][1],)).apply(
             pose, find_angle(curves[other if crossed else side], default))
-    for side in "lr":
+    for side in SIDES:
         pose = search_thigh(canvas, pose, side, prev)
     pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose), prev)
-    for side in "lr":
+    for side in SIDES:
         pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
     return pose
 
@@ -71,7 +70,7 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
     names exchanged, since there the two legs look alike and only their motion over
     time tells which is which (``mocap.silhouette.legchain`` chooses)."""
     first = fit_legs(canvas, pose, prev)
-    poses = [first] + [refit_leg_beside(canvas, first, side, prev) for side in "lr"]
+    poses = [first] + [refit_leg_beside(canvas, first, side, prev) for side in SIDES]
     if pose.spread < UNCROSS_SPREAD:
         poses += [_exchange_legs(p) for p in poses]
     poses = _distinct(poses)
@@ -101,7 +100,7 @@ def leg_scores(canvas: Canvas, poses: list[Pose2D]) -> np.ndarray:
 
 def _distinct(poses: list[Pose2D]) -> list[Pose2D]:
     """The poses less those whose leg joints all lie within DISTINCT_PX of an earlier one's."""
-    legs = [JOINT_INDEX[f"{j}_{s}"] for j in ("hip", "knee", "ankle") for s in "lr"]
+    legs = [JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]
     out, seen = [], []
     for pose in poses:
         joints = forward_kinematics_2d(pose)[legs]

@@ -26,15 +26,15 @@ from scipy.spatial.transform import Rotation
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
-from mocap.track.marks import turned_apart
+from mocap.track.marks import KEY_TRIANGLE, turned_apart
 
 UNIT_M = body.BODY_HEIGHT_M / body.BODY_HEIGHT
-KEY_JOINTS = ("shoulder_l", "shoulder_r", "chest")
-KEY = np.array([JOINT_INDEX[j] for j in KEY_JOINTS])
+KEY = np.array([JOINT_INDEX[j] for j in KEY_TRIANGLE])
 KEY_LINES = ((0, 1), (0, 2), (1, 2))
-CALIBRATION_LINES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
-    ("shoulder_l", "shoulder_r"), ("shoulder_l", "chest"), ("shoulder_r", "chest"),
-    ("hip_l", "hip_r"), ("hip_l", "chest"), ("hip_r", "chest")))
+# the hips and the chest, a second triangle beyond the paper's (see ``calibrate``)
+HIP_TRIANGLE = (*(body.limb("leg", side).joints[0] for side in body.SIDES), KEY_TRIANGLE[2])
+CALIBRATION_LINES = tuple((JOINT_INDEX[t[i]], JOINT_INDEX[t[j]])
+                          for t in (KEY_TRIANGLE, HIP_TRIANGLE) for i, j in KEY_LINES)
 SPAN_RANGE = (0.2, 0.5)         # metres: shoulder spans the calibration may find
 MAX_CALIBRATION_ERROR = 0.03    # of the marked body's size: a worse fit is refused
 NEWTON_STEPS = 30
@@ -50,14 +50,12 @@ def model_skeleton() -> np.ndarray:
     torso = length["torso"]
     at = {"pelvis": (0, 0), "neck": (0, torso), "chest": (0, body.CHEST_FRACTION * torso),
           "head_top": (0, torso + length["head"])}
-    for side, sign in (("l", 1.0), ("r", -1.0)):
-        shoulder = (sign * body.SHOULDER_HALF_SPAN, torso - body.SHOULDER_DROP)
-        hip = (sign * body.HIP_HALF_SPAN, 0.0)
-        at[f"shoulder_{side}"], at[f"hip_{side}"] = shoulder, hip
-        at[f"elbow_{side}"] = (shoulder[0], shoulder[1] - length["upper_arm_l"])
-        at[f"wrist_{side}"] = (shoulder[0], at[f"elbow_{side}"][1] - length["lower_arm_l"])
-        at[f"knee_{side}"] = (hip[0], -length["upper_leg_l"])
-        at[f"ankle_{side}"] = (hip[0], -length["upper_leg_l"] - length["lower_leg_l"])
+    for one in body.LIMBS:
+        sign = body.SIDE_SIGN[one.side]
+        at[one.joints[0]] = ((sign * body.SHOULDER_HALF_SPAN, torso - body.SHOULDER_DROP)
+                             if one.kind == "arm" else (sign * body.HIP_HALF_SPAN, 0.0))
+        for segment, (a, b) in zip(one.segments, (one.joints[:2], one.joints[1:])):
+            at[b] = (at[a][0], at[a][1] - length[segment])      # hanging straight down
     return np.array([[*at[j], 0.0] for j in JOINTS], dtype=float) * UNIT_M
 
 

@@ -10,7 +10,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, LENGTH, SEGMENT_NAMES
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, LENGTH, SEGMENT_NAMES, SIDES, limb
 from mocap.errors import MocapError
 
 KEY_TRIANGLE = ("shoulder_l", "shoulder_r", "chest")
@@ -106,5 +106,5 @@ def body_scale(marks: np.ndarray) -> float:
                    for a, b in zip(names, names[1:]))
     trunk = seen("head_top", "neck", "pelvis") / (_LENGTH["head"] + _LENGTH["torso"])
     leg = _LENGTH["upper_leg_l"] + _LENGTH["lower_leg_l"]
-    legs = [seen(f"hip_{s}", f"knee_{s}", f"ankle_{s}") / leg for s in "lr"]
+    legs = [seen(*limb("leg", side).joints) / leg for side in SIDES]
     return max(trunk, *legs, 1e-6)

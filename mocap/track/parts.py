@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SHOULDER_HALF_SPAN, WIDTH,
+from mocap import body
+from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SEGMENTS, SHOULDER_HALF_SPAN, WIDTH,
                         torso_width)
 from mocap.track import blocks
 from mocap.track.blocks import M, block_end, from_block
@@ -63,16 +64,17 @@ class Part:
         return SCHEDULES[self.segment.split("_")[0]]
 
 
-PARTS = (Part("head", "head_top", "neck"), Part("torso", "neck", "pelvis"),
-         *(Part(f"{kind}_{side}", f"{a}_{side}", f"{b}_{side}") for side in "lr"
-           for kind, a, b in (("upper_arm", "shoulder", "elbow"), ("lower_arm", "elbow", "wrist"),
-                              ("upper_leg", "hip", "knee"), ("lower_leg", "knee", "ankle"))))
+# head to feet: the head and the trunk each from its distal to its proximal joint, then
+# every limb's two segments from its root
+PARTS = (*(Part(s, *SEGMENTS[s][::-1]) for s in ("head", "torso")),
+         *(Part(s, *SEGMENTS[s]) for one in body.LIMBS for s in one.segments))
 PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
-LIMBS = (2, 4, 6, 8)       # upper part of each limb; its lower part follows it
-ARMS = (2, 6)
-TWINS = (ARMS, (4, 8))     # the arms, the legs
-TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}   # each forearm's twin
 HEAD, TORSO = 0, 1
+# upper part of each limb (its lower part follows it), in body.LIMBS's order
+LIMBS = tuple(2 + 2 * n for n in range(len(body.LIMBS)))
+ARMS, LEGS = (tuple(k for k, one in zip(LIMBS, body.LIMBS) if one.kind == kind) for kind in ("arm", "leg"))
+TWINS = (ARMS, LEGS)
+TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}   # each forearm's twin
 
 
 def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
@@ -153,7 +155,7 @@ def far_forearm(key_depths: np.ndarray) -> int | None:
     matches the trunk). The twin's model in place of the far forearm's own lost the
     far arm where it was hidden (an earlier tracker: 77 -> 83 mm)."""
     side = far_arm(key_depths)
-    return None if side is None else ARMS["lr".index(side)] + 1
+    return None if side is None else ARMS[body.SIDES.index(side)] + 1
 
 
 def mirrored_model(model: np.ndarray, shape: tuple) -> np.ndarray:

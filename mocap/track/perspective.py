@@ -26,7 +26,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from mocap import body
-from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
+from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_JOINTS
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import KEY, MODEL, UNIT_M, Pinhole
 from mocap.track.keydepths import Turns, body_axes, key_joints
@@ -34,24 +34,43 @@ from mocap.track.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty,
                               signs_allowed, toward_signs)
 
 # bones from the centre to the fringe: (known joint, joint placed from it)
-BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
-    ("chest", "neck"), ("neck", "head_top"), ("chest", "pelvis"),
-    ("pelvis", "hip_l"), ("pelvis", "hip_r"),
-    ("shoulder_l", "elbow_l"), ("elbow_l", "wrist_l"),
-    ("shoulder_r", "elbow_r"), ("elbow_r", "wrist_r"),
-    ("hip_l", "knee_l"), ("knee_l", "ankle_l"), ("hip_r", "knee_r"), ("knee_r", "ankle_r")))
+BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in body.bones_from(tuple(JOINTS[k] for k in KEY)))
 BONE_INDEX = {bone: n for n, bone in enumerate(BONES)}
-BONE_PAIRS = ((0,), (1,), (2,), (5, 7), (6, 8), (9, 11), (10, 12))   # measured, left/right pooled
-# of each pair's seen lengths over the clip (measured_lengths): the median; the head's and the
-# torso's lower quartile, the shins' upper quartile
-LENGTH_PERCENTILES = (50, 25, 25, 50, 50, 50, 75)
-HIP_BONES = (3, 4)              # pelvis to hips: the model's, not measured
-TORSO_BONES = 5                 # the first five bones move with the key triangle
+TORSO_BONES = len(BONES) - 2 * len(body.LIMBS)   # the first bones move with the key triangle
+# pelvis to hips: the model's, not measured
+HIP_BONES = tuple(n for n, (_, b) in enumerate(BONES[:TORSO_BONES])
+                  if JOINTS[b] in {one.joints[0] for one in body.LIMBS})
+# of each bone's seen lengths over the clip (measured_lengths), by the joint it places (the
+# side left out): the median; the head's and the torso's lower quartile, the shins' upper
+LENGTH_PERCENTILES = {"head_top": 25, "pelvis": 25, "ankle": 75}
 SEGMENT_OF = {(int(a), int(b)): k for k, (a, b) in enumerate(SEGMENT_JOINTS)}
-# trunk joints whose root choice decides a segment's sign: joint -> (segment, its other
-# end, already placed; whether the joint is the segment's distal end)
-TRUNK_SIGNS = {JOINT_INDEX["head_top"]: (SEGMENT_INDEX["head"], JOINT_INDEX["neck"], True),
-               JOINT_INDEX["pelvis"]: (SEGMENT_INDEX["torso"], JOINT_INDEX["neck"], False)}
+
+
+def _pooled_bones() -> tuple[tuple[int, ...], ...]:
+    """The measured bones (all but HIP_BONES), each with its mirror image where it has one."""
+    out = []
+    for n, (a, b) in enumerate(BONES):
+        twin = BONE_INDEX[body.MIRROR_JOINTS[a], body.MIRROR_JOINTS[b]]
+        if n not in HIP_BONES and twin >= n:
+            out.append((n,) if twin == n else (n, twin))
+    return tuple(out)
+
+
+def _trunk_signs() -> dict[int, tuple[int, int, bool]]:
+    """Trunk joints whose root choice decides a segment's sign: joint -> (segment, its
+    other end, already placed; whether the joint is the segment's distal end)."""
+    placed, out = set(KEY.tolist()), {}
+    for _, b in BONES[:TORSO_BONES]:
+        for k, (proximal, distal) in enumerate(SEGMENT_JOINTS.tolist()):
+            other = distal if b == proximal else proximal
+            if b in (proximal, distal) and other in placed:
+                out[b] = (k, other, b == distal)
+        placed.add(b)
+    return out
+
+
+BONE_PAIRS = _pooled_bones()     # measured, left/right pooled
+TRUNK_SIGNS = _trunk_signs()
 # of the way from its ray-sphere root to its limb's swing plane (toward_swing_planes) that an
 # elbow or wrist, a knee or ankle is moved; the cosines between the joint's line of sight
 # and the plane's normal from which on the move is made in part and in full (the plane
@@ -92,7 +111,9 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) * depth[:, None] / camera.focal
     out = np.empty(len(BONES))
     out[list(HIP_BONES)] = body.HIP_HALF_SPAN * UNIT_M
-    for group, percentile in zip(BONE_PAIRS, LENGTH_PERCENTILES):
+    for group in BONE_PAIRS:
+        placed = JOINTS[BONES[group[0]][1]]
+        percentile = LENGTH_PERCENTILES.get(placed.removesuffix("_l").removesuffix("_r"), 50)
         out[list(group)] = np.percentile(seen[:, list(group)], percentile)
     return out
 

@@ -26,15 +26,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap.body import JOINT_INDEX
+from mocap import body
+from mocap.body import JOINT_INDEX, SIDE_SIGN
 from mocap.body import limb_penalty as joint_limits
 from mocap.smoothest import smoothest_states
 
 # (root, middle, end, leg, side): side +1 left, -1 right
-LIMBS = tuple((*(JOINT_INDEX[f"{name}_{s}"] for name in (a, b, c)), leg, side)
-              for s, side in (("l", 1.0), ("r", -1.0))
-              for a, b, c, leg in (("shoulder", "elbow", "wrist", False),
-                                   ("hip", "knee", "ankle", True)))
+LIMBS = tuple((*(JOINT_INDEX[j] for j in one.joints), one.kind == "leg", SIDE_SIGN[one.side])
+              for one in body.LIMBS)
 LIMIT_WEIGHT = 3.0      # m^2 of squared acceleration that a unit of joint-limit penalty costs
 
 

@@ -21,10 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from mocap.body import JOINT_INDEX, JOINTS
+from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, limb
 from mocap.errors import MocapError
 from mocap.track.marks import check_marks
-from mocap.body import knee_facing
 from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.keydepths import Turns
 from mocap.track.perspective import reconstruct, steady_depths, to_contract
@@ -45,8 +44,8 @@ TURN_CUE_S = 1.0           # seconds from frame 0 whose knee bends tell an unsai
 # way on the frames around it
 SPREAD_S = 0.2
 # an arm joint a correction also carries by its parent joint (spread_corrections)
-CARRIED_BY = {JOINT_INDEX[f"{joint}_{side}"]: JOINT_INDEX[f"{parent}_{side}"]
-              for side in "lr" for joint, parent in (("elbow", "shoulder"), ("wrist", "elbow"))}
+CARRIED_BY = {JOINT_INDEX[joint]: JOINT_INDEX[JOINT_PARENT[joint]]
+              for side in SIDES for joint in limb("arm", side).joints[1:]}
 
 
 def _joint_parts() -> list[tuple[int, ...]]:
