@@ -27,7 +27,7 @@ MARKING_HELP = ("The tracking method follows the 16 joints you mark on frame 0, 
                 "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "
                 "click where it is on the video frame. Then press **Track**.")
 STATIC = Path(__file__).resolve().parents[1] / "static"
-HELP_FILE = STATIC / "help.md"           # the Help tab; its pictures sit beside it
+HELP_FILE = STATIC / "help.md"           # the Help folder; its pictures sit beside it
 SIGN_COLOURS = {1: "teal", -1: "grape"}
 FLAT = 0.05                         # |dZ| / length below which a segment lies in the image plane
 REVIEW_LINES = 8                    # doubtful frames listed on the page
@@ -116,40 +116,41 @@ def build_controls(gui, n_frames: int) -> Controls:
     frame = gui.add_slider("Frame", 0, max(n_frames - 1, 0), 1, 0)
     frame_steps = gui.add_button_group("Step", FRAME_STEPS)
     key_steps = gui.add_button_group("Jump", KEY_STEPS)
+    play = gui.add_button("Play", icon="player-play", disabled=True)
     keyframe = gui.add_button("Unmark keyframe", icon="key")
     frame_info = gui.add_markdown("")
     edits = gui.add_button_group("Edit", EDITS)
     tabs = gui.add_tab_group()
-    with tabs.add_tab("Body", icon="walk"):
+    with tabs.add_tab("Body"):
         orientation = gui.add_dropdown("Facing", (AUTO, *ORIENTATIONS), initial_value=AUTO,
                                        hint="which way the performer faces, from this frame on")
         orientation_note = gui.add_markdown("")
         gui.add_markdown("Foreshortening: toward or away from the camera. Click to flip, "
                          "or click the segment in 3D.")
         segments = {s: gui.add_button(segment_label(s), disabled=True) for s in SEGMENT_NAMES}
-    with tabs.add_tab("Joints", icon="target"):
+    with tabs.add_tab("Joints"):
         joint = gui.add_dropdown("Place", (NO_JOINT, *JOINTS), initial_value=NO_JOINT,
                                  hint="choose a joint, then click where it is on the video frame")
         gui.add_markdown("Choose a joint, then click where it is on the video frame.")
         clear_override = gui.add_button("Clear override", icon="eraser",
                                         hint="the chosen joint's, or every one on this frame")
         overrides = gui.add_markdown("")
-    with tabs.add_tab("Tracking", icon="route"):
+    with tabs.add_tab("Tracking"):
         mark, marks_from_fit, track, track_info = _tracking_tab(gui)
-    with tabs.add_tab("Review", icon="alert-triangle"):
+    with tabs.add_tab("Review"):
         doubtful = gui.add_button("Next doubtful frame", icon="alert-triangle")
         review = gui.add_markdown("")
-    with tabs.add_tab("Stage", icon="photo"):
+    with tabs.add_tab("Stage"):
         stage, use_stage, stage_info = _stage_tab(gui)
-    with tabs.add_tab("Export", icon="download"):
-        play = gui.add_button("Play", icon="player-play", disabled=True)
+    # folders, not tabs: used once, at the end, or seldom; a sixth tab wraps the tabs
+    with gui.add_folder("Export", expand_by_default=False):
         foot_lock = gui.add_checkbox("Foot lock", initial_value=False,
                                      hint="keep each planted foot in place through its contact "
                                           "in the files downloaded")
         downloads = gui.add_button_group("Download", tuple(DOWNLOADS))
         gui.add_markdown("*HTML page*: the playback page, one HTML file that plays the "
                          "body in any browser, from disk, with no server.")
-    with tabs.add_tab("Help", icon="help"):
+    with gui.add_folder("Help", expand_by_default=False):
         help_page = gui.add_markdown(help_markdown(), image_root=STATIC)
     with gui.add_folder("Keys", expand_by_default=False):
         gui.add_markdown(HELP)
@@ -160,7 +161,6 @@ def build_controls(gui, n_frames: int) -> Controls:
                     edits, doubtful, review, play, downloads, commands, help_page, track_info,
                     mark, marks_from_fit, track, stage, use_stage, stage_info,
                     foot_lock)
-
 
 
 def _tracking_tab(gui) -> tuple[object, object, object, object]:

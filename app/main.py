@@ -8,7 +8,6 @@ of the state redraws what it changed (``App.refresh``), for every tab at once.
 from __future__ import annotations
 
 import errno
-import math
 import socket
 import sys
 import threading
@@ -23,13 +22,13 @@ from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD
                           Controls, build_controls, frame_text, orientation_text, review_text,
                           sign_button, stage_text, tracking_text)
 from app.state import AppState, FrameView
-from app.views import (FrameCache, Layout, SceneView, caption_image, silhouette_image, tracked_image,
+from app.layout import Layout, place_cameras
+from app.views import (FrameCache, SceneView, caption_image, silhouette_image, tracked_image,
                        video_image)
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
-CAMERA_FOV = math.radians(30.0)
 
 
 class Player:
@@ -90,8 +89,9 @@ class App:
         self.player = Player(self)
         self._render_lock = threading.RLock()
         self._shown: dict[str, object] = {}
+        self._notices: dict[int, object] = {}       # client id -> its notification shown
         self._wire()
-        self._place_camera()
+        place_cameras(server, self.layout)
         state.on_change(self.refresh)
         self.refresh()
 
@@ -103,7 +103,17 @@ class App:
             action()
         except MocapError as exc:
             if client is not None:
-                client.add_notification("Not done", str(exc), color="red", auto_close_seconds=6.0)
+                self._notify(client, str(exc))
+
+    def _notify(self, client, text: str) -> None:
+        """Say ``text`` in the tab's one notification: a new one replaces the last, so
+        that they never stack down out of the band kept free for them (app.layout)."""
+        with self._render_lock:
+            last = self._notices.pop(client.client_id, None)
+            if last is not None:
+                last.remove()
+            self._notices[client.client_id] = client.add_notification(
+                "Not done", text, color="red", auto_close_seconds=6.0)
 
     def _on(self, action: Callable[[], object]) -> Callable:
         """An event callback that runs ``action`` for the event's tab."""
@@ -229,13 +239,13 @@ class App:
                                         view.sides_known, sorted(view.overrides.items()))):
             self.scene.show_silhouette(self._silhouette_image(view))
         joint = self.controls.joint.value
-        self.scene.caption("video", f"video frame {view.index}"
-                           + (f" · click to place {joint}" if joint != NO_JOINT else ""))
+        self.scene.caption("video", f"frame {view.index}"
+                           + (f" · click: {joint}" if joint != NO_JOINT else ""))
         if view.method == "track":
-            self.scene.caption("silhouette", "tracked joints" + (
+            self.scene.caption("silhouette", "tracked" + (
                 f" · reliability {view.score:.2f}" if view.score is not None else ""))
         else:
-            self.scene.caption("silhouette", "silhouette and fit" + (
+            self.scene.caption("silhouette", "silhouette" + (
                 f" · S = {view.score:.2f}" if view.score is not None else ""))
 
     def _silhouette_image(self, view: FrameView) -> np.ndarray:
@@ -257,12 +267,11 @@ class App:
         if view.pose3d is not None:
             note = ""
         elif not view.progress.ready:
-            work = "tracking" if view.method == "track" else "the fit"
-            note = f" · after {work}" if view.progress.error is None else " · none"
+            note = " · not yet" if view.progress.error is None else " · none"
         else:
             note = " · nobody found"
-        self.scene.caption("front", "3D, seen from the camera" + note)
-        self.scene.caption("side", "3D, seen from the side (camera to the right)" + note)
+        self.scene.caption("front", "3D · camera's view" + note)
+        self.scene.caption("side", "3D · side view" + note)
 
     def show_playing(self, joints3d: np.ndarray, frame: int) -> None:
         """Pose the 3D bodies for a frame of the playing animation."""
@@ -312,15 +321,6 @@ class App:
             work = "Tracking" if view.method == "track" else "Preprocessing"
             text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%"
         _set(c.status, content=text)
-
-    def _place_camera(self) -> None:
-        """Look at the four panels from +z, all of them in view."""
-        camera = self.server.initial_camera
-        reach = self.layout.height + 0.5
-        camera.fov = CAMERA_FOV
-        camera.look_at = (0.0, 0.0, 0.0)
-        camera.position = (0.0, 0.0, 1.1 * reach / math.tan(CAMERA_FOV / 2))
-        camera.up = (0.0, 1.0, 0.0)
 
 
 def _set(handle, **props) -> None:

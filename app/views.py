@@ -1,9 +1,8 @@
 """What the scene shows of a frame: the video frame, the silhouette with the fitted
 model over it, and the lifted 3D cylinder body seen from the camera and from the side.
 
-Four panels on a 2 x 2 grid in the plane z = 0 of a y-up scene, looked at from +z:
-the two images on top, the 3D body under them (front view under the video frame,
-side view under the silhouette). Images are drawn with OpenCV (numpy in, numpy out);
+Four panels of one size in the plane z = 0 of a y-up scene, looked at from +z, where
+``app.layout`` puts them for the video's aspect ratio. Images are drawn with OpenCV (numpy in, numpy out);
 ``SceneView`` only moves viser handles, so an update costs a few messages;
 ``FrameCache`` keeps recently shown video frames decoded.
 """
@@ -12,19 +11,17 @@ from __future__ import annotations
 
 import threading
 from collections import OrderedDict
-from dataclasses import dataclass
 from typing import Callable
 
 import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
 from mocap.session import (Silhouette, VideoInfo, draw_skeleton, read_frame, segment_colour,
                            silhouette_view)
 
-PANEL_HEIGHT = 1.9          # scene units (metres) of each panel: a 1.75 m body fits
-GAP = 0.3                   # between panels, room for their captions
 DISPLAY_HEIGHT = 480        # px: smaller frames are shown enlarged to this height
 CENTRE_RGB = (150, 150, 160)        # torso and head in 3D (the scene is white)
 MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
@@ -33,37 +30,6 @@ AMBIENT = 1.2                       # ambient light intensity beside the default
 UPRIGHT = (0.0, 1.0, 0.0, 0.0)      # half turn about x: viser images put row 0 at -y
 SIDE = tuple(Rotation.from_euler("y", 90, degrees=True).as_quat(scalar_first=True))
 _J = JOINT_INDEX
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where the panels sit: centres (x, y) in the scene, and the image panels' size."""
-
-    width: float
-    height: float
-    video: tuple[float, float]
-    silhouette: tuple[float, float]
-    front: tuple[float, float]
-    side: tuple[float, float]
-
-    @classmethod
-    def for_video(cls, width_px: int, height_px: int) -> "Layout":
-        w = PANEL_HEIGHT * width_px / height_px
-        dx, dy = (w + GAP) / 2, (PANEL_HEIGHT + GAP) / 2
-        return cls(w, PANEL_HEIGHT, (-dx, dy), (dx, dy), (-dx, -dy), (dx, -dy))
-
-    def video_pixel(self, origin, direction, size: tuple[int, int]) -> tuple[float, float] | None:
-        """Where a click ray meets the video panel, in pixels of an image of ``size``
-        (width, height); None when it misses."""
-        o, d = np.asarray(origin, float), np.asarray(direction, float)
-        if abs(d[2]) < 1e-9:
-            return None
-        p = o - o[2] / d[2] * d
-        u = (p[0] - self.video[0]) / self.width + 0.5
-        v = 0.5 - (p[1] - self.video[1]) / self.height
-        if not (0 <= u <= 1 and 0 <= v <= 1):
-            return None
-        return u * size[0], v * size[1]
 
 
 def segment_transforms(joints3d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -202,6 +168,8 @@ class SceneView:
         self.silhouette = self._image(scene, "/silhouette", blank, layout.silhouette)
         self.video.on_click(on_image_click)
         self.captions = {name: scene.add_label(f"/captions/{name}", "", anchor="bottom-left",
+                                               font_size_mode="scene",
+                                               font_scene_height=layout.caption_height,
                                                position=(at[0] - layout.width / 2,
                                                          at[1] + layout.height / 2 + 0.02, 0.0))
                          for name, at in (("video", layout.video), ("silhouette", layout.silhouette),

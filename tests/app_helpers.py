@@ -56,8 +56,8 @@ def deepest_segment(state, frame: int | None = None) -> str:
 
 
 def download_export(page, button: str, folder: Path) -> Path:
-    """Click an Export-tab button of the app's page and save the file it sends."""
-    page.get_by_role("tab", name="Export").click()
+    """Open the app page's Export folder, click a button and save the file it sends."""
+    page.get_by_text("Export", exact=True).first.click()
     with page.expect_download() as download:
         page.get_by_role("button", name=button).click()
     path = folder / download.value.suggested_filename

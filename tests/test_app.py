@@ -18,7 +18,8 @@ from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_qu
 from app.edits import toggled_keyframe
 from app.saving import annotations_path
 from app.state import AppState
-from app.views import DISPLAY_HEIGHT, Layout, segment_transforms, video_image
+from app.layout import Layout
+from app.views import DISPLAY_HEIGHT, segment_transforms, video_image
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main

@@ -1,4 +1,4 @@
-"""The app's Help tab (static/help.md and its picture) and its playback-page download.
+"""The app's Help folder (static/help.md and its picture) and its playback-page download.
 
 The shortcuts are collected from what ``build_controls`` registers with
 ``gui.add_command`` on a real viser server, so the help cannot drift from the code.
@@ -82,7 +82,7 @@ def test_help_explains_the_topics_with_a_picture():
 
 
 @pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is not installed")
-def test_help_tab_and_playback_download_in_chromium(app, tmp_path):
+def test_help_folder_and_playback_download_in_chromium(app, tmp_path):
     sync_api = pytest.importorskip("playwright.sync_api")
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
@@ -97,7 +97,7 @@ def test_help_tab_and_playback_download_in_chromium(app, tmp_path):
             if warning.count():
                 warning.locator("xpath=../..").get_by_role("button").first.click()
             # the help: one click
-            page.get_by_role("tab", name="Help").click()
+            page.get_by_text("Help", exact=True).first.click()
             page.get_by_text("Keyboard shortcuts").wait_for()
             picture = page.locator("img[src^='data:image/svg']").first
             picture.scroll_into_view_if_needed()
@@ -105,7 +105,7 @@ def test_help_tab_and_playback_download_in_chromium(app, tmp_path):
                                    arg=picture.element_handle())
             ARTIFACTS.mkdir(parents=True, exist_ok=True)
             page.wait_for_timeout(300)
-            page.screenshot(path=str(ARTIFACTS / "help_tab.png"))
+            page.screenshot(path=str(ARTIFACTS / "help_folder.png"))
             # the playback page: the export button
             path = download_export(page, "HTML page", tmp_path)
             assert path.name == "walk.html"

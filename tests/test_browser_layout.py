@@ -1,0 +1,105 @@
+"""The page's layout in a real browser, for the usual video shapes (4:3, 16:9, and a
+phone's 9:16 portrait) in a 1280x720 and a 1920x1080 window: the four panels with
+their captions all inside the 3D canvas, none over another nor under the control
+panel or a notification, all of one size; the tabs on one line. Screenshots go to
+artifacts/browser/layout_*.png."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from app_helpers import started_app
+from browser_helpers import SKIP_WITHOUT_CHROMIUM, chromium, open_page, screen_point, shot, wait_until  # noqa: F401
+from helpers import render_walk
+
+from app.layout import CAPTION_CHARS, GAP
+
+pytestmark = SKIP_WITHOUT_CHROMIUM
+SHAPES = {"4x3": (320, 240), "16x9": (384, 216), "9x16": (216, 384)}
+WINDOWS = ((1280, 720), (1920, 1080))
+PANELS = ("video", "silhouette", "front", "side")
+
+
+@pytest.fixture(scope="module", params=list(SHAPES))
+def shaped_app(request, tmp_path_factory):
+    """(shape, app): a preprocessed app on a 12-frame walk of the shape."""
+    folder = tmp_path_factory.mktemp(request.param)
+    render_walk(folder / "walk.mp4", size=SHAPES[request.param], seconds=12 / 15)
+    app = started_app(folder / "walk.mp4")
+    yield request.param, app
+    app.server.stop()
+
+
+def panel_boxes(page, app) -> dict[str, tuple[float, float, float, float]]:
+    """name -> (left, top, right, bottom) page pixels of each panel, with the caption
+    band above it."""
+    layout, boxes = app.layout, {}
+    for name in PANELS:
+        x, y = getattr(layout, name)
+        corners = [screen_point(page, app, (x + dx * layout.width / 2, y + dy, 0.0))
+                   for dx in (-1, 1) for dy in (-layout.height / 2, layout.height / 2 + GAP)]
+        xs, ys = zip(*corners)
+        boxes[name] = (min(xs), min(ys), max(xs), max(ys))
+    return boxes
+
+
+def overlap(a, b) -> bool:
+    return a[0] < b[2] - 0.5 and b[0] < a[2] - 0.5 and a[1] < b[3] - 0.5 and b[1] < a[3] - 0.5
+
+
+def box_of(locator) -> tuple[float, float, float, float]:
+    b = locator.bounding_box()
+    return b["x"], b["y"], b["x"] + b["width"], b["y"] + b["height"]
+
+
+def fitted_camera(app, page, before: set[int]) -> None:
+    """Wait until the page is the app's only tab (not one of the ids ``before``) and its
+    camera looks from where its canvas shows every panel."""
+    wait_until(lambda: len(app.server.get_clients()) == 1 and not set(app.server.get_clients()) & before)
+    camera = next(iter(app.server.get_clients().values())).camera
+
+    def fitted() -> bool:
+        canvas = page.locator("canvas[data-engine]").bounding_box()
+        size = (camera.image_width, camera.image_height)
+        position, look_at = app.layout.camera(*size, camera.fov)
+        return (np.allclose(size, (canvas["width"], canvas["height"]), atol=1.0)
+                and np.allclose(camera.position, position, atol=1e-3)
+                and np.allclose(camera.look_at, look_at, atol=1e-3))
+    wait_until(fitted)
+
+
+@pytest.mark.parametrize("window", WINDOWS, ids=lambda w: f"{w[0]}x{w[1]}")
+def test_panels_visible_apart_and_of_one_size(chromium, shaped_app, window):  # noqa: F811
+    shape, app = shaped_app
+    context = chromium.new_context(viewport={"width": window[0], "height": window[1]})
+    try:
+        before = set(app.server.get_clients())
+        page = open_page(context, app.server.get_port())
+        fitted_camera(app, page, before)
+        canvas = box_of(page.locator("canvas[data-engine]"))
+        controls = box_of(page.get_by_role("tablist"))
+        assert canvas[2] <= controls[0], "the 3D canvas runs under the control panel"
+        boxes = panel_boxes(page, app)
+        for name, box in boxes.items():
+            assert canvas[0] <= box[0] and box[2] <= canvas[2], f"{name} cut off at the sides"
+            assert canvas[1] <= box[1] and box[3] <= canvas[3], f"{name} cut off at the top or bottom"
+        names = list(boxes)
+        for i, a in enumerate(names):
+            for b in names[i + 1:]:
+                assert not overlap(boxes[a], boxes[b]), f"{a} and {b} overlap"
+        sizes = np.array([(b[2] - b[0], b[3] - b[1]) for b in boxes.values()])
+        np.testing.assert_allclose(sizes, np.broadcast_to(sizes[0], sizes.shape), rtol=0.02)
+        assert sizes[0].min() > 0.15 * min(window), f"panels of {sizes[0]} px are too small"
+        captions = [c.text for c in app.scene.captions.values()]
+        assert max(map(len, captions)) <= CAPTION_CHARS, captions    # each fits its panel
+        # once the panel has settled (it may be narrower for a moment while it docks)
+        wait_until(lambda: len({round(box_of(t)[1]) for t in page.get_by_role("tab").all()}) == 1)
+        video = boxes["video"]                      # no joint chosen to place: refused
+        page.mouse.click((video[0] + video[2]) / 2, (video[1] + video[3]) / 2)
+        notice = page.locator(".mantine-Notification-root")
+        notice.wait_for()
+        for name, box in boxes.items():
+            assert not overlap(box_of(notice), box), f"the notification covers {name}"
+        shot(page, f"layout_{shape}_{window[0]}x{window[1]}")
+    finally:
+        context.close()
