@@ -254,7 +254,7 @@ def test_bad_input_is_one_line(args, message, videos, tmp_path, capsys):
 
 def test_index_page_opens_in_chromium_and_its_links_resolve(library):
     sync_api = pytest.importorskip("playwright.sync_api")
-    from test_browser import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS
+    from browser_helpers import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS
     if not CHROMIUM.exists():
         pytest.skip("Debian's chromium is not installed (apt-get install chromium)")
     out = library[0]
