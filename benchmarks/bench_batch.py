@@ -33,7 +33,7 @@ from pathlib import Path
 import cv2
 
 from mocap.batch import Tally, batch, dask_client, plan, run_batch
-from mocap.batchtask import EXPORTS
+from mocap.batchtask import DEFAULT_EXPORTS
 
 CLIPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "clips"
 
@@ -73,7 +73,7 @@ def peak_rss_mb() -> float:
 
 def peak_memory(video: Path, folder: Path) -> tuple[int, float]:
     """Frames of the video and the peak memory (MB) of the worker that did it."""
-    jobs = plan([video], folder, list(EXPORTS), 0.0, None)
+    jobs = plan([video], folder, list(DEFAULT_EXPORTS), 0.0, None)
     tally = Tally(1)
     with dask_client(None, 1) as client:
         run_batch(jobs, client, tally)
