@@ -16,7 +16,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from mocap.errors import MocapError
+from mocap.io.export.masks import MaskFolder
 from mocap.silhouette.background import Background
 
 HELD_WARNING = 0.1      # median share of the silhouettes over guessed pixels that warns
@@ -54,12 +54,9 @@ def write_masks(folder: str | os.PathLike, silhouettes: list, shape: tuple[int, 
                 size: tuple[int, int]) -> Path:
     """Every frame's silhouette (session.Silhouette in a processing frame of ``shape``
     (height, width)) as ``folder/NNNNNN.png``: 8-bit, 255 = performer, the video's
-    ``size`` (width, height); an empty image where nobody was found."""
-    folder = Path(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise MocapError(f"{folder}: cannot create the masks folder ({exc.strerror})") from None
+    ``size`` (width, height); an empty image where nobody was found. The folder is
+    replaced whole (io.export.masks.MaskFolder), as mocap batch writes it."""
+    out = MaskFolder(folder)
     for i, sil in enumerate(silhouettes):
         full = np.zeros(shape, np.uint8)
         if sil is not None:
@@ -67,6 +64,5 @@ def write_masks(folder: str | os.PathLike, silhouettes: list, shape: tuple[int, 
             full[y0:y1, x0:x1] = sil.mask() * 255
         if full.shape[::-1] != tuple(size):
             full = cv2.resize(full, tuple(size), interpolation=cv2.INTER_NEAREST)
-        if not cv2.imwrite(str(folder / f"{i:06d}.png"), full):
-            raise MocapError(f"{folder}: cannot write mask {i:06d}.png")
-    return folder
+        out.add(i, full)
+    return out.finish()
