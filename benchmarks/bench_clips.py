@@ -6,8 +6,10 @@ oracle.json annotations), writing the silhouettes too, and scores the results wi
 ../shared/bench/score.py: its per-clip table (2D error, failed frames, PA-MPJPE, signs,
 silhouette IoU against the true masks), the fit's frames per second among them.
 With --plate each clip gets its background photo (backgrounds/) as the clean plate.
+With --true-masks the fit runs on each clip's true masks instead of its own silhouettes:
+the fitter's and the lift's error alone, apart from the silhouettes' (no IoU column then).
 
-    python benchmarks/bench_clips.py [--oracle] [--plate] [--clips NAME ...] [--keep DIR]
+    python benchmarks/bench_clips.py [--oracle] [--plate | --true-masks] [--clips NAME ...] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -56,6 +58,35 @@ def fit_clip(name: str, out_dir: Path, mode: str, plate: bool) -> float:
     return seconds
 
 
+def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
+    """Fit one clip's true masks (the frames' grey levels kept for the inner edges) into
+    out_dir/<name>/ as fit_clip does, with no silhouettes written; the wall time."""
+    import cv2
+
+    from mocap.io.annotations import Annotations, load_annotations
+    from mocap.io.export.formats import write_format
+    from mocap.io.video import iter_frames, open_video, processing_scale
+    from mocap.session.silhouette import SilhouetteSession
+    from mocap.silhouette.passes import Silhouette, body_heights, iter_fits
+
+    clip, folder = CLIPS / name, out_dir / name
+    folder.mkdir(parents=True)
+    (folder / "truth.json").symlink_to(clip / "truth.json")
+    start = time.perf_counter()
+    info = open_video(clip / "video.mp4")
+    scale = processing_scale(info)
+    silhouettes = []
+    for index, frame in iter_frames(info, scale=scale):
+        mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        mask = cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST)
+        silhouettes.append(Silhouette.from_mask(mask, frame))
+    fits = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps))
+    notes = load_annotations(clip / "oracle.json", info.frame_count) if mode == "oracle" else Annotations()
+    session = SilhouetteSession(info, fits, notes)
+    write_format("json", folder / ("oracle.out.json" if mode == "oracle" else "auto.json"), session.clip())
+    return time.perf_counter() - start
+
+
 def background_photo(clip: Path) -> Path:
     """The photo in backgrounds/ that the clip was rendered over: the one nearest its
     first frame (the clips' folders do not name it)."""
@@ -70,6 +101,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--oracle", action="store_true", help="fit with each clip's oracle.json annotations")
     parser.add_argument("--plate", action="store_true", help="give each clip its background photo")
+    parser.add_argument("--true-masks", action="store_true", help="fit each clip's true masks")
     parser.add_argument("--clips", nargs="+", metavar="NAME", help="only these clips")
     parser.add_argument("--keep", type=Path, metavar="DIR", help="write the outputs here (default: a temp dir)")
     args = parser.parse_args()
@@ -81,7 +113,9 @@ def main() -> int:
         out_dir = args.keep or Path(tmp)
         timings = []
         for name in args.clips or clip_names():
-            timings.append(f"{name} {mode} {fit_clip(name, out_dir, mode, args.plate):.3f}")
+            seconds = (fit_true_masks(name, out_dir, mode) if args.true_masks
+                       else fit_clip(name, out_dir, mode, args.plate))
+            timings.append(f"{name} {mode} {seconds:.3f}")
         (out_dir / "timings.txt").write_text("\n".join(timings) + "\n")
         result = subprocess.run([sys.executable, str(SCORER), "--clips", str(out_dir), "--modes", mode,
                                  "--timings", str(out_dir / "timings.txt")],
