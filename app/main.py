@@ -304,7 +304,9 @@ class App:
 
     def _show_progress(self, view: FrameView) -> None:
         p, c = view.progress, self.controls
-        _set(c.progress, value=100.0 * p.done / max(p.total, 1), visible=not p.ready)
+        # a stopped run's bar stays where it stopped, red and still, beside its error
+        _set(c.progress, value=100.0 * p.done / max(p.total, 1), visible=not p.ready,
+             animated=p.error is None, color=None if p.error is None else "red")
         done = "tracked" if view.method == "track" else "fitted"
         if p.error is not None:
             text = f"**Stopped:** {p.error}"

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
+from helpers import write_empty_scene
 
 from mocap.silhouette.passes import iter_fits, iter_silhouettes
 from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_queue
@@ -264,3 +265,21 @@ def test_serve_command_line(capsys):
     assert main(["serve", "/no/such/video.mp4"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mocap: error: ") and "video.mp4" in err[0]
+
+
+def test_a_failed_preprocessing_stops_the_bar_and_says_why(tmp_path):
+    """Nobody in the video: the progress bar stops animating, turns red and the status
+    line names the problem (the bar no longer pretends to work)."""
+    from app.main import create
+    write_empty_scene(tmp_path / "empty.mp4")
+    app = create(tmp_path / "empty.mp4", port=0)
+    try:
+        assert app.controls.progress.animated
+        app.state.start()
+        assert app.state.ready.wait(60)
+        bar, status = app.controls.progress, app.controls.status.content
+        assert not bar.animated and bar.color == "red" and bar.visible
+        assert status.startswith("**Stopped:**") and "no person found" in status, status
+        assert "not fitted" in app.controls.frame_info.content.lower()
+    finally:
+        app.server.stop()
