@@ -84,6 +84,12 @@ SHOULDER_DROP = 6.0
 # of body height too high on walks and runs). The fit keeps Table 1; the joints it
 # reports are moved (``reported_joints``).
 HIP_BELOW_THIGH_TOPS = 4.0
+# The foot below the ankle: the contract's body ends at the ankles, a body's silhouette at
+# the soles, about 0.039 of the stature lower in people (anthropometric tables: ankle
+# height), 7 units under a 175-unit body. The 2D fit draws it (a piece that continues
+# each lower leg this far past the ankle) so that the ankle is not put at the sole;
+# no contract joint names it.
+FOOT_LENGTH = 7.0
 # chest: the point on the pelvis->neck axis at this fraction (apex of the key triangle)
 CHEST_FRACTION = 0.6
 

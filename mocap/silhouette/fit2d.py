@@ -23,14 +23,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, SEGMENT_INDEX, Pose2D, forward_kinematics_2d
+from mocap.body import BODY_HEIGHT, FOOT_LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d
 from mocap.silhouette.arms import ARM, facing_of_knees, fit_arm
 from mocap.silhouette.legs import LEGS, leg_hypotheses
 from mocap.silhouette.raster import Canvas, draw_model, pose_quads, similarity
 from mocap.silhouette.torso import TORSO_HEAD, fit_torso_head, initial_pose
 
-FIT_BODY_PX = 96.0               # body height of the normalised silhouette the fit works on
-FIT_SCALE = FIT_BODY_PX / BODY_HEIGHT
+FIT_BODY_PX = 96.0               # height of the normalised standing silhouette the fit works on
+FIT_SCALE = FIT_BODY_PX / (BODY_HEIGHT + FOOT_LENGTH)  # the silhouette is the body and its feet
 
 
 @dataclass(frozen=True)

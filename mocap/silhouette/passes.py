@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from mocap.body import JOINTS, reported_joints
+from mocap.body import BODY_HEIGHT, JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
@@ -86,7 +86,8 @@ def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray
 
 
 def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """The silhouette cropped with a margin and resized to FIT_BODY_PX body height;
+    """The silhouette cropped with a margin and resized so that the standing body
+    (``body_px`` tall, feet included) is FIT_BODY_PX tall;
     returns (mask, origin in processing pixels, pixels of processing per fit pixel)."""
     pad = int(np.ceil(MARGIN * body_px))
     small = _fit_sized(sil.mask() * 255, pad, FIT_BODY_PX / body_px) > 127
@@ -155,7 +156,7 @@ def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
             continue
         index, origin, step = item
         joints = (origin + (reported_joints(fit.joints, FIT_SCALE) + 0.5) * step - 0.5) / scale
-        yield FrameFit(index, joints, fit.score, fit, FIT_BODY_PX * step / scale)
+        yield FrameFit(index, joints, fit.score, fit, BODY_HEIGHT * FIT_SCALE * step / scale)
 
 
 def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -13,13 +13,14 @@ import math
 import cv2
 import numpy as np
 
-from mocap.body import (SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH, Pose2D,
+from mocap.body import (FOOT_LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH, Pose2D,
                         forward_kinematics_2d, torso_width)
 from mocap.edges import EDGE_WEIGHT, Edges
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
 _TORSO = SEGMENT_INDEX["torso"]
+_HAS_FOOT = np.isin(np.arange(len(SEGMENT_NAMES)), [SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]])
 
 
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -39,9 +40,16 @@ def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> n
 
 def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
     """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2);
-    the torso is as wide as ``spread`` (shape (...,)) makes it look."""
+    the torso is as wide as ``spread`` (shape (...,)) makes it look, and each lower leg
+    goes on past the ankle by the foot (body.FOOT_LENGTH), which silhouettes show."""
     idx = np.arange(len(SEGMENT_NAMES)) if segments is None else np.asarray(segments)
     ends = joints[..., SEGMENT_JOINTS[idx], :]
+    foot = _HAS_FOOT[idx]
+    if foot.any():
+        shin = ends[..., foot, 1, :] - ends[..., foot, 0, :]
+        length = np.maximum(np.linalg.norm(shin, axis=-1, keepdims=True), 1e-9)
+        ends = ends.copy()
+        ends[..., foot, 1, :] += shin / length * (FOOT_LENGTH * scale)
     widths = np.empty(ends.shape[:-2])
     widths[...] = WIDTH[idx] * scale
     torso = idx == _TORSO
