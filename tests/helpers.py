@@ -22,6 +22,7 @@ from mocap.walk import walk_cycle
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DOG_WALKER = SHARED_DATA / "video" / "dog_walker.avi"
+DEV_CLIPS = SHARED_DATA / "clips"   # rendered CMU motion capture with exact masks (README there)
 # joints marked by hand on every third frame of dog_walker (see the file's own notes)
 DOG_WALKER_LABELS = Path(__file__).resolve().parent / "data" / "dog_walker.labels.json"
 CLIP = dict(size=(320, 240), fps=15.0, seconds=2.0)

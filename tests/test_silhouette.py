@@ -130,6 +130,39 @@ def test_soft_shadow_is_not_person(scene):
         assert (mask[shadow > 0] > 0).mean() < 0.05
 
 
+def _bricks(height: int = 240, width: int = 320) -> np.ndarray:
+    """A grey brick wall: flat bricks (grey 130..150) between light mortar lines."""
+    rng = np.random.default_rng(1)
+    wall = np.full((height, width, 3), 215, np.uint8)
+    for top in range(0, height, 30):
+        shift = 30 if top % 60 else 0
+        for left in range(-shift, width, 60):
+            grey = int(rng.integers(130, 150))
+            cv2.rectangle(wall, (left + 2, top + 2), (left + 57, top + 27), (grey, grey, grey), -1)
+    return wall
+
+
+def test_grey_trousers_over_bricks_are_not_shadow_and_a_shadow_is():
+    """Grey cloth as dark as a shadow, of the wall's own grey, over flat bricks passes
+    every pixel test of a shadow; the mortar lines it hides tell them apart (bricks wider than the legs)."""
+    wall = _bricks()
+    rng = np.random.default_rng(2)
+    model = estimate_background([np.clip(wall + rng.normal(0, 2, wall.shape), 0, 255).astype(np.uint8)
+                                 for _ in range(5)])
+    frame = wall.astype(np.float32)
+    legs = np.zeros(wall.shape[:2], np.uint8)
+    cv2.line(legs, (150, 50), (130, 200), 255, 22)
+    cv2.line(legs, (150, 50), (175, 200), 255, 22)
+    frame[legs > 0] = 80                                       # level about 0.55 of the bricks
+    shadow = np.zeros_like(legs)
+    cv2.ellipse(shadow, (240, 212), (50, 12), 0, 0, 360, 255, -1)
+    frame[shadow > 0] *= 0.6
+    frame = np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+    mask = extract_silhouette(frame, model)
+    assert iou(mask, legs) > 0.9
+    assert (mask[shadow > 0] > 0).mean() < 0.05
+
+
 def test_empty_scene_gives_empty_mask(scene):
     background, _, _, _, model, _ = scene
     assert not extract_silhouette(model.image, model).any()

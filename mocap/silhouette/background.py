@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -35,6 +36,9 @@ _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |
 _GAIN_SAMPLES = 1000  # pixels (on a regular grid) that estimate an exposure gain
 K_SIGMA = 3.0         # noise sigmas a difference must exceed to be foreground
 MIN_THRESHOLD = 12.0  # grey levels: compression artefacts of a very clean clip stay out
+SHADOW_RATIO = (0.35, 0.95)  # a shadow darkens the background by a factor in this range
+SHADOW_CHROMA = 0.12  # and keeps its colour within this share of its brightest channel
+SHADOW_NCC = 0.5      # correlation with the background's texture that a shadow keeps
 
 
 @dataclass(frozen=True)
@@ -48,6 +52,11 @@ class Background:
     threshold: np.ndarray
     sigma: float
     held: np.ndarray | None = None
+
+    @cached_property
+    def grey(self) -> np.ndarray:
+        """The image in grey levels (the shadow test's texture), computed once."""
+        return cv2.cvtColor(self.image, cv2.COLOR_BGR2GRAY)
 
 
 def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
@@ -67,9 +76,10 @@ def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int
     else:
         frames = list(source)
     stack = _check_frames(frames)
-    reference = _median(stack)
+    grid = (slice(None), *_gain_grid(stack.shape[1:3]))   # all exposure_gain looks at
+    reference = _median(stack[grid])
     for frame in stack:
-        frame[:] = cv2.transform(frame, np.diag(exposure_gain(frame, reference)))
+        frame[:] = cv2.transform(frame, np.diag(exposure_gain(frame[grid[1:]], reference)))
     background = _median(stack)
     noise, sigma = _noise(stack, background)
     threshold = np.clip(k * noise, min_threshold, 255).astype(np.uint8)
@@ -89,23 +99,48 @@ def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float
     over time, right even where the performer or their shadow covers a pixel in most
     samples, then spread to the neighbours (texture edges) and floored at the global.
     """
-    deviation = np.stack([cv2.absdiff(f, background).max(axis=2) for f in stack])
-    sigma = MAD_TO_SIGMA * float(np.median(deviation))
+    deviation = np.stack([_largest_channel(cv2.absdiff(f, background)) for f in stack])
+    sigma = MAD_TO_SIGMA * _histogram_median(deviation)
     noise = np.full(background.shape[:2], sigma, np.float32)
     if len(stack) >= 5:
-        quartile = np.quantile(deviation, 0.25, axis=0).astype(np.float32)
+        quartile = _quantile(deviation, 0.25)
         local = cv2.dilate(MAD_TO_SIGMA * _MEDIAN_PER_QUARTILE * quartile, np.ones((3, 3)))
         noise = np.maximum(noise, local)
     return noise, sigma
 
 
+def _histogram_median(values: np.ndarray) -> float:
+    """The median of a uint8 array, counted rather than sorted (numpy's median's
+    mean of the two middle values for an even count)."""
+    cumulative = np.cumsum(np.bincount(values.ravel(), minlength=256))
+    n = cumulative[-1]
+    return 0.5 * float(np.searchsorted(cumulative, (n - 1) // 2 + 1) + np.searchsorted(cumulative, n // 2 + 1))
+
+
+def _quantile(stack: np.ndarray, q: float) -> np.ndarray:
+    """Per-pixel q-quantile over time of a uint8 stack (float32; numpy's linear
+    interpolation between ranks), by partition rather than a full sort."""
+    position = q * (len(stack) - 1)
+    low = int(position)
+    high = min(low + 1, len(stack) - 1)
+    ranked = np.partition(stack, (low, high), axis=0)
+    below = ranked[low].astype(np.float32)
+    return below + (position - low) * (ranked[high].astype(np.float32) - below)
+
+
 def _median(stack: np.ndarray, rows: int = 32) -> np.ndarray:
-    """Per-pixel median over time of a uint8 frame stack, in strips of `rows` rows so
-    that the working memory stays small next to the stack."""
+    """Per-pixel median over time of a uint8 frame stack (rounded), in strips of
+    `rows` rows so that the working memory stays small next to the stack."""
     median = np.empty(stack.shape[1:], np.uint8)
     for y in range(0, median.shape[0], rows):
-        median[y:y + rows] = np.median(stack[:, y:y + rows], axis=0) + 0.5
+        median[y:y + rows] = _quantile(stack[:, y:y + rows], 0.5) + 0.5
     return median
+
+
+def _largest_channel(image: np.ndarray) -> np.ndarray:
+    """The largest of the three channels of each pixel of a uint8 image."""
+    b, g, r = cv2.split(image)
+    return cv2.max(cv2.max(b, g), r)
 
 
 def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -115,9 +150,9 @@ def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
     three quarters of them that agree best with that first gain (the performer and
     shadows drop out): a global exposure change, robust to whatever moved.
     """
-    stride = max(1, int(np.sqrt(frame.shape[0] * frame.shape[1] / _GAIN_SAMPLES)))
-    f = _channel_rows(frame[::stride, ::stride].reshape(-1, 3))
-    r = _channel_rows(reference[::stride, ::stride].reshape(-1, 3))
+    grid = _gain_grid(frame.shape[:2])
+    f = _channel_rows(frame[grid].reshape(-1, 3))
+    r = _channel_rows(reference[grid].reshape(-1, 3))
     usable = ((f > 8) & (f < 250) & (r > 8) & (r < 250)).all(axis=0)
     if not usable.any():
         return np.ones(3, np.float32)
@@ -128,9 +163,15 @@ def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return np.median(ratio[:, keep], axis=1).astype(np.float32)
 
 
+def _gain_grid(shape: tuple[int, ...]) -> tuple[slice, slice]:
+    """The regular grid of about _GAIN_SAMPLES pixels that an exposure gain is taken on."""
+    stride = max(1, int(np.sqrt(shape[0] * shape[1] / _GAIN_SAMPLES)))
+    return slice(None, None, stride), slice(None, None, stride)
+
+
 def extract_silhouette(frame: np.ndarray, background: Background,
-                       shadow_ratio: tuple[float, float] = (0.35, 0.95),
-                       shadow_chroma: float = 0.12) -> np.ndarray:
+                       shadow_ratio: tuple[float, float] = SHADOW_RATIO,
+                       shadow_chroma: float = SHADOW_CHROMA) -> np.ndarray:
     """The performer's silhouette in `frame` (HxW uint8, 0 or 255), empty if nobody.
 
     Section 3.2's thresholded difference from the background, after exposure
@@ -143,19 +184,16 @@ def extract_silhouette(frame: np.ndarray, background: Background,
     gain = exposure_gain(frame, background.image)
     frame = cv2.transform(frame, np.diag(gain))
     mask = foreground(frame, background)
-    return clean_mask(remove_shadows(mask, frame, background.image, shadow_ratio, shadow_chroma,
-                                     background.sigma))
+    return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma))
 
 
 def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
     """Pixels whose largest channel difference exceeds the pixel's threshold."""
-    diff = cv2.absdiff(frame, background.image)
-    b, g, r = cv2.split(diff)
-    return cv2.compare(cv2.max(cv2.max(b, g), r), background.threshold, cv2.CMP_GT)
+    return cv2.compare(_largest_channel(cv2.absdiff(frame, background.image)), background.threshold, cv2.CMP_GT)
 
 
-def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: np.ndarray,
-                   ratio: tuple[float, float], chroma: float, sigma: float) -> np.ndarray:
+def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
+                   ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
     """`mask` without its soft-shadow areas (the paper's noted failure, section 3.2).
 
     A shadow pixel is the background darkened by one factor in `ratio` for all
@@ -165,35 +203,68 @@ def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: np.ndarray,
     areas of such pixels go: thin runs of them inside the person (dark hair on a
     grey wall) survive the opening and stay.
     """
-    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-    grey_bg = cv2.cvtColor(background, cv2.COLOR_BGR2GRAY)
+    grey, grey_bg = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), background.grey
     darker = cv2.compare(grey, grey_bg, cv2.CMP_LT)
     index = np.flatnonzero(cv2.bitwise_and(mask, darker).view(bool))
     f = _channel_rows(np.take(frame.reshape(-1, 3), index, axis=0))
-    b = _channel_rows(np.take(background.reshape(-1, 3), index, axis=0)) + 1.0
+    b = _channel_rows(np.take(background.image.reshape(-1, 3), index, axis=0)) + 1.0
     level = f.sum(axis=0) / b.sum(axis=0)
     residual = np.abs(f - level * b).max(axis=0)
     like = ((level > ratio[0]) & (level < ratio[1])
             & (residual < chroma * level * b.max(axis=0)))
+    candidates = np.zeros_like(mask)
+    candidates.reshape(-1)[index[like]] = 255
+    disk = _disk(mask.shape)
+    # the opening keeps nothing outside the candidates' own solid areas, so the texture
+    # test (a few blurs) runs only around those
+    x, y, w, h = cv2.boundingRect(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, disk))
+    if not w:
+        return mask
+    pad = 2 + _vote_size(mask.shape) // 2
+    box = (slice(max(0, y - pad), y + h + pad), slice(max(0, x - pad), x + w + pad))
     shadow = np.zeros_like(mask)
-    shadow.reshape(-1)[index[like]] = 255
-    x, y, w, h = cv2.boundingRect(shadow)
-    if w:   # the texture test only where the candidates are (it costs four blurs)
-        x0, y0 = max(0, x - 2), max(0, y - 2)
-        box = (slice(y0, y + h + 2), slice(x0, x + w + 2))
-        shadow[box] = cv2.bitwise_and(shadow[box], _textured_alike(grey[box], grey_bg[box], sigma))
-    shadow = cv2.morphologyEx(shadow, cv2.MORPH_OPEN, _disk(mask.shape))
+    shadow[box] = cv2.morphologyEx(
+        _textured_alike(candidates[box], grey[box], grey_bg[box], background.sigma, mask.shape),
+        cv2.MORPH_OPEN, disk,
+        borderType=cv2.BORDER_CONSTANT, borderValue=0)
     return cv2.bitwise_and(mask, cv2.bitwise_not(shadow))
 
 
-def _textured_alike(grey: np.ndarray, grey_bg: np.ndarray, sigma: float) -> np.ndarray:
-    """255 where the frame keeps the background's texture over 5x5 pixels: its local
-    contrast is at least the background's darkened by the local level, less K_SIGMA
-    noise levels (a shadow scales the texture; cloth over a pattern hides it)."""
-    frame_mean, frame_spread = _local_spread(grey.astype(np.float32))
-    bg_mean, bg_spread = _local_spread(grey_bg.astype(np.float32))
-    expected = frame_mean / (bg_mean + 1.0) * bg_spread - K_SIGMA * sigma
-    return cv2.compare(frame_spread, expected, cv2.CMP_GE)
+def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray,
+                    sigma: float, frame_shape: tuple[int, ...]) -> np.ndarray:
+    """The shadow ``candidates`` (0/255) that keep the background's texture.
+
+    A shadow scales the texture, so over 5x5 pixels the frame correlates with the
+    background (normalised cross-correlation over SHADOW_NCC); cloth over a pattern
+    hides it. Only where the background's darkened contrast stands clear of the
+    noise (K_SIGMA levels) does the test tell, and most of a patterned floor is flat
+    between its lines, so the candidates vote: a candidate is shadow when most of the
+    telling candidates within _vote_size keep the texture (where none tells, most of
+    those of its connected piece), as a cast shadow does throughout and grey
+    trousers over bricks do not.
+    """
+    frame, bg = grey.astype(np.float32), grey_bg.astype(np.float32)
+    frame_mean, frame_spread = _local_spread(frame)
+    bg_mean, bg_spread = _local_spread(bg)
+    covariance = cv2.blur(frame * bg, (5, 5)) - frame_mean * bg_mean
+    expected = frame_mean / (bg_mean + 1.0) * bg_spread
+    telling = (candidates > 0) & (expected > K_SIGMA * sigma)
+    correlated = covariance > SHADOW_NCC * frame_spread * bg_spread
+    keeps = (telling & correlated).astype(np.float32)
+    loses = (telling & ~correlated & (frame_spread < expected)).astype(np.float32)
+    size = (_vote_size(frame_shape),) * 2
+    near_keeps = cv2.boxFilter(keeps, -1, size, normalize=False)
+    near_loses = cv2.boxFilter(loses, -1, size, normalize=False)
+    count, label = cv2.connectedComponents(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, _disk(frame_shape)))
+    piece = (np.bincount(label.ravel(), keeps.ravel(), count)
+             >= np.bincount(label.ravel(), loses.ravel(), count))[label]
+    shadow = np.where(near_keeps + near_loses > 0, near_keeps >= near_loses, piece)
+    return np.where(shadow & (candidates > 0), np.uint8(255), np.uint8(0))
+
+
+def _vote_size(shape: tuple[int, ...]) -> int:
+    """The side of the texture vote's window: about 5% of the frame height, odd."""
+    return max(5, round(shape[0] / 20) | 1)
 
 
 def _local_spread(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

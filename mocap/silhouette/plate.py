@@ -14,10 +14,13 @@ silhouette. This module finds those pixels and puts the empty scene back in them
    the region being the background seed;
 4. a GrabCut piece is the performer only when most of its pixels have colours seen
    more often in the evidence (the performer over the scene) than in the scene
-   itself, so a clip whose median is already empty keeps it;
+   itself, so a clip whose median is already empty keeps it; the pixels of such
+   colours connected to those pieces join them (legs that stand still below
+   jabbing arms lie outside the region the motion outlines);
 5. each such pixel takes the median of the samples that differ from the median
-   image there (the scene, uncovered), or, where the performer never leaves it,
-   the scene inpainted from around (Telea's method) -- ``held``, the pixels the
+   image there and have the scene's colours (the scene, uncovered, not another
+   part of the performer passing), or, where the performer never leaves it, the
+   scene inpainted from around (Telea's method) -- ``held``, the pixels the
    silhouettes there depend on a guess;
 6. in the performer's region the difference threshold is the clip's noise floor:
    the per-pixel noise measured against a median that held the performer is not
@@ -68,17 +71,16 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
     region = performer_region(masks, radius)
     if region is None:
         return background
-    held_in_median = _median_holds(background.image, region, radius, frames, masks)
-    image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius)
+    held_in_median, odds = _median_holds(background.image, region, radius, frames, masks)
+    image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius, odds)
     threshold = background.threshold.copy()
-    threshold[cv2.dilate(region, _disk(radius)) > 0] = noise_floor(background.sigma)
+    threshold[cv2.dilate(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
     return replace(background, image=image, threshold=threshold, held=held)
 
 
 def _evidence(frame: np.ndarray, background: Background) -> np.ndarray:
     """Pixels that differ from the background, shadows and speckle removed (0/255)."""
-    mask = remove_shadows(foreground(frame, background), frame, background.image, (0.35, 0.95), 0.12,
-                          background.sigma)
+    mask = remove_shadows(foreground(frame, background), frame, background)
     return cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
 
 
@@ -108,43 +110,60 @@ def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
 
 
 def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray],
-                  masks: list[np.ndarray]) -> np.ndarray:
+                  masks: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Pixels (bool) where the median image shows the performer: GrabCut's foreground
-    within the region, kept by pieces whose colours are the performer's (steps 3-4)."""
+    within the region, kept by pieces whose colours are the performer's, and grown
+    by the performer-coloured pixels joined to them (steps 3-4); and the colour odds
+    table (``_colour_odds``)."""
     disk = _disk(radius)
     around = cv2.dilate(region, disk)
     cut = np.full(region.shape, cv2.GC_BGD, np.uint8)
     cut[around > 0] = cv2.GC_PR_BGD
     cut[region > 0] = cv2.GC_PR_FGD
     x, y, w, h = cv2.boundingRect(cv2.dilate(around, disk))
-    window = cut[y:y + h, x:x + w].copy()
-    models = (np.zeros((1, 65)), np.zeros((1, 65)))
-    cv2.setRNGSeed(0)   # GrabCut's colour models start from k-means: the same clip, the same cut
-    cv2.grabCut(np.ascontiguousarray(image[y:y + h, x:x + w]), window, None, *models,
-                GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
     cut_fg = np.zeros(region.shape, np.uint8)
-    cut_fg[y:y + h, x:x + w] = (window == cv2.GC_FGD) | (window == cv2.GC_PR_FGD)
-    if not cut_fg.any():
-        return cut_fg > 0
+    cut_fg[y:y + h, x:x + w] = _grabcut(image[y:y + h, x:x + w], cut[y:y + h, x:x + w])
     near = cv2.dilate(cut_fg, disk) > 0
     performer = np.concatenate([f[(m > 0) & ~near] for f, m in zip(frames, masks)])
-    like = _colour_likelihood(performer, image) > _colour_likelihood(image[around == 0], image)
-    return _majority_pieces(cut_fg, like)
+    odds = _colour_odds(performer, image[around == 0])
+    if not cut_fg.any():
+        return cut_fg > 0, odds
+    like = _odds_of(image, odds) > 1.0
+    return _joined(_majority_pieces(cut_fg, like), like), odds
 
 
-def _colour_likelihood(samples: np.ndarray, image: np.ndarray) -> np.ndarray:
-    """Each pixel of ``image``: the frequency of its colour among ``samples`` (N, 3),
-    a COLOUR_BINS^3 histogram with one added to every bin (unseen colours stay possible)."""
-    step = 256 // COLOUR_BINS
+def _grabcut(image: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """GrabCut's foreground (0/1 uint8) of ``image`` seeded by ``cut`` (its GC_* labels)."""
+    cut = cut.copy()
+    models = (np.zeros((1, 65)), np.zeros((1, 65)))
+    cv2.setRNGSeed(0)   # GrabCut's colour models start from k-means: the same clip, the same cut
+    cv2.grabCut(np.ascontiguousarray(image), cut, None, *models, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    return ((cut == cv2.GC_FGD) | (cut == cv2.GC_PR_FGD)).astype(np.uint8)
+
+
+def _colour_odds(performer: np.ndarray, scene: np.ndarray) -> np.ndarray:
+    """A COLOUR_BINS^3 table: how much more frequent each colour is among the
+    ``performer``'s pixels (N, 3) than among the ``scene``'s, each histogram with one
+    added to every bin (unseen colours stay possible)."""
+    return _histogram(performer) / _histogram(scene)
+
+
+def _histogram(samples: np.ndarray) -> np.ndarray:
     hist = np.ones(COLOUR_BINS ** 3)
     if len(samples):
-        hist += np.bincount(_colour_code(samples, step), minlength=COLOUR_BINS ** 3)
-    return (hist / hist.sum())[_colour_code(image.reshape(-1, 3), step)].reshape(image.shape[:2])
+        hist += np.bincount(_colour_code(samples), minlength=COLOUR_BINS ** 3)
+    return hist / hist.sum()
 
 
-def _colour_code(pixels: np.ndarray, step: int) -> np.ndarray:
-    q = pixels.astype(np.int64) // step
-    return (q[:, 0] * COLOUR_BINS + q[:, 1]) * COLOUR_BINS + q[:, 2]
+def _odds_of(pixels: np.ndarray, odds: np.ndarray) -> np.ndarray:
+    """The colour odds of each pixel of an (..., 3) array."""
+    return odds[_colour_code(pixels.reshape(-1, 3))].reshape(pixels.shape[:-1])
+
+
+def _colour_code(pixels: np.ndarray) -> np.ndarray:
+    """The COLOUR_BINS^3 histogram bin of each (N, 3) uint8 pixel."""
+    q = pixels // np.uint8(256 // COLOUR_BINS)
+    return (q[:, 0].astype(np.uint16) * COLOUR_BINS + q[:, 1]) * COLOUR_BINS + q[:, 2]
 
 
 def _majority_pieces(pieces: np.ndarray, like: np.ndarray) -> np.ndarray:
@@ -156,18 +175,33 @@ def _majority_pieces(pieces: np.ndarray, like: np.ndarray) -> np.ndarray:
     return inside & (votes / sizes > 0.5)[label]
 
 
+def _joined(holds: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """``holds`` and the performer-coloured pixels connected to it: what of the
+    performer stands still outside the region the motion outlines (legs under jabbing
+    arms)."""
+    n, label = cv2.connectedComponents((holds | like).astype(np.uint8))
+    joined = np.zeros(n, bool)
+    joined[label[holds]] = True
+    joined[0] = False
+    return joined[label]
+
+
 def _replate(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
-             radius: int) -> tuple[np.ndarray, np.ndarray]:
+             radius: int, odds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Step 5: the median image with the scene put back where it ``holds`` the
-    performer, and the pixels where the scene had to be inpainted (bool)."""
+    performer, and the pixels where the scene had to be inpainted (bool). The scene
+    is the median of the samples that differ from the median image there and are
+    scene-coloured (colour ``odds`` under one: another part of the performer passing
+    is not the scene)."""
     index = np.flatnonzero(holds)
     plate = image.copy()
     held = np.zeros(holds.shape, bool)
     if not len(index):
         return plate, held
-    values = frames.reshape(len(frames), -1, 3)[:, index].astype(np.float32)
-    uncovered = masks.reshape(len(masks), -1)[:, index] > 0
+    values = frames.reshape(len(frames), -1, 3)[:, index]
+    uncovered = (masks.reshape(len(masks), -1)[:, index] > 0) & (_odds_of(values, odds) < 1.0)
     seen = uncovered.sum(axis=0) >= MIN_UNCOVERED
+    values = values.astype(np.float32)
     values[~uncovered] = np.nan
     scene = np.nanmedian(values[:, seen], axis=0)
     plate.reshape(-1, 3)[index[seen]] = np.round(scene).astype(np.uint8)
