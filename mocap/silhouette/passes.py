@@ -18,7 +18,7 @@ from mocap.io.video import VideoInfo, iter_frames
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.plate import clip_background
-from mocap.silhouette.torso import torso_spread
+from mocap.silhouette.torso import head_top_row, torso_spread
 from mocap.silhouette.legchain import LAG_S, LegChain
 
 MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody
@@ -80,9 +80,16 @@ def iter_silhouettes(info: VideoInfo, scale: float,
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
     """The standing body height in pixels around each frame (NaN where nobody is):
-    a high percentile of the silhouette heights within SCALE_WINDOW_S."""
+    a high percentile of the silhouette heights within SCALE_WINDOW_S, each measured
+    from the head's top (``torso.head_top_row``: not from a hand raised above it) to
+    the feet, at the scale that the silhouettes' whole heights suggest."""
+    half = max(1, int(round(SCALE_WINDOW_S * fps)))
     h = np.array([np.nan if s is None else s.height for s in silhouettes], float)
-    return rolling_percentile(h, max(1, int(round(SCALE_WINDOW_S * fps))), SCALE_PERCENTILE)
+    rough = rolling_percentile(h, half, SCALE_PERCENTILE) * FIT_SCALE / FIT_BODY_PX
+    for i, sil in enumerate(silhouettes):
+        if sil is not None:
+            h[i] -= head_top_row(sil.mask(), rough[i])
+    return rolling_percentile(h, half, SCALE_PERCENTILE)
 
 
 def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:

@@ -19,18 +19,36 @@ TORSO_HEAD = ("torso", "head")
 WAIST_RANGE = (45.0, 135.0)      # Table 1
 NECK_RANGE = (45.0, 135.0)       # Table 1
 SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
+# A head (15-20 units wide, round from any side) is 14 units wide about 3 units under
+# its crown; a raised forearm or hand is 8-10 units wide.
+HEAD_ROW_WIDTH = 14.0
+HEAD_ROW_DEPTH = 3.0
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
-    """Torso location from Table 1 ratios: the head at the silhouette's top, the pelvis
-    head+torso lengths below, x at the horizontal middle of the silhouette there."""
+    """Torso location from Table 1 ratios: the head at the silhouette's top (the
+    head's, ``head_top_row``, not a raised hand's), the pelvis head+torso lengths
+    below, x at the horizontal middle of the silhouette there."""
     rows = np.flatnonzero(silhouette.any(axis=1))
-    top, bottom = int(rows[0]), int(rows[-1])
+    top, bottom = head_top_row(silhouette, scale), int(rows[-1])
     head = LENGTH[SEGMENT_INDEX["head"]] * scale
     pelvis_y = min(top + head + LENGTH[SEGMENT_INDEX["torso"]] * scale, bottom)
     xs = np.nonzero(silhouette[int(top + head): int(pelvis_y) + 1])[1]
     x = float(np.median(xs)) if len(xs) else float(np.median(np.nonzero(silhouette)[1]))
     return Pose2D(pelvis=np.array([x, pelvis_y]), scale=scale)
+
+
+def head_top_row(silhouette: np.ndarray, scale: float) -> int:
+    """The silhouette's top row, or where an arm is raised above the head, the row
+    above the first one as wide as a head HEAD_ROW_WIDTH units down from its crown
+    (a forearm is about half as wide)."""
+    rows, starts, ends = row_runs(silhouette)
+    if len(rows) == 0:
+        return 0
+    wide = rows[(ends - starts) >= HEAD_ROW_WIDTH * scale]
+    if len(wide) == 0:
+        return int(rows[0])
+    return max(int(rows[0]), int(round(wide[0] - HEAD_ROW_DEPTH * scale)))
 
 
 def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
@@ -60,11 +78,11 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
     silhouette, converted by ``body.spread_for_width``. Arms in front of or behind the
     torso widen some rows and some frames, so callers also take a low percentile
     over neighbouring frames (the body turns slowly, arms swing)."""
-    ys = np.flatnonzero(silhouette.any(axis=1))
-    if len(ys) == 0:
+    if not silhouette.any():
         return 1.0
+    top = head_top_row(silhouette, scale)
     head, torso = LENGTH[SEGMENT_INDEX["head"]] * scale, LENGTH[SEGMENT_INDEX["torso"]] * scale
-    band = silhouette[int(ys[0] + head + 0.25 * torso): int(ys[0] + head + 0.75 * torso)] > 0
+    band = silhouette[int(top + head + 0.25 * torso): int(top + head + 0.75 * torso)] > 0
     rows, starts, ends = row_runs(band)
     if len(rows) == 0:
         return 1.0
