@@ -25,8 +25,9 @@ LEG = {side: limb("leg", side).segments for side in SIDES}
 LEGS = LEG["l"] + LEG["r"]
 UPPER_LEGS, LOWER_LEGS = tuple(zip(LEG["l"], LEG["r"]))
 # Wider than Table 1's walking limits (240-300) so that runs and crouches can be
-# fitted; frames outside Table 1 are flagged for review instead of forced inside.
-THIGH_RANGE = (200.0, 340.0)
+# fitted (a deep squat's thighs are level or above); frames outside Table 1 are
+# flagged for review instead of forced inside.
+THIGH_RANGE = (175.0, 365.0)
 THIGH_TRACK_HALF_RANGE = 40.0    # degrees searched around a previous thigh, which swings fastest
 CROSSED_GAIN = 0.02              # S by which crossed thighs must explain more to be kept
 CROSSED_TURN = 30.0              # degrees less thigh turn since the last frame that keeps a crossing

@@ -157,5 +157,6 @@ def around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: flo
     """(lo, hi, centre): within ``half`` of the previous frame's angle, else the whole range."""
     if prev is None:
         return lo, hi, default
-    c = float(np.clip(prev.angle[SEGMENT_INDEX[segment]], lo, hi))
+    middle = (lo + hi) / 2                  # the previous angle's turn nearest the range
+    c = float(np.clip(middle + (prev.angle[SEGMENT_INDEX[segment]] - middle + 180.0) % 360.0 - 180.0, lo, hi))
     return max(lo, c - half), min(hi, c + half), c

@@ -65,10 +65,22 @@ def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
 
 
 def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
-    """The torso's angle (Algorithm 1, head drawn along it) and horizontal position."""
+    """The torso's angle (Algorithm 1, head drawn along it), the pelvis under the head
+    at that lean, and the horizontal position."""
     lo, hi, c = around(prev, "torso", *WAIST_RANGE, 90.0)
     pose = search_angle(canvas, pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
-    return fit_pelvis_x(canvas, pose)
+    return fit_pelvis_x(canvas, under_the_head(canvas.sil, pose))
+
+
+def under_the_head(silhouette: np.ndarray, pose: Pose2D) -> Pose2D:
+    """The pelvis as far under the head's top as the leaning torso and head reach
+    down (Table 1's lengths at the torso's angle): a body bending over or crouching
+    has its pelvis higher under its head than when upright."""
+    reach = (LENGTH[SEGMENT_INDEX["head"]] + LENGTH[SEGMENT_INDEX["torso"]]) * pose.scale
+    lean = np.sin(np.radians(pose.angle[SEGMENT_INDEX["torso"]]))
+    bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
+    y = min(head_top_row(silhouette, pose.scale) + reach * lean, bottom)
+    return replace(pose, pelvis=np.array([pose.pelvis[0], y]))
 
 
 def torso_spread(silhouette: np.ndarray, scale: float) -> float:
