@@ -9,6 +9,7 @@ import pytest
 from helpers import DOG_WALKER
 
 from mocap.errors import MocapError
+from mocap.silhouette import background as background_module
 from mocap.silhouette.background import clean_mask, estimate_background, exposure_gain, extract_silhouette
 from mocap.io.video import iter_frames, open_video
 
@@ -184,6 +185,14 @@ def test_background_from_a_video_file(tmp_path):
     for (i, frame), figure in zip(iter_frames(info, scale=0.5), figures):
         small = cv2.resize(figure, (160, 120), interpolation=cv2.INTER_AREA) > 127
         assert iou(extract_silhouette(frame, model), small) > 0.8, i
+
+
+@pytest.mark.parametrize("n", [1, 2, 12, 30, 33])
+def test_the_sorting_network_gives_numpys_median_and_quartile(n):
+    stack = np.random.default_rng(n).integers(0, 256, (n, 37, 41, 3)).astype(np.uint8)
+    assert np.array_equal(background_module._median(stack), (np.median(stack, axis=0) + 0.5).astype(np.uint8))
+    assert np.allclose(background_module._quantile(stack, 0.25), np.quantile(stack, 0.25, axis=0))
+    assert background_module.median_level(stack[..., 0]) == np.median(stack[..., 0])
 
 
 def test_no_frames_is_refused():

@@ -40,8 +40,8 @@ import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, open_video, read_frame, sample_frames
-from mocap.silhouette.background import (MAD_TO_SIGMA, Background, estimate_background,
-                                         exposure_gain, foreground, noise_floor, remove_shadows)
+from mocap.silhouette.background import (MAD_TO_SIGMA, Background, estimate_background, exposure_gain,
+                                         foreground, median_level, noise_floor, remove_shadows)
 
 HALF = 0.5              # evidence on at least this fraction of samples: the performer stays
 RADIUS = 0.07           # of the evidence's height: a body part's reach around evidence
@@ -236,7 +236,7 @@ def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, sc
         image = cv2.resize(image, samples[0].shape[1::-1], interpolation=cv2.INTER_AREA)
     deviation = [cv2.absdiff(cv2.transform(f, np.diag(exposure_gain(f, image))), image).max(axis=2)
                  for f in samples]
-    sigma = MAD_TO_SIGMA * float(np.median(np.stack(deviation)))
+    sigma = MAD_TO_SIGMA * median_level(deviation)
     return Background(image, np.full(image.shape[:2], noise_floor(sigma), np.uint8), sigma)
 
 
