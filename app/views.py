@@ -15,15 +15,18 @@ from typing import Callable
 
 import cv2
 import numpy as np
+import trimesh
 from scipy.spatial.transform import Rotation
 
 from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
-from mocap.session import (Silhouette, VideoInfo, draw_skeleton, read_frame, segment_colour,
-                           silhouette_view)
+from mocap.session import (FACING_MARKS, Silhouette, VideoInfo, draw_skeleton, facing_marks, read_frame,
+                           segment_colour, silhouette_view)
 
 DISPLAY_HEIGHT = 480        # px: smaller frames are shown enlarged to this height
 CENTRE_RGB = (150, 150, 160)        # torso and head in 3D (the scene is white)
+MARK_RGB = (40, 40, 48)             # the nose and the chest's mark (mocap.facing)
+CONE = trimesh.creation.cone(radius=1.0, height=1.0, sections=16)   # base at z = 0, tip at z = 1
 MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
 UNSIDED_BGR = (90, 200, 90)         # the 2D model before left and right are known
 AMBIENT = 1.2                       # ambient light intensity beside the default lights
@@ -175,9 +178,9 @@ class SceneView:
                          for name, at in (("video", layout.video), ("silhouette", layout.silhouette),
                                           ("front", layout.front), ("side", layout.side))}
         self.radii = semi_axes(BODY_HEIGHT_M)
-        self.bodies = [self._body(scene, name, at, wxyz, on_segment_click)
-                       for name, at, wxyz in (("front", layout.front, (1.0, 0.0, 0.0, 0.0)),
-                                              ("side", layout.side, SIDE))]
+        views = (("front", layout.front, (1.0, 0.0, 0.0, 0.0)), ("side", layout.side, SIDE))
+        self.bodies = [self._body(scene, name, at, wxyz, on_segment_click) for name, at, wxyz in views]
+        self.marks = [self._marks(scene, name, on_segment_click) for name, _, _ in views]
 
     def _image(self, scene, name: str, image: np.ndarray, at: tuple[float, float]):
         return scene.add_image(name, image, self.layout.width, self.layout.height,
@@ -196,6 +199,18 @@ class SceneView:
             handles.append(handle)
         return handles
 
+    @staticmethod
+    def _marks(scene, name: str, on_click: Callable[[str, object], None]) -> list:
+        """The facing marks of a body (cones): a click on one is a click on its segment."""
+        handles = []
+        for mark, (segment, *_) in FACING_MARKS.items():
+            handle = scene.add_mesh_simple(f"/body/{name}/{mark}", CONE.vertices, CONE.faces,
+                                           color=MARK_RGB, flat_shading=True, cast_shadow=False,
+                                           receive_shadow=False, visible=False)
+            handle.on_click(lambda event, s=segment: on_click(s, event))
+            handles.append(handle)
+        return handles
+
     def show_video(self, image: np.ndarray) -> None:
         self.video.image = image
 
@@ -205,14 +220,21 @@ class SceneView:
     def show_pose(self, joints3d: np.ndarray | None) -> None:
         """Pose both 3D bodies (pelvis at their panel's centre), or hide them."""
         if joints3d is None:
-            for handle in (h for body in self.bodies for h in body):
+            for handle in (h for body in self.bodies + self.marks for h in body):
                 handle.visible = False
             return
-        centres, wxyz, lengths = segment_transforms(joints3d - joints3d[_J["pelvis"]])
-        for body in self.bodies:
+        joints3d = joints3d - joints3d[_J["pelvis"]]
+        centres, wxyz, lengths = segment_transforms(joints3d)
+        marks = facing_marks(joints3d)
+        turns = [Rotation.align_vectors([m[1]], [[0.0, 0.0, 1.0]])[0] for m in marks]  # cone's z out
+        for body, cones in zip(self.bodies, self.marks):
             for k, handle in enumerate(body):
                 handle.position, handle.wxyz = centres[k], wxyz[k]
                 handle.scale = (float(self.radii[k, 0]), float(self.radii[k, 1]), float(lengths[k]))
+                handle.visible = True
+            for (base, _, (length, radius, _)), turn, handle in zip(marks, turns, cones):
+                handle.position, handle.wxyz = base, turn.as_quat(scalar_first=True)
+                handle.scale = (float(radius), float(radius), float(length))
                 handle.visible = True
 
     def caption(self, name: str, text: str) -> None:

@@ -16,7 +16,9 @@ from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
 from mocap.cli import main
 from mocap.errors import MocapError
+from mocap.facing import FACING_MARKS, facing_marks
 from mocap.io.export.formats import FORMATS, Clip, write_format
+from mocap.io.export.glb import SIDES
 from mocap.lift.motion import build_motion
 from mocap.lift.skeleton import BONES, JOINT_BONES
 from mocap.synth import resample_indices
@@ -130,7 +132,8 @@ class Gltf:
 
 def test_glb_is_one_skinned_character(walk_motion, tmp_path):
     """One mesh, one skin over every bone, one animation; on sampled frames the joints
-    are the motion's and the skinned cylinders' ends sit on their joints."""
+    are the motion's, the skinned cylinders' ends sit on their joints and the nose and
+    chest marks stand out of the body's front."""
     gltf = Gltf(write_format("glb", tmp_path / "m.glb", Clip("m", {}, [], walk_motion)))
     doc = gltf.doc
     assert len(doc.animations) == len(doc.meshes) == len(doc.skins) == len(doc.materials) == 1
@@ -147,7 +150,8 @@ def test_glb_is_one_skinned_character(walk_motion, tmp_path):
     joints = gltf.accessor(primitive.attributes.JOINTS_0).astype(int)
     weights = gltf.accessor(primitive.attributes.WEIGHTS_0)
     assert np.allclose(weights.sum(1), 1.0)
-    per_segment = len(vertices) // len(body.SEGMENTS)
+    per_segment = len(trimesh.creation.cylinder(radius=1.0, height=1.0, sections=SIDES).vertices)
+    per_mark = (len(vertices) - per_segment * len(body.SEGMENTS)) // len(FACING_MARKS)
     world = walk_motion.world_joints
     for sample in (0, 17, walk_motion.n_frames - 1):
         matrices = gltf.world_matrices(sample)
@@ -163,6 +167,14 @@ def test_glb_is_one_skinned_character(walk_motion, tmp_path):
             for end_at, joint in ((0.0, ends[0]), (1.0, ends[1])):
                 ring = moved[part][np.abs(along - end_at) < 1e-4]
                 assert np.abs(ring.mean(0) - joint).max() < 1e-5, (start, end)
+        marks = moved[per_segment * len(body.SEGMENTS):].reshape(len(FACING_MARKS), per_mark, 3)
+        for (segment, *_), (base, out, _), mark in zip(FACING_MARKS.values(),
+                                                       facing_marks(world[sample]), marks):
+            start, end = world[sample, [body.JOINT_INDEX[j] for j in body.SEGMENTS[segment]]]
+            axis = (end - start) / np.linalg.norm(end - start)
+            offset = mark - start - np.outer((mark - start) @ axis, axis)   # off the axis
+            tip = offset[np.argmax(np.linalg.norm(offset, axis=1))]
+            assert tip @ out > 0.9 * np.linalg.norm(tip), (segment, sample)    # in front
 
 
 def _along(vertices, rest, skin, start: str, end: str) -> np.ndarray:
@@ -175,7 +187,7 @@ def test_glb_loads_in_trimesh(walk_motion, tmp_path):
     scene = trimesh.load(write_format("glb", tmp_path / "m.glb", Clip("m", {}, [], walk_motion)))
     assert list(scene.geometry) == ["body"]
     mesh = scene.geometry["body"]
-    assert mesh.body_count == len(body.SEGMENTS) and mesh.volume > 0
+    assert mesh.body_count == len(body.SEGMENTS) + len(FACING_MARKS) and mesh.volume > 0
     assert all(part.is_watertight for part in mesh.split(only_watertight=False))
 
 

@@ -12,6 +12,7 @@ import pytest
 from helpers import page_data
 
 from mocap.cli import main as cli
+from mocap.facing import facing_marks
 from mocap.io.export.html import DATA_SLOT, TEMPLATE, motion_html
 from mocap.io.export.motion_json import write_motion
 from mocap.lift.motion import build_motion
@@ -111,6 +112,12 @@ def test_page_plays_from_disk_in_chromium(page_file):
             }""")
             assert 0.005 < shown < 0.5, f"{shown:.3%} of the canvas drawn"
             assert counter.text_content() == f"frame 10 of 0–{N_FRAMES - 1}"   # 0-based, as the files
+            # the nose and the chest's mark drawn where mocap.body puts them (facing shows)
+            pose = page.evaluate("() => DATA.frames[10]")
+            drawn = np.array(page.evaluate("() => facingMarks(DATA.frames[10]).map(m => [m[0], m[1]])"))
+            marks = facing_marks(np.array(pose))
+            np.testing.assert_allclose(drawn[:, 0], marks[:, 0], atol=1e-3)
+            np.testing.assert_allclose(drawn[:, 1], marks[:, 0] + marks[:, 1] * marks[:, 2, :1], atol=1e-3)
             page.locator("#play").click()
             page.wait_for_timeout(300)
             ARTIFACTS.mkdir(parents=True, exist_ok=True)

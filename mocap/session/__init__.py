@@ -4,9 +4,11 @@ command line and the app work through; ``mocap.pipeline.open_session`` opens one
 Beside the sessions, the words a front end needs to speak with them, so that it
 reaches the methods through this door alone: the annotations (read, saved, edited),
 the export formats a session writes (``Session.export``), the review's doubts, the
-video's frames, the silhouette method's per-frame products and their drawing.
+video's frames, the silhouette method's per-frame products and their drawing, the
+body's facing marks.
 """
 
+from mocap.facing import FACING_MARKS, facing_marks
 from mocap.io.annotations import Annotations, load_annotations, save_annotations
 from mocap.io.export.formats import FORMATS
 from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
@@ -18,8 +20,8 @@ from mocap.session.tracking import (MARKS_NEEDED, TrackSession, check_tracking_m
                                     tracked_video)
 from mocap.silhouette.passes import FrameFit, Silhouette
 
-__all__ = ["FORMATS", "MARKS_NEEDED", "Annotations", "Doubt", "FrameFit", "Session", "Silhouette",
+__all__ = ["FACING_MARKS", "FORMATS", "MARKS_NEEDED", "Annotations", "Doubt", "FrameFit", "Session", "Silhouette",
            "SilhouetteSession", "TrackSession", "VideoInfo", "check_tracking_marks",
-           "draw_skeleton", "load_annotations", "marks_of", "open_video", "processing_scale",
+           "draw_skeleton", "facing_marks", "load_annotations", "marks_of", "open_video", "processing_scale",
            "read_frame", "save_annotations", "segment_colour", "silhouette_view", "remarks_of",
            "tracked_video"]

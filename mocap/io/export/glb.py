@@ -7,7 +7,8 @@ its T-pose (node translations = the bones' offsets, metres, y up) at the first
 frame's root. The body is one mesh of the model's 10 cylinders (their cross-sections
 ``body.semi_axes`` at 1.75 m, built by trimesh), skinned to it with JOINTS_0/WEIGHTS_0:
 each limb cylinder rides its proximal bone, the torso blends from Hips at the pelvis to
-Spine1 at the neck; one material. ``skin.inverseBindMatrices`` are the rest pose's.
+Spine1 at the neck; a nose and a chest mark (``mocap.facing``, cones) ride their
+segment's bones, so that the way the body faces shows; one material. ``skin.inverseBindMatrices`` are the rest pose's.
 One animation: a sample per motion frame at 1/fps, a rotation channel per bone and the
 root's translation in the exports' world (the floor at y = 0); glTF's LINEAR
 interpolation of rotations is slerp. pygltflib writes the document and its binary.
@@ -20,6 +21,7 @@ import pygltflib as gl
 import trimesh
 
 from mocap import body
+from mocap.facing import FACING_MARKS, facing_marks
 from mocap.lift.motion import Motion
 from mocap.lift.skeleton import BONE_INDEX, BONES, END_SITE, JOINT_BONES, PARENTS, rest_positions
 
@@ -78,6 +80,11 @@ def body_parts(rest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
         riders.append(np.stack([np.full(len(along), first), np.full(len(along), last),
                                 np.clip(along, 0, 1)], axis=1))
         meshes.append(mesh)
+    joints = np.array([rest[BONE_INDEX[_JOINT[j]]] for j in body.JOINTS])
+    for (segment, along, *_), (base, out, size) in zip(FACING_MARKS.values(), facing_marks(joints)):
+        meshes.append(_cone(base, out, size[0], size[1]))
+        first, last = (BONE_INDEX[r] for r in _RIDERS[segment])
+        riders.append(np.tile([first, last, along], (len(meshes[-1].vertices), 1)))
     whole = trimesh.util.concatenate(meshes)
     return (np.asarray(whole.vertices), np.asarray(whole.vertex_normals), np.asarray(whole.faces),
             np.concatenate(riders))
@@ -98,6 +105,16 @@ def _cylinder(start: np.ndarray, end: np.ndarray, radii: np.ndarray) -> trimesh.
                                   unit * length], axis=1)
     transform[:3, 3] = (start + end) / 2
     return trimesh.creation.cylinder(radius=1.0, height=1.0, sections=SIDES, transform=transform)
+
+
+def _cone(base: np.ndarray, out: np.ndarray, length: float, radius: float) -> trimesh.Trimesh:
+    """A closed cone standing on ``base``, its tip ``length`` along the unit ``out``."""
+    across = np.cross(out, [0.0, 1.0, 0.0] if abs(out[1]) < 0.9 else [1.0, 0.0, 0.0])
+    across /= np.linalg.norm(across)
+    transform = np.eye(4)
+    transform[:3, :3] = np.stack([across * radius, np.cross(out, across) * radius, out * length], axis=1)
+    transform[:3, 3] = base
+    return trimesh.creation.cone(radius=1.0, height=1.0, sections=SIDES, transform=transform)
 
 
 class _Document:

@@ -17,6 +17,7 @@ import numpy as np
 
 from mocap import body
 from mocap.errors import MocapError
+from mocap.facing import FACING_MARKS
 from mocap.io.export.atomic import write_export
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.motion import Motion
@@ -24,7 +25,7 @@ from mocap.lift.motion import Motion
 STATIC = Path(__file__).resolve().parents[3] / "static"
 TEMPLATE = STATIC / "playback.html"
 DATA_SLOT, TITLE_SLOT = "/*MOCAP_DATA*/null", "__MOCAP_TITLE__"
-COLOURS = {"torso": "#8a9bb0", "head": "#c9a27e", "l": "#3d8fb8", "r": "#d9822b"}
+COLOURS = {"torso": "#8a9bb0", "head": "#c9a27e", "l": "#3d8fb8", "r": "#d9822b", "mark": "#30343c"}
 
 
 def playback_html(name: str, fps: float, joints: np.ndarray) -> str:
@@ -41,11 +42,25 @@ def playback_html(name: str, fps: float, joints: np.ndarray) -> str:
                 for i, (s, (a, b)) in enumerate(body.SEGMENTS.items())]
     frames = [None if not np.isfinite(f).all() else np.round(f, 3).tolist() for f in joints]
     data = {"name": name, "fps": float(fps), "n_frames": len(joints), "joints": list(body.JOINTS),
-            "segments": segments, "frames": frames}
+            "segments": segments, "marks": _marks(), "frames": frames}
     # '<' escaped: no '</script>' in a clip's name can end the script early
     text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
     template = TEMPLATE.read_text(encoding="utf-8")
     return template.replace(DATA_SLOT, text, 1).replace(TITLE_SLOT, html.escape(name))
+
+
+def _marks() -> dict:
+    """What the page needs to draw mocap.facing's marks: the pairs of joints whose left
+    minus right is the body's left, and per mark its segment's joints, where along it,
+    how far out in front it stands, its length and radius (metres)."""
+    units = body.BODY_HEIGHT_M / body.BODY_HEIGHT
+    front = body.semi_axes(body.BODY_HEIGHT_M)[:, 1]
+    return {"left": [[body.JOINT_INDEX[f"{names[0]}_l"], body.JOINT_INDEX[f"{names[0]}_r"]]
+                     for names in body.LIMB_JOINTS.values()],
+            "marks": [[*(body.JOINT_INDEX[j] for j in body.SEGMENTS[s]), along,
+                       round(float(front[body.SEGMENT_INDEX[s]]), 4), length * units, radius * units]
+                      for s, along, length, radius in FACING_MARKS.values()],
+            "colour": COLOURS["mark"]}
 
 
 def motion_html(motion: Motion, name: str) -> str:
