@@ -11,9 +11,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from app.signs import build_signs
 from app.state import AppState, FrameView
-from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
-from mocap.body import ORIENTATIONS
+from mocap.body import JOINTS, ORIENTATIONS
 from mocap.session import FORMATS
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
@@ -28,8 +28,6 @@ MARKING_HELP = ("The tracking method follows the 16 joints you mark on frame 0, 
                 "click where it is on the video frame. Then press **Track**.")
 STATIC = Path(__file__).resolve().parents[1] / "static"
 HELP_FILE = STATIC / "help.md"           # the Help folder; its pictures sit beside it
-SIGN_COLOURS = {1: "teal", -1: "grape"}
-FLAT = 0.05                         # |dZ| / length below which a segment lies in the image plane
 REVIEW_LINES = 8                    # doubtful frames listed on the page
 # action -> (label in the command palette, key, modifier). The keys of a video editor's
 # J/K/L; viser's own camera keys (W, A, S, D, Q, E, the arrows) are left alone.
@@ -44,12 +42,6 @@ HOTKEYS: dict[str, tuple[str, str, str | None]] = {
     "redo": ("Redo", "Z", "cmd/ctrl+shift"),
     "play": ("Play or pause the animation", "P", None),
 }
-
-
-def segment_label(segment: str) -> str:
-    """'upper_arm_l' -> 'upper arm L'."""
-    words = segment.split("_")
-    return " ".join(words[:-1]) + f" {words[-1].upper()}" if words[-1] in ("l", "r") else segment
 
 
 HELP = "  \n".join(f"**{'+'.join(filter(None, [mod, key]))}** {label.lower()}"
@@ -125,9 +117,7 @@ def build_controls(gui, n_frames: int) -> Controls:
         orientation = gui.add_dropdown("Facing", (AUTO, *ORIENTATIONS), initial_value=AUTO,
                                        hint="which way the performer faces, from this frame on")
         orientation_note = gui.add_markdown("")
-        gui.add_markdown("Foreshortening: toward or away from the camera. Click to flip, "
-                         "or click the segment in 3D.")
-        segments = {s: gui.add_button(segment_label(s), disabled=True) for s in SEGMENT_NAMES}
+        segments = build_signs(gui)
     with tabs.add_tab("Joints"):
         joint = gui.add_dropdown("Place", (NO_JOINT, *JOINTS), initial_value=NO_JOINT,
                                  hint="choose a joint, then click where it is on the video frame")
@@ -147,7 +137,9 @@ def build_controls(gui, n_frames: int) -> Controls:
         foot_lock = gui.add_checkbox("Foot lock", initial_value=False,
                                      hint="keep each planted foot in place through its contact "
                                           "in the files downloaded")
-        downloads = gui.add_button_group("Download", tuple(DOWNLOADS))
+        downloads = {f.label: gui.add_button(f.label, icon="download", disabled=True,
+                                             hint=None if f.available() else f.needs)
+                     for f in FORMATS.values()}
         gui.add_markdown("*HTML page*: the playback page, one HTML file that plays the "
                          "body in any browser, from disk, with no server.")
     with gui.add_folder("Help", expand_by_default=False):
@@ -188,18 +180,6 @@ def _stage_tab(gui) -> tuple[object, object, object]:
 
 
 # -- what the controls say about a frame ------------------------------------------------
-
-def sign_button(segment: str, view: FrameView) -> dict:
-    """Label, colour and state of a segment's foreshortening toggle."""
-    if view.signs is None:
-        return {"label": f"{segment_label(segment)}: –", "color": None, "disabled": True}
-    k = SEGMENT_INDEX[segment]
-    sign, note = view.signs[k], view.sign_notes[k]
-    flat = " · in the image plane" if view.depths[k] < FLAT else ""
-    return {"label": f"{segment_label(segment)}: {'toward' if sign > 0 else 'away'}{flat}"
-                     + ("" if note == "guessed" else f" ({note})"),
-            "color": SIGN_COLOURS[sign], "disabled": False}
-
 
 def frame_text(view: FrameView) -> str:
     """The frame's markdown: which frame, whether a keyframe, fit quality, doubts."""

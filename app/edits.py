@@ -119,6 +119,11 @@ class Edits:
             return notes
         return self.edit(0, change)
 
+    @property
+    def silhouette_fitted(self) -> bool:
+        """Whether the silhouette method's fit of every frame exists (marks_from_fit needs it)."""
+        return self._fitted is not None
+
     def unmarked(self) -> list[str]:
         """The joints not yet marked on frame 0, in JOINTS order."""
         there = placed(self._annotations, 0)

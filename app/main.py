@@ -20,7 +20,8 @@ import viser
 
 from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD_CHOICES, NO_JOINT,
                           Controls, build_controls, frame_text, orientation_text, review_text,
-                          sign_button, stage_text, tracking_text)
+                          stage_text, tracking_text)
+from app.enabling import control_states
 from app.state import AppState, FrameView
 from app.layout import Layout, place_cameras
 from app.views import (FrameCache, SceneView, caption_image, silhouette_image, tracked_image,
@@ -126,7 +127,7 @@ class App:
             "next_frame": lambda: state.go_to(state.frame + 1),
             "prev_key": lambda: self._jump(state.keyframe_after(state.frame, -1)),
             "next_key": lambda: self._jump(state.keyframe_after(state.frame, 1)),
-            "keyframe": lambda: state.toggle_keyframe(state.frame),
+            "keyframe": self._toggle_keyframe,
             "doubtful": lambda: self._jump(state.next_doubtful(), "no doubtful frame"),
             "undo": lambda: self._jump(state.undo(), "nothing to undo"),
             "redo": lambda: self._jump(state.redo(), "nothing to redo"),
@@ -144,16 +145,23 @@ class App:
         c.frame.on_update(self._from_client(lambda: state.go_to(int(c.frame.value))))
         c.orientation.on_update(self._from_client(lambda: state.set_orientation(
             state.frame, None if c.orientation.value == AUTO else c.orientation.value)))
-        c.joint.on_update(lambda _e: self.refresh())
+        c.joint.on_update(lambda _e: self.refresh())      # the ring shown, Clear override's state
         c.method.on_update(self._from_client(lambda: state.set_method(METHOD_CHOICES[c.method.value])))
         c.mark.on_click(self._on(self._start_marking))
         c.marks_from_fit.on_click(self._on(state.marks_from_fit))
         c.track.on_click(self._on(state.start_tracking))
         c.use_stage.on_click(self._on(lambda: state.set_background(c.stage.value)))
         c.clear_override.on_click(self._on(self._clear_override))
-        c.downloads.on_click(lambda e: self._run(e.client, lambda: self._download(e)))
+        for label, button in c.downloads.items():
+            button.on_click(lambda e, key=DOWNLOADS[label]: self._run(e.client, lambda: self._download(e, key)))
         for segment, button in c.segments.items():
             button.on_click(self._on(lambda s=segment: self._flip(s)))
+
+    def _toggle_keyframe(self) -> None:
+        """Mark or unmark the frame; refused, as its button is disabled, without a fit there."""
+        if self.state.view().joints2d is None:
+            raise MocapError(f"frame {self.state.frame} has no fit (not yet, or nobody found) to key")
+        self.state.toggle_keyframe(self.state.frame)
 
     def _from_client(self, action: Callable[[], object]) -> Callable:
         """An on_update callback that ignores the server's own updates of the control."""
@@ -199,8 +207,8 @@ class App:
         joint = self.controls.joint.value
         self.state.clear_overrides(self.state.frame, None if joint == NO_JOINT else joint)
 
-    def _download(self, event) -> None:
-        name, data = self.state.export(DOWNLOADS[event.target.value], self.controls.foot_lock.value)
+    def _download(self, event, key: str) -> None:
+        name, data = self.state.export(key, self.controls.foot_lock.value)
         event.client.send_file_download(name, data, save_immediately=True)
 
     # -- state -> page ------------------------------------------------------------
@@ -284,12 +292,11 @@ class App:
         c = self.controls
         self._show_progress(view)
         _set(c.frame, value=view.index)
-        _set(c.keyframe, label="Unmark keyframe" if view.keyframe else "Mark as keyframe")
         _set(c.frame_info, content=frame_text(view))
         _set(c.orientation, value=view.orientation if view.orientation_note == "set here" else AUTO)
         _set(c.orientation_note, content=orientation_text(view))
-        for segment, button in c.segments.items():
-            _set(button, **sign_button(segment, view))
+        for handle, props in control_states(c, self.state, view):
+            _set(handle, **props)
         _set(c.overrides, content="  \n".join(f"**{j}** at ({x:.0f}, {y:.0f})"
                                               for j, (x, y) in view.overrides.items())
              or "No override on this frame.")
@@ -300,7 +307,6 @@ class App:
         _set(c.method, value=next(k for k, v in METHOD_CHOICES.items() if v == view.method))
         _set(c.track_info, content=tracking_text(self.state))
         _set(c.stage_info, content=stage_text(self.state))
-        _set(c.track, disabled=self.state.tracking)
 
     def _show_progress(self, view: FrameView) -> None:
         p, c = view.progress, self.controls

@@ -14,6 +14,7 @@ from mocap.body import SEGMENT_NAMES
 from mocap.lift.taylor import depth_fractions
 
 TINY_FRAMES = 20            # 320x240 at 15 fps: fitted in about half a second
+SHAPES = {"4x3": (320, 240), "16x9": (384, 216), "9x16": (216, 384)}     # the usual videos'
 
 
 @pytest.fixture(scope="module")
@@ -31,6 +32,16 @@ def app(tiny_video, tmp_path):
     yield app
     if app.player.playing:
         app.player.stop()
+    app.server.stop()
+
+
+@pytest.fixture(scope="module", params=list(SHAPES))
+def shaped_app(request, tmp_path_factory):
+    """(shape, app): a preprocessed app on a 12-frame walk of each of SHAPES."""
+    folder = tmp_path_factory.mktemp(request.param)
+    render_walk(folder / "walk.mp4", size=SHAPES[request.param], seconds=12 / 15)
+    app = started_app(folder / "walk.mp4")
+    yield request.param, app
     app.server.stop()
 
 

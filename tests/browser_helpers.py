@@ -79,3 +79,65 @@ def screen_point(page, app, world) -> tuple[float, float]:
     focal = box["height"] / 2 / np.tan(camera.fov / 2)
     return (box["x"] + box["width"] / 2 + focal * local[0] / local[2],
             box["y"] + box["height"] / 2 + focal * local[1] / local[2])
+
+
+def fitted_camera(app, page, before: set[int]) -> None:
+    """Wait until the page is the app's only tab (not one of the ids ``before``) and its
+    camera looks from where its canvas shows every panel."""
+    wait_until(lambda: len(app.server.get_clients()) == 1 and not set(app.server.get_clients()) & before)
+    camera = next(iter(app.server.get_clients().values())).camera
+
+    def fitted() -> bool:
+        canvas = page.locator("canvas[data-engine]").bounding_box()
+        size = (camera.image_width, camera.image_height)
+        position, look_at = app.layout.camera(*size, camera.fov)
+        return (np.allclose(size, (canvas["width"], canvas["height"]), atol=1.0)
+                and np.allclose(camera.position, position, atol=1e-3)
+                and np.allclose(camera.look_at, look_at, atol=1e-3))
+    wait_until(fitted)
+
+
+def body_axes(app) -> list[tuple[list, list]]:
+    """Per 3D view (the camera's, the side), the scene's (centre, unit axis, scale) of
+    every cylinder and of every facing mark (its centre halfway up the cone)."""
+    from app.views import SIDE
+    views = []
+    for body, marks, at, frame in zip(app.scene.bodies, app.scene.marks, (app.layout.front, app.layout.side),
+                                      ((1.0, 0.0, 0.0, 0.0), SIDE)):
+        turn, origin = Rotation.from_quat(frame, scalar_first=True), np.array(at + (0.0,))
+
+        def axes(handles, lift: float) -> list:
+            out = []
+            for h in handles:
+                axis = turn.apply(Rotation.from_quat(h.wxyz, scalar_first=True).apply([0.0, 0.0, 1.0]))
+                out.append((origin + turn.apply(h.position) + lift * h.scale[2] * axis, axis, h.scale))
+            return out
+        views.append((axes(body, 0.0), axes(marks, 0.5)))
+    return views
+
+
+def unhidden_point(app, segment: str | None = None, mark: int | None = None) -> np.ndarray:
+    """A scene point on a segment's cylinder (or on facing mark number ``mark``), in the
+    camera or the side view, that no other cylinder hides from the tab's camera (points
+    along the axis, middle first)."""
+    from mocap.body import SEGMENT_INDEX
+    eye = next(iter(app.server.get_clients().values())).camera.position
+    k = None if segment is None else SEGMENT_INDEX[segment]
+    for cylinders, marks in body_axes(app):
+        centre, axis, scale = cylinders[k] if mark is None else marks[mark]
+        for t in ((0.0, -0.2, 0.2, -0.35, 0.35) if mark is None else (0.0,)):
+            point = centre + t * scale[2] * axis
+            ray = (point - eye) / np.linalg.norm(point - eye)
+            if not any(_hides(eye, ray, np.linalg.norm(point - eye), other)
+                       for j, other in enumerate(cylinders) if j != k):
+                return point
+    raise AssertionError(f"{segment or mark} is hidden in both 3D views")
+
+
+def _hides(eye, ray, depth: float, cylinder) -> bool:
+    """Whether a cylinder (centre, axis, scale) crosses the ray before ``depth``."""
+    centre, axis, scale = cylinder
+    samples = centre + np.linspace(-0.5, 0.5, 21)[:, None] * scale[2] * axis
+    along = (samples - eye) @ ray
+    off = np.linalg.norm(samples - eye - along[:, None] * ray, axis=1)
+    return bool(np.any((off < max(scale[0], scale[1])) & (along < depth - max(scale[0], scale[1]))))

@@ -291,3 +291,22 @@ def test_a_failed_preprocessing_stops_the_bar_and_says_why(tmp_path):
         assert "not fitted" in app.controls.frame_info.content.lower()
     finally:
         app.server.stop()
+
+
+def test_controls_enabled_only_when_they_can_act(app):
+    c, state = app.controls, app.state
+    assert c.clear_override.disabled                        # no override on the frame
+    state.set_override(3, "wrist_r", (100.0, 100.0))
+    assert not c.clear_override.disabled
+    c.joint.value = "elbow_l"                               # chosen, but not placed here
+    app.refresh()
+    assert c.clear_override.disabled
+    c.joint.value = "wrist_r"
+    app.refresh()
+    assert not c.clear_override.disabled
+    assert not c.mark.disabled and c.track.disabled         # marks missing: nothing to track
+    state.marks_from_fit()
+    assert c.mark.disabled and not c.track.disabled         # all 16 marked
+    state.set_method("track")
+    assert all(b.disabled for b in c.downloads.values())    # nothing tracked yet
+    assert all(b.disabled for b in c.segments.values()) and c.keyframe.disabled

@@ -20,50 +20,16 @@ import bvhio
 import numpy as np
 import pytest
 from browser_helpers import (SKIP_WITHOUT_CHROMIUM, TIMEOUT_MS, VIEWPORT, browser, chromium,  # noqa: F401
-                             open_page, screen_point, shot, wait_until)
+                             open_page, screen_point, shot, unhidden_point, wait_until)
 from app_helpers import (TINY_FRAMES, app, deepest_segment, download_export,  # noqa: F401
                          fresh_copy, panning_clip, started_app, tiny_video)
-from scipy.spatial.transform import Rotation
 
-from app.controls import segment_label, sign_button
-from app.views import SIDE
+from app.signs import segment_label, sign_button
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 
 pytestmark = SKIP_WITHOUT_CHROMIUM
 sync_api = pytest.importorskip("playwright.sync_api")
-
-
-def unhidden_point(app, segment: str) -> np.ndarray:
-    """A scene point on a segment's cylinder, in the camera or the side view, that no
-    other cylinder hides from the tab's camera (points along the axis, middle first)."""
-    eye = next(iter(app.server.get_clients().values())).camera.position
-    bodies = []
-    for body, at, frame in zip(app.scene.bodies, (app.layout.front, app.layout.side),
-                               ((1.0, 0.0, 0.0, 0.0), SIDE)):
-        turn, origin = Rotation.from_quat(frame, scalar_first=True), np.array(at + (0.0,))
-        axes = [(origin + turn.apply(h.position), turn.apply(Rotation.from_quat(h.wxyz, scalar_first=True)
-                                                               .apply([0.0, 0.0, 1.0])), h.scale) for h in body]
-        bodies.append(axes)
-    k = SEGMENT_INDEX[segment]
-    for axes in bodies:
-        centre, axis, scale = axes[k]
-        for t in (0.0, -0.2, 0.2, -0.35, 0.35):
-            point = centre + t * scale[2] * axis
-            ray = (point - eye) / np.linalg.norm(point - eye)
-            if not any(_hides(eye, ray, np.linalg.norm(point - eye), other)
-                       for j, other in enumerate(axes) if j != k):
-                return point
-    raise AssertionError(f"{segment} is hidden in both 3D views")
-
-
-def _hides(eye, ray, depth: float, cylinder) -> bool:
-    """Whether a cylinder (centre, axis, scale) crosses the ray before ``depth``."""
-    centre, axis, scale = cylinder
-    samples = centre + np.linspace(-0.5, 0.5, 21)[:, None] * scale[2] * axis
-    along = (samples - eye) @ ray
-    off = np.linalg.norm(samples - eye - along[:, None] * ray, axis=1)
-    return bool(np.any((off < max(scale[0], scale[1])) & (along < depth - max(scale[0], scale[1]))))
 
 
 def video_point(app, xy) -> np.ndarray:
@@ -115,7 +81,7 @@ def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
     handle = app.scene.bodies[1][SEGMENT_INDEX[segment]]     # the side view, where it shows
     pose, placed = app.state.view().pose3d, np.concatenate([handle.position, handle.wxyz])
     segment_button(page, segment).click()
-    segment_button(page, segment).filter(has_text="(set here)").wait_for()
+    segment_button(page, segment).filter(has_text="set here").wait_for()
     assert np.abs(app.state.view().pose3d - pose).max() > 0.05
     assert not np.allclose(placed, np.concatenate([handle.position, handle.wxyz]))
     note = load_annotations(app.state.path).frames[6].foreshortening
@@ -203,7 +169,7 @@ def test_two_tabs_one_truth(browser, app):
     first, second = open_page(browser, port), open_page(browser, port)
     segment = deepest_segment(app.state)
     segment_button(first, segment).click()
-    segment_button(second, segment).filter(has_text="(set here)").wait_for()
+    segment_button(second, segment).filter(has_text="set here").wait_for()
     second.get_by_role("button", name="frame ▶", exact=True).click()
     first.get_by_text("Frame 1 of").wait_for()
     for _ in range(3):                                     # clicks from both tabs at once
@@ -258,7 +224,7 @@ def test_killing_the_server_loses_no_shown_edit(browser, tiny_video, tmp_path):
         shown = []
         for segment in ("upper_leg_l", "lower_leg_l", "upper_arm_r"):
             segment_button(page, segment).click()
-            segment_button(page, segment).filter(has_text="(set here)").wait_for()
+            segment_button(page, segment).filter(has_text="set here").wait_for()
             shown.append(segment)
         segment_button(page, "torso").click()                  # in flight when killed
     finally:

@@ -8,26 +8,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from app_helpers import started_app
-from browser_helpers import SKIP_WITHOUT_CHROMIUM, chromium, open_page, screen_point, shot, wait_until  # noqa: F401
-from helpers import render_walk
+from app_helpers import shaped_app  # noqa: F401
+from browser_helpers import (SKIP_WITHOUT_CHROMIUM, chromium, fitted_camera, open_page, screen_point,  # noqa: F401
+                             shot, wait_until)
 
 from app.layout import CAPTION_CHARS, GAP
 
 pytestmark = SKIP_WITHOUT_CHROMIUM
-SHAPES = {"4x3": (320, 240), "16x9": (384, 216), "9x16": (216, 384)}
 WINDOWS = ((1280, 720), (1920, 1080))
 PANELS = ("video", "silhouette", "front", "side")
-
-
-@pytest.fixture(scope="module", params=list(SHAPES))
-def shaped_app(request, tmp_path_factory):
-    """(shape, app): a preprocessed app on a 12-frame walk of the shape."""
-    folder = tmp_path_factory.mktemp(request.param)
-    render_walk(folder / "walk.mp4", size=SHAPES[request.param], seconds=12 / 15)
-    app = started_app(folder / "walk.mp4")
-    yield request.param, app
-    app.server.stop()
 
 
 def panel_boxes(page, app) -> dict[str, tuple[float, float, float, float]]:
@@ -50,22 +39,6 @@ def overlap(a, b) -> bool:
 def box_of(locator) -> tuple[float, float, float, float]:
     b = locator.bounding_box()
     return b["x"], b["y"], b["x"] + b["width"], b["y"] + b["height"]
-
-
-def fitted_camera(app, page, before: set[int]) -> None:
-    """Wait until the page is the app's only tab (not one of the ids ``before``) and its
-    camera looks from where its canvas shows every panel."""
-    wait_until(lambda: len(app.server.get_clients()) == 1 and not set(app.server.get_clients()) & before)
-    camera = next(iter(app.server.get_clients().values())).camera
-
-    def fitted() -> bool:
-        canvas = page.locator("canvas[data-engine]").bounding_box()
-        size = (camera.image_width, camera.image_height)
-        position, look_at = app.layout.camera(*size, camera.fov)
-        return (np.allclose(size, (canvas["width"], canvas["height"]), atol=1.0)
-                and np.allclose(camera.position, position, atol=1e-3)
-                and np.allclose(camera.look_at, look_at, atol=1e-3))
-    wait_until(fitted)
 
 
 @pytest.mark.parametrize("window", WINDOWS, ids=lambda w: f"{w[0]}x{w[1]}")
