@@ -22,6 +22,7 @@ from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD
                           Controls, build_controls, frame_text, orientation_text, review_text,
                           stage_text, tracking_text)
 from app.enabling import control_states
+from app.player import Player
 from app.state import AppState, FrameView
 from app.layout import Layout, place_cameras
 from app.views import (FrameCache, SceneView, caption_image, silhouette_image, tracked_image,
@@ -30,49 +31,6 @@ from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
-
-
-class Player:
-    """Plays the animation in the 3D panels at the video's frame rate, in a thread."""
-
-    def __init__(self, app: "App"):
-        self.app = app
-        self.frame = 0
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-
-    @property
-    def playing(self) -> bool:
-        return self._thread is not None and self._thread.is_alive()
-
-    def toggle(self) -> None:
-        if self.playing:
-            self.stop()
-        else:
-            self.start()
-
-    def start(self) -> None:
-        """Play from the current frame on, looping."""
-        joints3d, fps = self.app.state.animation()
-        self.frame = self.app.state.frame
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, args=(joints3d, fps),
-                                        daemon=True, name="mocap-player")
-        self._thread.start()
-        self.app.refresh(force=True)
-
-    def _run(self, joints3d: np.ndarray, fps: float) -> None:
-        while not self._stop.wait(1.0 / fps):
-            self.frame = (self.frame + 1) % len(joints3d)
-            self.app.show_playing(joints3d[self.frame], self.frame)
-
-    def stop(self) -> None:
-        """Stop, and make the frame the animation stopped at the current one."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join()
-        if not self.app.state.go_to(self.frame):
-            self.app.refresh(force=True)
 
 
 class App:
@@ -87,7 +45,7 @@ class App:
         self.scene = SceneView(server.scene, self.layout, self.size, self._image_clicked,
                                lambda segment, event: self._run(event.client, lambda: self._flip(segment)))
         self.controls: Controls = build_controls(server.gui, state.n_frames)
-        self.player = Player(self)
+        self.player = Player(state, lambda force: self.refresh(force=force))
         self._render_lock = threading.RLock()
         self._shown: dict[str, object] = {}
         self._notices: dict[int, object] = {}       # client id -> its notification shown
@@ -220,7 +178,9 @@ class App:
                 self._shown.clear()
             view = self.state.view()
             self._show_images(view)
-            if not self.player.playing:
+            if self.player.playing:
+                self._show_animation(view.index)
+            else:
                 self._show_pose(view)
             self._show_controls(view)
 
@@ -281,12 +241,12 @@ class App:
         self.scene.caption("front", "3D · camera's view" + note)
         self.scene.caption("side", "3D · side view" + note)
 
-    def show_playing(self, joints3d: np.ndarray, frame: int) -> None:
-        """Pose the 3D bodies for a frame of the playing animation."""
-        with self._render_lock:
-            self.scene.show_pose(joints3d)
-            self.scene.caption("front", f"3D · playing frame {frame}")
-            self._shown.pop("pose", None)
+    def _show_animation(self, frame: int) -> None:
+        """Pose the 3D bodies as the playing animation has them on ``frame``."""
+        self.scene.show_pose(self.player.pose(frame))
+        self._shown.pop("pose", None)
+        self.scene.caption("front", f"3D · playing frame {frame}")
+        self.scene.caption("side", "3D · side view")
 
     def _show_controls(self, view: FrameView) -> None:
         c = self.controls

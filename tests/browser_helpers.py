@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from app.layout import GAP
+
 CHROMIUM = Path("/usr/bin/chromium")
 SKIP_WITHOUT_CHROMIUM = pytest.mark.skipif(not CHROMIUM.exists(),
                                        reason="Debian's chromium is not installed (apt-get install chromium)")
@@ -26,6 +28,7 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic"
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 VIEWPORT = {"width": 1280, "height": 800}
 TIMEOUT_MS = 20_000
+PANELS = ("video", "silhouette", "front", "side")
 
 
 @pytest.fixture(scope="module")
@@ -79,6 +82,25 @@ def screen_point(page, app, world) -> tuple[float, float]:
     focal = box["height"] / 2 / np.tan(camera.fov / 2)
     return (box["x"] + box["width"] / 2 + focal * local[0] / local[2],
             box["y"] + box["height"] / 2 + focal * local[1] / local[2])
+
+
+def panel_boxes(page, app, caption: bool = True) -> dict[str, tuple[float, float, float, float]]:
+    """name -> (left, top, right, bottom) page pixels of each panel, with the caption
+    band above it (or the panel's image alone: ``caption`` False)."""
+    layout, boxes = app.layout, {}
+    top = layout.height / 2 + (GAP if caption else 0.0)
+    for name in PANELS:
+        x, y = getattr(layout, name)
+        corners = [screen_point(page, app, (x + dx * layout.width / 2, y + dy, 0.0))
+                   for dx in (-1, 1) for dy in (-layout.height / 2, top)]
+        xs, ys = zip(*corners)
+        boxes[name] = (min(xs), min(ys), max(xs), max(ys))
+    return boxes
+
+
+def box_of(locator) -> tuple[float, float, float, float]:
+    b = locator.bounding_box()
+    return b["x"], b["y"], b["x"] + b["width"], b["y"] + b["height"]
 
 
 def fitted_camera(app, page, before: set[int]) -> None:

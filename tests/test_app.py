@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -310,3 +311,47 @@ def test_controls_enabled_only_when_they_can_act(app):
     state.set_method("track")
     assert all(b.disabled for b in c.downloads.values())    # nothing tracked yet
     assert all(b.disabled for b in c.segments.values()) and c.keyframe.disabled
+
+
+def test_play_follows_the_clock_from_a_moved_frame_and_stops_at_the_end(app):
+    """Play moves the current frame (so every view and the slider) at the video's rate,
+    the 3D bodies posed as the animation; a frame chosen while playing plays on from
+    there; playing stops at the last frame, and Play there starts from the first."""
+    fps, state = app.state.info.fps, app.state
+
+    def on_the_clock(origin: int, since: tuple[float, float]) -> None:
+        """The frame is where the clock says, never ahead of it (a loaded machine may
+        show it up to half a second late)."""
+        before, frame, after = time.monotonic(), state.frame, time.monotonic()
+        assert origin + (before - since[1]) * fps - 0.5 * fps <= frame, (frame, origin)
+        assert frame <= origin + (after - since[0]) * fps + 1, (frame, origin)
+    started = time.monotonic()
+    app.player.toggle()
+    since = (started, time.monotonic())
+    assert app.player.playing
+    time.sleep(0.4)
+    on_the_clock(0, since)
+    slider = app.controls.frame.value       # read first: the player may step in between
+    assert 0 < slider <= state.frame, (slider, state.frame)
+    shown = np.array([h.position for h in app.scene.bodies[0]])     # the 3D: the animation's
+    now = state.frame
+    poses = [app.player.pose(f) for f in range(max(now - 2, 0), now + 1)]
+    assert any(np.allclose(shown, segment_transforms(p - p[JOINT_INDEX["pelvis"]])[0], atol=1e-6)
+               for p in poses)
+    moved = time.monotonic()
+    state.go_to(2)
+    since = (moved, time.monotonic())
+    time.sleep(0.3)
+    on_the_clock(2, since)
+    deadline = time.monotonic() + 10
+    while app.controls.play.label != "Play" and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not app.player.playing and state.frame == TINY_FRAMES - 1
+    restarted = time.monotonic()
+    app.player.toggle()
+    assert app.player.playing
+    on_the_clock(0, (restarted, time.monotonic()))
+    app.player.toggle()
+    stopped = state.frame
+    time.sleep(0.3)
+    assert not app.player.playing and state.frame == stopped == app.controls.frame.value

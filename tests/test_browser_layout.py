@@ -9,36 +9,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from app_helpers import shaped_app  # noqa: F401
-from browser_helpers import (SKIP_WITHOUT_CHROMIUM, chromium, fitted_camera, open_page, screen_point,  # noqa: F401
-                             shot, wait_until)
+from browser_helpers import (SKIP_WITHOUT_CHROMIUM, box_of, chromium, fitted_camera,  # noqa: F401
+                             open_page, panel_boxes, shot, wait_until)
 
-from app.layout import CAPTION_CHARS, GAP
+from app.layout import CAPTION_CHARS
 
 pytestmark = SKIP_WITHOUT_CHROMIUM
 WINDOWS = ((1280, 720), (1920, 1080))
-PANELS = ("video", "silhouette", "front", "side")
-
-
-def panel_boxes(page, app) -> dict[str, tuple[float, float, float, float]]:
-    """name -> (left, top, right, bottom) page pixels of each panel, with the caption
-    band above it."""
-    layout, boxes = app.layout, {}
-    for name in PANELS:
-        x, y = getattr(layout, name)
-        corners = [screen_point(page, app, (x + dx * layout.width / 2, y + dy, 0.0))
-                   for dx in (-1, 1) for dy in (-layout.height / 2, layout.height / 2 + GAP)]
-        xs, ys = zip(*corners)
-        boxes[name] = (min(xs), min(ys), max(xs), max(ys))
-    return boxes
 
 
 def overlap(a, b) -> bool:
     return a[0] < b[2] - 0.5 and b[0] < a[2] - 0.5 and a[1] < b[3] - 0.5 and b[1] < a[3] - 0.5
-
-
-def box_of(locator) -> tuple[float, float, float, float]:
-    b = locator.bounding_box()
-    return b["x"], b["y"], b["x"] + b["width"], b["y"] + b["height"]
 
 
 @pytest.mark.parametrize("window", WINDOWS, ids=lambda w: f"{w[0]}x{w[1]}")

@@ -1,0 +1,97 @@
+"""Play: the whole page (video frame, silhouette and fit, frame slider, 3D bodies)
+runs through the video at its frame rate.
+
+The player only moves the state's current frame (``AppState.go_to``), so every tab
+shows the same frame as it would when stepped by hand, and the 3D bodies show the
+animation (keyframes lifted, the frames between interpolated: what the exports
+hold). It is paced by the wall clock: each tick shows the frame the clock is at and
+skips any it is late for, so a slow machine or a slow link drops frames rather than
+falling behind. Moving the frame while playing plays on from there; playing stops
+at the last frame (Play there starts again from the first).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Callable
+
+import numpy as np
+
+from app.state import AppState
+
+
+class Player:
+    """Plays ``state`` at the video's frame rate in a thread; ``refresh(force)`` redraws
+    the page when playing starts or stops."""
+
+    def __init__(self, state: AppState, refresh: Callable[[bool], None]):
+        self.state, self._refresh = state, refresh
+        self._lock = threading.Lock()       # start and stop come from any tab's callback thread
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._playing = False
+        self._animation: tuple[object, np.ndarray] | None = None    # (annotations, joints3d)
+
+    @property
+    def playing(self) -> bool:
+        return self._playing
+
+    def toggle(self) -> None:
+        with self._lock:
+            if self._playing:
+                self._halt()
+            else:
+                self._start()
+        self._refresh(True)
+
+    def stop(self) -> None:
+        """Stop playing (the current frame stays where playing got to)."""
+        with self._lock:
+            self._halt()
+        self._refresh(True)
+
+    def pose(self, frame: int) -> np.ndarray | None:
+        """The animation's (16, 3) joints on ``frame``, made again after an edit."""
+        notes = self.state.annotations
+        if self._animation is None or self._animation[0] is not notes:
+            self._animation = (notes, self.state.animation()[0])
+        joints = self._animation[1][frame]
+        return None if not np.isfinite(joints).all() else joints
+
+    def _start(self) -> None:
+        self.pose(self.state.frame)     # refused (MocapError) before every frame is fitted
+        if self.state.frame >= self.state.n_frames - 1:
+            self.state.go_to(0)
+        self._stop.clear()
+        self._playing = True
+        self._thread = threading.Thread(target=self._run, daemon=True, name="mocap-player")
+        self._thread.start()
+
+    def _halt(self) -> None:
+        self._stop.set()
+        thread, self._thread = self._thread, None
+        if thread is not None and thread is not threading.current_thread():
+            thread.join()
+        self._playing = False
+
+    def _run(self) -> None:
+        state, period = self.state, 1.0 / self.state.info.fps
+        start, origin = time.monotonic(), state.frame
+        shown = origin
+        while True:
+            if state.frame != shown:        # the user moved the frame: play on from there
+                start, origin = time.monotonic(), state.frame
+            frame = origin + int((time.monotonic() - start) / period)
+            if frame >= state.n_frames:
+                state.go_to(state.n_frames - 1)
+                break
+            state.go_to(frame)
+            shown = frame
+            wait = start + (frame + 1 - origin) * period - time.monotonic()
+            if self._stop.wait(max(wait, 0.0)):
+                return
+        # not under the lock: a Pause holding it may be joining this thread right now
+        if not self._stop.is_set():
+            self._playing = False
+        self._refresh(True)
