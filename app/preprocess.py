@@ -1,7 +1,8 @@
 """The app's background work: the silhouette method's two passes over the video
-(``mocap.pipeline``) from the start, and the tracking once frame 0 is marked. Each
-frame's silhouette and fit are kept as they come (the pipeline's Progress carries
-them), so the page shows them at once; the page hears at each whole percent."""
+(``mocap.pipeline``, streamed together) from the start, and the tracking once frame
+0 is marked. Each frame's silhouette and fit are kept as they come (the pipeline's
+Progress carries them), so the page shows them at once; the page hears at each whole
+percent, and at once when the frame it shows gets its silhouette or fit."""
 
 from __future__ import annotations
 
@@ -24,11 +25,14 @@ class Throttle:
     def __init__(self, report: Callable[[int, str], None], total: int):
         self.report, self.total, self.last = report, max(total, 1), (-1, "")
 
-    def __call__(self, done: int, stage: str) -> None:
+    def __call__(self, done: int, stage: str) -> bool:
+        """Whether it passed this step on."""
         key = (100 * done // self.total, stage)
-        if key != self.last:
-            self.last = key
-            self.report(done, stage)
+        if key == self.last:
+            return False
+        self.last = key
+        self.report(done, stage)
+        return True
 
 
 def stage_of(text: str, n_frames: int) -> str | tuple[int, int] | None:
@@ -79,10 +83,14 @@ class Preprocessing:
             with self._lock:
                 if p.stage == SILHOUETTES:
                     self._silhouettes[p.frame], self._silhouettes_done = p.product, p.frame + 1
-                elif p.stage == FITTING:
-                    self._fits[p.frame] = p.product
+                elif p.stage == FITTING and (p.final or self._fits[p.frame] is None):
+                    self._fits[p.frame] = p.product     # a first look until the legs are chosen
+                # the passes run together: the page names the silhouettes' until all are in
+                stage = SILHOUETTES if self._silhouettes_done < self.n_frames else FITTING
+                shown = p.frame == self._frame
             progress(p.done, p.total)
-            report(p.done, p.stage)
+            if not report(p.done, stage) and shown:
+                self._changed()     # the frame on the page has its silhouette or fit now
 
         session = open_session(self.info, self._annotations, method="silhouette", progress=step,
                                background=self._annotations.background_source(self.path))

@@ -9,6 +9,11 @@ queued every message of the update; "received" is when a connected websocket cli
 marker label queued after the update says when.
 
     python benchmarks/bench_app.py [--video VIDEO] [--seconds S] [--repeats N] [--track]
+    python benchmarks/bench_app.py --startup [--video VIDEO] [--repeats N]
+
+``--startup`` times what a user waits for after ``mocap serve``: from the app's
+creation to the page's frame 0 showing its silhouette, then its fitted model (the
+first fitted frame in the app), and to every frame fitted (best and median of N runs).
 
 Default video: the bundled sample (640x480, 99 frames). ``--seconds`` renders the
 procedural walk at 640x480 and 30 fps for that long instead (how latency grows with
@@ -36,6 +41,7 @@ from websockets.sync.client import connect
 
 from app.main import SAMPLE, create
 from mocap.body import JOINTS, SEGMENT_NAMES
+from mocap.io.video import open_video
 from mocap.lift.taylor import depth_fractions
 from mocap.synth import render_clip
 from mocap.walk import walk_cycle
@@ -135,12 +141,49 @@ def bench(video: Path, repeats: int, seed: int = 0, marks: np.ndarray | None = N
     app.server.stop()
 
 
+def startup(video: Path) -> np.ndarray:
+    """(3, 2): seconds from creating the app to frame 0's silhouette on the page, to its
+    fit, and to every frame fitted; wall-clock and this process's CPU."""
+    marks: dict[str, tuple[float, float]] = {}
+    t0, c0 = time.perf_counter(), time.process_time()
+    app = create(video, port=0)
+    state = app.state
+
+    def note() -> None:        # after the app's own listener: the page's update is queued
+        view = state.view(0)
+        for name, reached in (("silhouette", view.silhouette_ready), ("fit", view.fitted)):
+            if reached and name not in marks:
+                marks[name] = (time.perf_counter() - t0, time.process_time() - c0)
+    state.on_change(note)
+    state.start()
+    state.ready.wait()
+    marks["ready"] = (time.perf_counter() - t0, time.process_time() - c0)
+    app.server.stop()
+    if state.progress.error is not None:
+        raise RuntimeError(state.progress.error)
+    return np.array([marks["silhouette"], marks["fit"], marks["ready"]])
+
+
+def bench_startup(video: Path, repeats: int) -> None:
+    info = open_video(video)
+    runs = np.stack([startup(video) for _ in range(repeats)])
+    print(f"{info.width}x{info.height}, {info.frame_count} frames at {info.fps:g} fps; {repeats} runs; "
+          "CPU: this process's (all its threads)")
+    print(f"{'from the app created to':34s} {'wall best':>9s} {'median':>7s} {'CPU median':>10s}")
+    for k, name in enumerate(("frame 0's silhouette on the page", "first fitted frame on the page",
+                              "every frame fitted")):
+        wall, cpu = runs[:, k, 0], runs[:, k, 1]
+        print(f"{name:34s} {wall.min():8.2f}s {np.median(wall):6.2f}s {np.median(cpu):9.2f}s")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--video", type=Path, default=SAMPLE)
     parser.add_argument("--seconds", type=float, default=None)
     parser.add_argument("--repeats", type=int, default=30)
     parser.add_argument("--track", action="store_true", help="the tracking method (needs --seconds)")
+    parser.add_argument("--startup", action="store_true",
+                        help="time to the first fitted frame and to every frame fitted")
     args = parser.parse_args()
     if args.track and not args.seconds:
         parser.error("--track renders its clip: give --seconds")
@@ -155,7 +198,10 @@ def main() -> int:
                         view="three-quarter", seed=1)
         else:
             shutil.copy(args.video, video)           # edits are saved beside it: not the sample's
-        bench(video, args.repeats, marks=marks)
+        if args.startup:
+            bench_startup(video, args.repeats)
+        else:
+            bench(video, args.repeats, marks=marks)
     return 0
 
 

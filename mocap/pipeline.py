@@ -24,7 +24,7 @@ from mocap.io.fileio import check_writable
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
-from mocap.silhouette.passes import FrameFit, Silhouette, body_heights, iter_fits, iter_silhouettes
+from mocap.silhouette.passes import FitStream, FrameFit, Silhouette, iter_silhouettes
 from mocap.silhouette.plate import clip_background
 from mocap.track.tracking import TrackResult
 
@@ -38,7 +38,8 @@ class Progress:
     """How far a run is: ``done`` of ``total`` steps (the silhouette method: two per
     frame, the tracking method: one), at ``stage``. A step that produced a frame's
     silhouette or 2D fit carries it (``frame``, ``product``: a Silhouette, None where
-    nobody is, or a FrameFit) so that a viewer can show it at once."""
+    nobody is, or a FrameFit) so that a viewer can show it at once; a fit whose legs are
+    not chosen yet comes first as a report that is not ``final`` (done unchanged)."""
 
     done: int
     total: int
@@ -46,6 +47,7 @@ class Progress:
     error: str | None = None
     frame: int | None = None
     product: Silhouette | FrameFit | None = None
+    final: bool = True      # False: a fit shown before its legs are chosen (not a step)
 
     @property
     def ready(self) -> bool:
@@ -61,22 +63,30 @@ def _quiet(_: Progress) -> None:
 
 def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None
                       ) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    """The silhouette method's two passes over a video: every frame's silhouette
-    (against ``background``, else the clip's, mocap.silhouette.plate), then every
-    frame's 2D fit, each reported as it comes."""
+    """The silhouette method's two passes over a video, streamed together
+    (``FitStream``): each frame's silhouette (against ``background``, else the
+    clip's, mocap.silhouette.plate) and each frame's 2D fit as soon as the silhouettes
+    it needs are in, each reported as it comes (``done`` counts both)."""
     report, n = progress or _quiet, info.frame_count
     scale = processing_scale(info)
-    silhouettes: list[Silhouette | None] = []
+    stream, fits = FitStream(scale, info.fps), []
+
+    def fitted(batch: list[FrameFit]) -> None:
+        for fit in batch:
+            fits.append(fit)
+            report(Progress(len(stream.silhouettes) + len(fits), 2 * n, FITTING, frame=fit.index,
+                            product=fit))
     for i, sil in enumerate(iter_silhouettes(info, scale, background)):
-        silhouettes.append(sil)
-        report(Progress(i + 1, 2 * n, SILHOUETTES, frame=i, product=sil))
-    if all(s is None for s in silhouettes):
+        batch = stream.push(sil)
+        report(Progress(i + 1 + len(fits), 2 * n, SILHOUETTES, frame=i, product=sil))
+        fitted(batch)
+        for fit in stream.provisional:
+            report(Progress(i + 1 + len(fits), 2 * n, FITTING, frame=fit.index, product=fit,
+                            final=False))
+    if all(s is None for s in stream.silhouettes):
         raise MocapError(f"{info.path}: no person found in any of its {n} frames")
-    fits: list[FrameFit] = []
-    for fit in iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps):
-        fits.append(fit)
-        report(Progress(n + fit.index + 1, 2 * n, FITTING, frame=fit.index, product=fit))
-    return silhouettes, fits
+    fitted(stream.finish())
+    return stream.silhouettes, fits
 
 
 def fit_video(video: str | os.PathLike | VideoInfo,

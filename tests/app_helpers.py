@@ -84,3 +84,25 @@ def panning_clip(tmp_path_factory):
     truth = render_walk(path, yaw=45.0, perspective=400.0, moving_background=True,
                         seed=3, seconds=TINY_FRAMES / CLIP["fps"])
     return path, truth
+
+
+def hold_fitting(monkeypatch, at: int, gate, held=None) -> None:
+    """Make the pipeline wait for ``gate`` before it reports frame ``at``'s fit (the
+    fits before it reported); ``held`` is set when it starts waiting."""
+    from mocap.silhouette.passes import FitStream
+
+    def hold(fits):
+        for fit in fits:
+            if fit.index == at:
+                if held is not None:
+                    held.set()
+                gate.wait(60)
+            yield fit
+
+    class Held(FitStream):
+        def push(self, sil):
+            return hold(super().push(sil))
+
+        def finish(self):
+            return hold(super().finish())
+    monkeypatch.setattr("mocap.pipeline.FitStream", Held)

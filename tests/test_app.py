@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, tiny_video  # noqa: F401
-from helpers import write_empty_scene
+from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, hold_fitting, tiny_video  # noqa: F401
+from helpers import render_walk, write_empty_scene
 
 from mocap.silhouette.passes import iter_fits, iter_silhouettes
 from mocap import review
@@ -49,18 +49,42 @@ def test_streamed_preprocessing_equals_fit_video(tiny_video):
         np.testing.assert_array_equal(a.joints2d, b.joints2d)
 
 
+def test_fits_stream_out_while_silhouettes_are_found_and_equal_the_whole_clips(tmp_path):
+    """On a clip longer than a fit's windows, each frame's fit is reported while later
+    silhouettes are still to be found, as soon as the windows it needs are in (a first
+    look, then the fit with its legs chosen LAG_S later), and every fit equals the
+    one fitted after every silhouette."""
+    from mocap.pipeline import FITTING, SILHOUETTES, silhouette_passes
+    from mocap.silhouette.legchain import LAG_S
+    from mocap.silhouette.passes import SCALE_WINDOW_S, SPREAD_WINDOW_S
+    render_walk(tmp_path / "walk.mp4", seconds=4.0)
+    info = open_video(tmp_path / "walk.mp4")
+    reports = []
+    silhouettes, fits = silhouette_passes(info, reports.append)
+    final = [p for p in reports if p.final]
+    assert [p.done for p in final] == list(range(1, 2 * info.frame_count + 1))
+    # the torso spread's window, its frames' body heights', theirs' rough heights'
+    windows = sum(round(s * info.fps) for s in (SPREAD_WINDOW_S, SCALE_WINDOW_S, SCALE_WINDOW_S))
+    for kind, needed in ((reports, windows + 1), (final, windows + round(LAG_S * info.fps) + 1)):
+        first_fit = [p.stage for p in kind].index(FITTING)
+        assert kind[first_fit].frame == 0
+        found = [p.stage for p in kind[:first_fit]].count(SILHOUETTES)
+        assert found == needed < info.frame_count, (found, needed)
+    first_looks = [p.frame for p in reports if not p.final]
+    assert first_looks == list(range(info.frame_count - windows))    # the frames fitted before the end
+    whole = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), processing_scale(info),
+                           info.fps))
+    assert [f.index for f in fits] == [f.index for f in whole] == list(range(info.frame_count))
+    for a, b in zip(fits, whole):
+        assert a.score == b.score
+        np.testing.assert_array_equal(a.joints2d, b.joints2d)
+
+
 def test_page_state_while_preprocessing(tiny_video, tmp_path, monkeypatch):
     """Frames fitted so far can be looked at; later ones say they are not; edits that
     need the 3D pose are refused until it exists."""
     gate, held = threading.Event(), threading.Event()
-
-    def slow(*args):
-        for fit in iter_fits(*args):
-            if fit.index == 5:
-                held.set()
-                gate.wait(30)
-            yield fit
-    monkeypatch.setattr("mocap.pipeline.iter_fits", slow)
+    hold_fitting(monkeypatch, 5, gate, held)
     state = AppState(fresh_copy(tiny_video, tmp_path))
     state.start()
     assert held.wait(30)

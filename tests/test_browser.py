@@ -22,7 +22,7 @@ import pytest
 from browser_helpers import (SKIP_WITHOUT_CHROMIUM, TIMEOUT_MS, VIEWPORT, browser, chromium,  # noqa: F401
                              open_page, screen_point, shot, unhidden_point, wait_until)
 from app_helpers import (TINY_FRAMES, app, deepest_segment, download_export,  # noqa: F401
-                         fresh_copy, panning_clip, started_app, tiny_video)
+                         fresh_copy, hold_fitting, panning_clip, started_app, tiny_video)
 
 from app.signs import segment_label, sign_button
 from mocap.io.annotations import Annotations, load_annotations
@@ -185,15 +185,8 @@ def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypa
     """Fitted frames show at once; the others say they are not fitted yet."""
     import threading
     from app.main import create
-    from mocap.silhouette.passes import iter_fits
     gate = threading.Event()
-
-    def slow(*args):
-        for fit in iter_fits(*args):
-            if fit.index == TINY_FRAMES // 2:
-                gate.wait(60)
-            yield fit
-    monkeypatch.setattr("mocap.pipeline.iter_fits", slow)
+    hold_fitting(monkeypatch, TINY_FRAMES // 2, gate)
     app = create(fresh_copy(tiny_video, tmp_path), port=0)
     try:
         app.state.start()

@@ -14,7 +14,7 @@ import threading
 
 import numpy as np
 import pytest
-from app_helpers import deepest_segment, shaped_app  # noqa: F401
+from app_helpers import deepest_segment, hold_fitting, shaped_app  # noqa: F401
 from browser_helpers import (SKIP_WITHOUT_CHROMIUM, TIMEOUT_MS, VIEWPORT, browser, chromium,  # noqa: F401
                              fitted_camera, open_page, screen_point, shot, unhidden_point, wait_until)
 from helpers import render_walk_with_exit
@@ -124,16 +124,9 @@ def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch): 
     """Before the fit: no sign, keyframe, download or review; a frame where nobody is:
     no sign nor keyframe; each enabled again when it can act."""
     from app.main import create
-    from mocap.silhouette.passes import iter_fits
     render_walk_with_exit(tmp_path / "exit.mp4", gone=slice(12, 18))
     gate = threading.Event()
-
-    def slow(*args):
-        for fit in iter_fits(*args):
-            if fit.index == 20:
-                gate.wait(60)
-            yield fit
-    monkeypatch.setattr("mocap.pipeline.iter_fits", slow)
+    hold_fitting(monkeypatch, 20, gate)
     app = create(tmp_path / "exit.mp4", port=0)
     try:
         app.state.start()

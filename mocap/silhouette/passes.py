@@ -83,13 +83,19 @@ def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray
     a high percentile of the silhouette heights within SCALE_WINDOW_S, each measured
     from the head's top (``torso.head_top_row``: not from a hand raised above it) to
     the feet, at the scale that the silhouettes' whole heights suggest."""
-    half = max(1, int(round(SCALE_WINDOW_S * fps)))
+    half = half_window(SCALE_WINDOW_S, fps)
     h = np.array([np.nan if s is None else s.height for s in silhouettes], float)
-    rough = rolling_percentile(h, half, SCALE_PERCENTILE) * FIT_SCALE / FIT_BODY_PX
+    rough = rolling_percentile(h, half, SCALE_PERCENTILE)
     for i, sil in enumerate(silhouettes):
         if sil is not None:
-            h[i] -= head_top_row(sil.mask(), rough[i])
+            h[i] = head_to_feet(sil, rough[i])
     return rolling_percentile(h, half, SCALE_PERCENTILE)
+
+
+def head_to_feet(sil: Silhouette, rough: float) -> float:
+    """A silhouette's height from the head's top (``torso.head_top_row``) to the feet,
+    given a rough body height in pixels (the percentile of whole heights)."""
+    return sil.height - head_top_row(sil.mask(), rough * FIT_SCALE / FIT_BODY_PX)
 
 
 def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:
@@ -124,34 +130,127 @@ def torso_spreads(silhouettes: list[Silhouette | None], heights: np.ndarray, fps
     for i, sil in enumerate(silhouettes):
         if sil is not None:
             raw[i] = torso_spread(normalise(sil, heights[i])[0], FIT_SCALE)
-    return rolling_percentile(raw, max(1, int(round(SPREAD_WINDOW_S * fps))), SPREAD_PERCENTILE)
+    return rolling_percentile(raw, half_window(SPREAD_WINDOW_S, fps), SPREAD_PERCENTILE)
 
 
 def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
     """The q-th percentile of the finite values within +-half of each finite entry."""
     out = np.full(len(values), np.nan)
     for i in np.flatnonzero(np.isfinite(values)):
-        out[i] = np.nanpercentile(values[max(0, i - half): i + half + 1], q)
+        out[i] = window_percentile(values, i, half, q)
     return out
+
+
+def window_percentile(values, i: int, half: int, q: float) -> float:
+    """The q-th percentile of the finite values within +-half of entry i."""
+    return float(np.nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q))
+
+
+def half_window(seconds: float, fps: float) -> int:
+    """Frames in a half-window of ``seconds``."""
+    return max(1, int(round(seconds * fps)))
 
 
 def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
               fps: float) -> Iterator[FrameFit]:
-    """Pass two (section 3.3): every frame's 2D fit in turn, each search centred on
-    the previous fit; each frame's legs are chosen among its hypotheses over time
-    (``mocap.silhouette.legchain``), so a fit comes out LAG_S later than its frame is fitted."""
+    """Pass two (section 3.3): every frame's 2D fit in turn (``Fitter``), given every
+    frame's silhouette and body height."""
     spreads = torso_spreads(silhouettes, heights, fps)
-    chain = LegChain(max(1, int(round(LAG_S * fps))))
+    fitter = Fitter(scale, fps)
     for index, sil in enumerate(silhouettes):
+        yield from fitter.fit(index, sil, heights[index], spreads[index])
+    yield from fitter.flush()
+
+
+class Fitter:
+    """Pass two's frames in order: each search centred on the previous fit; each
+    frame's legs chosen among its hypotheses over time (``mocap.silhouette.legchain``),
+    so a fit comes out LAG_S later than its frame is fitted."""
+
+    def __init__(self, scale: float, fps: float):
+        self.scale, self.chain = scale, LegChain(half_window(LAG_S, fps))
+        self.latest: FrameFit | None = None     # the last frame fitted, legs not yet chosen
+
+    def fit(self, index: int, sil: Silhouette | None, height: float, spread: float) -> list[FrameFit]:
+        """Fit a frame; returns the fits now decided (``latest``: this frame's fit with
+        the legs of the best path so far, until it is decided)."""
+        self.latest = None
         if sil is None:
-            yield from _frame_fits(chain.push(index, None), scale)
-            continue
-        small, origin, step = normalise(sil, heights[index])
-        best = chain.current
+            return list(_frame_fits(self.chain.push(index, None), self.scale))
+        small, origin, step = normalise(sil, height)
+        best = self.chain.current
         prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
-        fit = fit_frame(small, FIT_SCALE, prev, spreads[index], normalised_grey(sil, heights[index]))
-        yield from _frame_fits(chain.push((index, origin, step), fit), scale)
-    yield from _frame_fits(chain.flush(), scale)
+        fit = fit_frame(small, FIT_SCALE, prev, spread, normalised_grey(sil, height))
+        decided = list(_frame_fits(self.chain.push((index, origin, step), fit), self.scale))
+        if not decided or decided[-1].index != index:
+            self.latest = next(_frame_fits([((index, origin, step), self.chain.current)], self.scale))
+        return decided
+
+    def flush(self) -> list[FrameFit]:
+        """The fits still held, at the end of the video."""
+        return list(_frame_fits(self.chain.flush(), self.scale))
+
+
+class FitStream:
+    """Pass two alongside pass one: ``push`` each frame's silhouette in order as it
+    is found; each push returns the fits now decided, ``finish`` the rest. A frame
+    is fitted as soon as the silhouettes its windows need are in: its torso spread's
+    (SPREAD_WINDOW_S) frames' body heights' (SCALE_WINDOW_S) frames' rough heights'
+    (SCALE_WINDOW_S again, ``body_heights``); every window is the
+    one ``body_heights`` and ``torso_spreads`` take over the whole clip, so the fits
+    equal ``iter_fits``' on every silhouette (tested), the first ones coming out while
+    the rest of the video is still being read."""
+
+    def __init__(self, scale: float, fps: float):
+        self.scale, self.fitter = scale, Fitter(scale, fps)
+        self.height_half = half_window(SCALE_WINDOW_S, fps)
+        self.spread_half = half_window(SPREAD_WINDOW_S, fps)
+        self.silhouettes: list[Silhouette | None] = []
+        self._sizes: list[float] = []       # silhouette heights, NaN where nobody is
+        self._standing: list[float] = []    # their heights from the head's top (head_to_feet)
+        self._heights: list[float] = []     # body heights (body_heights) known so far
+        self._spreads: list[float] = []     # per-frame torso spreads (torso_spreads' raw)
+        self._fitted = 0
+        self._provisional: list[FrameFit] = []
+
+    def push(self, sil: Silhouette | None) -> list[FrameFit]:
+        self.silhouettes.append(sil)
+        self._sizes.append(np.nan if sil is None else sil.height)
+        return self._advance(False)
+
+    @property
+    def provisional(self) -> list[FrameFit]:
+        """The frames the last push fitted whose legs are not chosen yet, each with
+        the legs of the best path so far (a viewer's first look; not the result)."""
+        return self._provisional
+
+    def finish(self) -> list[FrameFit]:
+        return self._advance(True) + self.fitter.flush()
+
+    def _advance(self, end: bool) -> list[FrameFit]:
+        n, out, half = len(self.silhouettes), [], self.height_half
+        while len(self._standing) < n and (end or len(self._standing) + half < n):
+            j, sil = len(self._standing), self.silhouettes[len(self._standing)]
+            self._standing.append(np.nan if sil is None else head_to_feet(
+                sil, window_percentile(self._sizes, j, half, SCALE_PERCENTILE)))
+        known = len(self._standing)
+        while len(self._heights) < known and (end or len(self._heights) + half < known):
+            i, sil = len(self._heights), self.silhouettes[len(self._heights)]
+            height = np.nan if sil is None else window_percentile(self._standing, i, half,
+                                                                  SCALE_PERCENTILE)
+            self._heights.append(height)
+            self._spreads.append(np.nan if sil is None else
+                                 torso_spread(normalise(sil, height)[0], FIT_SCALE))
+        known, self._provisional = len(self._heights), []
+        while self._fitted < known and (end or self._fitted + self.spread_half < known):
+            i = self._fitted
+            spread = (np.nan if self.silhouettes[i] is None else
+                      window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE))
+            out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], spread)
+            if self.fitter.latest is not None and not end:
+                self._provisional.append(self.fitter.latest)
+            self._fitted += 1
+        return out
 
 
 def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
