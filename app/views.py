@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections import OrderedDict
-from typing import Callable
+from typing import Callable, Iterator
 
 import cv2
 import numpy as np
@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
-from mocap.session import (FACING_MARKS, Silhouette, VideoInfo, draw_skeleton, facing_marks, read_frame,
+from mocap.session import (FACING_MARKS, Silhouette, VideoInfo, draw_skeleton, facing_marks, iter_frames,
                            segment_colour, silhouette_view)
 
 DISPLAY_HEIGHT = 480        # px: smaller frames are shown enlarged to this height
@@ -138,21 +138,31 @@ def tracked_image(frame_bgr: np.ndarray, joints2d: np.ndarray,
 
 
 class FrameCache:
-    """Decoded video frames at the processing scale; the most recent few are kept."""
+    """Decoded video frames at the processing scale; the most recent few are kept. The
+    frame after the last one read is decoded on from there (playing, stepping) rather
+    than sought, which costs a seek and the decoding from the keyframe before it."""
 
     def __init__(self, info: VideoInfo, scale: float, size: int = 48):
         self.info, self.scale, self.size = info, scale, size
         self._frames: OrderedDict[int, np.ndarray] = OrderedDict()
         self._lock = threading.Lock()
+        self._reader: Iterator[tuple[int, np.ndarray]] | None = None
+        self._next = -1                 # the frame the reader decodes next
 
     def get(self, index: int) -> np.ndarray:
         with self._lock:
             if index not in self._frames:
-                self._frames[index] = read_frame(self.info, index, self.scale)
+                self._frames[index] = self._read(index)
                 if len(self._frames) > self.size:
                     self._frames.popitem(last=False)
             self._frames.move_to_end(index)
             return self._frames[index]
+
+    def _read(self, index: int) -> np.ndarray:
+        if index != self._next or self._reader is None:
+            self._reader = iter_frames(self.info, start=index, scale=self.scale)
+        self._next = index + 1
+        return next(self._reader)[1]
 
 
 class SceneView:

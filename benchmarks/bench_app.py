@@ -10,10 +10,15 @@ marker label queued after the update says when.
 
     python benchmarks/bench_app.py [--video VIDEO] [--seconds S] [--repeats N] [--track]
     python benchmarks/bench_app.py --startup [--video VIDEO] [--repeats N]
+    python benchmarks/bench_app.py --play [--video VIDEO] [--repeats N]
 
 ``--startup`` times what a user waits for after ``mocap serve``: from the app's
 creation to the page's frame 0 showing its silhouette, then its fitted model (the
 first fitted frame in the app), and to every frame fitted (best and median of N runs).
+
+``--play`` plays the whole video N times with one websocket client connected: how
+long it took against the video's own length, and how many frames were shown (the
+player skips the frames it is late for).
 
 Default video: the bundled sample (640x480, 99 frames). ``--seconds`` renders the
 procedural walk at 640x480 and 30 fps for that long instead (how latency grows with
@@ -176,6 +181,39 @@ def bench_startup(video: Path, repeats: int) -> None:
         print(f"{name:34s} {wall.min():8.2f}s {np.median(wall):6.2f}s {np.median(cpu):9.2f}s")
 
 
+def bench_play(video: Path, repeats: int) -> None:
+    app = create(video, port=0)
+    app.state.start()
+    app.state.ready.wait()
+    receiver = Receiver(app.server.get_port())
+    marker = app.server.scene.add_label("/bench-marker", "", visible=False)
+    measure(app, receiver, marker, lambda: None)                 # the backlog has arrived
+    state, shown = app.state, []
+    state.on_change(lambda: shown.append(state.frame))
+    n, fps = state.n_frames, state.info.fps
+    print(f"{state.info.width}x{state.info.height}, {n} frames at {fps:g} fps ({n / fps:.2f} s); "
+          "one connected websocket client")
+    print(f"{'run':>3s} {'played in':>9s} {'frames shown':>12s} {'skipped':>7s}")
+    for run in range(repeats):
+        state.go_to(0)
+        shown.clear()
+        t0 = time.perf_counter()
+        app.player.toggle()
+        while app.controls.play.label != "Play":
+            time.sleep(0.01)
+        took, frames = time.perf_counter() - t0, len(set(shown))
+        print(f"{run + 1:3d} {took:8.2f}s {frames:12d} {n - frames:7d}")
+    steps = []
+    for frame in range(n):          # what a shown frame costs: stepping through every one
+        t0 = time.perf_counter()
+        state.go_to(frame)
+        steps.append(time.perf_counter() - t0)
+    print(f"a frame shown (every view redrawn), frame after frame: median "
+          f"{1000 * np.median(steps):.1f} ms, p95 {1000 * np.percentile(steps, 95):.1f} ms "
+          f"(the video's frames are {1000 / fps:.1f} ms apart)")
+    app.server.stop()
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--video", type=Path, default=SAMPLE)
@@ -184,6 +222,7 @@ def main() -> int:
     parser.add_argument("--track", action="store_true", help="the tracking method (needs --seconds)")
     parser.add_argument("--startup", action="store_true",
                         help="time to the first fitted frame and to every frame fitted")
+    parser.add_argument("--play", action="store_true", help="play the video through")
     args = parser.parse_args()
     if args.track and not args.seconds:
         parser.error("--track renders its clip: give --seconds")
@@ -200,6 +239,8 @@ def main() -> int:
             shutil.copy(args.video, video)           # edits are saved beside it: not the sample's
         if args.startup:
             bench_startup(video, args.repeats)
+        elif args.play:
+            bench_play(video, args.repeats)
         else:
             bench(video, args.repeats, marks=marks)
     return 0

@@ -11,7 +11,7 @@ body's facing marks.
 from mocap.facing import FACING_MARKS, facing_marks
 from mocap.io.annotations import Annotations, load_annotations, save_annotations
 from mocap.io.export.formats import FORMATS
-from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
+from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale, read_frame
 from mocap.overlay import draw_skeleton, segment_colour, silhouette_view
 from mocap.review import Doubt
 from mocap.session.base import Session
@@ -22,6 +22,7 @@ from mocap.silhouette.passes import FrameFit, Silhouette
 
 __all__ = ["FACING_MARKS", "FORMATS", "MARKS_NEEDED", "Annotations", "Doubt", "FrameFit", "Session", "Silhouette",
            "SilhouetteSession", "TrackSession", "VideoInfo", "check_tracking_marks",
-           "draw_skeleton", "facing_marks", "load_annotations", "marks_of", "open_video", "processing_scale",
+           "draw_skeleton", "facing_marks", "iter_frames", "load_annotations", "marks_of", "open_video",
+           "processing_scale",
            "read_frame", "save_annotations", "segment_colour", "silhouette_view", "remarks_of",
            "tracked_video"]
