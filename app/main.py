@@ -178,7 +178,7 @@ class App:
                 self._shown.clear()
             view = self.state.view()
             self._show_images(view)
-            if self.player.playing:
+            if self.player.playing and view.progress.ready:    # (a new fit stops it)
                 self._show_animation(view.index)
             else:
                 self._show_pose(view)

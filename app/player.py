@@ -83,6 +83,8 @@ class Player:
             if state.frame != shown:        # the user moved the frame: play on from there
                 start, origin = time.monotonic(), state.frame
             frame = origin + int((time.monotonic() - start) / period)
+            if not state.ready.is_set():    # fitting again (a new empty stage): no animation
+                break
             if frame >= state.n_frames:
                 state.go_to(state.n_frames - 1)
                 break

@@ -379,3 +379,15 @@ def test_play_follows_the_clock_from_a_moved_frame_and_stops_at_the_end(app):
     stopped = state.frame
     time.sleep(0.3)
     assert not app.player.playing and state.frame == stopped == app.controls.frame.value
+
+
+def test_a_new_empty_stage_while_playing_stops_playing(app):
+    """Refitting takes the animation away: playing stops, the page shows the refit."""
+    app.player.toggle()
+    app.state.set_background("0-3")
+    deadline = time.monotonic() + 10
+    while app.player.playing and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not app.player.playing
+    assert app.state.ready.wait(60) and app.state.progress.ready
+    assert app.state.view().pose3d is not None
