@@ -35,9 +35,12 @@ def render_walk(path: str | Path, view: str = "side", seed: int = 1, **overrides
     return synth.render_clip(joints, path, view=view, seed=seed, **opts)
 
 
-def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, **overrides) -> Truth:
+def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, regraded: bool = False,
+                          **overrides) -> Truth:
     """The walk with the performer stepped far out of the frame (20 m to the image
     right) on the frames of `gone`; the camera frames the walk as if they had stayed.
+    ``regraded``: the frames after `gone` in other colours (red and blue swapped, as
+    a cut to a camera graded otherwise), where the marked colours are not found.
     Keyword ``overrides`` set RenderOptions fields (e.g. yaw, perspective)."""
     fps, seconds = CLIP["fps"], CLIP["seconds"]
     opts = RenderOptions(size=CLIP["size"], fps=fps, seed=seed, **overrides)
@@ -46,8 +49,36 @@ def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, **overri
     joints_cam[gone, :, 0] += 20.0
     scene = dataclasses.replace(scene, joints_cam=joints_cam)
     n = len(joints_cam)
-    synth.write_video(path, (synth.draw_frame(scene, i) for i in range(n)), fps, opts.size)
+
+    def frame(i: int) -> np.ndarray:
+        image = synth.draw_frame(scene, i)
+        return np.ascontiguousarray(image[..., ::-1]) if regraded and i >= gone.stop else image
+    synth.write_video(path, (frame(i) for i in range(n)), fps, opts.size)
     return synth.scene_truth(scene, "walk-cycle with an exit", np.arange(n))
+
+
+def render_walk_with_occluder(path: str | Path, hidden: slice, seed: int = 2, **overrides) -> Truth:
+    """The walk with a board (grey, as wide as the frame's third) passing in front of
+    the camera: it slides in from the image left, covers the performer whole on the
+    frames of ``hidden`` and is gone after them. Keyword ``overrides`` set
+    RenderOptions fields (e.g. yaw, perspective)."""
+    fps, seconds = CLIP["fps"], CLIP["seconds"]
+    opts = RenderOptions(size=CLIP["size"], fps=fps, seed=seed, **overrides)
+    scene = synth.plan_scene(walk_cycle(seconds, fps), opts)
+    truth = synth.scene_truth(scene, "walk-cycle behind a board", np.arange(len(scene.joints_cam)))
+    width, height = opts.size
+    board = width // 3
+
+    def frame(i: int) -> np.ndarray:
+        image = synth.draw_frame(scene, i)
+        body = truth.joints2d[i, :, 0]
+        left = np.interp(i, [hidden.start - 2, hidden.start, hidden.stop - 1, hidden.stop + 1],
+                         [-board, body.min() - 8, body.max() + 8 - board, width])
+        lo, hi = int(np.clip(left, 0, width)), int(np.clip(left + board, 0, width))
+        image[:, lo:hi] = (90, 95, 100)
+        return image
+    synth.write_video(path, (frame(i) for i in range(len(truth.joints2d))), fps, opts.size)
+    return truth
 
 
 def write_empty_scene(path: str | Path, n: int = 20) -> None:

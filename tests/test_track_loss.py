@@ -1,5 +1,7 @@
 """The tracking method noticing that it lost the body: per-joint confidence, lost
-frames in the motion file (no joints there), short losses bridged."""
+frames in the motion file (no joints there), short losses bridged; the body found
+again by itself after an occluder passed or the performer came back, and by a
+re-mark where its colours changed."""
 
 from __future__ import annotations
 
@@ -8,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from helpers import render_walk_with_exit
+from helpers import render_walk_with_exit, render_walk_with_occluder
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import parse_annotations
@@ -18,14 +20,15 @@ from mocap.pipeline import open_session
 from mocap.track.loss import bridged, ramp, stretches
 
 GONE = slice(10, 24)          # frames the performer is out of the picture
+HIDDEN = slice(10, 18)        # frames a board hides the performer whole
+RENDER = dict(seed=3, yaw=45.0, perspective=400.0, moving_background=True)
 
 
 @pytest.fixture(scope="module")
 def exit_clip(tmp_path_factory):
     folder = tmp_path_factory.mktemp("loss")
     video = folder / "exit.avi"
-    truth = render_walk_with_exit(video, GONE, seed=3, yaw=45.0, perspective=400.0,
-                                  moving_background=True)
+    truth = render_walk_with_exit(video, GONE, regraded=True, **RENDER)
     return video, truth
 
 
@@ -66,6 +69,24 @@ def test_a_body_that_leaves_is_reported_lost_not_answered(exit_clip, tmp_path):
     assert np.nanmax(err[:GONE.start]) < 5.0
     conf = np.array([f["confidence"] for f in frames[:GONE.start]])
     assert conf[1:3].mean() > 0.5
+
+
+@pytest.mark.parametrize("case", ["occluder", "comeback"])
+def test_the_body_is_found_again_without_a_remark(case, tmp_path):
+    """A board passes in front of the performer, or the performer leaves the frame
+    and comes back: the frames without them are reported lost, and the tracker finds
+    the body again by itself (mocap.track.reacquire) once it shows."""
+    video = tmp_path / f"{case}.avi"
+    if case == "occluder":
+        truth, gone = render_walk_with_occluder(video, HIDDEN, **RENDER), HIDDEN
+    else:
+        truth, gone = render_walk_with_exit(video, GONE, **RENDER), GONE
+    frames = fit(video, write_notes(tmp_path / "marks.json", truth), tmp_path / "out.json")
+    lost = np.array([bool(f.get("lost")) for f in frames])
+    assert lost[gone.start + 2:gone.stop - 1].all()
+    assert not lost[:gone.start].any() and not lost[gone.stop + 1:].any()
+    err = errors(frames, truth)
+    assert np.nanmax(err[gone.stop + 1:]) < 5.0 and np.nanmax(err[:gone.start]) < 5.0
 
 
 def test_short_losses_are_bridged_long_ones_stay_lost():

@@ -17,7 +17,8 @@ as tracked and falling to 0 where it looks lost:
 - whether its ends stay inside the frame (a lost tracker drifts to the border).
 
 A frame is lost where the head or the trunk, which every limb hangs from, is below
-LOST, and stays lost until both are above FOUND again; the limbs' joints then take the trunk's confidence too (``joint_confidence``).
+LOST, and stays lost until the body is found again (mocap.track.reacquire) with both
+above FOUND; the limbs' joints take the trunk's confidence too (``joint_confidence``).
 """
 
 from __future__ import annotations

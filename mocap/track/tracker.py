@@ -58,6 +58,7 @@ from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVER
                                arm_limits_cost, around_root, limb_cost, limb_penalty, outline_cost,
                                settled_knee, twin_overlap)
 from mocap.track.marks import body_scale
+from mocap.track.reacquire import carried, reacquired, scan_heads
 from mocap.track.parts import (ARMS, HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS, far_forearm,
                                mirrored_model, part_lengths, part_widths, search_part, skeleton)
 
@@ -102,6 +103,7 @@ class BodyTracker:
         self.models = [blocks.sample_blocks(frame0, b, g)[0]
                        for b, g in zip(self.blocks, self.grids)]
         self.marked = list(self.models)
+        self.good = self.blocks.copy()
         self.history: deque[np.ndarray] = deque(maxlen=HISTORY)
         self.chest = to_block(marks[JOINT_INDEX["chest"]], self.blocks[TORSO])
         self.far_forearm = far_forearm(self.trunk.depths)
@@ -114,7 +116,8 @@ class BodyTracker:
         new, s = predicted.copy(), np.zeros(len(PARTS))
         new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
         predicted[TORSO, :2] = block_end(new[HEAD])
-        new[TORSO], s[TORSO] = self._search(frame, TORSO, predicted[TORSO], new)
+        new[TORSO], s[TORSO] = self._track_torso(frame, predicted[TORSO], new[HEAD])
+        refound = self.lost and self._reacquire(frame, new, s)
         self.limb_costs = self._limb_costs(new, Edges.of_frame(frame))
         for k in LIMBS:
             self._track_limb(frame, new, s, k, self._avoided(k, new))
@@ -122,9 +125,36 @@ class BodyTracker:
             self._part_twins(frame, new, s, twins)
         new = self._bounded(new, frame.shape)
         self.confidence = self._confidence(new, s, frame.shape)
-        self.lost = bool(body_lost(self.confidence, self.lost))
+        # a lost body is found again only where re-acquisition finds it: the tracker's
+        # own match drifts on clutter that now and then matches as well as the body
+        self.lost = self.lost and not refound or bool(body_lost(self.confidence, self.lost))
         self._update(frame, new, s, self.lost)
         return skeleton(new, self.chest), s
+
+    def _reacquire(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> bool:
+        """Whether the head and trunk of a frame where the body was lost are found
+        again (mocap.track.reacquire), from the head tracked on it (``new``, the
+        image difference's), the last good pose's and the best places of the head's
+        colours over the whole frame. If so, they go into ``new`` and ``s``, and the
+        limbs start from the last good pose carried by the trunk found."""
+        starts = np.concatenate([new[[HEAD]], self.good[[HEAD]],
+                                 scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])])
+        found = reacquired(frame, starts, self.good, self._usual(), self._head_search,
+                           self._track_torso)
+        if found is None:
+            return False
+        self.blocks = carried(self.good, found.blocks[1])
+        self.blocks[[HEAD, TORSO]] = found.blocks
+        self.velocity[:] = 0.0
+        new[:] = self.blocks
+        s[[HEAD, TORSO]] = found.s
+        return True
+
+    def _head_search(self, frame: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, float]:
+        """The head's block and S searched from ``start``, its length within ZOOM_RANGE."""
+        found, s = self._search(frame, HEAD, start, self._zoom(start))
+        found[M] = np.clip(found[M], *self.head_lengths)
+        return found, s
 
     def _confidence(self, new: np.ndarray, s: np.ndarray, shape: tuple) -> np.ndarray:
         """(10,) the parts' confidence on a frame (mocap.track.loss.part_confidence);
@@ -152,11 +182,16 @@ class BodyTracker:
         predicted[1:, N] = self.blocks[1:, N] * predicted[HEAD, M] / self.blocks[HEAD, M]
         return predicted
 
-    def _search(self, image: np.ndarray, k: int, start: np.ndarray, new: np.ndarray,
+    def _search(self, image: np.ndarray, k: int, start: np.ndarray, zoom: float,
                 penalty: blocks.Penalty | None = None):
-        """Part k's block and S searched from ``start`` (search_part)."""
+        """Part k's block and S searched from ``start`` (search_part), the body at
+        ``zoom`` (``_zoom``)."""
         return search_part(image, self._model(k), self.grids[k], start, PARTS[k],
-                           self.longest[k] * new[HEAD, N] / self.head_width, penalty)
+                           self.longest[k] * zoom, penalty)
+
+    def _zoom(self, head: np.ndarray) -> float:
+        """The body's scale on a frame against the marks' by its ``head`` block."""
+        return float(head[N] / self.head_width)
 
     def _track_head(self, frame: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, float]:
         """The head block, searched from the better of the image difference's and
@@ -177,13 +212,29 @@ class BodyTracker:
         moved = head_displacement(self.frame, frame, head[:2], block_end(head), self.p)
         starts = np.stack([np.r_[head[:2] + moved.vector, predicted[2:]], predicted])
         order = np.argsort(-blocks.score(frame, self.models[HEAD], self.grids[HEAD], starts))
-        found, s = self._search(frame, HEAD, starts[order[0]], self.blocks)
+        found, s = self._search(frame, HEAD, starts[order[0]], self._zoom(head))
         if s < HEAD_RETRY * self._usual()[HEAD]:
-            found, s = max((found, s), self._search(frame, HEAD, starts[order[1]], self.blocks),
+            found, s = max((found, s), self._search(frame, HEAD, starts[order[1]], self._zoom(head)),
                            key=lambda match: match[1])
         found[M] = np.clip(found[M], *self.head_lengths)
         self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
         return found, s
+
+    def _track_torso(self, frame: np.ndarray, predicted: np.ndarray,
+                     head: np.ndarray) -> tuple[np.ndarray, float]:
+        """The trunk's block searched from the predicted one and from it at the
+        trunk's usual length at the zoom of ``head``, the better match kept.
+
+        Beyond the paper: a trunk of one colour matches about as well at many lengths
+        (the bottom of the block slides up the shirt), and an arm swinging across it
+        makes a shorter block match as well for a few frames; a search that changes
+        the length by a tenth a frame then shrinks the trunk to half its length and
+        stays in that local optimum when the arm has passed (track_walk: the pelvis
+        35 px up a 86 px trunk, the legs hanging from there)."""
+        usual = predicted.copy()
+        usual[M] = self.lengths[TORSO] * self._zoom(head)
+        return max((self._search(frame, TORSO, start, self._zoom(head)) for start in (predicted, usual)),
+                   key=lambda match: match[1])
 
     def _root(self, k: int, new: np.ndarray) -> np.ndarray:
         """Limb k's root (a shoulder or hip) carried by the trunk's motion to ``new``."""
@@ -247,7 +298,7 @@ class BodyTracker:
         """Limb k from its ``root`` and the lower part searched from ``lower`` (its
         candidates charged ``penalty``), a leg's knee settled (``settled_knee``): the
         upper part then runs from the root to where the lower part begins."""
-        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, new, penalty)
+        new[k + 1], s[k + 1] = self._search(image, k + 1, lower, self._zoom(new[HEAD]), penalty)
         if k not in ARMS:
             new[k + 1], s[k + 1] = settled_knee(
                 image, root, new[k + 1], (self._model(k), self.grids[k], new[k, N]),
@@ -280,6 +331,7 @@ class BodyTracker:
         if lost:
             return
         self.history.append(s)
+        self.good = new.copy()
         for k in np.flatnonzero(s >= UPDATE_MIN * self._usual()):
             seen = blocks.sample_blocks(frame, new[k], self.grids[k])[0]
             adapted = (1 - UPDATE_RATE) * self.models[k] + UPDATE_RATE * seen

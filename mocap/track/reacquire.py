@@ -1,0 +1,133 @@
+"""Finding the body again after the tracker lost it (mocap.track.loss): a search of
+the whole frame for the head by its colour model, the trunk hung from each head
+found, the best pair kept if both match as well as they usually do.
+
+Beyond the tracking paper (Pan, Zhuang and Liu, *Video motion capture in VBA*,
+2000), which tracks from frame to frame only and so never finds a body it lost
+(an occluder that crossed it, a jump cut, a performer who left the frame and came
+back). Its own tools do the search: the head's morph block (mocap.track.blocks,
+Eq. 3-5) scored on a grid over the whole frame, the best places refined by the
+search path of Fig. 6; with them the head the image difference points to (the
+tracker's own search on the frame, Eq. 1-5) and the last good pose's head. Each
+head's trunk is searched from the last good pose's trunk hung from it; the
+limbs are then found from the trunk by the tracker's own limb search
+(mocap.track.tracker), started from the last good pose carried by the trunk
+(``carried``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from mocap.track import blocks
+from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
+from mocap.track.parts import HEAD, TORSO
+
+PEAKS = 6                  # the best places of the head's scan refined by the search path
+SCAN_STEP = 0.4            # of the head's width: the spacing of the scan's grid
+PEAK_SPACING = 1.0         # of the head's length: distinct places of the scan lie this far apart
+ZOOMS = np.array([0.8, 1.0, 1.25])   # of the last good head's size: the sizes the head is looked for at
+TRUNK_TURNS = np.radians(np.arange(-45.0, 46.0, 15.0))   # the trunk's turns tried from the last good one
+CHUNK = 16384              # sub-pixel rows scored at once (OpenCV's remap takes fewer than 32767)
+REFOUND = 0.7              # of their usual S: the least match of head and trunk found again
+
+# the tracker's searches: (frame, start block) -> the head's (block, S);
+# (frame, start block, the head's block) -> the trunk's (block, S)
+HeadSearch = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, float]]
+TrunkSearch = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, float]]
+
+
+class Found(NamedTuple):
+    """A head and trunk found again: their blocks (2, 5) and S (2,)."""
+
+    blocks: np.ndarray
+    s: np.ndarray
+
+
+def scan_heads(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, head: np.ndarray,
+               peaks: int = PEAKS) -> np.ndarray:
+    """(K, 5) the ``peaks`` best head blocks of ``frame`` on a grid of places SCAN_STEP
+    of the head's width apart, each ``head``'s shape (5,) moved there, scored by the
+    head's colour ``model``; places nearer than PEAK_SPACING head lengths to a better
+    one are left out (one place per head-like thing)."""
+    height, width = frame.shape[:2]
+    step = max(SCAN_STEP * head[N], 2.0)
+    xs, ys = np.arange(0.0, width, step), np.arange(0.0, height, step)
+    cands = np.repeat(head[None], len(xs) * len(ys), axis=0)
+    cands[:, X] = np.tile(xs, len(ys))
+    cands[:, Y] = np.repeat(ys, len(xs))
+    inside = _inside(block_end(cands), frame.shape)
+    cands = cands[inside]
+    chunk = CHUNK // len(grid.along)
+    s = np.concatenate([blocks.score(frame, model, grid, cands[i:i + chunk])
+                        for i in range(0, len(cands), chunk)] or [np.zeros(0)])
+    order = np.argsort(-s)
+    kept: list[np.ndarray] = []
+    for cand in cands[order]:
+        if all(np.hypot(*(cand[:2] - k[:2])) >= PEAK_SPACING * head[M] for k in kept):
+            kept.append(cand)
+            if len(kept) == peaks:
+                break
+    return np.array(kept).reshape(-1, 5)
+
+
+def _inside(points: np.ndarray, shape: tuple) -> np.ndarray:
+    """(K,) whether points (K, 2) lie inside a frame of ``shape``."""
+    return ((points >= 0) & (points <= np.array([shape[1], shape[0]]) - 1)).all(axis=1)
+
+
+def reacquired(frame: np.ndarray, starts: np.ndarray, good: np.ndarray, usual: np.ndarray,
+               head_search: HeadSearch, trunk_search: TrunkSearch) -> Found | None:
+    """The head and trunk found again on ``frame``, or None: each head block of
+    ``starts`` (K, 5) at each of ZOOMS refined by the tracker's ``head_search``
+    (the best kept; the body may have come nearer or gone away), its trunk found by
+    ``trunk_search`` from the last good pose's trunk (``good`` (10, 5)) hung from it
+    (``hung_trunks``); the pair whose worse match (S over the part's ``usual`` S (10,))
+    is best, if that is at least REFOUND (a head matched worse is not looked under)."""
+    best, best_ratio = None, -np.inf
+    for start in starts:
+        head, s_head = max((head_search(frame, zoomed) for zoomed in zooms(start)), key=lambda match: match[1])
+        if s_head < REFOUND * usual[HEAD]:
+            continue
+        trunk, s_trunk = max((trunk_search(frame, hung, head) for hung in hung_trunks(good, head)),
+                             key=lambda match: match[1])
+        ratio = min(s_head / usual[HEAD], s_trunk / usual[TORSO])
+        if ratio > best_ratio:
+            best, best_ratio = Found(np.stack([head, trunk]), np.array([s_head, s_trunk])), ratio
+    return best if best_ratio >= REFOUND else None
+
+
+def zooms(head: np.ndarray) -> np.ndarray:
+    """(Z, 5) the head block (5,) at each of ZOOMS of its size, about its middle."""
+    out = np.repeat(head[None], len(ZOOMS), axis=0)
+    out[:, M:] *= ZOOMS[:, None]
+    middle = head[:2] + (block_end(head) - head[:2]) / 2
+    out[:, :2] = middle - (block_end(out) - out[:, :2]) / 2
+    return out
+
+
+def hung_trunks(good: np.ndarray, head: np.ndarray) -> np.ndarray:
+    """(A, 5) the last good pose's trunk block (``good`` (10, 5)) from the end of
+    ``head`` (5,), grown as the head did, turned by each of TRUNK_TURNS (the body
+    may have bent or leant since)."""
+    trunks = np.repeat(good[None, TORSO], len(TRUNK_TURNS), axis=0)
+    trunks[:, :2] = block_end(head)
+    trunks[:, THETA] += TRUNK_TURNS
+    trunks[:, M:] *= head[N] / good[HEAD, N]
+    return trunks
+
+
+def carried(good: np.ndarray, trunk: np.ndarray) -> np.ndarray:
+    """The last good pose's blocks (10, 5) carried rigidly by its trunk to ``trunk``
+    (5,): every block's two ends kept where they were in the trunk's block frame,
+    widths grown as the trunk."""
+    out = good.copy()
+    zoom = trunk[M] / good[TORSO, M]
+    for k, block in enumerate(good):
+        start = from_block(to_block(block[:2], good[TORSO]), trunk)
+        end = from_block(to_block(block_end(block), good[TORSO]), trunk)
+        out[k] = blocks.between(start[None], end[None], block[N] * zoom)[0]
+    return out
