@@ -25,7 +25,9 @@ DOWNLOADS = {fmt.label: fmt.key for fmt in FORMATS.values()}     # button -> for
 METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}    # shown -> annotations'
 MARKING_HELP = ("The tracking method follows the 16 joints you mark on frame 0, over any "
                 "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "
-                "click where it is on the video frame. Then press **Track**.")
+                "click where it is on the video frame. Then press **Track**. Where the review "
+                "says the body was lost, go to a frame that shows it and press **Mark joints** "
+                "again: the 16 joints marked there start the tracking anew; press **Track**.")
 STATIC = Path(__file__).resolve().parents[1] / "static"
 HELP_FILE = STATIC / "help.md"           # the Help folder; its pictures sit beside it
 REVIEW_LINES = 8                    # doubtful frames listed on the page
@@ -159,7 +161,8 @@ def _tracking_tab(gui) -> tuple[object, object, object, object]:
     """The Tracking tab's controls: marking, marks from the fit, Track, what it says."""
     gui.add_markdown(MARKING_HELP)
     mark = gui.add_button("Mark joints", icon="pointer",
-                          hint="go to frame 0 and place each joint not yet marked")
+                          hint="go to frame 0 and place each joint not yet marked; once all are, "
+                               "mark the body again on this frame (where the tracking lost it)")
     marks_from_fit = gui.add_button("Marks from the silhouette fit", icon="wand",
                                     hint="place all 16 marks where frame 0's fit has them")
     track = gui.add_button("Track", icon="player-track-next",
@@ -257,6 +260,11 @@ def tracking_text(state: AppState) -> str:
             "…" if len(missing) > 4 else "")
     else:
         marks = "All 16 joints marked on frame 0."
+    again = state.marking_frame()
+    left = state.unmarked(again)
+    if again and len(left) < 16:
+        marks += f"  \n**{16 - len(left)} of 16** joints marked again on frame {again}; next: {left[0]}" \
+            if left else f"  \nAll 16 joints marked again on frame {again}."
     if state.method != "track":
         return marks + "  \nChoose *tracking* as the method to see the tracked motion."
     p = state.progress

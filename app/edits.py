@@ -124,10 +124,17 @@ class Edits:
         """Whether the silhouette method's fit of every frame exists (marks_from_fit needs it)."""
         return self._fitted is not None
 
-    def unmarked(self) -> list[str]:
-        """The joints not yet marked on frame 0, in JOINTS order."""
-        there = placed(self._annotations, 0)
+    def unmarked(self, frame: int = 0) -> list[str]:
+        """The joints not yet marked on ``frame`` (frame 0's: the tracking's marks),
+        in JOINTS order."""
+        there = placed(self._annotations, frame)
         return [j for j in JOINTS if j not in there]
+
+    def marking_frame(self) -> int:
+        """The frame the tracking's joints are marked on: frame 0 until all 16 are
+        marked there, then the current frame (the body marked again where the
+        tracking lost it, which seeds the tracking anew there)."""
+        return self._frame if not self.unmarked(0) else 0
 
     def toggle_keyframe(self, frame: int) -> bool:
         """Mark ``frame`` as a keyframe, or unmark it."""

@@ -49,6 +49,7 @@ class App:
         self._render_lock = threading.RLock()
         self._shown: dict[str, object] = {}
         self._notices: dict[int, object] = {}       # client id -> its notification shown
+        self._marking = 0                            # the frame Mark joints marks the body on
         self._wire()
         place_cameras(server, self.layout)
         state.on_change(self.refresh)
@@ -143,21 +144,23 @@ class App:
             if at is not None:
                 xy = (at[0] / self.state.scale - 0.5, at[1] / self.state.scale - 0.5)
                 self.state.set_override(self.state.frame, joint, xy)
-                if self.state.frame == 0 and self.state.method == "track":
+                if self.state.frame == self._marking and self.state.method == "track":
                     self._next_mark()
         self._run(event.client, place)
 
     def _start_marking(self) -> None:
-        """Go to frame 0 and ask for the first joint not marked there."""
-        if not self.state.unmarked():
-            raise MocapError("all 16 joints are marked; to move one, choose it under Joints > "
-                             "Place and click on frame 0")
-        self.state.go_to(0)
+        """Go to the frame the joints are marked on (AppState.marking_frame: frame 0,
+        then the current one) and ask for the first joint not marked there."""
+        self._marking = self.state.marking_frame()
+        if not self.state.unmarked(self._marking):
+            raise MocapError(f"all 16 joints are marked on frame {self._marking}; to move one, choose "
+                             "it under Joints > Place and click on the frame")
+        self.state.go_to(self._marking)
         self._next_mark()
 
     def _next_mark(self) -> None:
-        """Ask for the next joint not marked on frame 0 (none once all are)."""
-        missing = self.state.unmarked()
+        """Ask for the next joint not marked on the marking frame (none once all are)."""
+        missing = self.state.unmarked(self._marking)
         self.controls.joint.value = missing[0] if missing else NO_JOINT
         self.refresh()
 

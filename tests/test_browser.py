@@ -40,6 +40,25 @@ def video_point(app, xy) -> np.ndarray:
     return np.array([layout.video[0] + u * layout.width, layout.video[1] - v * layout.height, 0.0])
 
 
+def to_tracking(page, status: str) -> None:
+    """Choose the tracking method, wait for the status line to say ``status``, and
+    open the Tracking tab."""
+    page.get_by_label("Method").click()
+    page.get_by_role("option", name="tracking").click()
+    page.get_by_text(status).wait_for()
+    page.get_by_role("tab", name="Tracking").click()
+
+
+def mark_by_clicking(page, app, joints2d: np.ndarray) -> None:
+    """Press Mark joints and click each of the 16 joints (16, 2) where the app asks
+    for it on the video frame."""
+    page.get_by_role("button", name="Mark joints").click()
+    for name in JOINTS:
+        wait_until(lambda: app.controls.joint.value == name)
+        xy = joints2d[JOINT_INDEX[name]]
+        page.mouse.click(*screen_point(page, app, video_point(app, xy)))
+
+
 def segment_button(page, segment: str):
     """The foreshortening toggle of a segment (its label also shows its state)."""
     return page.get_by_role("button", name=re.compile(f"^{segment_label(segment)}:"))
@@ -132,15 +151,8 @@ def test_switch_to_tracking_mark_by_clicking_and_track(browser, panning_clip, tm
     app = started_app(fresh_copy(video, tmp_path))
     try:
         page = open_page(browser, app.server.get_port())
-        page.get_by_label("Method").click()
-        page.get_by_role("option", name="tracking").click()
-        page.get_by_text("mark the 16 joints on frame 0").wait_for()
-        page.get_by_role("tab", name="Tracking").click()
-        page.get_by_role("button", name="Mark joints").click()
-        for name in JOINTS:
-            wait_until(lambda: app.controls.joint.value == name)
-            xy = truth.joints2d[0, JOINT_INDEX[name]]
-            page.mouse.click(*screen_point(page, app, video_point(app, xy)))
+        to_tracking(page, "mark the 16 joints on frame 0")
+        mark_by_clicking(page, app, truth.joints2d[0])
         page.get_by_text("All 16 joints marked on frame 0.").wait_for()
         marks = load_annotations(app.state.path).frames[0].joints2d
         assert np.abs(np.array([marks[j] for j in JOINTS]) - truth.joints2d[0]).max() < 2.0
@@ -148,6 +160,7 @@ def test_switch_to_tracking_mark_by_clicking_and_track(browser, panning_clip, tm
         page.get_by_role("button", name="Track", exact=True).click()
         page.get_by_text(f"{TINY_FRAMES} frames tracked.").first.wait_for()
         page.get_by_role("button", name="frame ▶", exact=True).click()
+        wait_until(lambda: app.state.frame == 1)
         page.get_by_text("Tracking reliability").first.wait_for()
         view = app.state.view()
         assert view.method == "track" and view.index == 1 and view.pose3d is not None
