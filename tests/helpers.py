@@ -81,6 +81,18 @@ def render_walk_with_occluder(path: str | Path, hidden: slice, seed: int = 2, **
     return truth
 
 
+def assert_root_comes_nearer(frames: list[dict], truth: Truth) -> None:
+    """A motion file's ``frames`` of a walk toward the camera: a root on nine frames
+    in ten, its depth following the true pelvis' (r >= 0.9), the last frames a
+    quarter nearer than the first."""
+    have = np.array(["root" in f for f in frames])
+    depth = np.array([-f["root"][2] for f in frames if "root" in f])
+    true_depth = -truth.pelvis_camera[have, 2]
+    assert have.mean() > 0.9 and np.ptp(true_depth) > 2.5
+    assert np.corrcoef(depth, true_depth)[0, 1] >= 0.9
+    assert depth[-5:].mean() < 0.75 * depth[:5].mean()
+
+
 def write_empty_scene(path: str | Path, n: int = 20) -> None:
     """A clip of the renderer's room with nobody in it (sensor noise only)."""
     opts = RenderOptions(size=CLIP["size"], fps=CLIP["fps"])

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import assert_root_comes_nearer
 
 from mocap.body import JOINT_INDEX
 from mocap.lift.contacts import FEET, foot_contacts
@@ -33,12 +34,7 @@ def fitted(tmp_path: Path, yaw: float):
 
 def test_a_walk_toward_the_camera_comes_nearer(tmp_path):
     truth, frames = fitted(tmp_path, 45.0)
-    have = np.array(["root" in f for f in frames])
-    depth = np.array([-f["root"][2] for f in frames if "root" in f])
-    true_depth = -truth.pelvis_camera[have, 2]
-    assert have.mean() > 0.9 and np.ptp(true_depth) > 2.5
-    assert np.corrcoef(depth, true_depth)[0, 1] >= 0.9
-    assert depth[-5:].mean() < 0.75 * depth[:5].mean()
+    assert_root_comes_nearer(frames, truth)
 
 
 def test_foot_contacts_agree_with_the_true_ankles(tmp_path):
