@@ -35,9 +35,14 @@ _TORSO = body.SEGMENT_INDEX["torso"]
 _LIGHT = np.array([-0.5, 0.6, 0.62]) / np.linalg.norm([-0.5, 0.6, 0.62])  # camera frame
 # shading layers: (radius fraction, shift toward the light in radii, brightness)
 _LAYERS = np.array([[1.0, 0.0, 0.72], [0.62, 0.3, 1.0], [0.25, 0.55, 1.18]])
-_COLOURS = np.array([  # BGR per segment, in body.SEGMENT_NAMES order
+_COLOURS = np.array([  # BGR per piece: body.SEGMENT_NAMES order, then the feet (shoes)
     (60, 70, 165), (135, 165, 220), (80, 95, 190), (125, 160, 215), (55, 60, 145),
-    (110, 145, 200), (145, 100, 60), (160, 115, 75), (120, 80, 45), (135, 92, 55)])
+    (110, 145, 200), (145, 100, 60), (160, 115, 75), (120, 80, 45), (135, 92, 55),
+    (50, 55, 62), (60, 66, 75)])
+_SHINS = [body.SEGMENT_INDEX["lower_leg_l"], body.SEGMENT_INDEX["lower_leg_r"]]
+# Feet (body units, of 175): soles body.FOOT_LENGTH under the ankles, heels 6 behind
+# and toes 22 ahead (anthropometric tables: foot 0.152 of the stature, ankle at a fifth)
+_HEEL, _TOE, _FOOT_R = 6.0, 22.0, body.FOOT_LENGTH / 2 / body.BODY_HEIGHT  # round feet
 _SHADES = np.clip(_COLOURS[:, None, :] * _LAYERS[None, :, 2:], 0, 255).tolist()
 _FOURCC = {".mp4": "mp4v", ".avi": "MJPG"}
 _NOISE_PAD = 32
@@ -107,15 +112,31 @@ def frame_camera(joints_world: np.ndarray, radii: np.ndarray, opts: RenderOption
                   origin=origin @ rot, scale=float(scale), cx=width / 2, cy=frame_h / 2)
 
 
-def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarray) -> np.ndarray:
-    """(..., 10, L, 2R, 3) points on both end ellipses of every segment, camera frame.
+def body_pieces(joints: np.ndarray) -> np.ndarray:
+    """(..., 12, 2, 3) ends of the drawn pieces of joints (..., 16, 3): the ten segments,
+    then each foot's heel and toe on its axis, half the foot's height above the sole,
+    at a right angle to the shin and pointing the way the hips and trunk face."""
+    ends, j = body.segment_endpoints(joints), body.JOINT_INDEX
+    u = body.body_height(joints.reshape(-1, 16, 3)[0]) / body.BODY_HEIGHT
+    trunk = _unit(joints[..., j["neck"], :] - joints[..., j["pelvis"], :], _UP)[..., None, :]
+    ahead = np.cross(joints[..., j["hip_l"], :] - joints[..., j["hip_r"], :], trunk[..., 0, :])
+    shin = _unit(ends[..., _SHINS, 1, :] - ends[..., _SHINS, 0, :], -_UP)   # (..., 2, 3)
+    ahead = _unit(ahead[..., None, :] - (ahead[..., None, :] * shin).sum(-1, keepdims=True) * shin,
+                  trunk)   # legs raised straight ahead: the feet point up the trunk
+    axis = ends[..., _SHINS, 1, :] + shin * (body.FOOT_LENGTH / 2 * u)
+    feet = np.stack([axis - ahead * (_HEEL * u), axis + ahead * (_TOE * u)], axis=-2)
+    return np.concatenate([ends, feet], axis=-3)
 
-    ``radii`` (10, 2) are each segment's lateral and front-to-back radii (only the
+
+def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarray) -> np.ndarray:
+    """(..., 12, L, 2R, 3) points on both end ellipses of every piece, camera frame.
+
+    ``radii`` (12, 2) are each segment's lateral and front-to-back radii (only the
     torso's differ: its lateral axis runs from the right hip and shoulder to the left
     ones). One ring per shading layer: radii times ``layer[0]``, shifted toward the
     light by ``layer[1]`` radii.
     """
-    ends = body.segment_endpoints(joints_cam)                        # (..., 10, 2, 3)
+    ends = body_pieces(joints_cam)                                   # (..., 12, 2, 3)
     axis = _unit(ends[..., 1, :] - ends[..., 0, :], _UP)
     across = _unit(np.cross(axis, [0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
     lateral = np.broadcast_to(across, axis.shape).copy()
@@ -123,7 +144,7 @@ def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarra
     lateral = _unit(lateral - (lateral * axis).sum(-1, keepdims=True) * axis, across)
     sagittal = np.cross(axis, lateral)
     light = _unit(_LIGHT - (axis @ _LIGHT)[..., None] * axis, across)
-    r = radii[:, None, :] * layers[:, :1]                            # (10, L, 2)
+    r = radii[:, None, :] * layers[:, :1]                            # (12, L, 2)
     ring = (_RING.real[:, None] * r[..., None, 0:1, None] * lateral[..., None, None, None, :]
             + _RING.imag[:, None] * r[..., None, 1:2, None] * sagittal[..., None, None, None, :])
     shift = (radii[:, :1] * layers[:, 1])[..., None] * light[..., None, :]  # (..., 10, L, 3)
@@ -147,7 +168,7 @@ class Scene:
     opts: RenderOptions
     camera: Camera
     joints_cam: np.ndarray   # (F, 16, 3) camera frame
-    radii: np.ndarray        # (10, 2) lateral and front-to-back radii, metres
+    radii: np.ndarray        # (12, 2) lateral and front-to-back radii (segments, feet), m
     canvas: np.ndarray       # background, wider than the frame when it pans
     noise: np.ndarray        # (2, H+pad, W+pad, 3) positive and negative sensor noise
 
@@ -157,7 +178,8 @@ def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
     joints_world = np.asarray(joints_world, dtype=float)
     if joints_world.ndim != 3 or joints_world.shape[1:] != (16, 3) or not len(joints_world):
         raise MocapError(f"expected joints of shape (F, 16, 3), got {joints_world.shape}")
-    radii = body.semi_axes(body.body_height(joints_world[0]))
+    height = body.body_height(joints_world[0])
+    radii = np.concatenate([body.semi_axes(height), np.full((2, 2), _FOOT_R * height)])
     camera = frame_camera(joints_world, radii, opts)
     width, height = opts.size
     rng = np.random.default_rng(opts.seed)
@@ -211,7 +233,7 @@ def draw_frame(scene: Scene, i: int) -> np.ndarray:
     img = background(scene, i).copy()
     pts = cylinder_points(scene.joints_cam[i], scene.radii, _LAYERS)
     px = np.round(scene.camera.project_camera(pts) * 16).astype(np.int32)   # 4 fraction bits
-    depth = body.segment_endpoints(scene.joints_cam[i]).mean(axis=1)[:, 2]
+    depth = body_pieces(scene.joints_cam[i]).mean(axis=1)[:, 2]
     line = cv2.LINE_AA if scene.opts.antialias else cv2.LINE_8
     for k in np.argsort(depth):
         for layer in range(len(_LAYERS)):

@@ -157,9 +157,11 @@ def unhidden_point(app, segment: str | None = None, mark: int | None = None) -> 
 
 
 def _hides(eye, ray, depth: float, cylinder) -> bool:
-    """Whether a cylinder (centre, axis, scale) crosses the ray before ``depth``."""
+    """Whether a cylinder (centre, axis, scale) crosses the ray before ``depth``, or
+    passes within half its radius of it (a click there may land on its outline)."""
     centre, axis, scale = cylinder
     samples = centre + np.linspace(-0.5, 0.5, 21)[:, None] * scale[2] * axis
     along = (samples - eye) @ ray
     off = np.linalg.norm(samples - eye - along[:, None] * ray, axis=1)
-    return bool(np.any((off < max(scale[0], scale[1])) & (along < depth - max(scale[0], scale[1]))))
+    radius = max(scale[0], scale[1])
+    return bool(np.any((off < 1.5 * radius) & (along < depth - radius)))

@@ -61,8 +61,10 @@ def test_truncated_video_is_fitted_on_the_frames_that_decode(tmp_path, capsys):
     code, err = run(capsys, "fit", cut, "--out", out, "--quiet")
     motion = read_motion(out)
     n = motion["video"]["frame_count"]
-    assert code == 0 and err == [f"mocap: warning: {cut}: only {n} of the 30 frames the file "
-                                 "announces decode (truncated or damaged); using those"]
+    # the first warning; the half walk may also be told its planted feet hide the scene
+    assert code == 0 and err[0] == (f"mocap: warning: {cut}: only {n} of the 30 frames the file "
+                                    "announces decode (truncated or damaged); using those")
+    assert all(line.startswith("mocap: warning: ") for line in err)
     assert 10 <= n < 30 and [f["index"] for f in motion["frames"]] == list(range(n))
     assert all(f["person"] for f in motion["frames"])
     err2d = side_matched_errors(frame_joints(motion), truth.joints2d[:n]) / truth.body_height_px

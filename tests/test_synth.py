@@ -59,9 +59,25 @@ def test_orthographic_body_height_in_pixels(view):
     truth = synth.scene_truth(scene, "standing", np.arange(1))
     assert truth.body_height_px == pytest.approx(0.6 * 480)
     rows = np.flatnonzero(body_mask(scene, 0).any(axis=1))
-    assert rows[-1] - rows[0] + 1 == pytest.approx(truth.body_height_px, abs=2.0)
+    feet = 1 + body.FOOT_LENGTH / body.BODY_HEIGHT       # the silhouette reaches the soles
+    assert rows[-1] - rows[0] + 1 == pytest.approx(feet * truth.body_height_px, abs=2.0)
     head, ankle = truth.joints2d[0, J["head_top"], 1], truth.joints2d[0, J["ankle_l"], 1]
     assert ankle - head == pytest.approx(truth.body_height_px)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 180.0])
+def test_feet_point_the_way_the_body_faces(yaw):
+    scene = synth.plan_scene(standing(), synth.RenderOptions(yaw=yaw, noise=0.0, antialias=False))
+    truth = synth.scene_truth(scene, "standing", np.arange(1))
+    unit = truth.body_height_px / body.BODY_HEIGHT
+    ankle = truth.joints2d[0, J["ankle_l"]]
+    mask = body_mask(scene, 0)
+    sole = mask[int(ankle[1] + 5 * unit)]                # a row through the feet
+    cols = np.flatnonzero(sole) - ankle[0]
+    ahead, behind = (cols.max(), -cols.min()) if yaw == 0.0 else (-cols.min(), cols.max())
+    assert ahead == pytest.approx(22 * unit, abs=2.0)      # toes: 22 units ahead of the ankle
+    assert behind == pytest.approx(6 * unit, abs=2.0)      # heel: 6 behind
+    assert not mask[int(ankle[1] + 8 * unit)].any()        # nothing under the soles
 
 
 @pytest.mark.parametrize("perspective", [None, 700.0])
