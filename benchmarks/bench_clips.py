@@ -67,7 +67,7 @@ def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
     from mocap.io.export.formats import write_format
     from mocap.io.video import iter_frames, open_video, processing_scale
     from mocap.session.silhouette import SilhouetteSession
-    from mocap.silhouette.passes import Silhouette, body_heights, iter_fits
+    from mocap.silhouette.passes import FitStream, Silhouette
 
     clip, folder = CLIPS / name, out_dir / name
     folder.mkdir(parents=True)
@@ -80,7 +80,10 @@ def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
         mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
         mask = cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST)
         silhouettes.append(Silhouette.from_mask(mask, frame))
-    fits = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps))
+    stream, fits = FitStream(scale, info.fps), []
+    for silhouette in silhouettes:          # the pipeline's own pass two
+        fits += stream.push(silhouette)
+    fits += stream.finish()
     notes = load_annotations(clip / "oracle.json", info.frame_count) if mode == "oracle" else Annotations()
     session = SilhouetteSession(info, fits, notes)
     write_format("json", folder / ("oracle.out.json" if mode == "oracle" else "auto.json"), session.clip())
