@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from scipy.spatial.transform import Rotation
 
 from app.layout import GAP
@@ -119,49 +120,66 @@ def fitted_camera(app, page, before: set[int]) -> None:
     wait_until(fitted)
 
 
-def body_axes(app) -> list[tuple[list, list]]:
-    """Per 3D view (the camera's, the side), the scene's (centre, unit axis, scale) of
-    every cylinder and of every facing mark (its centre halfway up the cone)."""
-    from app.views import SIDE
-    views = []
-    for body, marks, at, frame in zip(app.scene.bodies, app.scene.marks, (app.layout.front, app.layout.side),
-                                      ((1.0, 0.0, 0.0, 0.0), SIDE)):
-        turn, origin = Rotation.from_quat(frame, scalar_first=True), np.array(at + (0.0,))
+def scene_meshes(app) -> tuple[trimesh.Trimesh, np.ndarray, dict]:
+    """Both 3D bodies as the page draws them, in scene coordinates: every cylinder (a
+    unit cylinder along local z scaled by its handle's (x radius, y radius, length),
+    as viser draws it) and every facing mark (views.CONE). One mesh; each face's owner,
+    (view, segment index) for a cylinder or (view, -1 - mark number) for a mark; and
+    each owner's 4x4 placing of its unit shape."""
+    from app.views import CONE, SIDE
+    cylinder = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=20)
+    meshes, owners, placings = [], [], {}
+    for view, (body, marks, at, frame) in enumerate(zip(app.scene.bodies, app.scene.marks,
+                                                        (app.layout.front, app.layout.side),
+                                                        ((1.0, 0.0, 0.0, 0.0), SIDE))):
+        panel = _transform(frame, at + (0.0,), (1.0, 1.0, 1.0))
+        for shape, handles, first in ((cylinder, body, 0), (CONE, marks, -1)):
+            for i, h in enumerate(handles):
+                if h.visible:
+                    owner = (view, i if first == 0 else -1 - i)
+                    placings[owner] = panel @ _transform(h.wxyz, h.position, h.scale)
+                    meshes.append(shape.copy().apply_transform(placings[owner]))
+                    owners.append(np.tile(owner, (len(shape.faces), 1)))
+    return trimesh.util.concatenate(meshes), np.concatenate(owners), placings
 
-        def axes(handles, lift: float) -> list:
-            out = []
-            for h in handles:
-                axis = turn.apply(Rotation.from_quat(h.wxyz, scalar_first=True).apply([0.0, 0.0, 1.0]))
-                out.append((origin + turn.apply(h.position) + lift * h.scale[2] * axis, axis, h.scale))
-            return out
-        views.append((axes(body, 0.0), axes(marks, 0.5)))
-    return views
+
+def _transform(wxyz, position, scale) -> np.ndarray:
+    """The 4x4 of a scene node: scaled, turned by ``wxyz``, then moved to ``position``."""
+    out = np.eye(4)
+    out[:3, :3] = Rotation.from_quat(wxyz, scalar_first=True).as_matrix() * np.asarray(scale, float)
+    out[:3, 3] = position
+    return out
 
 
 def unhidden_point(app, segment: str | None = None, mark: int | None = None) -> np.ndarray:
-    """A scene point on a segment's cylinder (or on facing mark number ``mark``), in the
-    camera or the side view, that no other cylinder hides from the tab's camera (points
-    along the axis, middle first)."""
+    """A scene point on a segment's cylinder (along its axis, middle first) or on facing
+    mark number ``mark`` (along the cone's axis, halfway up first), in the camera or the
+    side view, that the tab's camera sees first: the ray from the camera through it,
+    and rays a canvas pixel around it (where a click lands, rounded to the pixel),
+    must each hit that mesh before any other of the scene's."""
     from mocap.body import SEGMENT_INDEX
-    eye = next(iter(app.server.get_clients().values())).camera.position
-    k = None if segment is None else SEGMENT_INDEX[segment]
-    for cylinders, marks in body_axes(app):
-        centre, axis, scale = cylinders[k] if mark is None else marks[mark]
-        for t in ((0.0, -0.2, 0.2, -0.35, 0.35) if mark is None else (0.0,)):
-            point = centre + t * scale[2] * axis
-            ray = (point - eye) / np.linalg.norm(point - eye)
-            if not any(_hides(eye, ray, np.linalg.norm(point - eye), other)
-                       for j, other in enumerate(cylinders) if j != k):
+    camera = next(iter(app.server.get_clients().values())).camera
+    eye = np.asarray(camera.position, float)
+    mesh, owners, placings = scene_meshes(app)
+    want = SEGMENT_INDEX[segment] if mark is None else -1 - mark
+    pixel = 2 * np.tan(camera.fov / 2) / camera.image_height       # a canvas pixel per unit of depth
+    along = (0.0, -0.2, 0.2, -0.35, 0.35) if mark is None else (0.5, 0.3)
+    for view in range(len(app.scene.bodies)):
+        if (view, want) not in placings:
+            continue
+        for t in along:
+            point = (placings[view, want] @ [0.0, 0.0, t, 1.0])[:3]
+            rays = _rays_around(eye, point, pixel)
+            first = mesh.ray.intersects_first(np.tile(eye, (len(rays), 1)), rays)
+            if np.all(first >= 0) and np.all(owners[first] == (view, want)):
                 return point
-    raise AssertionError(f"{segment or mark} is hidden in both 3D views")
+    raise AssertionError(f"{segment if mark is None else f'mark {mark}'} is hidden in both 3D views")
 
 
-def _hides(eye, ray, depth: float, cylinder) -> bool:
-    """Whether a cylinder (centre, axis, scale) crosses the ray before ``depth``, or
-    passes within half its radius of it (a click there may land on its outline)."""
-    centre, axis, scale = cylinder
-    samples = centre + np.linspace(-0.5, 0.5, 21)[:, None] * scale[2] * axis
-    along = (samples - eye) @ ray
-    off = np.linalg.norm(samples - eye - along[:, None] * ray, axis=1)
-    radius = max(scale[0], scale[1])
-    return bool(np.any((off < 1.5 * radius) & (along < depth - radius)))
+def _rays_around(eye: np.ndarray, point: np.ndarray, spread: float) -> np.ndarray:
+    """Unit rays from ``eye`` through ``point`` and through four points ``spread`` per unit
+    of depth beside it, across the ray."""
+    ray = (point - eye) / np.linalg.norm(point - eye)
+    across = np.linalg.svd(ray[None])[2][1:]                        # two unit vectors normal to it
+    rays = ray + spread * np.concatenate([np.zeros((1, 3)), across, -across])
+    return rays / np.linalg.norm(rays, axis=1, keepdims=True)
