@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS, WIDTH
 from mocap.edges import Edges
 from mocap.silhouette.raster import Canvas, segment_quads, sweep_scorer
 
@@ -34,19 +35,25 @@ def test_a_segment_on_an_outline_inside_the_silhouette_is_supported_flat_colour_
     assert on_outline < 0.05
 
 
-def test_an_arm_over_the_trunk_scores_as_inside_the_silhouette_where_edges_are_followed():
-    """With a sliver of the trunk's outline left unexplained, Eq. 1-3 on the partial
-    silhouette rate an arm wholly over the fitted trunk (no pixel of the sliver
-    covered) below one sticking out of the silhouette; on a canvas following edges
-    the trunk under the arm counts as silhouette it covers, and the arm over the
-    trunk wins."""
+def test_an_arm_over_the_fitted_trunk_is_placed_by_the_edges_not_by_its_length():
+    """The silhouette cannot tell where an arm in front of the fitted trunk lies (a
+    strip of the trunk left unexplained, which only a fourth candidate covers): Eq. 1-3
+    on the partial silhouette rate such arms alike whatever their length (counting
+    the trunk under an arm as silhouette it covers made the longest arm win), and
+    the frame's edges pick the one on the bar's outline."""
     sil, grey = trunk_with_bar()
     canvas = Canvas(sil, grey)
-    canvas.commit(segment_quads(np.array([[50.0, 20.0]]), np.array([[50.0, 80.0]]), np.array([36.0])))
-    starts, ends = np.array([[47.0, 25.0], [47.0, 25.0]]), np.array([[47.0, 75.0], [97.0, 25.0]])
-    arms = segment_quads(starts, ends, np.full(2, BAR))[:, None]        # over the trunk, out of it
-    plain, _ = sweep_scorer(canvas.fork(), arms)
-    following, _ = sweep_scorer(canvas.fork(by_edges=True), arms)
-    assert plain[0] < plain[1]
-    assert following[0] > following[1]
+    canvas.commit(segment_quads(np.array([[41.0, 20.0], [62.0, 20.0]]), np.array([[41.0, 80.0], [62.0, 80.0]]),
+                                np.array([22.0, 16.0])))
+    following = canvas.fork(by_edges=True)
+    tops, bottoms = np.array([40.0, 25.0, 25.0, 25.0]), np.array([60.0, 75.0, 75.0, 75.0])
+    xs = np.array([47.0, 47.0, 60.0, 53.0])         # on the bar short and long, beside it, on the strip
+    starts, ends = np.column_stack([xs, tops]), np.column_stack([xs, bottoms])
+    scores, _ = sweep_scorer(following, segment_quads(starts, ends, np.full(4, BAR))[:, None])
+    assert np.ptp(scores[:3]) < 1e-9 and scores[3] > scores[0]
+    lower = SEGMENT_INDEX["lower_arm_l"]
+    joints = np.zeros((4, len(JOINTS), 2))
+    joints[:, SEGMENT_JOINTS[lower, 0]], joints[:, SEGMENT_JOINTS[lower, 1]] = starts, ends
+    edges = following.edge_scores(joints, [lower], BAR / WIDTH[lower])
+    assert edges[1] > edges[2] + 0.1
     assert not Canvas(sil).fork(by_edges=True).by_edges          # no frame, no edges to follow

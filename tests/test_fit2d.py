@@ -12,13 +12,14 @@ import pytest
 
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, Pose2D, default_angles, forward_kinematics_2d
 from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_cross
-from mocap.silhouette.arms import two_link_angles
+from mocap.silhouette.arms import elbow_bends_back, two_link_angles
 from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.search import coarse_to_fine
 from mocap.silhouette.torso import head_top_row
 from mocap.silhouette.legchain import LegChain
 from mocap.metrics import side_matched_errors
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
+from mocap.silhouette.torso import torso_spread
 from mocap.pipeline import silhouette_passes
 from mocap.synth import render_motion
 from mocap.io.video import open_video
@@ -154,17 +155,23 @@ def test_profile_elbow_bends_the_way_the_knees_point():
     """Seen in profile, facing image right (knees bent forward): an upper arm hanging
     down with the lower arm held forward outlines the same silhouette as an upper arm
     reaching forward with the lower arm folded back into the trunk, an elbow bent
-    backward. The fit takes the elbow that bends forward."""
+    backward. The fit (given the torso's foreshortening measured as the pipeline
+    measures it) takes the elbow that bends forward, the elbow within 5% of body
+    height (the upper arm over the trunk, which the silhouette cannot place, may lean
+    back a little; the folded-back arm puts it 20% off)."""
     angle = default_angles()
     for name, a in (("upper_leg_l", 290), ("lower_leg_l", 255), ("upper_leg_r", 285), ("lower_leg_r", 250),
                     ("upper_arm_l", 260), ("lower_arm_l", 265), ("upper_arm_r", 272), ("lower_arm_r", 5)):
         angle[SEGMENT_INDEX[name]] = a
     truth = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.2)
-    fit = fit_frame(draw_model(truth, (160, 200)) * 255, FIT_SCALE)
+    silhouette = draw_model(truth, (160, 200)) * 255
+    fit = fit_frame(silhouette, FIT_SCALE, spread=torso_spread(silhouette, FIT_SCALE))
     want = forward_kinematics_2d(truth)
     err = {j: np.linalg.norm(fit.joints[JOINT_INDEX[j]] - want[JOINT_INDEX[j]]) / (175 * FIT_SCALE)
            for j in ("elbow_r", "wrist_r")}
-    assert max(err.values()) < 0.03, err
+    assert max(err.values()) < 0.05, err
+    bend = fit.pose.angle[SEGMENT_INDEX["lower_arm_r"]] - fit.pose.angle[SEGMENT_INDEX["upper_arm_r"]]
+    assert not elbow_bends_back(np.array([bend]), 0.0, facing=1)[0]
 
 
 def test_reported_hips_lie_below_where_the_thighs_attach_along_the_trunk():

@@ -2,10 +2,11 @@
 detection (Algorithms 2-4), refined by Algorithm 1 (upper arm with the lower arm
 attached, then the lower arm) and Algorithm 6. Beyond the paper: each arm explains
 only its own image side; guesses whose elbow bends backward (the knees tell which
-way the performer faces) are dropped; with the frame's grey levels, an arm over the
-trunk counts as inside the silhouette and the edges inside the silhouette along its
-sides add to S (mocap.edges), so that an arm in front of the trunk is found where it
-shows.
+way the performer faces) are dropped; the model's lower arm reaches on into a hand
+(raster.HAND_LENGTH), so the wrist is not put at the silhouette's end; with the
+frame's grey levels the edges inside the silhouette along an arm's sides add to S
+(mocap.edges), so that an arm in front of the trunk, which the silhouette cannot
+place, is found where it shows.
 """
 
 from __future__ import annotations
@@ -17,10 +18,11 @@ import numpy as np
 from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, Pose2D,
                         forward_kinematics_2d, forward_kinematics_2d_batch, image_angle, knee_bend, limb)
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
-from mocap.silhouette.raster import Canvas, joint_quads, sweep_scorer
+from mocap.silhouette.raster import HAND_LENGTH, Canvas, joint_quads, sweep_scorer
 from mocap.silhouette.search import Knob, span, refine_limb, search_angle
 
 ARM = {side: limb("arm", side).segments for side in SIDES}
+GUESS_RATIOS = (1.0, 0.8)
 ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
 KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
 ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
@@ -58,27 +60,31 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
     """First guesses for one arm's (upper, lower) angles and foreshortening ratios:
-    contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point,
-    hanging down, all at the model's lengths, the previous frame's arm as it was and,
-    where the frame's edges can tell arms inside the silhouette apart, a grid of
-    arms all around the shoulder (ARM_GRID). (An arm hidden in front of the trunk
-    scores alike at any length, so a length carried over from frame to frame could
-    only shrink.)"""
+    contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point
+    bent either way or straight and foreshortened, hanging down, the previous
+    frame's arm as it was and, where the frame's edges can tell arms inside the
+    silhouette apart, a grid of arms all around the shoulder (ARM_GRID); each new
+    guess at GUESS_RATIOS of the model's lengths (an arm turned toward the camera
+    is shorter in the image, and one hanging in front of the trunk scores alike at
+    any length)."""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
-    guesses = [((270.0, 270.0), (1.0, 1.0))]
+    angles, guesses = [(270.0, 270.0)], []
     if prev is not None:
         guesses.append(((prev.angle[upper], prev.angle[lower]), (prev.ratio[upper], prev.ratio[lower])))
-    angles = [guesses[-1][0]]
     joints = forward_kinematics_2d(pose)
     points = arm_curve(canvas, joints, side, pose.scale)
     if len(points) >= 3:
-        angles.append(_contour_guess(points, angles[0]))
+        angles.append(_contour_guess(points, guesses[0][0] if guesses else angles[0]))
         shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
         tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
-        angles += two_link_angles(shoulder, tip, LENGTH[upper] * pose.scale, LENGTH[lower] * pose.scale)
+        # the curve ends with the hand
+        l1, l2 = LENGTH[upper] * pose.scale, (LENGTH[lower] + HAND_LENGTH) * pose.scale
+        angles += two_link_angles(shoulder, tip, l1, l2)
+        toward, ratio = image_angle(tip - shoulder), min(float(np.hypot(*(tip - shoulder))) / (l1 + l2), 1.0)
+        guesses.append(((toward, toward), (ratio, ratio)))
     if canvas.by_edges:
         angles += ARM_GRID
-    guesses += [(a, (1.0, 1.0)) for a in angles[1:]]
+    guesses += [(a, (r, r)) for a in angles for r in GUESS_RATIOS]
     return [(*a, *r) for a, r in guesses]
 
 

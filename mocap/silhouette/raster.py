@@ -13,14 +13,23 @@ import math
 import cv2
 import numpy as np
 
-from mocap.body import (FOOT_LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH, Pose2D,
-                        forward_kinematics_2d, torso_width)
+from mocap.body import (FOOT_LENGTH, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH,
+                        Pose2D, forward_kinematics_2d, torso_width)
 from mocap.edges import EDGE_WEIGHT, Edges
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
 _TORSO = SEGMENT_INDEX["torso"]
 _HAS_FOOT = np.isin(np.arange(len(SEGMENT_NAMES)), [SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]])
+# The hand (not in the paper's 10 cylinders nor the contract's joints): drawn as the
+# lower arm's continuation beyond the wrist, this long in model units at the lower
+# arm's foreshortening. Without it the fit puts the wrist at the silhouette's end, in
+# the hand. Rendered and real bodies show 9-15 units of hand past the wrist joint
+# (a hand is 19 units to the fingertips, less its curl).
+HAND_LENGTH = 13.0
+_HAND_REACH = np.zeros(len(SEGMENT_NAMES))       # of the lower arm's drawn length
+_HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = HAND_LENGTH / LENGTH[
+    SEGMENT_INDEX["lower_arm_l"]]
 
 
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -40,16 +49,20 @@ def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> n
 
 def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
     """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2);
-    the torso is as wide as ``spread`` (shape (...,)) makes it look, and each lower leg
-    goes on past the ankle by the foot (body.FOOT_LENGTH), which silhouettes show."""
+    the torso is as wide as ``spread`` (shape (...,)) makes it look, each lower leg
+    goes on past the ankle by the foot (body.FOOT_LENGTH), which silhouettes show, and
+    each lower arm into the hand (HAND_LENGTH)."""
     idx = np.arange(len(SEGMENT_NAMES)) if segments is None else np.asarray(segments)
     ends = joints[..., SEGMENT_JOINTS[idx], :]
-    foot = _HAS_FOOT[idx]
+    foot, hand = _HAS_FOOT[idx], _HAND_REACH[idx]
+    if foot.any() or hand.any():
+        ends = ends.copy()
     if foot.any():
         shin = ends[..., foot, 1, :] - ends[..., foot, 0, :]
         length = np.maximum(np.linalg.norm(shin, axis=-1, keepdims=True), 1e-9)
-        ends = ends.copy()
         ends[..., foot, 1, :] += shin / length * (FOOT_LENGTH * scale)
+    if hand.any():
+        ends[..., 1, :] += (ends[..., 1, :] - ends[..., 0, :]) * hand[:, None]
     widths = np.empty(ends.shape[:-2])
     widths[...] = WIDTH[idx] * scale
     torso = idx == _TORSO
@@ -112,15 +125,13 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
     returns (their S (B,) of Eq. 1-3, a function scoring further candidates).
 
     The partial silhouette is the silhouette inside the swept area that the canvas's
-    fitted part does not already explain. On a canvas that follows edges
-    (``Canvas.fork``), a candidate's pixels on the silhouette already explained count
-    as silhouette it covers: they are inside the silhouette, so an arm over the trunk
-    scores as well as one that explains a sliver of the trunk's outline, and the
-    frame's edges tell them apart (``Canvas.edge_scores``); this holds on either
-    side of the body's axis (``Canvas.whole``), so a forearm may cross the chest. Candidates are drawn into
-    planes of one array and weighed in one product: a pixel weighs 1 if free, plus
-    ``base`` (more than the window's pixel count) if in the partial silhouette, or
-    ``base`` squared if explained silhouette counts, so one sum tells every count.
+    fitted part does not already explain. A candidate's pixels over the fitted part
+    count neither way: the silhouette cannot tell where an arm in front of the trunk
+    lies (the frame's edges can: ``Canvas.edge_scores``), and counting them as
+    silhouette it covers would make the longest arm over the trunk win. Candidates
+    are drawn into planes of one array and weighed in one product: a pixel weighs 1
+    if free, plus ``base`` (more than the window's pixel count) if in the partial
+    silhouette, so one sum tells both counts.
     """
     x0, y0, x1, y1 = bounding_window(sweep, canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
@@ -133,16 +144,12 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
     sil_area = np.count_nonzero(target)
     base = float(free.size + 1)
     weights = free.ravel() + base * target.ravel()
-    if canvas.by_edges:
-        weights = weights + base ** 2 * (~free & canvas.whole[y0:y1, x0:x1].astype(bool)).ravel()
 
     def weigh(planes_: np.ndarray) -> np.ndarray:
-        totals = planes_.reshape(len(planes_), -1) @ weights
-        explained = np.floor(totals / base ** 2)
-        totals = totals - base ** 2 * explained
+        # einsum, not BLAS: a threaded product of many candidates costs several times more CPU
+        totals = np.einsum("bn,n->b", planes_.reshape(len(planes_), -1), weights)
         overlap = np.floor(totals / base)
-        model = totals - base * overlap
-        return similarity_from_counts(sil_area + explained, model + explained, overlap + explained)
+        return similarity_from_counts(sil_area, totals - base * overlap, overlap)
     return weigh(planes), lambda candidates: weigh(_draw_planes(candidates, offset, shape))
 
 
@@ -168,7 +175,6 @@ class Canvas:
 
     def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None):
         self.sil = (silhouette > 0).astype(np.uint8)
-        self.whole = self.sil
         self.fixed = np.zeros_like(self.sil)
         self.edges = None if grey is None else Edges.inside(grey, self.sil)
         self.by_edges = False
@@ -177,10 +183,9 @@ class Canvas:
         """A copy whose fitted part also holds quads, and whose silhouette is only
         the pixels where keep is true (for a part that may explain only those);
         ``by_edges``: the copy follows the frame's inner edges, where it has them
-        (``sweep_scorer``, ``edge_scores``)."""
+        (``edge_scores``)."""
         other = Canvas.__new__(Canvas)
         other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
-        other.whole = self.whole
         other.fixed = self.fixed.copy()
         other.edges = self.edges
         other.by_edges = by_edges and self.edges is not None
