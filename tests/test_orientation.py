@@ -3,6 +3,9 @@ exact truth of the model's own walk and, when present, real motion capture)."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from helpers import SHARED_DATA
@@ -134,6 +137,22 @@ def test_legs_keep_their_sides_through_every_crossing_of_a_profile_walk():
     known = known_sides(["right"] * len(image_side), says, image_side)
     swap = track_sides(image_side, known, np.ones(len(image_side)))
     assert np.mean(swap[:, 1] == swapped) > 0.9      # the rest: legs level, either order
+
+
+def test_a_kicking_leg_keeps_its_name_through_the_crossing_its_thigh_swings_through():
+    """A real kick fitted from its masks (kick_34's true masks, frames 40-79): the
+    kicking leg swings forward past the standing one, ever faster, into a profile
+    where the image sides say nothing. At the crossing the fit hands each leg's name
+    to the other and draws the kicking shin folded back, so the joints' positions
+    alone continue the legs the wrong way; the thighs' turning names them right."""
+    data = json.loads((Path(__file__).parent / "data" / "kick_crossing.json").read_text())
+    joints, truth = np.array(data["joints2d"]), np.array(data["right_is_image_left"], bool)
+    known = np.full((len(joints), 2), -1, np.int8)
+    known[:6] = 1                                           # turned toward the camera: the rule holds
+    swap = track_sides(joints, known, np.ones(len(joints)))[:, 1]
+    assert truth[6:19].all() and not truth[19:].any()       # the fit exchanges the names at frame 59
+    assert np.mean(swap[6:] == truth[6:]) > 0.9
+    assert not swap[25:].any()                              # named right after the crossing
 
 
 def test_users_leg_signs_tell_which_leg_is_which_where_the_legs_cross():

@@ -37,6 +37,9 @@ SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)     # model half-spans: shoulders, h
 # ``orientation_of_yaw``: the six orientations split the circle into 60-degree sectors.
 PROFILE_HALF_SECTOR = 30.0
 SEPARATED = 0.25     # distal joints this many limb lengths apart tell two limbs apart
+# limb lengths of joint distance that a radian of segment turn counts as: a segment
+# (half a limb) that turns a radian moves its distal joint about that far
+ANGLE_WEIGHT = 0.5
 MIN_APART = 3        # frames: shorter stretches apart are fit noise inside a crossing
 _J = JOINT_INDEX
 _TORSO, _HEAD = SEGMENT_INDEX["torso"], SEGMENT_INDEX["head"]
@@ -129,15 +132,16 @@ def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray) -
     ok = np.isfinite(joints2d).all(axis=(1, 2))
     for r in runs(ok):
         legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
-        parity = _anchored(bridge_parity(legs, _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])), known[r, 1])
+        chains = _limb_pair(joints2d[r], LIMB_JOINTS["leg"])
+        parity = _anchored(bridge_parity(chains, _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])), known[r, 1])
         out[r, 1] = np.where(known[r, 1] >= 0, known[r, 1] == 1, parity)
         arms = _counter_phase(legs, out[r, 1], _limb_pair(joints2d[r], _PAIR_JOINTS["arms"]), facing_x[r])
         out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, arms)
     return out
 
 
-def _limb_pair(joints2d: np.ndarray, names: tuple[str, str]) -> np.ndarray:
-    """(F, 2, 2, 2): image-left/right limb, (middle, distal) joint, xy about the pelvis."""
+def _limb_pair(joints2d: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """(F, 2, len(names), 2): image-left/right limb, its joints ``names``, xy about the pelvis."""
     idx = [[_J[f"{n}_{s}"] for n in names] for s in SIDES]
     return joints2d[:, idx] - joints2d[:, None, None, _J["pelvis"]]
 
@@ -150,21 +154,20 @@ def _limb_px(joints2d: np.ndarray, root: str, tip: str) -> float:
 
 def bridge_parity(pair: np.ndarray, limb_px: float) -> np.ndarray:
     """(F,) 0/1: whether each frame's two limbs are swapped relative to the first
-    stretch where they are apart. While apart, each frame's limbs follow the nearer
-    ones of the frame before; across each stretch where they are close together the
-    swap is decided by predicting both limbs at constant velocity from either side
-    (crossing limbs continue, turning limbs come back); close frames take the parity
-    of the nearer side."""
-    apart = np.linalg.norm(pair[:, 0, 1] - pair[:, 1, 1], axis=-1) / limb_px > SEPARATED
+    stretch where they are apart. ``pair`` (F, 2, 3, 2): each limb's root, middle and
+    distal joint. While apart, each frame's limbs follow the nearer ones of the frame
+    before; across each stretch where they are close together the swap is decided by
+    ``_crosses``; close frames take the parity of the nearer side."""
+    apart = np.linalg.norm(pair[:, 0, 2] - pair[:, 1, 2], axis=-1) / limb_px > SEPARATED
     pieces = [p for p in runs(apart) if p.stop - p.start >= MIN_APART]
     parity = np.zeros(len(pair), int)
     if not pieces:
         return parity
-    flat = pair.reshape(len(pair), 2, -1)
+    flat = pair[:, :, 1:].reshape(len(pair), 2, -1)
     current = 0
     for k, piece in enumerate(pieces):
         if k:
-            current = int(_crosses(pair, pieces[k - 1], piece, parity))
+            current = int(_crosses(pair, pieces[k - 1], piece, parity, limb_px))
             middle = (pieces[k - 1].stop + piece.start + 1) // 2
             parity[middle:piece.start] = current
         for t in range(piece.start, piece.stop):
@@ -178,23 +181,55 @@ def bridge_parity(pair: np.ndarray, limb_px: float) -> np.ndarray:
     return parity
 
 
-def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray) -> bool:
+def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, limb_px: float) -> bool:
     """Whether the limbs of ``after``'s first frame, as labelled, are in the other
-    order than ``before``'s limbs put in one order by ``parity`` so far (the limbs
-    followed across the stretch between by constant velocity, from either side)."""
-    flat = pair.reshape(len(pair), 2, -1).copy()
-    flat[parity == 1] = flat[parity == 1, ::-1]
+    order than ``before``'s limbs put in one order by ``parity`` so far.
+
+    Each limb is followed across the stretch between at constant velocity from
+    either side (crossing limbs continue, turning limbs come back): its middle and
+    distal joints and its two segments' image angles. The angles carry a limb that
+    swings past the other, even one that speeds up (a kick), where its joints come
+    close to the other's and a fit that loses one segment there misplaces them."""
+    ordered = pair.copy()
+    ordered[parity == 1] = pair[parity == 1, ::-1]
     t0, t1 = before.stop - 1, after.start
     a0, a1 = max(before.start, t0 - 2), min(after.stop - 1, t1 + 2)
-    v0 = (flat[t0] - flat[a0]) / max(1, t0 - a0)
-    after_flat = pair.reshape(len(pair), 2, -1)
-    later = after_flat[a1] if _same_order(after_flat, t1, a1) else after_flat[a1, ::-1]
-    v1 = (later - after_flat[t1]) / max(1, a1 - t1)
-    ahead, back = flat[t0] + v0 * (t1 - t0), after_flat[t1] - v1 * (t1 - t0)
-    keep = np.linalg.norm(ahead - after_flat[t1], axis=-1).sum() + np.linalg.norm(back - flat[t0], axis=-1).sum()
-    swap = (np.linalg.norm(ahead - after_flat[t1, ::-1], axis=-1).sum()
-            + np.linalg.norm(back[::-1] - flat[t0], axis=-1).sum())
+    later = pair[a1] if _same_order(pair[:, :, 1:], t1, a1) else pair[a1, ::-1]
+    ahead = _ahead(ordered[a0], ordered[t0], t0 - a0, t1 - t0)
+    back = _ahead(later, pair[t1], a1 - t1, t1 - t0)
+    keep = _mismatch(ahead, pair[t1], limb_px) + _mismatch(back, ordered[t0], limb_px)
+    swap = (_mismatch(ahead, pair[t1, ::-1], limb_px)
+            + _mismatch((back[0][::-1], back[1][::-1]), ordered[t0], limb_px))
     return swap < keep
+
+
+def _limb_features(limbs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(2, 2, 2) middle and distal joints and (2, 2) segment angles (radians) of
+    two limbs (2, 3, 2) given by their root, middle and distal joints."""
+    d = np.diff(limbs, axis=1)
+    return limbs[:, 1:], np.arctan2(d[..., 0], d[..., 1])
+
+
+def _ahead(earlier: np.ndarray, last: np.ndarray, span: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two limbs' joints and angles (``_limb_features``) ``frames`` on from ``last``
+    at their pace since ``earlier``, ``span`` frames before it (either way in time)."""
+    (p0, q0), (p1, q1) = _limb_features(earlier), _limb_features(last)
+    pace = frames / max(1, span)
+    return p1 + (p1 - p0) * pace, q1 + _wrapped(q1 - q0) * pace
+
+
+def _mismatch(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
+    """How far two limbs (2, 3, 2) lie from a prediction (``_ahead``): their middle
+    and distal joints' distances in limb lengths, plus ANGLE_WEIGHT times their
+    segments' turns in radians."""
+    joints, angles = _limb_features(limbs)
+    return float(np.linalg.norm(predicted[0] - joints, axis=-1).sum() / limb_px
+                 + ANGLE_WEIGHT * np.abs(_wrapped(predicted[1] - angles)).sum())
+
+
+def _wrapped(radians: np.ndarray) -> np.ndarray:
+    """Angle differences in [-pi, pi)."""
+    return (radians + np.pi) % (2 * np.pi) - np.pi
 
 
 def _same_order(flat: np.ndarray, t: int, u: int) -> bool:
