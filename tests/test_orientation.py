@@ -15,7 +15,8 @@ from mocap import body, synth
 from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, MIRROR_JOINTS
 from mocap.io.bvh import contract_joints, read_bvh
-from mocap.lift.taylor import known_sides, runs, track_sides
+from mocap.lift.sides import known_sides, track_sides
+from mocap.lift.taylor import runs
 from mocap.lift.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, legs_crossed
 from mocap.smoothest import smoothest_states
 from mocap.walk import walk_cycle

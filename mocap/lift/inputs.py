@@ -12,8 +12,8 @@ from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
-from mocap.lift.taylor import (LENGTH, anatomical_joints, clip_lengths, exchange_legs, known_sides, lift_pose,
-                        runs, track_sides)
+from mocap.lift.sides import known_sides, track_sides
+from mocap.lift.taylor import LENGTH, anatomical_joints, clip_lengths, exchange_legs, lift_pose, runs
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
                                legs_crossed, segment_vectors, yaws)
 

@@ -2,7 +2,7 @@
 the orientation and every foreshortening direction): orientation, which image-side
 limb is which in a profile, and every segment's sign.
 
-Which image-side limb is which is decided in ``mocap.lift.taylor`` (``track_sides``) from the
+Which image-side limb is which is decided in ``mocap.lift.sides`` (``track_sides``) from the
 orientation; where the legs cross in a turned view, the user's signs on them revise it
 (``legs_crossed``).
 Three cues, each a short function:
@@ -224,7 +224,7 @@ def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarra
 def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
                  px_per_unit: np.ndarray, lengths: np.ndarray, pinned: np.ndarray) -> np.ndarray:
     """(F,) bool: frames of anatomical 2D joints (F, 16, 2), named by the orientation's
-    image-side rule (``lift.track_sides``), whose knees and ankles belong to the other
+    image-side rule (``sides.track_sides``), whose knees and ankles belong to the other
     hip, by the user's foreshortening directions on the thighs and shins.
 
     Turned toward or away from the camera, the legs cross in the image as they

@@ -14,8 +14,8 @@ nearer the camera, larger z). Depths are chained from the pelvis outward.
 The body's orientation (one of six) and the torso's horizontal foreshortening
 (``spread``, the seen fraction of the shoulder/hip span) give how far the performer
 is turned about the vertical axis (the yaw), which places the hips and shoulders in
-depth, and which image-side limb is which anatomical one (``image_left_is_right``,
-``track_sides``).
+depth, and which image-side limb is which anatomical one (``image_left_is_right``;
+followed through time by ``mocap.lift.sides``).
 
 Coordinates (CONTRACT.md): 2D in video pixels (x right, y down); 3D in metres, origin
 at the pelvis, x to the image right, y up, z toward the camera, body height 1.75 m.
@@ -28,7 +28,7 @@ import numpy as np
 
 from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, CHEST_FRACTION, HIP_HALF_SPAN,
                         JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS,
-                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN, SIDE_SIGN, SIDES, AWAY,
+                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN, SIDE_SIGN, AWAY,
                         ORIENTATIONS, TOWARD, left_direction)
 
 UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT            # metres per model unit
@@ -36,17 +36,10 @@ SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)     # model half-spans: shoulders, h
 # A yaw within this many degrees of a profile (+-90) is named a profile by
 # ``orientation_of_yaw``: the six orientations split the circle into 60-degree sectors.
 PROFILE_HALF_SECTOR = 30.0
-SEPARATED = 0.25     # distal joints this many limb lengths apart tell two limbs apart
-# limb lengths of joint distance that a radian of segment turn counts as: a segment
-# (half a limb) that turns a radian moves its distal joint about that far
-ANGLE_WEIGHT = 0.5
-MIN_APART = 3        # frames: shorter stretches apart are fit noise inside a crossing
 _J = JOINT_INDEX
 _TORSO, _HEAD = SEGMENT_INDEX["torso"], SEGMENT_INDEX["head"]
 # limb segments in chain order (each one's proximal joint is placed before it)
 _LIMB_SEGMENTS = [SEGMENT_INDEX[s] for s in SEGMENT_NAMES if s not in ("torso", "head")]
-# the joints whose image sides the arms' and the legs' parities swap
-_PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 
 
 # -- orientation ----------------------------------------------------------------------
@@ -96,7 +89,7 @@ def image_left_is_right(orientation: str) -> bool | None:
     image left), which the image cannot show either (a silhouette looks the same
     with the depths mirrored and the sides swapped). Profiles therefore return
     None: the sides are followed through time from a frame where they are known
-    (``track_sides``).
+    (``mocap.lift.sides.track_sides``).
     """
     if orientation.startswith("forward"):
         return True
@@ -113,185 +106,6 @@ def runs(mask: np.ndarray) -> list[slice]:
     return [slice(a, b) for a, b in zip(edges[::2], edges[1::2])]
 
 
-# -- which image-side limb is which ----------------------------------------------------
-# Section 3.4: "From the orientation, we also determine the left leg (arm) and the
-# right leg (arm)." The 2D fit names limbs by image side (section 3.3).
-
-def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray) -> np.ndarray:
-    """(F, 2) bool: for arms and legs, whether the image-left limb is the right one.
-
-    ``known`` (F, 2) holds 1 (swap), 0 (keep) or -1 (unknown: a profile, where the 2D
-    fit names limbs by their image order, back and front). In a profile the legs keep
-    their identity through the moments where they pass each other by
-    ``bridge_parity``; the arms swing opposite to the legs (the front arm is on the
-    other side than the front leg), since the fit cannot see arms cross. A stretch
-    with nothing known starts from the forward-facing convention (swap), which the
-    user corrects with one joint override. ``facing_x`` (F,) is +1 facing image right.
-    """
-    out = np.zeros(known.shape, bool)
-    ok = np.isfinite(joints2d).all(axis=(1, 2))
-    for r in runs(ok):
-        legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
-        chains = _limb_pair(joints2d[r], LIMB_JOINTS["leg"])
-        parity = _anchored(bridge_parity(chains, _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])), known[r, 1])
-        out[r, 1] = np.where(known[r, 1] >= 0, known[r, 1] == 1, parity)
-        arms = _counter_phase(legs, out[r, 1], _limb_pair(joints2d[r], _PAIR_JOINTS["arms"]), facing_x[r])
-        out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, arms)
-    return out
-
-
-def _limb_pair(joints2d: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """(F, 2, len(names), 2): image-left/right limb, its joints ``names``, xy about the pelvis."""
-    idx = [[_J[f"{n}_{s}"] for n in names] for s in SIDES]
-    return joints2d[:, idx] - joints2d[:, None, None, _J["pelvis"]]
-
-
-def _limb_px(joints2d: np.ndarray, root: str, tip: str) -> float:
-    """A limb's typical image length (root to tip), pixels."""
-    ends = joints2d[:, [_J[f"{root}_l"], _J[f"{tip}_l"]]]
-    return max(float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=-1))), 1e-6)
-
-
-def bridge_parity(pair: np.ndarray, limb_px: float) -> np.ndarray:
-    """(F,) 0/1: whether each frame's two limbs are swapped relative to the first
-    stretch where they are apart. ``pair`` (F, 2, 3, 2): each limb's root, middle and
-    distal joint. While apart, each frame's limbs follow the nearer ones of the frame
-    before; across each stretch where they are close together the swap is decided by
-    ``_crosses``; close frames take the parity of the nearer side."""
-    apart = np.linalg.norm(pair[:, 0, 2] - pair[:, 1, 2], axis=-1) / limb_px > SEPARATED
-    pieces = [p for p in runs(apart) if p.stop - p.start >= MIN_APART]
-    parity = np.zeros(len(pair), int)
-    if not pieces:
-        return parity
-    flat = pair[:, :, 1:].reshape(len(pair), 2, -1)
-    current = 0
-    for k, piece in enumerate(pieces):
-        if k:
-            current = int(_crosses(pair, pieces[k - 1], piece, parity, limb_px))
-            middle = (pieces[k - 1].stop + piece.start + 1) // 2
-            parity[middle:piece.start] = current
-        for t in range(piece.start, piece.stop):
-            if t > piece.start:
-                step = np.linalg.norm(flat[t] - flat[t - 1], axis=-1).sum()
-                cross = np.linalg.norm(flat[t, ::-1] - flat[t - 1], axis=-1).sum()
-                current ^= int(cross < step)
-            parity[t] = current
-        end = pieces[k + 1].start if k + 1 < len(pieces) else len(pair)
-        parity[piece.stop:end] = current
-    return parity
-
-
-def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, limb_px: float) -> bool:
-    """Whether the limbs of ``after``'s first frame, as labelled, are in the other
-    order than ``before``'s limbs put in one order by ``parity`` so far.
-
-    Each limb is followed across the stretch between at constant velocity from
-    either side (crossing limbs continue, turning limbs come back): its middle and
-    distal joints and its two segments' image angles. The angles carry a limb that
-    swings past the other, even one that speeds up (a kick), where its joints come
-    close to the other's and a fit that loses one segment there misplaces them."""
-    ordered = pair.copy()
-    ordered[parity == 1] = pair[parity == 1, ::-1]
-    t0, t1 = before.stop - 1, after.start
-    a0, a1 = max(before.start, t0 - 2), min(after.stop - 1, t1 + 2)
-    later = pair[a1] if _same_order(pair[:, :, 1:], t1, a1) else pair[a1, ::-1]
-    ahead = _ahead(ordered[a0], ordered[t0], t0 - a0, t1 - t0)
-    back = _ahead(later, pair[t1], a1 - t1, t1 - t0)
-    keep = _mismatch(ahead, pair[t1], limb_px) + _mismatch(back, ordered[t0], limb_px)
-    swap = (_mismatch(ahead, pair[t1, ::-1], limb_px)
-            + _mismatch((back[0][::-1], back[1][::-1]), ordered[t0], limb_px))
-    return swap < keep
-
-
-def _limb_features(limbs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(2, 2, 2) middle and distal joints and (2, 2) segment angles (radians) of
-    two limbs (2, 3, 2) given by their root, middle and distal joints."""
-    d = np.diff(limbs, axis=1)
-    return limbs[:, 1:], np.arctan2(d[..., 0], d[..., 1])
-
-
-def _ahead(earlier: np.ndarray, last: np.ndarray, span: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two limbs' joints and angles (``_limb_features``) ``frames`` on from ``last``
-    at their pace since ``earlier``, ``span`` frames before it (either way in time)."""
-    (p0, q0), (p1, q1) = _limb_features(earlier), _limb_features(last)
-    pace = frames / max(1, span)
-    return p1 + (p1 - p0) * pace, q1 + _wrapped(q1 - q0) * pace
-
-
-def _mismatch(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
-    """How far two limbs (2, 3, 2) lie from a prediction (``_ahead``): their middle
-    and distal joints' distances in limb lengths, plus ANGLE_WEIGHT times their
-    segments' turns in radians."""
-    joints, angles = _limb_features(limbs)
-    return float(np.linalg.norm(predicted[0] - joints, axis=-1).sum() / limb_px
-                 + ANGLE_WEIGHT * np.abs(_wrapped(predicted[1] - angles)).sum())
-
-
-def _wrapped(radians: np.ndarray) -> np.ndarray:
-    """Angle differences in [-pi, pi)."""
-    return (radians + np.pi) % (2 * np.pi) - np.pi
-
-
-def _same_order(flat: np.ndarray, t: int, u: int) -> bool:
-    """Whether the limbs of frame u follow those of frame t in the same order."""
-    return (np.linalg.norm(flat[u] - flat[t], axis=-1).sum()
-            <= np.linalg.norm(flat[u, ::-1] - flat[t], axis=-1).sum())
-
-
-def _anchored(parity: np.ndarray, known: np.ndarray, reach: int = 10) -> np.ndarray:
-    """Relative parity -> swap per frame. Each stretch of unknown frames takes the
-    constant that agrees with most known frames within ``reach`` of it (else in the
-    whole run); with none known, the forward-facing convention (swap)."""
-    out = (parity ^ 1).astype(bool)
-    for stretch in runs(known < 0):
-        near = slice(max(0, stretch.start - reach), min(len(known), stretch.stop + reach))
-        votes = np.flatnonzero(known[near] >= 0) + near.start
-        if not len(votes):
-            votes = np.flatnonzero(known >= 0)
-        if len(votes):
-            flip = np.mean(parity[votes] != known[votes]) > 0.5
-            out[stretch] = (parity[stretch] ^ int(flip)).astype(bool)
-    return out
-
-
-def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray,
-                   facing_x: np.ndarray) -> np.ndarray:
-    """Arm swaps in a profile from the legs: the arm in front is on the other side
-    than the leg in front (gait); where the legs are level the last decision holds."""
-    lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
-    arm_lead = (arms[:, 1, :, 0].mean(-1) - arms[:, 0, :, 0].mean(-1)) * facing_x
-    out = np.ones(len(legs), bool)
-    last = True
-    for t in range(len(legs)):
-        if abs(lead[t]) > 1e-6 and abs(arm_lead[t]) > 1e-6:
-            front_leg_right = legs_swap[t] == (lead[t] < 0)
-            # the front arm is the left one then; the image-left arm is right iff it is behind
-            last = front_leg_right == (arm_lead[t] > 0)
-        out[t] = last
-    return out
-
-
-def known_sides(orientations: list[str | None], overrides: dict[int, dict[str, tuple[float, float]]],
-                joints2d: np.ndarray) -> np.ndarray:
-    """(F, 2) int8 for ``track_sides``: the orientation's image-side rule (forward:
-    swap, backward: keep, profile: unknown), and where the user placed an elbow, wrist,
-    knee or ankle, the assignment that puts that side's limb nearer to it."""
-    known = np.full((len(orientations), 2), -1, np.int8)
-    for i, name in enumerate(orientations):
-        rule = None if name is None else image_left_is_right(name)
-        if rule is not None:
-            known[i] = int(rule)
-    for i, joints in overrides.items():
-        for p, names in enumerate(_PAIR_JOINTS.values()):
-            for joint, xy in joints.items():
-                kind, _, side = joint.rpartition("_")
-                if kind in names and np.isfinite(joints2d[i]).all():
-                    same = np.linalg.norm(joints2d[i, _J[joint]] - xy)
-                    other = np.linalg.norm(joints2d[i, _J[f"{kind}_{'r' if side == 'l' else 'l'}"]] - xy)
-                    known[i, p] = int(other < same)
-    return known
-
-
 def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
     """(F, 16, 2) image-side joints with each frame's arms and legs swapped as told."""
     out = _exchanged(joints_image, swap[:, 0], LIMB_JOINTS["arm"])
@@ -301,7 +115,7 @@ def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
 def exchange_legs(joints2d: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """(F, 16, 2) with the knees and ankles of the ``rows`` (F,) bool frames exchanged
     between the hips: legs crossed in the image, the hips where they were."""
-    return _exchanged(joints2d, rows, _PAIR_JOINTS["legs"])
+    return _exchanged(joints2d, rows, LIMB_JOINTS["leg"][1:])
 
 
 def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
