@@ -196,6 +196,7 @@ def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm, p
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
     camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     turn = "right" if yaw < 90 else "left"
+    monkeypatch.setattr(P, "GUIDE", C.MODEL)               # the model walk's head is upright
     pulled = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
     monkeypatch.setattr(P, "SWING_PLANE_WEIGHT", {False: 0.0, True: 0.0})
     found = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
@@ -206,6 +207,27 @@ def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm, p
     assert pa_mpjpe(P.to_contract(pulled), truth.joints3d) * 1000 < pulled_mm
     assert np.allclose(P.to_contract(found)[:, JOINT_INDEX["pelvis"]], 0.0)
     assert np.allclose(camera.project(pulled), truth.joints2d)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 30.0, -60.0, 150.0, 180.0])
+def test_a_head_leaning_forward_is_rebuilt_leaning_forward(yaw, monkeypatch):
+    """Heads lean forward of the neck (the neck joint at the back of the neck): a head
+    leant 25 degrees, seen from the front, turned or from behind, is rebuilt from its
+    exact 2D leaning forward; the model's upright head as the guide takes the root
+    leaning back, a decimetre off, where the body faces the camera."""
+    pose = known_pose(yaw)
+    body = pose.model()
+    neck, top = JOINT_INDEX["neck"], JOINT_INDEX["head_top"]
+    body[top] = body[neck] + 0.22 * np.array([0.0, np.cos(np.radians(25.0)), np.sin(np.radians(25.0))])
+    true = pose.to_camera(body)[None]
+    rays = CAMERA.rays(CAMERA.project(true))
+    lengths = P.bone_lengths(true)[0]
+    found = P.trunk_joints(true[:, C.KEY], rays, lengths)
+    assert np.linalg.norm(found[0, top] - true[0, top]) < 1e-6
+    monkeypatch.setattr(P, "GUIDE", C.MODEL)
+    upright = P.trunk_joints(true[:, C.KEY], rays, lengths)
+    if abs(yaw) <= 30.0:
+        assert np.linalg.norm(upright[0, top] - true[0, top]) > 0.1
 
 
 def swing_case(yaw: float, pixel_error: float, across: bool = False) -> tuple:
