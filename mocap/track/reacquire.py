@@ -9,7 +9,8 @@ back). Its own tools do the search: the head's morph block (mocap.track.blocks,
 Eq. 3-5) scored on a grid over the whole frame, the best places refined by the
 search path of Fig. 6; with them the head the image difference points to (the
 tracker's own search on the frame, Eq. 1-5) and the last good pose's head. Each
-head's trunk is searched from the last good pose's trunk hung from it; the
+head's trunk is searched from the last good pose's trunk hung from it; both
+searches start only from the places that match best where they lie. The
 limbs are then found from the trunk by the tracker's own limb search
 (mocap.track.tracker), started from the last good pose carried by the trunk
 (``carried``).
@@ -33,11 +34,15 @@ ZOOMS = np.array([0.8, 1.0, 1.25])   # of the last good head's size: the sizes t
 TRUNK_TURNS = np.radians(np.arange(-45.0, 46.0, 15.0))   # the trunk's turns tried from the last good one
 CHUNK = 16384              # sub-pixel rows scored at once (OpenCV's remap takes fewer than 32767)
 REFOUND = 0.7              # of their usual S: the least match of head and trunk found again
+REFINED = 3                # heads refined by the search: the best matched where they lie
+TRUNKS_REFINED = 3         # ... trunks hung from each head refined
 
 # the tracker's searches: (frame, start block) -> the head's (block, S);
 # (frame, start block, the head's block) -> the trunk's (block, S)
 HeadSearch = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, float]]
 TrunkSearch = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, float]]
+# (frame, part, blocks (K, 5)) -> the part's S of each block where it lies, unrefined
+Score = Callable[[np.ndarray, int, np.ndarray], np.ndarray]
 
 
 class Found(NamedTuple):
@@ -80,19 +85,34 @@ def _inside(points: np.ndarray, shape: tuple) -> np.ndarray:
 
 
 def reacquired(frame: np.ndarray, starts: np.ndarray, good: np.ndarray, usual: np.ndarray,
-               head_search: HeadSearch, trunk_search: TrunkSearch) -> Found | None:
-    """The head and trunk found again on ``frame``, or None: each head block of
-    ``starts`` (K, 5) at each of ZOOMS refined by the tracker's ``head_search``
-    (the best kept; the body may have come nearer or gone away), its trunk found by
-    ``trunk_search`` from the last good pose's trunk (``good`` (10, 5)) hung from it
-    (``hung_trunks``); the pair whose worse match (S over the part's ``usual`` S (10,))
-    is best, if that is at least REFOUND (a head matched worse is not looked under)."""
+               head_search: HeadSearch, trunk_search: TrunkSearch, score: Score) -> Found | None:
+    """The head and trunk found again on ``frame``, or None, coarse to fine: each head
+    block of ``starts`` (K, 5) at each of ZOOMS (the body may have come nearer or gone
+    away) matched where it lies (``score``), the REFINED best refined by the
+    tracker's ``head_search``; under each head refined that matches at least REFOUND
+    of usual (a head matched worse is not looked under), the last good pose's trunk
+    (``good`` (10, 5)) hung from it at each turn (``hung_trunks``) matched where it
+    lies, the TRUNKS_REFINED best refined by ``trunk_search``. The pair whose worse
+    match (S over the part's ``usual`` S (10,)) is best is kept if that is at least
+    REFOUND.
+
+    Refining every head at every zoom and the trunk at every turn under each (about
+    130 block searches a lost frame) made a lost frame cost 10 times a tracked one;
+    the search moves a block a few pixels, degrees and a tenth of its size, which
+    seldom reorders places matched that far apart. The three best heads of all places
+    and zooms, not the best zoom of each of the three best places: with those the
+    board passing the performer (tests/test_track_loss.py) was found 5 frames late;
+    two trunks of seven, not three: laugh_arms_up (benchmarks/bench_track_clips.py)
+    lost 3 frames more."""
+    heads = np.concatenate([zooms(start) for start in starts])
     best, best_ratio = None, -np.inf
-    for start in starts:
-        head, s_head = max((head_search(frame, zoomed) for zoomed in zooms(start)), key=lambda match: match[1])
+    for start in heads[np.argsort(-score(frame, HEAD, heads))[:REFINED]]:
+        head, s_head = head_search(frame, start)
         if s_head < REFOUND * usual[HEAD]:
             continue
-        trunk, s_trunk = max((trunk_search(frame, hung, head) for hung in hung_trunks(good, head)),
+        hung = hung_trunks(good, head)
+        order = np.argsort(-score(frame, TORSO, hung))[:TRUNKS_REFINED]
+        trunk, s_trunk = max((trunk_search(frame, start, head) for start in hung[order]),
                              key=lambda match: match[1])
         ratio = min(s_head / usual[HEAD], s_trunk / usual[TORSO])
         if ratio > best_ratio:

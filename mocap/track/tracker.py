@@ -140,7 +140,7 @@ class BodyTracker:
         starts = np.concatenate([new[[HEAD]], self.good[[HEAD]],
                                  scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])])
         found = reacquired(frame, starts, self.good, self._usual(), self._head_search,
-                           self._track_torso)
+                           self._track_torso, self._score)
         if found is None:
             return False
         self.blocks = carried(self.good, found.blocks[1])
@@ -149,6 +149,10 @@ class BodyTracker:
         new[:] = self.blocks
         s[[HEAD, TORSO]] = found.s
         return True
+
+    def _score(self, frame: np.ndarray, k: int, candidates: np.ndarray) -> np.ndarray:
+        """(K,) part k's S of blocks ``candidates`` (K, 5) where they lie."""
+        return blocks.score(frame, self._model(k), self.grids[k], candidates)
 
     def _head_search(self, frame: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, float]:
         """The head's block and S searched from ``start``, its length within ZOOM_RANGE."""
