@@ -47,6 +47,13 @@ _SHADES = np.clip(_COLOURS[:, None, :] * _LAYERS[None, :, 2:], 0, 255).tolist()
 _FOURCC = {".mp4": "mp4v", ".avi": "MJPG"}
 _NOISE_PAD = 32
 _PAN_SPEED = 3                                             # px/frame, moving background
+# body shapes: each kind of segment's widths (lateral and front to back) against the
+# model's (body.WIDTH), so that a method can be tried on a body other than its own model
+SHAPES = {"model": {},
+          "slim": {"head": 0.95, "torso": 0.8, "upper_arm": 0.75, "lower_arm": 0.75,
+                   "upper_leg": 0.75, "lower_leg": 0.8},
+          "broad": {"head": 1.05, "torso": 1.3, "upper_arm": 1.3, "lower_arm": 1.2,
+                    "upper_leg": 1.3, "lower_leg": 1.2}}
 
 
 @dataclass(frozen=True)
@@ -65,6 +72,7 @@ class RenderOptions:
     antialias: bool = True
     noise: float = 2.0                 # sensor noise sigma, grey levels
     seed: int = 0
+    shape: str = "model"               # a key of SHAPES: the body's widths
 
     @property
     def yaw_deg(self) -> float:
@@ -173,6 +181,13 @@ class Scene:
     noise: np.ndarray        # (2, H+pad, W+pad, 3) positive and negative sensor noise
 
 
+def shape_widths(shape: str) -> np.ndarray:
+    """(10,) each segment's widths against the model's for a body ``shape`` (SHAPES)."""
+    if shape not in SHAPES:
+        raise MocapError(f"unknown body shape {shape!r} (choose {', '.join(SHAPES)})")
+    return np.array([SHAPES[shape].get(body.segment_kind(s), 1.0) for s in body.SEGMENT_NAMES])
+
+
 def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
     """Camera, background and noise for rendering ``joints_world`` (F, 16, 3)."""
     joints_world = np.asarray(joints_world, dtype=float)
@@ -180,7 +195,8 @@ def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
         raise MocapError(f"expected joints of shape (F, 16, 3), got {joints_world.shape}")
     height = body.body_height(joints_world[0])
     radii = np.concatenate([body.semi_axes(height), np.full((2, 2), _FOOT_R * height)])
-    camera = frame_camera(joints_world, radii, opts)
+    camera = frame_camera(joints_world, radii, opts)         # the model's: shapes share it
+    radii[:len(body.SEGMENT_NAMES)] *= shape_widths(opts.shape)[:, None]
     width, height = opts.size
     rng = np.random.default_rng(opts.seed)
     pan = min(_PAN_SPEED * (len(joints_world) - 1), width) if opts.moving_background else 0
@@ -364,6 +380,8 @@ def add_synth_arguments(parser) -> None:
     parser.add_argument("--in-place", action="store_true", help="walk-cycle on the spot")
     parser.add_argument("--truth", help="ground truth JSON (default OUT.truth.json)")
     parser.add_argument("--seed", type=int, default=0, help="background and noise seed")
+    parser.add_argument("--shape", choices=list(SHAPES), default="model",
+                        help="the body's widths: the model's own (default), slim or broad")
     parser.set_defaults(run=run_synth)
 
 
@@ -373,7 +391,8 @@ def run_synth(args) -> None:
                          size=_parse_pair(args.size, "x", "--size", int), fps=args.fps,
                          perspective=args.perspective, body_fraction=args.body_fraction,
                          moving_background=args.moving_background,
-                         antialias=not args.no_antialias, noise=args.noise, seed=args.seed)
+                         antialias=not args.no_antialias, noise=args.noise, seed=args.seed,
+                         shape=args.shape)
     if min(opts.size) < 16 or opts.fps <= 0 or not 0 < opts.body_fraction <= 1 or (
             opts.perspective is not None and opts.perspective <= 0):
         raise MocapError("--size must be at least 16x16, --fps and --perspective positive, "

@@ -98,6 +98,25 @@ def test_every_segment_is_drawn_where_the_truth_says(perspective):
         assert (truth.joints2d[i] > 0).all() and (truth.joints2d[i] < [640, 480]).all()
 
 
+def test_body_shapes_change_the_widths_not_the_joints():
+    """A slim or broad body (--shape) covers fewer or more pixels around the same
+    joints, filmed by the same camera: each silhouette lies within the next wider one."""
+    joints = walk_cycle(1.0, 10.0)[:3]
+    masks = {}
+    for shape in ("slim", "model", "broad"):
+        scene = synth.plan_scene(joints, synth.RenderOptions(view="three-quarter", noise=0.0,
+                                                             antialias=False, shape=shape))
+        truth = synth.scene_truth(scene, "walk-cycle", np.arange(3))
+        masks[shape] = np.array([body_mask(scene, i) for i in range(3)])
+        joints2d = truth.joints2d if shape == "slim" else joints2d
+        assert np.allclose(truth.joints2d, joints2d)
+    for thin, wide in (("slim", "model"), ("model", "broad")):
+        assert not (masks[thin] & ~masks[wide]).any()
+        assert masks[thin].sum() < 0.9 * masks[wide].sum()
+    with pytest.raises(MocapError, match="unknown body shape"):
+        synth.plan_scene(joints, synth.RenderOptions(shape="round"))
+
+
 def test_video_and_truth_files(tmp_path):
     out = tmp_path / "clip.avi"
     truth = synth.render_clip(walk_cycle(0.5, 30.0, in_place=True), out,
@@ -157,7 +176,7 @@ def test_resample_indices():
 def test_cli(tmp_path, capsys):
     out = tmp_path / "w.mp4"
     assert main(["synth", "walk-cycle", str(out), "--seconds", "0.4", "--size", "160x120",
-                 "--view", "three-quarter", "--truth", str(tmp_path / "t.json")]) == 0
+                 "--view", "three-quarter", "--truth", str(tmp_path / "t.json"), "--shape", "slim"]) == 0
     assert out.exists() and (tmp_path / "t.json").exists()
     assert main(["synth", str(tmp_path / "absent.bvh"), str(out)]) == 2
     assert main(["synth", "walk-cycle", str(tmp_path / "w.mkv")]) == 2
