@@ -15,7 +15,7 @@ from mocap import body, synth
 from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, MIRROR_JOINTS
 from mocap.io.bvh import contract_joints, read_bvh
-from mocap.lift.sides import known_sides, track_sides
+from mocap.lift.sides import SEPARATED, known_sides, track_sides
 from mocap.lift.taylor import runs
 from mocap.lift.orientation import NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, legs_crossed
 from mocap.smoothest import smoothest_states
@@ -121,23 +121,30 @@ def test_a_joint_override_decides_the_sides_in_a_profile():
     assert not swap[frame].any()
 
 
-def test_legs_keep_their_sides_through_every_crossing_of_a_profile_walk():
-    """In a profile the fit names the legs by their image order, which changes at
-    every step; the sides are followed through the moments the legs pass each other
-    from a single joint override."""
+def test_limbs_keep_their_sides_through_every_crossing_of_a_profile_walk():
+    """In a profile the fit names the legs and the arms by their image order, which
+    changes at every step; from a single joint override the legs are followed through
+    the moments they pass each other, and the arms, swinging opposite to the legs
+    (the arm in front is on the other side than the leg in front), get their sides
+    wherever the hands are apart."""
     truth = seen(walk_cycle(3.0, 30.0), "side")
-    legs = [[JOINT_INDEX[f"{n}_{s}"] for n in ("hip", "knee", "ankle")] for s in "lr"]
-    image_side = truth.joints2d.copy()
-    swapped = truth.joints2d[:, legs[0], 0].mean(1) > truth.joints2d[:, legs[1], 0].mean(1)
-    image_side[np.ix_(swapped, legs[0])] = truth.joints2d[np.ix_(swapped, legs[1])]
-    image_side[np.ix_(swapped, legs[1])] = truth.joints2d[np.ix_(swapped, legs[0])]
-    assert 0.2 < swapped.mean() < 0.8                      # the image order changes
+    image_side, swapped = truth.joints2d.copy(), {}
+    for kind in ("leg", "arm"):
+        chain = [[JOINT_INDEX[f"{n}_{s}"] for n in body.LIMB_JOINTS[kind]] for s in "lr"]
+        swapped[kind] = truth.joints2d[:, chain[0], 0].mean(1) > truth.joints2d[:, chain[1], 0].mean(1)
+        image_side[np.ix_(swapped[kind], chain[0])] = truth.joints2d[np.ix_(swapped[kind], chain[1])]
+        image_side[np.ix_(swapped[kind], chain[1])] = truth.joints2d[np.ix_(swapped[kind], chain[0])]
+        assert 0.2 < swapped[kind].mean() < 0.8                # the image order changes
     ankles = truth.joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]]
     frame = int(np.argmax(np.abs(ankles[:, 0, 0] - ankles[:, 1, 0])))     # widest apart
     says = {frame: {"ankle_l": tuple(ankles[frame, 0])}}
     known = known_sides(["right"] * len(image_side), says, image_side)
     swap = track_sides(image_side, known, np.ones(len(image_side)))
-    assert np.mean(swap[:, 1] == swapped) > 0.9      # the rest: legs level, either order
+    assert np.mean(swap[:, 1] == swapped["leg"]) > 0.9      # the rest: legs level, either order
+    arm = sum(body.LENGTH[body.SEGMENT_INDEX[s]] for s in ("upper_arm_l", "lower_arm_l"))
+    wrists = truth.joints2d[:, [JOINT_INDEX["wrist_l"], JOINT_INDEX["wrist_r"]], 0]
+    apart = np.abs(wrists[:, 0] - wrists[:, 1]) > SEPARATED * arm * truth.body_height_px / BODY_HEIGHT
+    assert apart.mean() > 0.5 and np.mean(swap[apart, 0] == swapped["arm"][apart]) > 0.9
 
 
 def test_a_kicking_leg_keeps_its_name_through_the_crossing_its_thigh_swings_through():
