@@ -91,13 +91,15 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
     """Pixels on one image side ('l' or 'r') of the torso's axis: an arm explains only
     silhouette on its own side (section 3.3 names limbs by image side), so one arm
-    cannot take the other's pixels."""
+    cannot take the other's pixels. Above the head either arm may take them: hands
+    raised overhead come together there, and the axis's line beyond the head (off by
+    the fitted torso's lean) says nothing of which shoulder a hand belongs to."""
     joints = forward_kinematics_2d(pose)
     pelvis, neck = joints[JOINT_INDEX["pelvis"]], joints[JOINT_INDEX["neck"]]
     ys, xs = np.arange(shape[0])[:, None], np.arange(shape[1])[None, :]
     # positive on the image-right of the upward axis (image y points down)
     cross = (neck[0] - pelvis[0]) * (ys - pelvis[1]) - (neck[1] - pelvis[1]) * (xs - pelvis[0])
-    return cross < 0 if side == "l" else cross > 0
+    return (cross < 0 if side == "l" else cross > 0) | (ys < joints[JOINT_INDEX["head_top"], 1])
 
 
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
