@@ -131,6 +131,18 @@ def test_clean_plate_from_a_photo_and_from_empty_frames(in_place, tmp_path):
     assert mean_iou(in_place["frames"], in_place["masks"], filmed) > 0.9
 
 
+def test_a_plate_photographed_in_other_tones_is_brought_to_the_clips(in_place, tmp_path):
+    """A photo of the empty stage taken apart (darker, lifted blacks, sharper than the
+    clip's encoding) is brought to the clip's own image of the scene."""
+    photo = tmp_path / "other_camera.png"
+    cv2.imwrite(str(photo), np.clip(in_place["empty"] * 0.8 + 25.0, 0, 255).astype(np.uint8))
+    info = open_video(in_place["video"])
+    plate = clean_plate(photo, info, 1.0)
+    same = clean_plate(in_place["photo"], info, 1.0)
+    assert np.percentile(cv2.absdiff(plate.image, same.image), 99) <= 3
+    assert mean_iou(in_place["frames"], in_place["masks"], plate) > 0.9
+
+
 def test_clean_plate_of_another_shape_or_range_is_refused(in_place, tmp_path):
     info = open_video(in_place["video"])
     odd = tmp_path / "square.png"

@@ -220,8 +220,9 @@ def _disk(radius: int) -> np.ndarray:
 def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, scale: float) -> Background:
     """The background from the empty scene the user gives: a photo, a video of it
     (the median of its frames), or frames (first, last) of the clip itself; brought
-    to the clip's processing size. The threshold is the clip's noise floor, the noise
-    measured as the median difference of the clip's samples from the plate."""
+    to the clip's processing size and (``scene_image``) to the clip's own image of
+    the scene. The threshold is the clip's noise floor, the noise measured as the
+    median difference of the clip's samples from that."""
     if isinstance(source, tuple):
         first, last = source
         if not 0 <= first <= last < info.frame_count:
@@ -234,10 +235,48 @@ def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, sc
     samples = [f for _, f in sample_frames(info, BACKGROUND_FRAMES, scale)]
     if samples[0].shape != image.shape:
         image = cv2.resize(image, samples[0].shape[1::-1], interpolation=cv2.INTER_AREA)
+    image = scene_image(image, estimate_background(samples))
     deviation = [cv2.absdiff(cv2.transform(f, np.diag(exposure_gain(f, image))), image).max(axis=2)
                  for f in samples]
     sigma = MAD_TO_SIGMA * median_level(deviation)
     return Background(image, np.full(image.shape[:2], noise_floor(sigma), np.uint8), sigma)
+
+
+def scene_image(plate: np.ndarray, median: Background) -> np.ndarray:
+    """The clip's temporal ``median`` where it shows the scene, the ``plate`` (in the
+    clip's tones: ``match_tones``) where it holds the performer: where the two differ
+    by more than the clip's noise floor, a 3x3 opening against noise, grown by two
+    pixels for the blurred edges. The median has the camera, blur and encoding of the
+    frames, which a photo taken apart never has: on five of the eight development
+    clips the noise measured against their photo alone is 1.5 to 3 times that
+    against their median."""
+    plate = match_tones(plate, median.image)
+    differs = cv2.compare(cv2.absdiff(plate, median.image).max(axis=2), noise_floor(median.sigma), cv2.CMP_GT)
+    holds = cv2.dilate(cv2.morphologyEx(differs, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8)), _disk(2)) > 0
+    image = median.image.copy()
+    image[holds] = plate[holds]
+    return image
+
+
+def match_tones(plate: np.ndarray, scene: np.ndarray, rounds: int = 3) -> np.ndarray:
+    """``plate`` with each channel mapped onto the clip's tones (``scene``, the clip's
+    temporal median) by a gain and an offset: a photo or another video of the empty
+    scene is taken with another exposure and encoding than the clip, which no single
+    gain undoes (the development clips' photos are up to 12 grey levels off after
+    one). Least squares, refitted ``rounds`` times to the pixels within 2.5 robust
+    sigmas of the last fit, so that a performer who stays in place in ``scene``
+    does not pull it."""
+    out = []
+    for p, s in zip(cv2.split(plate), cv2.split(scene)):
+        p, s = p.ravel().astype(np.float32), s.ravel().astype(np.float32)
+        keep = np.ones(p.size, bool)
+        for _ in range(rounds):
+            gain, offset = np.polyfit(p[keep], s[keep], 1)
+            residual = np.abs(gain * p + offset - s)
+            keep = residual <= max(2.0, 2.5 * MAD_TO_SIGMA * float(np.median(residual)))
+        lut = np.clip(gain * np.arange(256.0) + offset + 0.5, 0, 255).astype(np.uint8)
+        out.append(cv2.LUT(p.reshape(plate.shape[:2]).astype(np.uint8), lut))
+    return cv2.merge(out)
 
 
 def _plate_image(path: str, size: tuple[int, int]) -> np.ndarray:
