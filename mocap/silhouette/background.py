@@ -262,13 +262,14 @@ def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarra
     """The shadow ``candidates`` (0/255) that keep the background's texture.
 
     A shadow scales the texture, so over 5x5 pixels the frame correlates with the
-    background (normalised cross-correlation over SHADOW_NCC); cloth over a pattern
-    hides it. Only where the background's darkened contrast stands clear of the
-    noise (K_SIGMA levels) does the test tell, and most of a patterned floor is flat
-    between its lines, so the candidates vote: a candidate is shadow when most of the
-    telling candidates within _vote_size keep the texture (where none tells, most of
-    those of its connected piece), as a cast shadow does throughout and grey
-    trousers over bricks do not.
+    background (normalised cross-correlation over SHADOW_NCC) with at least half the
+    contrast the darkening leaves; cloth over a pattern hides it (flat cloth's noise
+    may correlate, but has not the contrast). Only where the background's darkened
+    contrast stands clear of the noise (K_SIGMA levels) does the test tell, and most
+    of a patterned floor is flat between its lines, so the candidates vote: a
+    candidate is shadow when most of the telling candidates within _vote_size keep
+    the texture (where none tells, most of those of its connected piece), as a cast
+    shadow does throughout and grey trousers over bricks do not.
     """
     frame, bg = grey.astype(np.float32), grey_bg.astype(np.float32)
     frame_mean, frame_spread = _local_spread(frame)
@@ -276,9 +277,9 @@ def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarra
     covariance = cv2.blur(frame * bg, (5, 5)) - frame_mean * bg_mean
     expected = frame_mean / (bg_mean + 1.0) * bg_spread
     telling = (candidates > 0) & (expected > K_SIGMA * sigma)
-    correlated = covariance > SHADOW_NCC * frame_spread * bg_spread
-    keeps = (telling & correlated).astype(np.float32)
-    loses = (telling & ~correlated & (frame_spread < expected)).astype(np.float32)
+    kept = telling & (covariance > SHADOW_NCC * frame_spread * bg_spread) & (frame_spread >= 0.5 * expected)
+    keeps = kept.astype(np.float32)
+    loses = (telling & ~kept & (frame_spread < expected)).astype(np.float32)
     size = (_vote_size(frame_shape),) * 2
     near_keeps = cv2.boxFilter(keeps, -1, size, normalize=False)
     near_loses = cv2.boxFilter(loses, -1, size, normalize=False)
