@@ -85,7 +85,7 @@ def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
         fits += stream.push(silhouette)
     fits += stream.finish()
     notes = load_annotations(clip / "oracle.json", info.frame_count) if mode == "oracle" else Annotations()
-    session = SilhouetteSession(info, fits, notes)
+    session = SilhouetteSession(info, fits, notes, silhouettes=silhouettes)   # their grey levels: the heads' look
     write_format("json", folder / ("oracle.out.json" if mode == "oracle" else "auto.json"), session.clip())
     return time.perf_counter() - start
 

@@ -1,13 +1,22 @@
-"""Facing marks (beyond the paper): a nose on the head and a stub on the chest's front,
-so that the way the body faces shows in 3D, where the cylinders alone look alike turned
-half round. The app's 3D bodies, the GLB/FBX character and the playback page draw them.
+"""Which way the body faces (beyond the paper).
+
+Facing marks: a nose on the head and a stub on the chest's front, so that the way the
+body faces shows in 3D, where the cylinders alone look alike turned half round. The
+app's 3D bodies, the GLB/FBX character and the playback page draw them.
+
+The head's look: `mocap synth --hair` draws hair over the back of the head and the
+crown (``draw_hair``), and ``facing_away`` reads a video's heads for the orientation
+guess (mocap.lift.orientation): mostly face is seen from the front, mostly hair from
+behind, where the silhouette cannot tell.
 """
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, SEGMENT_INDEX, SEGMENT_JOINTS, left_direction, semi_axes, unit
+from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, left_direction,
+                        semi_axes, unit)
 
 # name -> (segment, where along it from its proximal joint, length and radius in model
 # units of a 175-unit body); each stands out of its segment's front
@@ -27,4 +36,109 @@ def facing_marks(joints3d: np.ndarray, body_height: float = BODY_HEIGHT_M) -> np
         out[k, 1] = unit(np.cross(left_direction(j), b - a))
         out[k, 0] = a + along * (b - a) + out[k, 1] * semi_axes(body_height)[i, 1]
         out[k, 2, :2] = np.array([length, radius]) * body_height / BODY_HEIGHT
+    return out
+
+
+# -- the head's look: hair behind, face in front ---------------------------------------
+# Hair covers the back of the head above the ears and the crown all round; the face the
+# front below the hairline. A silhouette (and every 2D joint) is the same seen from the
+# front or from behind with depths mirrored (the Necker ambiguity of an orthographic
+# view), but the head shows mostly face from the front and mostly hair from behind.
+HAIRLINE = 0.35          # of the head's length above the neck: hair above it at the back
+FRINGE = 0.8             # above it, hair all round (the forehead's hairline)
+HAIR_BGR = (38, 48, 66)  # dark brown
+_BACK_ARC = 0.25         # hair where the head's surface faces less than this far forward
+
+
+def hair_patches(joints: np.ndarray, radius: float, samples: int = 24) -> list[np.ndarray]:
+    """Points (N, 3) of each hair patch of a pose (16, 3; camera frame, z toward the
+    camera) whose head is a cylinder of ``radius``: the back of the head above
+    HAIRLINE and the crown above FRINGE, each only on the side facing the camera,
+    so that a patch projects to a convex region of the head's outline."""
+    a, b = joints[SEGMENT_JOINTS[SEGMENT_INDEX["head"]]]
+    axis = unit(b - a)
+    left = unit(left_direction(joints) - (left_direction(joints) @ axis) * axis)
+    angle = 2 * np.pi * np.arange(samples) / samples
+    normal = np.cos(angle)[:, None] * left + np.sin(angle)[:, None] * np.cross(left, axis)
+    seen = normal[:, 2] > -0.1
+    patches = []
+    for start, arc in ((HAIRLINE, seen & (np.sin(angle) < _BACK_ARC)), (FRINGE, seen)):
+        for run in _circular_runs(arc):
+            ring = normal[run] * radius
+            patches.append(np.concatenate([a + start * (b - a) + ring, b + ring]))
+    return patches
+
+
+def _circular_runs(mask: np.ndarray) -> list[np.ndarray]:
+    """Index arrays of the stretches of True (two or more) around a circular mask."""
+    if mask.all():
+        return [np.arange(len(mask))]
+    shift = int(np.argmin(mask))                    # start on a False: no run wraps
+    edges = np.flatnonzero(np.diff(np.r_[0, np.roll(mask, -shift).astype(int), 0]))
+    return [(np.arange(a, b) + shift) % len(mask) for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
+
+
+def draw_hair(img: np.ndarray, joints: np.ndarray, radius: float, project, outline: np.ndarray,
+              line: int) -> None:
+    """Paint the hair patches (``hair_patches``) onto a drawn head: ``project`` takes
+    camera-frame points to pixels, ``outline`` is the head's drawn convex hull in
+    sixteenths of a pixel (the patches are clipped to it)."""
+    outline = outline.reshape(-1, 2).astype(np.float32)
+    for points in hair_patches(joints, radius):
+        patch = cv2.convexHull(np.round(project(points) * 16).astype(np.float32))
+        area, shape = cv2.intersectConvexConvex(patch, outline)
+        if area > 0:
+            cv2.fillConvexPoly(img, np.round(shape).astype(np.int32), HAIR_BGR, line, 4)
+
+
+# The upper head (from above the ears to the crown, of the fitted neck -> head top) is
+# split into its dark and light tones (Otsu); the dark one's share is about 0.35 seen
+# from the front (a hairline), 0.5 three-quarter from the front, 0.75 three-quarter
+# from behind and from behind (measured on the development clips' independent renders
+# and on `mocap synth`'s, people with hair darker than their skin).
+HEAD_BAND = (0.35, 1.1, 0.4)   # along the head from, to; half-width across (head lengths)
+SHARE_BETWEEN = 0.6            # the dark share between the three-quarter views, front and back
+SHARE_SPAN = 0.15              # from it to a sure front or back
+MIN_CONTRAST = 30.0            # grey levels between the two tones: less is one tone, no cue
+_J_TOP, _J_NECK = JOINT_INDEX["head_top"], JOINT_INDEX["neck"]
+
+
+def hair_share(grey: np.ndarray, mask: np.ndarray, neck: np.ndarray, top: np.ndarray) -> float:
+    """The dark tone's share of the upper head's pixels in a grey image where ``mask``
+    is the performer (NaN when the head shows one tone or too few pixels)."""
+    u = top - neck
+    length = float(np.hypot(*u))
+    if not np.isfinite(length) or length < 2:
+        return np.nan
+    lo = np.maximum(np.floor(np.minimum(neck, top) - length).astype(int), 0)
+    hi = np.minimum(np.ceil(np.maximum(neck, top) + length).astype(int) + 1, grey.shape[1::-1])
+    yy, xx = np.mgrid[lo[1]:hi[1], lo[0]:hi[0]]
+    rel = np.stack([xx - neck[0], yy - neck[1]], axis=-1) / length ** 2
+    along, across = rel @ u, rel @ np.array([-u[1], u[0]])
+    start, end, half = HEAD_BAND
+    inside = mask[lo[1]:hi[1], lo[0]:hi[0]] & (along >= start) & (along <= end) & (np.abs(across) <= half)
+    tones = grey[lo[1]:hi[1], lo[0]:hi[0]][inside]
+    if tones.size < 10:
+        return np.nan
+    cut, _ = cv2.threshold(tones.reshape(-1, 1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    dark = tones <= cut
+    if dark.all() or not dark.any() or tones[~dark].mean() - tones[dark].mean() < MIN_CONTRAST:
+        return np.nan
+    return float(dark.mean())
+
+
+def facing_away(silhouettes: list, joints2d: np.ndarray, scale: float) -> np.ndarray:
+    """(F,) evidence in [-1, 1] that the performer faces away from the camera (> 0) or
+    toward it (< 0), from ``hair_share`` on each frame's silhouette (its box, mask and
+    grey levels, mocap.silhouette.passes.Silhouette, in pixels of ``scale`` times the
+    video's) and image joints (F, 16, 2; video pixels); 0 where the head says nothing."""
+    out = np.zeros(len(joints2d))
+    for i, (sil, joints) in enumerate(zip(silhouettes, joints2d)):
+        if sil is None or sil.grey is None or not np.isfinite(joints).all():
+            continue
+        origin = np.array(sil.box[:2], float)
+        share = hair_share(sil.grey, sil.mask() > 0, joints[_J_NECK] * scale - origin,
+                           joints[_J_TOP] * scale - origin)
+        if np.isfinite(share):
+            out[i] = np.clip((share - SHARE_BETWEEN) / SHARE_SPAN, -1.0, 1.0)
     return out

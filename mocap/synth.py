@@ -24,6 +24,7 @@ from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
 from mocap.io.fileio import check_writable
 from mocap.errors import MocapError
+from mocap.facing import draw_hair
 from mocap.truth import Camera, Truth, save_truth
 from mocap.walk import walk_cycle
 
@@ -31,7 +32,7 @@ WALK_CYCLE = "walk-cycle"   # the source name of the procedural walk
 VIEWS = {"side": 0.0, "three-quarter": 45.0, "front": 90.0}
 _UP = np.array([0.0, 1.0, 0.0])
 _RING = np.exp(2j * np.pi * np.arange(24) / 24)           # 24 samples on each end ellipse
-_TORSO = body.SEGMENT_INDEX["torso"]
+_TORSO, _HEAD = body.SEGMENT_INDEX["torso"], body.SEGMENT_INDEX["head"]
 _LIGHT = np.array([-0.5, 0.6, 0.62]) / np.linalg.norm([-0.5, 0.6, 0.62])  # camera frame
 # shading layers: (radius fraction, shift toward the light in radii, brightness)
 _LAYERS = np.array([[1.0, 0.0, 0.72], [0.62, 0.3, 1.0], [0.25, 0.55, 1.18]])
@@ -44,8 +45,7 @@ _SHINS = [body.SEGMENT_INDEX["lower_leg_l"], body.SEGMENT_INDEX["lower_leg_r"]]
 # and toes 22 ahead (anthropometric tables: foot 0.152 of the stature, ankle at a fifth)
 _HEEL, _TOE, _FOOT_R = 6.0, 22.0, body.FOOT_LENGTH / 2 / body.BODY_HEIGHT  # round feet
 _SHADES = np.clip(_COLOURS[:, None, :] * _LAYERS[None, :, 2:], 0, 255).tolist()
-_FOURCC = {".mp4": "mp4v", ".avi": "MJPG"}
-_NOISE_PAD = 32
+_FOURCC, _NOISE_PAD = {".mp4": "mp4v", ".avi": "MJPG"}, 32
 _PAN_SPEED = 3                                             # px/frame, moving background
 # body shapes: each kind of segment's widths (lateral and front to back) against the
 # model's (body.WIDTH), so that a method can be tried on a body other than its own model
@@ -73,6 +73,7 @@ class RenderOptions:
     noise: float = 2.0                 # sensor noise sigma, grey levels
     seed: int = 0
     shape: str = "model"               # a key of SHAPES: the body's widths
+    hair: bool = False                 # hair over the back of the head and the crown
 
     @property
     def yaw_deg(self) -> float:
@@ -197,8 +198,7 @@ def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
     radii = np.concatenate([body.semi_axes(height), np.full((2, 2), _FOOT_R * height)])
     camera = frame_camera(joints_world, radii, opts)         # the model's: shapes share it
     radii[:len(body.SEGMENT_NAMES)] *= shape_widths(opts.shape)[:, None]
-    width, height = opts.size
-    rng = np.random.default_rng(opts.seed)
+    (width, height), rng = opts.size, np.random.default_rng(opts.seed)
     pan = min(_PAN_SPEED * (len(joints_world) - 1), width) if opts.moving_background else 0
     canvas = _room(width + pan, height, rng, clutter=opts.moving_background)
     noise = rng.normal(0.0, opts.noise, (height + _NOISE_PAD, width + _NOISE_PAD, 3))
@@ -253,8 +253,10 @@ def draw_frame(scene: Scene, i: int) -> np.ndarray:
     line = cv2.LINE_AA if scene.opts.antialias else cv2.LINE_8
     for k in np.argsort(depth):
         for layer in range(len(_LAYERS)):
-            hull = cv2.convexHull(px[k, layer])
-            cv2.fillConvexPoly(img, hull, _SHADES[k][layer], line, 4)
+            cv2.fillConvexPoly(img, cv2.convexHull(px[k, layer]), _SHADES[k][layer], line, 4)
+        if k == _HEAD and scene.opts.hair:      # a face in front, hair behind (mocap.facing)
+            draw_hair(img, scene.joints_cam[i], scene.radii[k, 0], scene.camera.project_camera,
+                      cv2.convexHull(px[k, 0]), line)
     if scene.opts.noise > 0:
         width, height = scene.opts.size
         dy, dx = np.random.default_rng([scene.opts.seed, i]).integers(0, _NOISE_PAD, 2)
@@ -329,9 +331,7 @@ def resample_indices(n_source: int, frame_time: float, fps: float,
     start, stop, _ = slice(*(frames or (None, None))).indices(n_source)
     if stop <= start:
         raise MocapError(f"frame range {frames} is empty (the motion has {n_source} frames)")
-    duration = (stop - start) * frame_time
-    if seconds is not None:
-        duration = min(duration, seconds)
+    duration = min((stop - start) * frame_time, np.inf if seconds is None else seconds)
     count = max(1, int(np.floor(duration * fps + 1e-6)))
     picks = start + np.round(np.arange(count) / (fps * frame_time)).astype(int)
     return np.minimum(picks, stop - 1)
@@ -376,6 +376,7 @@ def add_synth_arguments(parser) -> None:
     parser.add_argument("--moving-background", action="store_true",
                         help="pan a cluttered background (for the tracking method)")
     parser.add_argument("--no-antialias", action="store_true", help="hard polygon edges")
+    parser.add_argument("--hair", action="store_true", help="dark hair over the back of the head")
     parser.add_argument("--noise", type=float, default=2.0, help="sensor noise sigma")
     parser.add_argument("--in-place", action="store_true", help="walk-cycle on the spot")
     parser.add_argument("--truth", help="ground truth JSON (default OUT.truth.json)")
@@ -392,7 +393,7 @@ def run_synth(args) -> None:
                          perspective=args.perspective, body_fraction=args.body_fraction,
                          moving_background=args.moving_background,
                          antialias=not args.no_antialias, noise=args.noise, seed=args.seed,
-                         shape=args.shape)
+                         shape=args.shape, hair=args.hair)
     if min(opts.size) < 16 or opts.fps <= 0 or not 0 < opts.body_fraction <= 1 or (
             opts.perspective is not None and opts.perspective <= 0):
         raise MocapError("--size must be at least 16x16, --fps and --perspective positive, "

@@ -1,12 +1,21 @@
-"""The facing marks (mocap.facing): a nose and a chest mark in front of the body."""
+"""Which way the body faces (mocap.facing): a nose and a chest mark in front of the 3D
+body, hair on the back of the rendered head, and the head's look in the video."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
+from helpers import SHARED_DATA
 
 from mocap import body
-from mocap.facing import FACING_MARKS, facing_marks
+from mocap.facing import FACING_MARKS, facing_away, facing_marks
+from mocap.lift import taylor as lift
+from mocap.pipeline import open_session
+from mocap.silhouette.passes import fit_arrays
+from mocap.synth import RenderOptions, render_motion
 from mocap.walk import walk_cycle
+
+CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 
 
 def test_facing_marks_stand_out_of_the_front_and_turn_with_the_body():
@@ -22,3 +31,21 @@ def test_facing_marks_stand_out_of_the_front_and_turn_with_the_body():
         assert 0.02 < size[0] < 0.2 and 0.02 < size[1] < 0.2                 # metres
     turned = pose * [-1.0, 1.0, -1.0]                          # half a turn about y: faces away
     np.testing.assert_allclose(facing_marks(turned)[:, :2], marks[:, :2] * [-1.0, 1.0, -1.0], atol=1e-9)
+
+
+@pytest.mark.skipif(not CMU_WALK.is_file(), reason=f"{CMU_WALK} is absent (real motion capture)")
+@pytest.mark.parametrize("yaw, away", [(-45.0, True), (-135.0, True), (45.0, False)])
+def test_a_performer_seen_from_behind_is_named_facing_away(tmp_path, yaw, away):
+    """A CMU walk seen three-quarter from behind has the silhouette (and the 2D joints)
+    of the mirror-image walk seen from the front; the back of the head (rendered with
+    hair, as people have) tells them apart: the guessed orientation is backward on
+    (almost) every frame, and forward from the front."""
+    video = tmp_path / "walk.mp4"
+    options = RenderOptions(yaw=yaw, size=(480, 360), fps=15.0, hair=True)
+    truth = render_motion(CMU_WALK, video, options, seconds=2.0)
+    assert all((abs(lift.yaw_of(p)) > 90) == away for p in truth.joints3d)
+    session = open_session(video)
+    evidence = facing_away(session.silhouettes, fit_arrays(session.fits)[0], 1.0)
+    assert np.mean(evidence > 0 if away else evidence < 0) >= 0.7       # frame by frame
+    names = session.inputs.orientation
+    assert sum(str(n).startswith("backward" if away else "forward") for n in names) >= 0.9 * len(names)

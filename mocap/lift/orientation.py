@@ -10,9 +10,12 @@ Three cues, each a short function:
 - **walking direction** (pelvis track) and **knee bends** (knees point the way the
   performer faces) say whether the performer faces image left or right; a growing
   body (walking toward a perspective camera) says forward, a shrinking one backward,
-  and otherwise forward is assumed. Forward and backward cannot be told apart from a
-  silhouette under orthographic projection: mirroring every depth and swapping left
-  and right gives the same image (the Necker ambiguity); the user says it once.
+  otherwise the head's look (below), else forward. Forward and backward cannot be told
+  apart from a silhouette or its 2D joints under orthographic projection: mirroring every depth
+  and swapping left and right gives the same image (the Necker ambiguity; knees,
+  elbows, feet and the walking direction only say which image side is faced). The
+  head's look can (mocap.facing.facing_away: mostly hair seen from behind, mostly
+  face from the front); where it says nothing the user says it once.
 - **joint limits**: knees bend backward, elbows forward, thighs and upper arms do not
   cross the body's midline or swing far backward, the torso does not lean far back.
 - **temporal coherence**: a sign can only change where its segment passes through
@@ -39,6 +42,7 @@ NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not mat
 PROFILE_SPREAD = 0.5       # torso spread below which the body is in profile (yaw 60..120)
 WALK_SPEED = 0.15          # body heights per second: slower pelvis tracks say nothing
 GROWTH = 0.05              # relative body-size change per second that says toward/away
+AWAY_SAYS = 0.25           # pooled head evidence (mocap.facing.facing_away) that says away
 CUE_WINDOW_S = 1.0         # half-window over which direction cues are pooled, seconds
 MIN_RUN_S = 0.5            # orientation runs shorter than this join their neighbours
 LIMIT_WEIGHT = 30.0        # model units of acceleration per unit of joint-limit violation
@@ -76,25 +80,28 @@ def pooled(values: np.ndarray, fps: float) -> np.ndarray:
 
 
 def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.ndarray,
-                       fps: float) -> list[str | None]:
+                       fps: float, away: np.ndarray | None = None) -> list[str | None]:
     """Each frame's orientation (None where nobody is): facing side from the walking
     direction and knee bends, profile when the torso's spread is below
-    PROFILE_SPREAD, backward only when the body shrinks (walks away), and runs
-    shorter than MIN_RUN_S merged into their neighbours."""
+    PROFILE_SPREAD, backward when the body shrinks (walks away) or, where it does not
+    grow, when the head's look says so (``away`` (F,): mocap.facing.facing_away, pooled
+    over CUE_WINDOW_S above AWAY_SAYS), and runs shorter than MIN_RUN_S merged into
+    their neighbours."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
-    side = np.full(len(ok), np.nan)
-    growth = np.full(len(ok), np.nan)
+    side, growth, behind = (np.full(len(ok), np.nan) for _ in range(3))
     for r in runs(ok):
         side[r] = pooled(facing_side_cues(joints2d[r], body_px[r], fps), fps)
         log_px = np.log(body_px[r])
         growth[r] = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps)
+        behind[r] = pooled(np.zeros(r.stop - r.start) if away is None else away[r], fps)
     names = [None] * len(ok)
     for i in np.flatnonzero(ok):
         facing = "left" if side[i] < 0 else "right"
         if spread[i] < PROFILE_SPREAD:
             names[i] = facing
         else:
-            names[i] = f"{'backward' if growth[i] < -GROWTH else 'forward'}_{facing}"
+            backward = growth[i] < -GROWTH or (growth[i] <= GROWTH and behind[i] > AWAY_SAYS)
+            names[i] = f"{'backward' if backward else 'forward'}_{facing}"
     return merge_short_runs(names, max(1, int(round(MIN_RUN_S * fps))))
 
 

@@ -18,8 +18,9 @@ import numpy as np
 
 from mocap.body import JOINTS
 from mocap.errors import MocapError
+from mocap.facing import facing_away
 from mocap.io.annotations import Annotations
-from mocap.io.video import VideoInfo
+from mocap.io.video import VideoInfo, processing_scale
 from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.motion import Motion
 from mocap.lift.orientation import guess_orientations
@@ -53,8 +54,11 @@ class SilhouetteSession(Session):
 
     @cached_property
     def _guessed(self) -> list[str | None]:
-        """The orientations the fits alone suggest (once per session)."""
-        return guess_orientations(*self._arrays, self.info.fps)
+        """The orientations the fits and the heads' look suggest (once per session)."""
+        joints, body_px, spread = self._arrays
+        away = (None if self.silhouettes is None else
+                facing_away(self.silhouettes, joints, processing_scale(self.info)))
+        return guess_orientations(joints, body_px, spread, self.info.fps, away)
 
     @cached_property
     def silhouette_confidence(self) -> np.ndarray | None:
