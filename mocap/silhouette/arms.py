@@ -30,6 +30,7 @@ ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend sho
 # (upper, lower) angles every 30 degrees all around the shoulder: arm guesses that the
 # frame's edges may pick inside the silhouette
 ARM_GRID = [(float(u), float(u + b)) for u in range(0, 360, 30) for b in range(-150, 151, 30)]
+_GRID_GUESSES = np.array([(*a, r, r) for a in ARM_GRID for r in GUESS_RATIOS])
 
 
 def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
@@ -59,7 +60,7 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 
 
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
-    """First guesses for one arm's (upper, lower) angles and foreshortening ratios:
+    """First guesses (G, 4) for one arm's (upper, lower) angles and foreshortening ratios:
     contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point
     bent either way or straight and foreshortened, hanging down, the previous
     frame's arm as it was and, where the frame's edges can tell arms inside the
@@ -82,10 +83,9 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
         angles += two_link_angles(shoulder, tip, l1, l2)
         toward, ratio = image_angle(tip - shoulder), min(float(np.hypot(*(tip - shoulder))) / (l1 + l2), 1.0)
         guesses.append(((toward, toward), (ratio, ratio)))
-    if canvas.by_edges:
-        angles += ARM_GRID
     guesses += [(a, (r, r)) for a in angles for r in GUESS_RATIOS]
-    return [(*a, *r) for a, r in guesses]
+    guesses = np.array([(*a, *r) for a, r in guesses])
+    return np.concatenate([guesses, _GRID_GUESSES]) if canvas.by_edges else guesses
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
@@ -120,7 +120,7 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
                    facing: int = 0) -> Pose2D:
     """The arm_candidates guess with the highest S, among those that do not bend the
     elbow backward (``elbow_bends_back``) where that can be told."""
-    guesses = np.array(arm_candidates(canvas, pose, side, prev))
+    guesses = arm_candidates(canvas, pose, side, prev)
     backward = elbow_bends_back(guesses[:, 1] - guesses[:, 0], pose.spread, facing)
     if not backward.all():
         guesses = guesses[~backward]

@@ -17,7 +17,7 @@ import numpy as np
 from mocap.body import (JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, Pose2D,
                         forward_kinematics_2d, image_angle, limb)
 from mocap.silhouette.contour import find_angle, lower_leg_curves, lower_legs_cross
-from mocap.silhouette.raster import Canvas, pose_quads, sweep_scorer
+from mocap.silhouette.raster import Canvas, pose_quads, poses_quads, sweep_scorer
 from mocap.silhouette.search import (RATIO_RANGE, TRACK_HALF_RANGE, Knob, around, span,
                                      refine_limb, search_angle)
 
@@ -95,7 +95,7 @@ def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | Non
 
 def leg_scores(canvas: Canvas, poses: list[Pose2D]) -> np.ndarray:
     """S (Eq. 1-3) of both legs of each pose, on the partial silhouette they outline together."""
-    scores, _ = sweep_scorer(canvas, np.stack([pose_quads(p, LEGS) for p in poses]))
+    scores, _ = sweep_scorer(canvas, poses_quads(poses, LEGS))
     return scores
 
 

@@ -8,17 +8,21 @@ model already fitted, so each candidate costs one small polygon fill and two cou
 
 from __future__ import annotations
 
+import functools
 import math
 
 import cv2
 import numpy as np
 
 from mocap.body import (FOOT_LENGTH, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH,
-                        Pose2D, forward_kinematics_2d, torso_width)
+                        Pose2D, forward_kinematics_2d, forward_kinematics_2d_batch, torso_width)
 from mocap.edges import EDGE_WEIGHT, Edges
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
+_PERPENDICULAR = np.array([-1.0, 1.0])   # (dx, dy) reversed times this: the normal (-dy, dx)
+_CORNER_END = np.array([0, 1, 1, 0])     # a rectangle's corners: at which end of the segment,
+_CORNER_SIDE = np.array([1.0, 1.0, -1.0, -1.0])[:, None]   # and on which side of it
 _TORSO = SEGMENT_INDEX["torso"]
 _HAS_FOOT = np.isin(np.arange(len(SEGMENT_NAMES)), [SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]])
 # The hand (not in the paper's 10 cylinders nor the contract's joints): drawn as the
@@ -34,17 +38,28 @@ _HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = HAND
 
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
     """Corners (..., 4, 2) of rectangles of the given widths from starts to ends."""
-    d = ends - starts
-    half = widths / (2 * np.maximum(np.sqrt((d * d).sum(-1)), 1e-9))
-    h = np.empty_like(d)
-    h[..., 0] = -d[..., 1] * half
-    h[..., 1] = d[..., 0] * half
-    out = np.empty(d.shape[:-1] + (4, 2))
-    out[..., 0, :] = starts + h
-    out[..., 1, :] = ends + h
-    out[..., 2, :] = ends - h
-    out[..., 3, :] = starts - h
-    return out
+    return _rectangles(np.stack([starts, ends], axis=-2), widths)
+
+
+def _rectangles(ends: np.ndarray, widths) -> np.ndarray:
+    """Corners (..., 4, 2) of rectangles of the given widths along segments whose two
+    ends are ``ends`` (..., 2, 2) (few array operations: this runs for every search)."""
+    d = ends[..., 1, :] - ends[..., 0, :]
+    half = widths / (2 * np.maximum(np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]), 1e-9))
+    h = d[..., ::-1] * (half[..., None] * _PERPENDICULAR)
+    return ends[..., _CORNER_END, :] + h[..., None, :] * _CORNER_SIDE
+
+
+@functools.lru_cache(maxsize=64)
+def _segment_plan(segments: tuple[int, ...]) -> tuple:
+    """What ``joint_quads`` needs of some segments, worked out once per tuple of
+    segment indices: their joints' indices, which positions have a foot, the hand's
+    reach of each (None without hands), their widths and where the torso is."""
+    idx = np.array(segments, int)
+    feet = np.flatnonzero(_HAS_FOOT[idx])
+    hands = _HAND_REACH[idx]
+    return (SEGMENT_JOINTS[idx], feet if len(feet) else None, hands[:, None] if hands.any() else None,
+            WIDTH[idx], np.flatnonzero(idx == _TORSO))
 
 
 def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
@@ -52,29 +67,35 @@ def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> 
     the torso is as wide as ``spread`` (shape (...,)) makes it look, each lower leg
     goes on past the ankle by the foot (body.FOOT_LENGTH), which silhouettes show, and
     each lower arm into the hand (HAND_LENGTH)."""
-    idx = np.arange(len(SEGMENT_NAMES)) if segments is None else np.asarray(segments)
-    ends = joints[..., SEGMENT_JOINTS[idx], :]
-    foot, hand = _HAS_FOOT[idx], _HAND_REACH[idx]
-    if foot.any() or hand.any():
-        ends = ends.copy()
-    if foot.any():
-        shin = ends[..., foot, 1, :] - ends[..., foot, 0, :]
-        length = np.maximum(np.linalg.norm(shin, axis=-1, keepdims=True), 1e-9)
-        ends[..., foot, 1, :] += shin / length * (FOOT_LENGTH * scale)
-    if hand.any():
-        ends[..., 1, :] += (ends[..., 1, :] - ends[..., 0, :]) * hand[:, None]
-    widths = np.empty(ends.shape[:-2])
-    widths[...] = WIDTH[idx] * scale
-    torso = idx == _TORSO
-    if torso.any():
+    ends_at, feet, hand, width, torso = _segment_plan(
+        tuple(range(len(SEGMENT_NAMES))) if segments is None else tuple(int(i) for i in segments))
+    ends = joints[..., ends_at, :]                    # a copy: the foot and hand extend it
+    if feet is not None:
+        shin = ends[..., feet, 1, :] - ends[..., feet, 0, :]
+        length = np.sqrt(shin[..., 0] * shin[..., 0] + shin[..., 1] * shin[..., 1])
+        ends[..., feet, 1, :] += shin / np.maximum(length[..., None], 1e-9) * (FOOT_LENGTH * scale)
+    if hand is not None:
+        ends[..., 1, :] += (ends[..., 1, :] - ends[..., 0, :]) * hand
+    widths = width * scale
+    if len(torso):
+        widths = np.repeat(widths[None], np.size(spread), 0).reshape(np.shape(spread) + widths.shape)
         widths[..., torso] = (torso_width(spread) * scale)[..., None]
-    return segment_quads(ends[..., 0, :], ends[..., 1, :], widths)
+    return _rectangles(ends, widths)
 
 
 def pose_quads(pose: Pose2D, segments=SEGMENT_NAMES) -> np.ndarray:
     """The rectangles (k, 4, 2) of the named segments of a 2D pose."""
     return joint_quads(forward_kinematics_2d(pose), pose.scale,
                        [SEGMENT_INDEX[s] for s in segments], pose.spread)
+
+
+def poses_quads(poses: list[Pose2D], segments=SEGMENT_NAMES) -> np.ndarray:
+    """The rectangles (P, k, 4, 2) of the named segments of 2D poses of one scale."""
+    spread = np.array([p.spread for p in poses])
+    joints = forward_kinematics_2d_batch(np.array([p.pelvis for p in poses], float), poses[0].scale,
+                                         np.array([p.angle for p in poses]), np.array([p.ratio for p in poses]),
+                                         spread)
+    return joint_quads(joints, poses[0].scale, [SEGMENT_INDEX[s] for s in segments], spread)
 
 
 def fill_quads(mask: np.ndarray, quads: np.ndarray, offset=(0, 0)) -> np.ndarray:
@@ -96,7 +117,7 @@ def similarity_from_counts(sil_area, model_area, overlap) -> np.ndarray:
     p: silhouette pixels not covered by the model / union; n: model pixels outside
     the silhouette / union. Works elementwise on arrays of candidates.
     """
-    sil_area = np.asarray(sil_area, dtype=float)
+    sil_area = float(sil_area)
     union = np.maximum(sil_area + model_area - overlap, 1.0)
     p = (sil_area - overlap) / union
     n = (model_area - overlap) / union
@@ -114,49 +135,51 @@ def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, i
     """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
     pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32)   # windows keep them >= 0
     planes = np.zeros((len(pts),) + shape, np.uint8)
-    owners = np.repeat(np.arange(len(pts)), pts.shape[1]).tolist()
-    for i, quad in zip(owners, pts.reshape(-1, 4, 2)):
-        cv2.fillConvexPoly(planes[i], quad, 1, cv2.LINE_8, _SHIFT)   # one by one: fillPoly
-    return planes                                                      # would make overlaps holes
+    for plane, quads in zip(planes, pts):
+        for quad in quads:                      # one by one: fillPoly would make overlaps holes
+            cv2.fillConvexPoly(plane, quad, 1, cv2.LINE_8, _SHIFT)
+    return planes
 
 
-def sweep_scorer(canvas: "Canvas", sweep: np.ndarray):
-    """Score a sweep of candidates (B, k, 4, 2) on the partial silhouette it outlines;
-    returns (their S (B,) of Eq. 1-3, a function scoring further candidates).
+def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None = None):
+    """Score a sweep of candidates (B, k, 4, 2) on the partial silhouette it outlines
+    (or the candidates ``outline`` of it do); returns (their S (B,) of Eq. 1-3, a
+    function scoring further candidates).
 
     The partial silhouette is the silhouette inside the swept area that the canvas's
     fitted part does not already explain. A candidate's pixels over the fitted part
     count neither way: the silhouette cannot tell where an arm in front of the trunk
     lies (the frame's edges can: ``Canvas.edge_scores``), and counting them as
     silhouette it covers would make the longest arm over the trunk win. Candidates
-    are drawn into planes of one array and weighed in one product: a pixel weighs 1
-    if free, plus ``base`` (more than the window's pixel count) if in the partial
-    silhouette, so one sum tells both counts.
+    are drawn into planes of one array and weighed in one integer product: a pixel
+    weighs 1 if free, plus 2**shift if in the partial silhouette, so one sum tells
+    both counts (a candidate covers fewer pixels than its window has, < 2**shift).
     """
-    x0, y0, x1, y1 = bounding_window(sweep, canvas.sil.shape)
+    outline = slice(None) if outline is None else outline
+    x0, y0, x1, y1 = bounding_window(sweep[outline], canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
     if not shape[0] or not shape[1]:            # swept wholly outside the frame: explains nothing
         return np.zeros(len(sweep)), lambda candidates: np.zeros(len(candidates))
     planes = _draw_planes(sweep, offset, shape)
-    free = canvas.fixed[y0:y1, x0:x1] == 0
-    sil = canvas.sil[y0:y1, x0:x1].astype(bool)
-    target = free & planes.any(axis=0) & sil
+    free = canvas.free[y0:y1, x0:x1]
+    target = np.bitwise_or.reduce(planes[outline], axis=0) & free & canvas.sil[y0:y1, x0:x1]
     sil_area = np.count_nonzero(target)
-    base = float(free.size + 1)
-    weights = free.ravel() + base * target.ravel()
+    # integers, not floats: einsum of uint8 planes with uint32 weights costs half the
+    # CPU of float64 ones (and a BLAS product of many candidates several times more)
+    shift, dtype = (16, np.uint32) if free.size < 1 << 16 else (32, np.uint64)
+    weights = (free | target.astype(dtype) << dtype(shift)).ravel()
+    low = dtype((1 << shift) - 1)
 
     def weigh(planes_: np.ndarray) -> np.ndarray:
-        # einsum, not BLAS: a threaded product of many candidates costs several times more CPU
         totals = np.einsum("bn,n->b", planes_.reshape(len(planes_), -1), weights)
-        overlap = np.floor(totals / base)
-        return similarity_from_counts(sil_area, totals - base * overlap, overlap)
+        return similarity_from_counts(sil_area, totals & low, totals >> dtype(shift))
     return weigh(planes), lambda candidates: weigh(_draw_planes(candidates, offset, shape))
 
 
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
     """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
-    pts = quads.reshape(-1, 2)
-    (ax, ay), (bx, by) = pts.min(axis=0).tolist(), pts.max(axis=0).tolist()
+    xs, ys = quads[..., 0], quads[..., 1]           # (a reduction along a long first axis is slow)
+    ax, ay, bx, by = float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
     h, w = shape
     x0, y0 = min(max(math.floor(ax - pad), 0), w), min(max(math.floor(ay - pad), 0), h)
     return x0, y0, min(max(math.ceil(bx + pad) + 1, x0), w), min(max(math.ceil(by + pad) + 1, y0), h)
@@ -176,6 +199,7 @@ class Canvas:
     def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None):
         self.sil = (silhouette > 0).astype(np.uint8)
         self.fixed = np.zeros_like(self.sil)
+        self.free = np.ones_like(self.sil)     # 1 - fixed, which every search reads
         self.edges = None if grey is None else Edges.inside(grey, self.sil)
         self.by_edges = False
 
@@ -186,7 +210,7 @@ class Canvas:
         (``edge_scores``)."""
         other = Canvas.__new__(Canvas)
         other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
-        other.fixed = self.fixed.copy()
+        other.fixed, other.free = self.fixed.copy(), self.free
         other.edges = self.edges
         other.by_edges = by_edges and self.edges is not None
         if len(quads):
@@ -205,6 +229,7 @@ class Canvas:
     def commit(self, quads) -> None:
         """Make quads part of the fitted model."""
         fill_quads(self.fixed, quads)
+        self.free = 1 - self.fixed
 
     def score_model(self) -> float:
         """S of Eq. 3 between the whole silhouette and the fitted model."""

@@ -16,6 +16,7 @@ RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs diffe
 TRACK_HALF_RANGE = 20.0          # degrees searched around a previous estimate
 ANGLE_SWEEP_STEP = 5.0           # degrees between the poses that outline a search's reach
 RATIO_SWEEP_STEP = 0.25          # the same for foreshortening ratios
+ONE_ROUND = 31                   # grids of at most this many values (a limb's 30 degrees) are scored in one round
 
 
 @dataclass(frozen=True)
@@ -44,11 +45,12 @@ class Knob:
     def batch(self, pose: Pose2D, values: np.ndarray):
         """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""
         n = len(values)
-        pelvis = np.repeat(pose.pelvis[None], n, 0)
-        angle, ratio = np.repeat(pose.angle[None], n, 0), np.repeat(pose.ratio[None], n, 0)
+        pelvis, angle, ratio = (np.repeat(a[None], n, 0) for a in (pose.pelvis, pose.angle, pose.ratio))
         spread = np.full(n, pose.spread)
-        if self.field in ("angle", "ratio"):
-            (angle if self.field == "angle" else ratio)[:, self.indices] = values[:, None]
+        if self.field == "angle":
+            angle[:, self.indices] = values[:, None]
+        elif self.field == "ratio":
+            ratio[:, self.indices] = values[:, None]
         elif self.field == "x":
             pelvis[:, 0] += values
         else:
@@ -104,22 +106,30 @@ def search(pose: Pose2D, job: Search) -> Pose2D:
     Every value of the grid is posed at once. The first level divides the range
     every ``sweep_step``; those poses also outline the partial silhouette (the
     region the range reaches). The second divides the two divisions around the
-    best at full resolution.
+    best at full resolution. A grid of at most ONE_ROUND values is scored whole in
+    the first round, which costs less than a second round; the narrowing chooses
+    from those scores as it would from the second round's.
     """
     n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
     step = (job.hi - job.lo) / (n - 1)
     values = job.lo + step * np.arange(n)
     pelvis, angle, ratio, spread = job.knob.batch(pose, values)
     joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-    quads = joint_quads(joints, pose.scale, [SEGMENT_INDEX[d] for d in job.drawn], spread)
+    drawn = [SEGMENT_INDEX[d] for d in job.drawn]
+    quads = joint_quads(joints, pose.scale, drawn, spread)
     every = max(1, int(round(job.sweep_step / step)))
     start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
     opening = sorted({*range(0, n, every), n - 1, start})
-    drawn = [SEGMENT_INDEX[d] for d in job.drawn]
-    first, score = sweep_scorer(job.canvas, quads[opening])
-    first = first + job.canvas.edge_scores(joints[opening], drawn, pose.scale)
-    best = coarse_to_fine(lambda i: score(quads[i]) + job.canvas.edge_scores(joints[i], drawn, pose.scale),
-                          n, opening, first, start, 2 * every)
+
+    def edges(i) -> np.ndarray:
+        return job.canvas.edge_scores(joints[i], drawn, pose.scale)
+    if n <= ONE_ROUND:
+        scores = sweep_scorer(job.canvas, quads, opening)[0] + edges(slice(None))
+        best = coarse_to_fine(scores.__getitem__, n, opening, scores[opening], start, 2 * every)
+    else:
+        first, score = sweep_scorer(job.canvas, quads[opening])
+        best = coarse_to_fine(lambda i: score(quads[i]) + edges(i), n, opening, first + edges(opening),
+                              start, 2 * every)
     return job.knob.apply(pose, float(values[best]))
 
 
@@ -158,5 +168,5 @@ def around(prev: Pose2D | None, segment: str, lo: float, hi: float, default: flo
     if prev is None:
         return lo, hi, default
     middle = (lo + hi) / 2                  # the previous angle's turn nearest the range
-    c = float(np.clip(middle + (prev.angle[SEGMENT_INDEX[segment]] - middle + 180.0) % 360.0 - 180.0, lo, hi))
+    c = min(max(float(middle + (prev.angle[SEGMENT_INDEX[segment]] - middle + 180.0) % 360.0 - 180.0), lo), hi)
     return max(lo, c - half), min(hi, c + half), c
