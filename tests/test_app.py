@@ -42,7 +42,7 @@ def test_streamed_preprocessing_equals_fit_video(tiny_video):
     info, fits = fit_video(tiny_video)
     scale = processing_scale(info)
     silhouettes = list(iter_silhouettes(open_video(tiny_video), scale))
-    streamed = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps))
+    streamed = list(iter_fits(silhouettes, scale, info.fps))
     assert len(streamed) == len(fits) == TINY_FRAMES
     for a, b in zip(streamed, fits):
         assert a.index == b.index and a.score == b.score
@@ -72,12 +72,28 @@ def test_fits_stream_out_while_silhouettes_are_found_and_equal_the_whole_clips(t
         assert found == needed < info.frame_count, (found, needed)
     first_looks = [p.frame for p in reports if not p.final]
     assert first_looks == list(range(info.frame_count - windows))    # the frames fitted before the end
-    whole = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), processing_scale(info),
-                           info.fps))
+    whole = whole_clip_fits(silhouettes, processing_scale(info), info.fps)
     assert [f.index for f in fits] == [f.index for f in whole] == list(range(info.frame_count))
     for a, b in zip(fits, whole):
         assert a.score == b.score
         np.testing.assert_array_equal(a.joints2d, b.joints2d)
+
+
+def whole_clip_fits(silhouettes: list, scale: float, fps: float) -> list:
+    """Pass two with every window taken over the whole clip at once: the body heights
+    (passes.body_heights) and the low percentile of the per-frame torso spreads around
+    each frame."""
+    from mocap.silhouette.fit2d import FIT_SCALE
+    from mocap.silhouette.passes import (SPREAD_PERCENTILE, SPREAD_WINDOW_S, Fitter, half_window, normalise,
+                                         rolling_percentile)
+    from mocap.silhouette.torso import torso_spread
+    heights = body_heights(silhouettes, fps)
+    raw = np.array([np.nan if s is None else torso_spread(normalise(s, h)[0], FIT_SCALE)
+                    for s, h in zip(silhouettes, heights)])
+    spreads = rolling_percentile(raw, half_window(SPREAD_WINDOW_S, fps), SPREAD_PERCENTILE)
+    fitter = Fitter(scale, fps)
+    fits = [f for i, s in enumerate(silhouettes) for f in fitter.fit(i, s, heights[i], spreads[i])]
+    return fits + fitter.flush()
 
 
 def test_page_state_while_preprocessing(tiny_video, tmp_path, monkeypatch):

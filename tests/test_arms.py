@@ -14,7 +14,7 @@ from helpers import SHARED_DATA
 from mocap.body import JOINT_INDEX
 from mocap.io.video import iter_frames, open_video, processing_scale
 from mocap.metrics import side_matched_errors
-from mocap.silhouette.passes import Silhouette, body_heights, iter_fits
+from mocap.silhouette.passes import Silhouette, iter_fits
 
 CLIPS = SHARED_DATA / "clips"
 FRAMES = 30
@@ -35,7 +35,7 @@ def true_mask_fits(name: str, frames: int = FRAMES) -> tuple[np.ndarray, np.ndar
         mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
         silhouettes.append(Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST),
                                                 frame))
-    fits = list(iter_fits(silhouettes, body_heights(silhouettes, info.fps), scale, info.fps))
+    fits = list(iter_fits(silhouettes, scale, info.fps))
     truth = json.loads((clip / "truth.json").read_text())
     true_joints = np.array([f["joints2d"] for f in truth["frames"][:frames]])
     return np.array([f.joints2d for f in fits]), true_joints, truth["body_height_px"]

@@ -195,14 +195,14 @@ def true_mask_fits(clip: Path) -> tuple[np.ndarray, np.ndarray, float]:
     import cv2
 
     from mocap.io.video import iter_frames, processing_scale
-    from mocap.silhouette.passes import Silhouette, body_heights, iter_fits
+    from mocap.silhouette.passes import Silhouette, iter_fits
     info = open_video(clip / "video.mp4")
     scale = processing_scale(info)
     sils = []
     for index, frame in iter_frames(info, scale=scale):
         mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
         sils.append(Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST), frame))
-    fits = list(iter_fits(sils, body_heights(sils, info.fps), scale, info.fps))
+    fits = list(iter_fits(sils, scale, info.fps))
     truth = json.loads((clip / "truth.json").read_text())
     return (np.array([f.joints2d for f in fits], float),
             np.array([f["joints2d"] for f in truth["frames"]], float), float(truth["body_height_px"]))

@@ -123,16 +123,6 @@ def _fit_sized(image: np.ndarray, pad: int, factor: float) -> np.ndarray:
     return cv2.resize(padded, size, interpolation=cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR)
 
 
-def torso_spreads(silhouettes: list[Silhouette | None], heights: np.ndarray, fps: float) -> np.ndarray:
-    """Each frame's torso horizontal foreshortening, as a low percentile of the
-    per-frame estimates within SPREAD_WINDOW_S (arms passing the torso widen it)."""
-    raw = np.full(len(silhouettes), np.nan)
-    for i, sil in enumerate(silhouettes):
-        if sil is not None:
-            raw[i] = torso_spread(normalise(sil, heights[i])[0], FIT_SCALE)
-    return rolling_percentile(raw, half_window(SPREAD_WINDOW_S, fps), SPREAD_PERCENTILE)
-
-
 def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
     """The q-th percentile of the finite values within +-half of each finite entry."""
     out = np.full(len(values), np.nan)
@@ -151,15 +141,13 @@ def half_window(seconds: float, fps: float) -> int:
     return max(1, int(round(seconds * fps)))
 
 
-def iter_fits(silhouettes: list[Silhouette | None], heights: np.ndarray, scale: float,
-              fps: float) -> Iterator[FrameFit]:
-    """Pass two (section 3.3): every frame's 2D fit in turn (``Fitter``), given every
-    frame's silhouette and body height."""
-    spreads = torso_spreads(silhouettes, heights, fps)
-    fitter = Fitter(scale, fps)
-    for index, sil in enumerate(silhouettes):
-        yield from fitter.fit(index, sil, heights[index], spreads[index])
-    yield from fitter.flush()
+def iter_fits(silhouettes: list[Silhouette | None], scale: float, fps: float) -> Iterator[FrameFit]:
+    """Pass two (section 3.3) over a whole clip's silhouettes: every frame's 2D fit in
+    turn, as ``FitStream`` makes them."""
+    stream = FitStream(scale, fps)
+    for sil in silhouettes:
+        yield from stream.push(sil)
+    yield from stream.finish()
 
 
 class Fitter:
@@ -196,10 +184,11 @@ class FitStream:
     is found; each push returns the fits now decided, ``finish`` the rest. A frame
     is fitted as soon as the silhouettes its windows need are in: its torso spread's
     (SPREAD_WINDOW_S) frames' body heights' (SCALE_WINDOW_S) frames' rough heights'
-    (SCALE_WINDOW_S again, ``body_heights``); every window is the
-    one ``body_heights`` and ``torso_spreads`` take over the whole clip, so the fits
-    equal ``iter_fits``' on every silhouette (tested), the first ones coming out while
-    the rest of the video is still being read."""
+    (SCALE_WINDOW_S again, ``body_heights``); every window is the one
+    ``body_heights`` takes over the whole clip, and the torso spread's the low
+    percentile of the per-frame spreads within SPREAD_WINDOW_S, so the fits equal
+    those made with every window over the whole clip (tested), the first ones coming
+    out while the rest of the video is still being read."""
 
     def __init__(self, scale: float, fps: float):
         self.scale, self.fitter = scale, Fitter(scale, fps)
@@ -209,7 +198,7 @@ class FitStream:
         self._sizes: list[float] = []       # silhouette heights, NaN where nobody is
         self._standing: list[float] = []    # their heights from the head's top (head_to_feet)
         self._heights: list[float] = []     # body heights (body_heights) known so far
-        self._spreads: list[float] = []     # per-frame torso spreads (torso_spreads' raw)
+        self._spreads: list[float] = []     # per-frame torso spreads (torso.torso_spread)
         self._fitted = 0
         self._provisional: list[FrameFit] = []
 
