@@ -104,10 +104,10 @@ def test_sides_follow_the_orientation_rule_where_it_is_known():
     truth = seen(walk_cycle(1.0, 15.0), "three-quarter")
     image_side = truth.joints2d[:, MIRROR_JOINTS]          # forward: image-left limbs are the right ones
     known = known_sides(["forward_right"] * len(image_side), {}, image_side)
-    swap = track_sides(image_side, known, np.ones(len(image_side)))
+    swap = track_sides(image_side, known, np.ones(len(image_side)), 15.0)
     assert swap.all()
     backward = known_sides(["backward_right"] * len(image_side), {}, image_side)
-    assert not track_sides(image_side, backward, np.ones(len(image_side))).any()
+    assert not track_sides(image_side, backward, np.ones(len(image_side)), 15.0).any()
 
 
 def test_a_joint_override_decides_the_sides_in_a_profile():
@@ -117,7 +117,7 @@ def test_a_joint_override_decides_the_sides_in_a_profile():
     says = {frame: {"ankle_l": tuple(joints[frame, 12]), "wrist_l": tuple(joints[frame, 6])}}
     known = known_sides(["right"] * len(joints), says, joints)
     assert (known[frame] == 0).all() and (np.delete(known, frame, axis=0) == -1).all()
-    swap = track_sides(joints, known, np.ones(len(joints)))
+    swap = track_sides(joints, known, np.ones(len(joints)), 15.0)
     assert not swap[frame].any()
 
 
@@ -139,7 +139,7 @@ def test_limbs_keep_their_sides_through_every_crossing_of_a_profile_walk():
     frame = int(np.argmax(np.abs(ankles[:, 0, 0] - ankles[:, 1, 0])))     # widest apart
     says = {frame: {"ankle_l": tuple(ankles[frame, 0])}}
     known = known_sides(["right"] * len(image_side), says, image_side)
-    swap = track_sides(image_side, known, np.ones(len(image_side)))
+    swap = track_sides(image_side, known, np.ones(len(image_side)), 30.0)
     assert np.mean(swap[:, 1] == swapped["leg"]) > 0.9      # the rest: legs level, either order
     arm = sum(body.LENGTH[body.SEGMENT_INDEX[s]] for s in ("upper_arm_l", "lower_arm_l"))
     wrists = truth.joints2d[:, [JOINT_INDEX["wrist_l"], JOINT_INDEX["wrist_r"]], 0]
@@ -157,10 +157,71 @@ def test_a_kicking_leg_keeps_its_name_through_the_crossing_its_thigh_swings_thro
     joints, truth = np.array(data["joints2d"]), np.array(data["right_is_image_left"], bool)
     known = np.full((len(joints), 2), -1, np.int8)
     known[:6] = 1                                           # turned toward the camera: the rule holds
-    swap = track_sides(joints, known, np.ones(len(joints)))[:, 1]
+    swap = track_sides(joints, known, np.ones(len(joints)), 25.0)[:, 1]
     assert truth[6:19].all() and not truth[19:].any()       # the fit exchanges the names at frame 59
     assert np.mean(swap[6:] == truth[6:]) > 0.9
     assert not swap[25:].any()                              # named right after the crossing
+
+
+def waving_in_place(seconds: float, fps: float) -> np.ndarray:
+    """(F, 16, 3) world joints of a performer standing with the feet apart and waving
+    both arms, stretched out to the sides, up and down out of phase (model proportions)."""
+    stand = walk_cycle(1.0 / fps, fps, in_place=True)[0]
+    frames = np.repeat(stand[None], max(1, int(round(seconds * fps))), axis=0)
+    t = np.arange(len(frames)) / fps
+    arm = np.linalg.norm(stand[JOINT_INDEX["elbow_l"]] - stand[JOINT_INDEX["shoulder_l"]])
+    for side, out in (("l", 1.0), ("r", -1.0)):                  # the performer's left is +x
+        frames[:, [JOINT_INDEX[f"knee_{side}"], JOINT_INDEX[f"ankle_{side}"]], 0] += out * 0.15
+        lift = np.radians(20.0 + 40.0 * np.sin(2 * np.pi * t + (0.0 if side == "l" else np.pi)))
+        reach = np.stack([out * np.cos(lift), np.sin(lift), np.zeros_like(lift)], axis=-1) * arm
+        shoulder = frames[:, JOINT_INDEX[f"shoulder_{side}"]]
+        frames[:, JOINT_INDEX[f"elbow_{side}"]] = shoulder + reach
+        frames[:, JOINT_INDEX[f"wrist_{side}"]] = shoulder + 2 * reach
+    return frames
+
+
+def test_arms_take_the_legs_sides_where_the_performer_does_not_step():
+    """A performer waving in place, facing the camera, the legs' sides known (as from
+    the user's knee marks) and the arms' not, as in a profile: there are no steps for
+    the arms to swing against, and each arm hangs from the shoulder above its own
+    side's hip, so the arms take the legs' sides (swung opposite to the legs, as in a
+    walk, each arm was named the other)."""
+    truth = seen(waving_in_place(2.0, 30.0), "front", fps=30.0)
+    image_side = truth.joints2d[:, MIRROR_JOINTS]           # facing the camera: image-left is right
+    known = np.full((len(image_side), 2), -1, np.int8)
+    known[:, 1] = 1
+    assert track_sides(image_side, known, np.ones(len(image_side)), 30.0)[:, 0].all()
+
+
+def test_the_heads_look_names_the_limbs_of_a_profile_where_nothing_else_does():
+    """A performer seen from behind, feet and arms apart, taken for a profile (as a
+    narrow torso is) with nothing known: where the head's look says they face away,
+    the backward-facing rule (image-left limbs are the left ones) names the limbs;
+    without it, the forward-facing convention names each the other."""
+    behind = synth.RenderOptions(yaw=-90.0, size=(640, 480), fps=30.0)
+    scene = synth.plan_scene(waving_in_place(2.0, 30.0), behind)
+    joints = synth.scene_truth(scene, "test", np.arange(60)).joints2d     # anatomical names
+    assert (joints[:, JOINT_INDEX["ankle_l"], 0] < joints[:, JOINT_INDEX["ankle_r"], 0]).all()  # image-left
+    known = np.full((len(joints), 2), -1, np.int8)
+    assert not track_sides(joints, known, np.ones(len(joints)), 30.0, np.ones(len(joints), bool)).any()
+    assert track_sides(joints, known, np.ones(len(joints)), 30.0).all()
+
+
+def test_arms_take_the_legs_sides_in_a_real_laugh():
+    """The same for a real performer laughing on the spot (CMU 13_14: arms thrown up
+    and out, feet apart) seen from the front, wherever the hands are apart."""
+    laugh = SHARED_DATA / "bvh" / "cmu_13_14_laugh.bvh"
+    if not laugh.exists():
+        pytest.skip(f"real data absent: {laugh} (../shared/data beside the checkout)")
+    truth = seen(contract_joints(read_bvh(laugh))[1080:1560:4], "front", fps=30.0)
+    image_side = truth.joints2d[:, MIRROR_JOINTS]
+    known = np.full((len(image_side), 2), -1, np.int8)
+    known[:, 1] = 1
+    swap = track_sides(image_side, known, np.ones(len(image_side)), 30.0)
+    arm = sum(body.LENGTH[body.SEGMENT_INDEX[s]] for s in ("upper_arm_l", "lower_arm_l"))
+    wrists = truth.joints2d[:, [JOINT_INDEX["wrist_l"], JOINT_INDEX["wrist_r"]], 0]
+    apart = np.abs(wrists[:, 0] - wrists[:, 1]) > SEPARATED * arm * truth.body_height_px / BODY_HEIGHT
+    assert apart.mean() > 0.5 and swap[apart, 0].all()
 
 
 def test_users_leg_signs_tell_which_leg_is_which_where_the_legs_cross():

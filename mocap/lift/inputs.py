@@ -14,7 +14,7 @@ from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
 from mocap.lift.sides import known_sides, track_sides
 from mocap.lift.taylor import LENGTH, anatomical_joints, clip_lengths, exchange_legs, lift_pose, runs
-from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs,
+from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
                                legs_crossed, segment_vectors, yaws)
 
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
@@ -93,14 +93,15 @@ def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
                    annotations: Annotations, lengths: np.ndarray | None = None,
-                   guessed: list[str | None] | None = None) -> Inputs:
+                   guessed: list[str | None] | None = None, away: np.ndarray | None = None) -> Inputs:
     """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding, the
     user's leg signs telling where the legs cross: orientation.legs_crossed); the
     arms steadied (``steadied_arms``); the overrides put in; segment lengths from the
     clip (lift.clip_lengths); the signs guessed with the user's held signs as
-    constraints (orientation.held_user_signs)."""
+    constraints (orientation.held_user_signs). ``away`` (F,): the heads' look
+    (mocap.facing.facing_away), which names the limbs of a profile where nothing else does."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if guessed is None:
@@ -109,7 +110,8 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
-    swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x)
+    swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x, fps,
+                       looks_away(away, fps, n))
     ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
     values, since = annotations.held_signs(n)

@@ -79,6 +79,15 @@ def pooled(values: np.ndarray, fps: float) -> np.ndarray:
     return out
 
 
+def looks_away(away: np.ndarray | None, fps: float, n: int) -> np.ndarray:
+    """(F,) bool: where the heads' look (``away``: mocap.facing.facing_away, pooled
+    over CUE_WINDOW_S) says facing away, as ``guess_orientations`` reads it; none
+    without it."""
+    if away is None:
+        return np.zeros(n, bool)
+    return np.nan_to_num(pooled(np.asarray(away, float), fps), nan=0.0) > AWAY_SAYS
+
+
 def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.ndarray,
                        fps: float, away: np.ndarray | None = None) -> list[str | None]:
     """Each frame's orientation (None where nobody is): facing side from the walking

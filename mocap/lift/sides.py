@@ -11,6 +11,7 @@ the legs pass each other (``bridge_parity``).
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SIDES
 from mocap.lift.taylor import image_left_is_right, runs
@@ -20,31 +21,38 @@ SEPARATED = 0.25     # distal joints this many limb lengths apart tell two limbs
 # (half a limb) that turns a radian moves its distal joint about that far
 ANGLE_WEIGHT = 0.5
 MIN_APART = 3        # frames: shorter stretches apart are fit noise inside a crossing
+STEP_S = 0.5         # s: about one step of a walk or run, so in a gait each leg leads within it
 _J = JOINT_INDEX
 # the joints whose image sides the arms' and the legs' parities swap
 _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 
 
-def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray) -> np.ndarray:
+def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
+                away: np.ndarray | None = None) -> np.ndarray:
     """(F, 2) bool: for arms and legs, whether the image-left limb is the right one.
 
     ``known`` (F, 2) holds 1 (swap), 0 (keep) or -1 (unknown: a profile, where the 2D
     fit names limbs by their image order, back and front). In a profile the legs keep
     their identity through the moments where they pass each other by
-    ``bridge_parity``; the arms swing opposite to the legs (the front arm is on the
-    other side than the front leg), since the fit cannot see arms cross. A stretch
-    with nothing known starts from the forward-facing convention (swap), which the
-    user corrects with one joint override. ``facing_x`` (F,) is +1 facing image right.
+    ``bridge_parity``; the arms, which the fit cannot see cross, are named from the
+    legs (``_stepping``). A stretch with nothing known starts from the forward-facing
+    convention (swap), or the backward one (keep) where the head's look says the
+    performer faces away over most of the run (``away`` (F,) bool), which the user
+    corrects with one joint override. ``facing_x`` (F,) is +1 facing image right; ``fps`` sets the window of a step.
     """
     out = np.zeros(known.shape, bool)
+    away = np.zeros(len(known), bool) if away is None else away
     ok = np.isfinite(joints2d).all(axis=(1, 2))
     for r in runs(ok):
         legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
         chains = _limb_pair(joints2d[r], LIMB_JOINTS["leg"])
-        parity = _anchored(bridge_parity(chains, _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])), known[r, 1])
+        leg_px = _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])
+        parity = _anchored(bridge_parity(chains, leg_px), known[r, 1], away[r])
         out[r, 1] = np.where(known[r, 1] >= 0, known[r, 1] == 1, parity)
-        arms = _counter_phase(legs, out[r, 1], _limb_pair(joints2d[r], _PAIR_JOINTS["arms"]), facing_x[r])
-        out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, arms)
+        arms = _limb_pair(joints2d[r], _PAIR_JOINTS["arms"])
+        stepping = _stepping(legs, out[r, 1], facing_x[r], leg_px, max(1, int(round(STEP_S * fps))))
+        sides = np.where(stepping, _counter_phase(legs, out[r, 1], arms, facing_x[r]), out[r, 1])
+        out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, sides)
     return out
 
 
@@ -146,11 +154,12 @@ def _same_order(flat: np.ndarray, t: int, u: int) -> bool:
             <= np.linalg.norm(flat[u, ::-1] - flat[t], axis=-1).sum())
 
 
-def _anchored(parity: np.ndarray, known: np.ndarray, reach: int = 10) -> np.ndarray:
+def _anchored(parity: np.ndarray, known: np.ndarray, away: np.ndarray, reach: int = 10) -> np.ndarray:
     """Relative parity -> swap per frame. Each stretch of unknown frames takes the
     constant that agrees with most known frames within ``reach`` of it (else in the
-    whole run); with none known, the forward-facing convention (swap)."""
-    out = (parity ^ 1).astype(bool)
+    whole run); with none known, the forward-facing convention (swap), or the
+    backward one (keep) if the head looks away (``away``) in most frames."""
+    out = (parity ^ int(away.mean() <= 0.5)).astype(bool)
     for stretch in runs(known < 0):
         near = slice(max(0, stretch.start - reach), min(len(known), stretch.stop + reach))
         votes = np.flatnonzero(known[near] >= 0) + near.start
@@ -160,6 +169,21 @@ def _anchored(parity: np.ndarray, known: np.ndarray, reach: int = 10) -> np.ndar
             flip = np.mean(parity[votes] != known[votes]) > 0.5
             out[stretch] = (parity[stretch] ^ int(flip)).astype(bool)
     return out
+
+
+def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg_px: float,
+              half: int) -> np.ndarray:
+    """(F,) bool: frames of a gait, where within ``half`` frames either side the right
+    leg is clearly ahead (SEPARATED leg lengths) at one time and the left at another.
+    There the arms swing opposite to the legs (``_counter_phase``); elsewhere (standing,
+    bending, kicking, jumping, even with the feet apart) each arm hangs from the
+    shoulder above its own side's hip, so the arms take the legs' names."""
+    lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
+    clear = np.abs(lead) > SEPARATED * leg_px
+    right_ahead = legs_swap == (lead < 0)
+    took_turns = [maximum_filter1d((clear & ahead).astype(np.uint8), 2 * half + 1, mode="constant") > 0
+                  for ahead in (right_ahead, ~right_ahead)]
+    return took_turns[0] & took_turns[1]
 
 
 def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray,

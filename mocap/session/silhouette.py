@@ -53,12 +53,18 @@ class SilhouetteSession(Session):
         return fit_arrays(self.fits)
 
     @cached_property
+    def _away(self) -> np.ndarray | None:
+        """(F,) the heads' look, how much it says facing away (mocap.facing.facing_away),
+        None without the silhouettes (once per session)."""
+        joints = self._arrays[0]
+        return (None if self.silhouettes is None else
+                facing_away(self.silhouettes, joints, processing_scale(self.info)))
+
+    @cached_property
     def _guessed(self) -> list[str | None]:
         """The orientations the fits and the heads' look suggest (once per session)."""
         joints, body_px, spread = self._arrays
-        away = (None if self.silhouettes is None else
-                facing_away(self.silhouettes, joints, processing_scale(self.info)))
-        return guess_orientations(joints, body_px, spread, self.info.fps, away)
+        return guess_orientations(joints, body_px, spread, self.info.fps, self._away)
 
     @cached_property
     def silhouette_confidence(self) -> np.ndarray | None:
@@ -105,7 +111,7 @@ class SilhouetteSession(Session):
         if self._inputs is None:
             joints, body_px, spread = self._arrays
             self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
-                                          guessed=self._guessed)
+                                          guessed=self._guessed, away=self._away)
         return self._inputs
 
     def held_signs(self) -> np.ndarray:
