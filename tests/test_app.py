@@ -75,24 +75,27 @@ def test_fits_stream_out_while_silhouettes_are_found_and_equal_the_whole_clips(t
     whole = whole_clip_fits(silhouettes, processing_scale(info), info.fps)
     assert [f.index for f in fits] == [f.index for f in whole] == list(range(info.frame_count))
     for a, b in zip(fits, whole):
-        assert a.score == b.score
+        assert a.score == b.score and a.spread == b.spread
         np.testing.assert_array_equal(a.joints2d, b.joints2d)
 
 
 def whole_clip_fits(silhouettes: list, scale: float, fps: float) -> list:
     """Pass two with every window taken over the whole clip at once: the body heights
-    (passes.body_heights) and the low percentile of the per-frame torso spreads around
-    each frame."""
-    from mocap.silhouette.fit2d import FIT_SCALE
-    from mocap.silhouette.passes import (SPREAD_PERCENTILE, SPREAD_WINDOW_S, Fitter, half_window, normalise,
-                                         rolling_percentile)
-    from mocap.silhouette.torso import torso_spread
+    (passes.body_heights), the low percentile of the per-frame torso spreads around
+    each frame and the lift's spread from them."""
+    from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE
+    from mocap.silhouette.passes import (SPREAD_PERCENTILE, SPREAD_WINDOW_S, Fitter, half_window, lift_spread,
+                                         normalise, rolling_percentile)
+    from mocap.silhouette.torso import torso_spread, torso_width_readable
     heights = body_heights(silhouettes, fps)
-    raw = np.array([np.nan if s is None else torso_spread(normalise(s, h)[0], FIT_SCALE)
-                    for s, h in zip(silhouettes, heights)])
-    spreads = rolling_percentile(raw, half_window(SPREAD_WINDOW_S, fps), SPREAD_PERCENTILE)
+    small = [None if s is None else normalise(s, h)[0] for s, h in zip(silhouettes, heights)]
+    raw = np.array([np.nan if m is None else torso_spread(m, FIT_SCALE) for m in small])
+    readable = [m is not None and torso_width_readable(m, FIT_SCALE, FIT_BODY_PX) for m in small]
+    half = half_window(SPREAD_WINDOW_S, fps)
+    spreads = rolling_percentile(raw, half, SPREAD_PERCENTILE)
+    lifts = [np.nan if m is None else lift_spread(raw, readable, i, half) for i, m in enumerate(small)]
     fitter = Fitter(scale, fps)
-    fits = [f for i, s in enumerate(silhouettes) for f in fitter.fit(i, s, heights[i], spreads[i])]
+    fits = [f for i, s in enumerate(silhouettes) for f in fitter.fit(i, s, heights[i], spreads[i], lifts[i])]
     return fits + fitter.flush()
 
 

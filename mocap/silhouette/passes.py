@@ -18,14 +18,16 @@ from mocap.io.video import VideoInfo, iter_frames
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.plate import clip_background
-from mocap.silhouette.torso import head_top_row, torso_spread
+from mocap.silhouette.torso import head_top_row, torso_spread, torso_width_readable
 from mocap.silhouette.legchain import LAG_S, LegChain
 
 MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody
 SCALE_PERCENTILE = 90           # of silhouette heights around a frame: the standing height
 SCALE_WINDOW_S = 1.0            # half-width of that window, seconds
 MARGIN = 0.25                   # of the body height, around the silhouette's box when fitting
-SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame
+SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame: the fit's
+LIFT_SPREAD_PERCENTILE = 20     # of the readable ones around a frame: the lift's
+SPREAD_FALLBACK_PERCENTILE = 50  # of all of them, the lift's where none is readable
 SPREAD_WINDOW_S = 0.5           # half-width of that window, seconds
 MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a search centre
 
@@ -67,6 +69,7 @@ class FrameFit:
     score: float | None
     fit: Fit2D | None = None
     body_px: float | None = None    # video pixels of the model's 175-unit body height
+    spread: float | None = None     # the torso's spread as the lift reads it (lift_spread)
 
 
 def iter_silhouettes(info: VideoInfo, scale: float,
@@ -136,6 +139,22 @@ def window_percentile(values, i: int, half: int, q: float) -> float:
     return float(np.nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q))
 
 
+def lift_spread(spreads, readable, i: int, half: int) -> float:
+    """A frame's torso spread (section 3.4, |cos yaw|) for the lift's orientation guess
+    and yaw, from the per-frame ones within +-half: a low percentile of those whose
+    width is readable (``torso.torso_width_readable``; arms swinging across the torso
+    still widen some), the median of all where none is (a long crouch or arms held
+    up: the per-frame widths err both ways then). The fit's own SPREAD_PERCENTILE of
+    all frames reads a back or three-quarter view with arms raised or a crouch as a
+    profile, and the orientation guess cannot tell front from back on a profile."""
+    lo, hi = max(0, i - half), i + half + 1
+    values = np.asarray(spreads[lo:hi], float)
+    good = values[np.asarray(readable[lo:hi], bool) & np.isfinite(values)]
+    if len(good):
+        return float(np.percentile(good, LIFT_SPREAD_PERCENTILE))
+    return float(np.nanpercentile(values, SPREAD_FALLBACK_PERCENTILE))
+
+
 def half_window(seconds: float, fps: float) -> int:
     """Frames in a half-window of ``seconds``."""
     return max(1, int(round(seconds * fps)))
@@ -159,9 +178,11 @@ class Fitter:
         self.scale, self.chain = scale, LegChain(half_window(LAG_S, fps))
         self.latest: FrameFit | None = None     # the last frame fitted, legs not yet chosen
 
-    def fit(self, index: int, sil: Silhouette | None, height: float, spread: float) -> list[FrameFit]:
-        """Fit a frame; returns the fits now decided (``latest``: this frame's fit with
-        the legs of the best path so far, until it is decided)."""
+    def fit(self, index: int, sil: Silhouette | None, height: float, spread: float,
+            lift_spread: float) -> list[FrameFit]:
+        """Fit a frame with the torso's ``spread``, ``lift_spread`` kept for the lift;
+        returns the fits now decided (``latest``: this frame's fit with the legs of the
+        best path so far, until it is decided)."""
         self.latest = None
         if sil is None:
             return list(_frame_fits(self.chain.push(index, None), self.scale))
@@ -169,9 +190,10 @@ class Fitter:
         best = self.chain.current
         prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
         fit = fit_frame(small, FIT_SCALE, prev, spread, normalised_grey(sil, height))
-        decided = list(_frame_fits(self.chain.push((index, origin, step), fit), self.scale))
+        item = (index, origin, step, lift_spread)
+        decided = list(_frame_fits(self.chain.push(item, fit), self.scale))
         if not decided or decided[-1].index != index:
-            self.latest = next(_frame_fits([((index, origin, step), self.chain.current)], self.scale))
+            self.latest = next(_frame_fits([(item, self.chain.current)], self.scale))
         return decided
 
     def flush(self) -> list[FrameFit]:
@@ -185,8 +207,8 @@ class FitStream:
     is fitted as soon as the silhouettes its windows need are in: its torso spread's
     (SPREAD_WINDOW_S) frames' body heights' (SCALE_WINDOW_S) frames' rough heights'
     (SCALE_WINDOW_S again, ``body_heights``); every window is the one
-    ``body_heights`` takes over the whole clip, and the torso spread's the low
-    percentile of the per-frame spreads within SPREAD_WINDOW_S, so the fits equal
+    ``body_heights`` takes over the whole clip, and the torso spreads' (the fit's and
+    the lift's) percentiles of the per-frame spreads within SPREAD_WINDOW_S, so the fits equal
     those made with every window over the whole clip (tested), the first ones coming
     out while the rest of the video is still being read."""
 
@@ -199,6 +221,7 @@ class FitStream:
         self._standing: list[float] = []    # their heights from the head's top (head_to_feet)
         self._heights: list[float] = []     # body heights (body_heights) known so far
         self._spreads: list[float] = []     # per-frame torso spreads (torso.torso_spread)
+        self._readable: list[bool] = []     # whether each is trusted (torso.torso_width_readable)
         self._fitted = 0
         self._provisional: list[FrameFit] = []
 
@@ -228,14 +251,16 @@ class FitStream:
             height = np.nan if sil is None else window_percentile(self._standing, i, half,
                                                                   SCALE_PERCENTILE)
             self._heights.append(height)
-            self._spreads.append(np.nan if sil is None else
-                                 torso_spread(normalise(sil, height)[0], FIT_SCALE))
+            small = None if sil is None else normalise(sil, height)[0]
+            self._spreads.append(np.nan if small is None else torso_spread(small, FIT_SCALE))
+            self._readable.append(small is not None and torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
         known, self._provisional = len(self._heights), []
         while self._fitted < known and (end or self._fitted + self.spread_half < known):
             i = self._fitted
-            spread = (np.nan if self.silhouettes[i] is None else
-                      window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE))
-            out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], spread)
+            spreads = ((np.nan, np.nan) if self.silhouettes[i] is None else
+                       (window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE),
+                        lift_spread(self._spreads, self._readable, i, self.spread_half)))
+            out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], *spreads)
             if self.fitter.latest is not None and not end:
                 self._provisional.append(self.fitter.latest)
             self._fitted += 1
@@ -244,21 +269,21 @@ class FitStream:
 
 def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
     """FrameFits of (item, fit) pairs from ``LegChain``: the item is (index, crop
-    origin, crop step) of a fitted frame, the index of one without a person."""
+    origin, crop step, lift spread) of a fitted frame, the index of one without a person."""
     for item, fit in decided:
         if fit is None:
             yield FrameFit(item, None, None)
             continue
-        index, origin, step = item
+        index, origin, step, spread = item
         joints = (origin + (reported_joints(fit.joints, FIT_SCALE) + 0.5) * step - 0.5) / scale
-        yield FrameFit(index, joints, fit.score, fit, BODY_HEIGHT * FIT_SCALE * step / scale)
+        yield FrameFit(index, joints, fit.score, fit, BODY_HEIGHT * FIT_SCALE * step / scale, spread)
 
 
 def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Image-side joints (F, 16, 2), body heights (F,) and torso spreads (F,) of the
-    fits, NaN where nobody was found."""
+    """Image-side joints (F, 16, 2), body heights (F,) and torso spreads as the lift
+    reads them (F,) of the fits, NaN where nobody was found."""
     nan = np.full((len(JOINTS), 2), np.nan)
     joints = np.array([nan if f.joints2d is None else f.joints2d for f in fits], float)
     body_px = np.array([np.nan if f.body_px is None else f.body_px for f in fits], float)
-    spread = np.array([np.nan if f.fit is None else f.fit.pose.spread for f in fits], float)
+    spread = np.array([np.nan if f.spread is None else f.spread for f in fits], float)
     return joints.reshape(len(fits), len(JOINTS), 2), body_px, spread

@@ -23,6 +23,8 @@ SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the
 # its crown; a raised forearm or hand is 8-10 units wide.
 HEAD_ROW_WIDTH = 14.0
 HEAD_ROW_DEPTH = 3.0
+UPRIGHT_SPAN = (0.94, 1.05)      # silhouette height / standing height of an upright body
+RAISED_PX = 1                    # fit pixels of silhouette over the head: none raised
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
@@ -102,6 +104,19 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
     np.maximum.at(widest, rows, ends - starts)
     width = (np.percentile(widest[widest > 0], 25) - SILHOUETTE_BLEED_PX) / scale
     return float(spread_for_width(width))
+
+
+def torso_width_readable(silhouette: np.ndarray, scale: float, body_px: float) -> bool:
+    """Whether a frame's torso width (``torso_spread``) can be trusted: the body is
+    upright (the silhouette UPRIGHT_SPAN of the standing height ``body_px``: crouching or
+    bending puts the torso band on the legs or the bent back) and nothing is raised
+    above the head (arms held up draw the shoulders in over a narrowed torso)."""
+    rows = np.flatnonzero(silhouette.any(axis=1))
+    if len(rows) == 0:
+        return False
+    span = (rows[-1] - rows[0]) / body_px
+    raised = head_top_row(silhouette, scale) - rows[0]
+    return bool(UPRIGHT_SPAN[0] <= span <= UPRIGHT_SPAN[1] and raised <= RAISED_PX)
 
 
 def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
