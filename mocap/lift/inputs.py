@@ -105,7 +105,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if guessed is None:
-        guessed = guess_orientations(joints_image, body_px, spread, fps)
+        guessed = guess_orientations(joints_image, body_px, spread, fps, away)
     said = annotations.orientations(n)
     orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
