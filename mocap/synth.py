@@ -22,7 +22,7 @@ import numpy as np
 
 from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
-from mocap.io.fileio import check_writable
+from mocap.io.video import write_video
 from mocap.errors import MocapError
 from mocap.facing import draw_hair
 from mocap.truth import Camera, Truth, save_truth
@@ -45,7 +45,7 @@ _SHINS = [body.SEGMENT_INDEX["lower_leg_l"], body.SEGMENT_INDEX["lower_leg_r"]]
 # and toes 22 ahead (anthropometric tables: foot 0.152 of the stature, ankle at a fifth)
 _HEEL, _TOE, _FOOT_R = 6.0, 22.0, body.FOOT_LENGTH / 2 / body.BODY_HEIGHT  # round feet
 _SHADES = np.clip(_COLOURS[:, None, :] * _LAYERS[None, :, 2:], 0, 255).tolist()
-_FOURCC, _NOISE_PAD = {".mp4": "mp4v", ".avi": "MJPG"}, 32
+_NOISE_PAD = 32
 _PAN_SPEED = 3                                             # px/frame, moving background
 # body shapes: each kind of segment's widths (lateral and front to back) against the
 # model's (body.WIDTH), so that a method can be tried on a body other than its own model
@@ -278,33 +278,6 @@ def scene_truth(scene: Scene, source: str, source_frames: np.ndarray) -> Truth:
                  source_frames=np.asarray(source_frames, dtype=int),
                  joints2d=cam.project_camera(scene.joints_cam),
                  joints3d=scene.joints_cam - pelvis[:, None], pelvis_camera=pelvis)
-
-
-# -- files ----------------------------------------------------------------------------
-
-def write_video(path: str | Path, frames, fps: float, size: tuple[int, int]) -> int:
-    """Write BGR frames (mp4v for .mp4, MJPG for .avi); check the count by reopening."""
-    path = Path(path)
-    code = _FOURCC.get(path.suffix.lower())
-    if code is None:
-        raise MocapError(f"{path}: video must end in {' or '.join(_FOURCC)}")
-    check_writable(path)
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*code), float(fps), size)
-    if not writer.isOpened():
-        raise MocapError(f"{path}: OpenCV cannot write {code} video here")
-    count = 0
-    try:
-        for frame in frames:
-            writer.write(frame)
-            count += 1
-    finally:
-        writer.release()
-    cap = cv2.VideoCapture(str(path))
-    found = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
-    cap.release()
-    if found != count:
-        raise MocapError(f"{path}: wrote {count} frames but the file holds {found}")
-    return count
 
 
 def render_clip(joints_world: np.ndarray, out_video: str | Path,

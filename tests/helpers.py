@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 
 from mocap import synth
+from mocap.io.video import write_video
 from mocap.synth import RenderOptions
 from mocap.truth import Truth
 from mocap.walk import walk_cycle
@@ -53,7 +54,7 @@ def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, regraded
     def frame(i: int) -> np.ndarray:
         image = synth.draw_frame(scene, i)
         return np.ascontiguousarray(image[..., ::-1]) if regraded and i >= gone.stop else image
-    synth.write_video(path, (frame(i) for i in range(n)), fps, opts.size)
+    write_video(path, (frame(i) for i in range(n)), fps, opts.size)
     return synth.scene_truth(scene, "walk-cycle with an exit", np.arange(n))
 
 
@@ -77,7 +78,7 @@ def render_walk_with_occluder(path: str | Path, hidden: slice, seed: int = 2, **
         lo, hi = int(np.clip(left, 0, width)), int(np.clip(left + board, 0, width))
         image[:, lo:hi] = (90, 95, 100)
         return image
-    synth.write_video(path, (frame(i) for i in range(len(truth.joints2d))), fps, opts.size)
+    write_video(path, (frame(i) for i in range(len(truth.joints2d))), fps, opts.size)
     return truth
 
 
@@ -100,7 +101,7 @@ def write_empty_scene(path: str | Path, n: int = 20) -> None:
     room, rng = synth.background(scene, 0), np.random.default_rng(0)
     frames = (np.clip(room + rng.normal(0, 2, room.shape), 0, 255).astype(np.uint8)
               for _ in range(n))
-    synth.write_video(path, frames, opts.fps, opts.size)
+    write_video(path, frames, opts.fps, opts.size)
 
 
 def dog_walker_marks() -> dict[str, dict[str, list[float]]]:

@@ -16,7 +16,7 @@ from mocap import synth
 from mocap.cli import main as mocap_main
 from mocap.errors import MocapError
 from mocap.review import GUESSED
-from mocap.io.video import iter_frames, open_video
+from mocap.io.video import iter_frames, open_video, write_video
 from mocap.silhouette.background import estimate_background, extract_silhouette
 from mocap.silhouette.masks import held_warning, silhouette_confidence
 from mocap.silhouette.passes import Silhouette
@@ -44,7 +44,7 @@ def in_place(tmp_path_factory):
     empty = synth.background(exact, 0)
     masks = [cv2.absdiff(synth.draw_frame(exact, i), empty).max(axis=2) > 0 for i in range(len(joints))]
     video, photo = folder / "in_place.mp4", folder / "empty.png"
-    synth.write_video(video, frames, OPTIONS.fps, OPTIONS.size)
+    write_video(video, frames, OPTIONS.fps, OPTIONS.size)
     cv2.imwrite(str(photo), empty)
     return dict(folder=folder, video=video, photo=photo, frames=frames, masks=masks, empty=empty)
 
@@ -122,11 +122,11 @@ def test_clean_plate_from_a_photo_and_from_empty_frames(in_place, tmp_path):
     assert mean_iou(in_place["frames"], in_place["masks"], photo) > 0.9
     frames = [in_place["empty"]] * 5 + in_place["frames"]
     video = tmp_path / "with_empty_stage.mp4"
-    synth.write_video(video, frames, OPTIONS.fps, OPTIONS.size)
+    write_video(video, frames, OPTIONS.fps, OPTIONS.size)
     stage = clean_plate((0, 4), open_video(video), 1.0)
     assert mean_iou(in_place["frames"], in_place["masks"], stage) > 0.9
     empty_video = tmp_path / "empty_stage.mp4"     # a short video of the empty stage
-    synth.write_video(empty_video, [in_place["empty"]] * 5, OPTIONS.fps, OPTIONS.size)
+    write_video(empty_video, [in_place["empty"]] * 5, OPTIONS.fps, OPTIONS.size)
     filmed = clean_plate(empty_video, info, 1.0)
     assert mean_iou(in_place["frames"], in_place["masks"], filmed) > 0.9
 

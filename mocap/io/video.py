@@ -1,4 +1,4 @@
-"""Reading video frames and metadata with OpenCV (FFmpeg backend).
+"""Reading video frames and metadata with OpenCV (FFmpeg backend), and writing videos.
 
 Frames are BGR uint8 arrays, streamed one at a time: nothing here holds a whole video
 in memory. Every bad input becomes a `MocapError` whose one-line message names the
@@ -26,15 +26,18 @@ import math
 import os
 import warnings
 from collections.abc import Iterator
+from pathlib import Path
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from mocap.errors import MocapError, MocapWarning
+from mocap.io.fileio import check_writable
 
 DEFAULT_FPS = 25.0  # used when the container does not state a usable frame rate
 _MAX_GRAB_GAP = 32  # forward jumps up to this many frames decode instead of seeking
+_FOURCC = {".mp4": "mp4v", ".avi": "MJPG"}  # the codec `write_video` uses for each suffix
 
 _CONTAINERS = (  # (offset, magic bytes, name) for the error message of unopenable files
     (8, b"AVI ", "AVI"),
@@ -237,3 +240,28 @@ def _resize(frame: np.ndarray, scale: float) -> np.ndarray:
     h, w = frame.shape[:2]
     size = (max(1, round(w * scale)), max(1, round(h * scale)))
     return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
+
+
+def write_video(path: str | Path, frames, fps: float, size: tuple[int, int]) -> int:
+    """Write BGR frames (mp4v for .mp4, MJPG for .avi); check the count by reopening."""
+    path = Path(path)
+    code = _FOURCC.get(path.suffix.lower())
+    if code is None:
+        raise MocapError(f"{path}: video must end in {' or '.join(_FOURCC)}")
+    check_writable(path)
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*code), float(fps), size)
+    if not writer.isOpened():
+        raise MocapError(f"{path}: OpenCV cannot write {code} video here")
+    count = 0
+    try:
+        for frame in frames:
+            writer.write(frame)
+            count += 1
+    finally:
+        writer.release()
+    cap = cv2.VideoCapture(str(path))
+    found = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    cap.release()
+    if found != count:
+        raise MocapError(f"{path}: wrote {count} frames but the file holds {found}")
+    return count
