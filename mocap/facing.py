@@ -8,6 +8,11 @@ The head's look: `mocap synth --hair` draws hair over the back of the head and t
 crown (``draw_hair``), and ``facing_away`` reads a video's heads for the orientation
 guess (mocap.lift.orientation): mostly face is seen from the front, mostly hair from
 behind, where the silhouette cannot tell.
+
+The near arm: in a profile the arm on the camera's side crosses in front of the trunk
+and its outline shows there, while the far one passes behind it, hidden
+(``near_arm``); which of the fit's two arms is near names them once the way the
+performer faces is known (mocap.lift.sides).
 """
 
 from __future__ import annotations
@@ -15,8 +20,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS, left_direction,
-                        semi_axes, unit)
+from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS, SIDES,
+                        WIDTH, left_direction, semi_axes, unit)
+from mocap.edges import Edges
 
 # name -> (segment, where along it from its proximal joint, length and radius in model
 # units of a 175-unit body); each stands out of its segment's front
@@ -141,4 +147,29 @@ def facing_away(silhouettes: list, joints2d: np.ndarray, scale: float) -> np.nda
                            joints[_J_TOP] * scale - origin)
         if np.isfinite(share):
             out[i] = np.clip((share - SHARE_BETWEEN) / SHARE_SPAN, -1.0, 1.0)
+    return out
+
+
+# -- the near arm: its outline across the trunk ------------------------------------------
+_ARM_CHAINS = [[JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["arm"]] for s in SIDES]
+_ARM_WIDTHS = WIDTH[[SEGMENT_INDEX["upper_arm_l"], SEGMENT_INDEX["lower_arm_l"]]]
+
+
+def near_arm(silhouettes: list, joints2d: np.ndarray, body_px: np.ndarray, scale: float) -> np.ndarray:
+    """(F,) how much more the image-left arm of the fit (joints2d (F, 16, 2), image sides,
+    video pixels; ``body_px`` (F,) video pixels of the model's body height) shows its
+    outline inside the silhouette than the image-right one: the edge support
+    (mocap.edges.Edges.inside, 0..1) along the sides of its two segments, Table 1's
+    widths wide. Where an arm lies over the trunk, the near one's sleeve edges show and
+    the far one's are hidden behind it; an arm off the trunk has its outline on the
+    silhouette's, which does not count. 0 where there is no silhouette."""
+    out = np.zeros(len(joints2d))
+    for i, (sil, joints) in enumerate(zip(silhouettes, joints2d)):
+        if sil is None or sil.grey is None or not np.isfinite(joints).all() or not np.isfinite(body_px[i]):
+            continue
+        edges = Edges.inside(sil.grey, sil.mask() > 0)
+        chains = joints[_ARM_CHAINS] * scale - np.array(sil.box[:2], float)      # (2, 3, 2)
+        widths = _ARM_WIDTHS * body_px[i] * scale / BODY_HEIGHT
+        support = edges.support(chains[:, :-1], chains[:, 1:], widths)
+        out[i] = float(support[0] - support[1])
     return out

@@ -8,11 +8,12 @@ import pytest
 from helpers import SHARED_DATA
 
 from mocap import body
-from mocap.facing import FACING_MARKS, facing_away, facing_marks
+from mocap.body import JOINT_INDEX
+from mocap.facing import FACING_MARKS, facing_away, facing_marks, near_arm
 from mocap.lift import taylor as lift
 from mocap.pipeline import open_session
 from mocap.silhouette.passes import fit_arrays
-from mocap.synth import RenderOptions, render_motion
+from mocap.synth import RenderOptions, render_clip, render_motion
 from mocap.walk import walk_cycle
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
@@ -49,3 +50,29 @@ def test_a_performer_seen_from_behind_is_named_facing_away(tmp_path, yaw, away):
     assert np.mean(evidence > 0 if away else evidence < 0) >= 0.7       # frame by frame
     names = session.inputs.orientation
     assert sum(str(n).startswith("backward" if away else "forward") for n in names) >= 0.9 * len(names)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 180.0])
+def test_the_near_arms_outline_names_the_limbs_of_a_profile_walk(tmp_path, yaw):
+    """A walk across the frame in profile (facing image right, then left), with no
+    input: the near arm's outline shows over the trunk and the far one's is hidden
+    (near_arm, pooled over the clip, says which of the fit's arms is near), and the
+    limbs are named by it: the knees and ankles, elbows and wrists of each side lie
+    nearer that side's truth than the other's wherever the limbs are apart."""
+    video = tmp_path / "walk.mp4"
+    truth = render_clip(walk_cycle(1.5, 15.0), video, RenderOptions(yaw=yaw, size=(480, 360), fps=15.0))
+    session = open_session(video)
+    joints, body_px, _ = fit_arrays(session.fits)
+    near_side = "r" if lift.yaw_of(truth.joints3d[0]) > 0 else "l"       # facing image right: the right
+    wrists = [JOINT_INDEX[f"wrist_{s}"] for s in ("l", "r", near_side)]
+    image_left_near = (np.linalg.norm(joints[:, wrists[0]] - truth.joints2d[:, wrists[2]], axis=-1)
+                       < np.linalg.norm(joints[:, wrists[1]] - truth.joints2d[:, wrists[2]], axis=-1))
+    evidence = near_arm(session.silhouettes, joints, body_px, 1.0)
+    assert np.sum(evidence * np.where(image_left_near, 1.0, -1.0)) > 0
+    named, true = session.inputs.joints2d, truth.joints2d
+    for kind in (("knee", "ankle"), ("elbow", "wrist")):
+        sides = [[JOINT_INDEX[f"{n}_{s}"] for n in kind] for s in "lr"]
+        own = sum(np.linalg.norm(named[:, j] - true[:, j], axis=-1).sum(1) for j in sides)
+        other = sum(np.linalg.norm(named[:, j] - true[:, k], axis=-1).sum(1) for j, k in zip(sides, sides[::-1]))
+        apart = np.linalg.norm(true[:, sides[0][-1]] - true[:, sides[1][-1]], axis=-1) > 0.05 * truth.body_height_px
+        assert np.mean(own[apart] < other[apart]) >= 0.7, kind

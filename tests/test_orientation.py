@@ -122,12 +122,9 @@ def test_a_joint_override_decides_the_sides_in_a_profile():
     assert not swap[frame].any()
 
 
-def test_limbs_keep_their_sides_through_every_crossing_of_a_profile_walk():
-    """In a profile the fit names the legs and the arms by their image order, which
-    changes at every step; from a single joint override the legs are followed through
-    the moments they pass each other, and the arms, swinging opposite to the legs
-    (the arm in front is on the other side than the leg in front), get their sides
-    wherever the hands are apart."""
+def profile_walk_by_image_side():
+    """A walk seen in profile facing image right, its limbs named by image side as the
+    fit names them; the truth and, per limb kind, whether the image-left one is the right."""
     truth = seen(walk_cycle(3.0, 30.0), "side")
     image_side, swapped = truth.joints2d.copy(), {}
     for kind in ("leg", "arm"):
@@ -135,6 +132,17 @@ def test_limbs_keep_their_sides_through_every_crossing_of_a_profile_walk():
         swapped[kind] = truth.joints2d[:, chain[0], 0].mean(1) > truth.joints2d[:, chain[1], 0].mean(1)
         image_side[np.ix_(swapped[kind], chain[0])] = truth.joints2d[np.ix_(swapped[kind], chain[1])]
         image_side[np.ix_(swapped[kind], chain[1])] = truth.joints2d[np.ix_(swapped[kind], chain[0])]
+    return truth, image_side, swapped
+
+
+def test_limbs_keep_their_sides_through_every_crossing_of_a_profile_walk():
+    """In a profile the fit names the legs and the arms by their image order, which
+    changes at every step; from a single joint override the legs are followed through
+    the moments they pass each other, and the arms, swinging opposite to the legs
+    (the arm in front is on the other side than the leg in front), get their sides
+    wherever the hands are apart."""
+    truth, image_side, swapped = profile_walk_by_image_side()
+    for kind in ("leg", "arm"):
         assert 0.2 < swapped[kind].mean() < 0.8                # the image order changes
     ankles = truth.joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]]
     frame = int(np.argmax(np.abs(ankles[:, 0, 0] - ankles[:, 1, 0])))     # widest apart
@@ -206,6 +214,24 @@ def test_the_heads_look_names_the_limbs_of_a_profile_where_nothing_else_does():
     known = np.full((len(joints), 2), -1, np.int8)
     assert not track_sides(joints, known, np.ones(len(joints)), 30.0, np.ones(len(joints), bool)).any()
     assert track_sides(joints, known, np.ones(len(joints)), 30.0).all()
+
+
+def test_the_near_arm_names_the_limbs_of_a_profile_where_nothing_else_does():
+    """A profile walk with nothing known: the naming is the one whose arms agree with
+    the near arm (mocap.facing.near_arm; facing image right the near arm is the
+    performer's right). Told the image-left arm is the near one where it is the right
+    one, every limb is named right; told the other, every limb the other way."""
+    truth, image_side, swapped = profile_walk_by_image_side()
+    known = np.full((len(image_side), 2), -1, np.int8)
+    near = np.where(swapped["arm"], 0.2, -0.2)           # the right arm's outline over the trunk
+    right = track_sides(image_side, known, np.ones(len(image_side)), 30.0, near=near)
+    wrong = track_sides(image_side, known, np.ones(len(image_side)), 30.0, near=-near)
+    arm = sum(body.LENGTH[body.SEGMENT_INDEX[s]] for s in ("upper_arm_l", "lower_arm_l"))
+    wrists = truth.joints2d[:, [JOINT_INDEX["wrist_l"], JOINT_INDEX["wrist_r"]], 0]
+    apart = np.abs(wrists[:, 0] - wrists[:, 1]) > SEPARATED * arm * truth.body_height_px / BODY_HEIGHT
+    assert np.mean(right[:, 1] == swapped["leg"]) > 0.9 and np.mean(wrong[:, 1] == swapped["leg"]) < 0.1
+    assert np.mean(right[apart, 0] == swapped["arm"][apart]) > 0.9
+    assert np.mean(wrong[apart, 0] == swapped["arm"][apart]) < 0.1
 
 
 def test_arms_take_the_legs_sides_in_a_real_laugh():

@@ -93,7 +93,8 @@ def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
                    annotations: Annotations, lengths: np.ndarray | None = None,
-                   guessed: list[str | None] | None = None, away: np.ndarray | None = None) -> Inputs:
+                   guessed: list[str | None] | None = None, away: np.ndarray | None = None,
+                   near: np.ndarray | None = None) -> Inputs:
     """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding, the
@@ -101,7 +102,8 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     arms steadied (``steadied_arms``); the overrides put in; segment lengths from the
     clip (lift.clip_lengths); the signs guessed with the user's held signs as
     constraints (orientation.held_user_signs). ``away`` (F,): the heads' look
-    (mocap.facing.facing_away), which names the limbs of a profile where nothing else does."""
+    (mocap.facing.facing_away) and ``near`` (F,): the near arm (mocap.facing.near_arm),
+    which name the limbs of a profile where nothing else does."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if guessed is None:
@@ -111,7 +113,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
     swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x, fps,
-                       looks_away(away, fps, n))
+                       looks_away(away, fps, n), near)
     ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
     values, since = annotations.held_signs(n)

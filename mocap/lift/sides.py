@@ -28,32 +28,50 @@ _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 
 
 def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
-                away: np.ndarray | None = None) -> np.ndarray:
+                away: np.ndarray | None = None, near: np.ndarray | None = None) -> np.ndarray:
     """(F, 2) bool: for arms and legs, whether the image-left limb is the right one.
 
     ``known`` (F, 2) holds 1 (swap), 0 (keep) or -1 (unknown: a profile, where the 2D
     fit names limbs by their image order, back and front). In a profile the legs keep
     their identity through the moments where they pass each other by
     ``bridge_parity``; the arms, which the fit cannot see cross, are named from the
-    legs (``_stepping``). A stretch with nothing known starts from the forward-facing
-    convention (swap), or the backward one (keep) where the head's look says the
-    performer faces away over most of the run (``away`` (F,) bool), which the user
-    corrects with one joint override. ``facing_x`` (F,) is +1 facing image right; ``fps`` sets the window of a step.
+    legs (``_stepping``). A run in profile throughout, facing one image side, takes
+    the naming whose arms agree over the run with the near arm (``near`` (F,):
+    mocap.facing.near_arm, > 0 where the image-left arm's outline shows across the
+    trunk; facing image right the near arm is the performer's right one); where it
+    says nothing, or the run turns, a stretch with nothing known takes the
+    forward-facing convention (swap), or the backward one (keep) where the head's
+    look says the performer faces away over most of the run (``away`` (F,) bool),
+    which the user corrects with one joint override. ``facing_x`` (F,) is +1 facing
+    image right; ``fps`` sets the window of a step.
     """
     out = np.zeros(known.shape, bool)
     away = np.zeros(len(known), bool) if away is None else away
+    near = np.zeros(len(known)) if near is None else near
+    half = max(1, int(round(STEP_S * fps)))
     ok = np.isfinite(joints2d).all(axis=(1, 2))
     for r in runs(ok):
         legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
+        arms = _limb_pair(joints2d[r], _PAIR_JOINTS["arms"])
         chains = _limb_pair(joints2d[r], LIMB_JOINTS["leg"])
         leg_px = _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])
         parity = _anchored(bridge_parity(chains, leg_px), known[r, 1], away[r])
         out[r, 1] = np.where(known[r, 1] >= 0, known[r, 1] == 1, parity)
-        arms = _limb_pair(joints2d[r], _PAIR_JOINTS["arms"])
-        stepping = _stepping(legs, out[r, 1], facing_x[r], leg_px, max(1, int(round(STEP_S * fps))))
-        sides = np.where(stepping, _counter_phase(legs, out[r, 1], arms, facing_x[r]), out[r, 1])
-        out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, sides)
+        out[r, 0] = _arm_sides(legs, arms, out[r, 1], known[r, 0], facing_x[r], leg_px, half)
+        one_way = (known[r] < 0).all() and (facing_x[r] == facing_x[r.start]).all()
+        if one_way and np.sum(near[r] * facing_x[r] * np.where(out[r, 0], 1.0, -1.0)) < 0:
+            out[r, 1] = ~out[r, 1]
+            out[r, 0] = _arm_sides(legs, arms, out[r, 1], known[r, 0], facing_x[r], leg_px, half)
     return out
+
+
+def _arm_sides(legs: np.ndarray, arms: np.ndarray, legs_swap: np.ndarray, known: np.ndarray,
+               facing_x: np.ndarray, leg_px: float, half: int) -> np.ndarray:
+    """(F,) bool: whether the image-left arm is the right one, from the legs' sides
+    (``_stepping``, ``_counter_phase``) where ``known`` (F,) says nothing (-1)."""
+    stepping = _stepping(legs, legs_swap, facing_x, leg_px, half)
+    sides = np.where(stepping, _counter_phase(legs, legs_swap, arms, facing_x), legs_swap)
+    return np.where(known >= 0, known == 1, sides)
 
 
 def _limb_pair(joints2d: np.ndarray, names: tuple[str, ...]) -> np.ndarray:

@@ -18,7 +18,7 @@ import numpy as np
 
 from mocap.body import JOINTS
 from mocap.errors import MocapError
-from mocap.facing import facing_away
+from mocap.facing import facing_away, near_arm
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
 from mocap.lift.inputs import Inputs, resolve_inputs
@@ -59,6 +59,14 @@ class SilhouetteSession(Session):
         joints = self._arrays[0]
         return (None if self.silhouettes is None else
                 facing_away(self.silhouettes, joints, processing_scale(self.info)))
+
+    @cached_property
+    def _near(self) -> np.ndarray | None:
+        """(F,) which of the fit's arms shows across the trunk (mocap.facing.near_arm),
+        None without the silhouettes (once per session)."""
+        joints, body_px, _ = self._arrays
+        return (None if self.silhouettes is None else
+                near_arm(self.silhouettes, joints, body_px, processing_scale(self.info)))
 
     @cached_property
     def _guessed(self) -> list[str | None]:
@@ -111,7 +119,7 @@ class SilhouetteSession(Session):
         if self._inputs is None:
             joints, body_px, spread = self._arrays
             self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
-                                          guessed=self._guessed, away=self._away)
+                                          guessed=self._guessed, away=self._away, near=self._near)
         return self._inputs
 
     def held_signs(self) -> np.ndarray:
