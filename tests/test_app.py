@@ -82,18 +82,15 @@ def test_fits_stream_out_while_silhouettes_are_found_and_equal_the_whole_clips(t
 def whole_clip_fits(silhouettes: list, scale: float, fps: float) -> list:
     """Pass two with every window taken over the whole clip at once: the body heights
     (passes.body_heights), the low percentile of the per-frame torso spreads around
-    each frame and the lift's spread from them."""
-    from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE
+    each frame and the lift's spread from its own per-frame ones (passes.torso_reads)."""
     from mocap.silhouette.passes import (SPREAD_PERCENTILE, SPREAD_WINDOW_S, Fitter, half_window, lift_spread,
-                                         normalise, rolling_percentile)
-    from mocap.silhouette.torso import torso_spread, torso_width_readable
+                                         rolling_percentile, torso_reads)
     heights = body_heights(silhouettes, fps)
-    small = [None if s is None else normalise(s, h)[0] for s, h in zip(silhouettes, heights)]
-    raw = np.array([np.nan if m is None else torso_spread(m, FIT_SCALE) for m in small])
-    readable = [m is not None and torso_width_readable(m, FIT_SCALE, FIT_BODY_PX) for m in small]
+    reads = [(np.nan, np.nan, False) if s is None else torso_reads(s, h) for s, h in zip(silhouettes, heights)]
+    raw, lift_raw, readable = (np.array(values) for values in zip(*reads))
     half = half_window(SPREAD_WINDOW_S, fps)
     spreads = rolling_percentile(raw, half, SPREAD_PERCENTILE)
-    lifts = [np.nan if m is None else lift_spread(raw, readable, i, half) for i, m in enumerate(small)]
+    lifts = [np.nan if s is None else lift_spread(lift_raw, readable, i, half) for i, s in enumerate(silhouettes)]
     fitter = Fitter(scale, fps)
     fits = [f for i, s in enumerate(silhouettes) for f in fitter.fit(i, s, heights[i], spreads[i], lifts[i])]
     return fits + fitter.flush()

@@ -139,6 +139,18 @@ def window_percentile(values, i: int, half: int, q: float) -> float:
     return float(np.nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q))
 
 
+def torso_reads(sil: Silhouette, height: float) -> tuple[float, float, bool]:
+    """A frame's torso spread (``torso.torso_spread``) as the fit reads it, on the
+    silhouette normalised to ``height`` (FIT_BODY_PX tall), and as the lift reads it, on
+    the silhouette at the processing resolution, and whether the torso's width is
+    readable (``torso.torso_width_readable``). At the fit's size a profile torso is
+    about 12 pixels wide and each pixel moves the spread by 0.1-0.2, so the lift's
+    orientation guess reads it finer."""
+    small = normalise(sil, height)[0]
+    return (torso_spread(small, FIT_SCALE), torso_spread(sil.mask(), height * FIT_SCALE / FIT_BODY_PX),
+            torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
+
+
 def lift_spread(spreads, readable, i: int, half: int) -> float:
     """A frame's torso spread (section 3.4, |cos yaw|) for the lift's orientation guess
     and yaw, from the per-frame ones within +-half: a low percentile of those whose
@@ -221,6 +233,7 @@ class FitStream:
         self._standing: list[float] = []    # their heights from the head's top (head_to_feet)
         self._heights: list[float] = []     # body heights (body_heights) known so far
         self._spreads: list[float] = []     # per-frame torso spreads (torso.torso_spread)
+        self._lift_reads: list[float] = []  # the same at the processing resolution (torso_reads)
         self._readable: list[bool] = []     # whether each is trusted (torso.torso_width_readable)
         self._fitted = 0
         self._provisional: list[FrameFit] = []
@@ -251,15 +264,15 @@ class FitStream:
             height = np.nan if sil is None else window_percentile(self._standing, i, half,
                                                                   SCALE_PERCENTILE)
             self._heights.append(height)
-            small = None if sil is None else normalise(sil, height)[0]
-            self._spreads.append(np.nan if small is None else torso_spread(small, FIT_SCALE))
-            self._readable.append(small is not None and torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
+            reads = (np.nan, np.nan, False) if sil is None else torso_reads(sil, height)
+            for values, value in zip((self._spreads, self._lift_reads, self._readable), reads):
+                values.append(value)
         known, self._provisional = len(self._heights), []
         while self._fitted < known and (end or self._fitted + self.spread_half < known):
             i = self._fitted
             spreads = ((np.nan, np.nan) if self.silhouettes[i] is None else
                        (window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE),
-                        lift_spread(self._spreads, self._readable, i, self.spread_half)))
+                        lift_spread(self._lift_reads, self._readable, i, self.spread_half)))
             out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], *spreads)
             if self.fitter.latest is not None and not end:
                 self._provisional.append(self.fitter.latest)
