@@ -61,18 +61,29 @@ def fit_clip(name: str, out_dir: Path, mode: str, plate: bool) -> float:
 def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
     """Fit one clip's true masks (the frames' grey levels kept for the inner edges) into
     out_dir/<name>/ as fit_clip does, with no silhouettes written; the wall time."""
+    from mocap.io.export.formats import write_format
+
+    folder = out_dir / name
+    folder.mkdir(parents=True)
+    (folder / "truth.json").symlink_to(CLIPS / name / "truth.json")
+    start = time.perf_counter()
+    session = true_mask_session(name, mode)
+    write_format("json", folder / ("oracle.out.json" if mode == "oracle" else "auto.json"), session.clip())
+    return time.perf_counter() - start
+
+
+def true_mask_session(name: str, mode: str = "auto"):
+    """The silhouette method's session of one clip fitted on its true masks (the
+    pipeline's own pass two), with the clip's oracle.json annotations in mode
+    "oracle", none otherwise."""
     import cv2
 
     from mocap.io.annotations import Annotations, load_annotations
-    from mocap.io.export.formats import write_format
     from mocap.io.video import iter_frames, open_video, processing_scale
     from mocap.session.silhouette import SilhouetteSession
     from mocap.silhouette.passes import FitStream, Silhouette
 
-    clip, folder = CLIPS / name, out_dir / name
-    folder.mkdir(parents=True)
-    (folder / "truth.json").symlink_to(clip / "truth.json")
-    start = time.perf_counter()
+    clip = CLIPS / name
     info = open_video(clip / "video.mp4")
     scale = processing_scale(info)
     silhouettes = []
@@ -85,9 +96,7 @@ def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
         fits += stream.push(silhouette)
     fits += stream.finish()
     notes = load_annotations(clip / "oracle.json", info.frame_count) if mode == "oracle" else Annotations()
-    session = SilhouetteSession(info, fits, notes, silhouettes=silhouettes)   # their grey levels: the heads' look
-    write_format("json", folder / ("oracle.out.json" if mode == "oracle" else "auto.json"), session.clip())
-    return time.perf_counter() - start
+    return SilhouetteSession(info, fits, notes, silhouettes=silhouettes)   # their grey levels: the heads' look
 
 
 def background_photo(clip: Path) -> Path:
