@@ -16,7 +16,10 @@ silhouette. This module finds those pixels and puts the empty scene back in them
    more often in the evidence (the performer over the scene) than in the scene
    itself, so a clip whose median is already empty keeps it; the pixels of such
    colours connected to those pieces join them (legs that stand still below
-   jabbing arms lie outside the region the motion outlines);
+   jabbing arms lie outside the region the motion outlines); a steady piece of
+   them (most samples show the median there) whose border lies mostly outside them
+   is the scene taken in by its colour, not a still part of the performer, which
+   the moving parts border;
 5. each such pixel takes the median of the samples that differ from the median
    image there and have the scene's colours (the scene, uncovered, not another
    part of the performer passing), or, where the performer never leaves it, the
@@ -72,6 +75,7 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
     if region is None:
         return background
     held_in_median, odds = _median_holds(background.image, region, radius, frames, masks)
+    held_in_median = _without_steady_scene(held_in_median, _steady(background.image, frames, background.sigma))
     image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius, odds)
     threshold = background.threshold.copy()
     threshold[cv2.dilate(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
@@ -184,6 +188,36 @@ def _joined(holds: np.ndarray, like: np.ndarray) -> np.ndarray:
     joined[label[holds]] = True
     joined[0] = False
     return joined[label]
+
+
+def _steady(image: np.ndarray, frames: list[np.ndarray], sigma: float) -> np.ndarray:
+    """Pixels (bool) where at least HALF of the ``frames`` show the median ``image``
+    within the clip's noise floor: a stable view there, the scene or a part of the
+    performer that stays still (where the performer moves over a pixel most of the
+    time, the median is a mix of what passes)."""
+    floor = noise_floor(sigma)
+    agree = np.zeros(image.shape[:2], np.float32)
+    for frame in frames:
+        agree += cv2.absdiff(frame, image).max(axis=2) <= floor
+    return agree >= HALF * len(frames)
+
+
+def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
+    """``holds`` without its steady pieces (4-connected) of which most of the border
+    lies outside it: a still part of the performer is bordered by the parts that
+    move around it, which the held region takes in too (the median there is a mix
+    of them), while steady scene that the held region took in by its colour (a
+    pale object beside the legs) goes on into the scene outside."""
+    n, label = cv2.connectedComponents((holds & steady).astype(np.uint8), connectivity=4)
+    if n < 2:
+        return holds
+    border = cv2.dilate(label.astype(np.float32), np.ones((3, 3), np.uint8)).astype(np.int32)
+    ring = (border > 0) & (label == 0)
+    outside = np.bincount(border[ring], weights=~holds[ring], minlength=n)
+    total = np.maximum(np.bincount(border[ring], minlength=n), 1)
+    drop = outside / total > HALF
+    drop[0] = False
+    return holds & ~drop[label]
 
 
 def _replate(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
