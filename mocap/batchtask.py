@@ -146,13 +146,11 @@ class Masks:
             self.out.add(progress.frame, self.full(progress.product))
 
     def full(self, silhouette: Silhouette | None) -> np.ndarray:
-        """A silhouette as a mask of the whole frame at the video's size (255 = performer)."""
+        """A silhouette as written out (its cover) in a mask of the whole frame at the
+        video's size (255 = performer)."""
         info, scale = self.info, self.scale
         size = (max(1, round(info.width * scale)), max(1, round(info.height * scale)))
-        mask = np.zeros(size[::-1], np.uint8)
-        if silhouette is not None:
-            x0, y0, x1, y1 = silhouette.box
-            mask[y0:y1, x0:x1] = silhouette.mask() * 255
+        mask = np.zeros(size[::-1], np.uint8) if silhouette is None else silhouette.written(size[::-1])
         if size == (info.width, info.height):
             return mask
         return cv2.resize(mask, (info.width, info.height), interpolation=cv2.INTER_NEAREST)

@@ -205,13 +205,18 @@ def extract_silhouette(frame: np.ndarray, background: Background,
     compensation, with soft shadows removed, cleaned by morphology and reduced to the
     person-sized region.
     """
+    frame = at_exposure(frame, background)
+    mask = foreground(frame, background)
+    return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma))
+
+
+def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
+    """`frame` brought to the background's exposure (``exposure_gain``), checked
+    against its shape."""
     if frame.shape != background.image.shape or frame.dtype != np.uint8:
         raise ValueError(f"frame {frame.shape} {frame.dtype} does not match the "
                          f"background {background.image.shape} uint8")
-    gain = exposure_gain(frame, background.image)
-    frame = cv2.transform(frame, np.diag(gain))
-    mask = foreground(frame, background)
-    return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma))
+    return cv2.transform(frame, np.diag(exposure_gain(frame, background.image)))
 
 
 def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
@@ -221,40 +226,56 @@ def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
 
 def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
                    ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """`mask` without its soft-shadow areas (the paper's noted failure, section 3.2).
+    """`mask` without its soft-shadow areas (the paper's noted failure, section 3.2):
+    ``without_shadows`` of the ``shadow_candidates``."""
+    return without_shadows(mask, frame, background, shadow_candidates(mask, frame, background, ratio, chroma))
 
-    A shadow pixel is the background darkened by one factor in `ratio` for all
-    channels (same chromaticity, within `chroma` of the brightest background
-    channel) that keeps the background's texture (``_textured_alike``: grey
-    clothes over a patterned floor are as dark, but flat). Only solid
-    areas of such pixels go: thin runs of them inside the person (dark hair on a
-    grey wall) survive the opening and stay.
-    """
-    grey, grey_bg = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), background.grey
-    darker = cv2.compare(grey, grey_bg, cv2.CMP_LT)
-    index = np.flatnonzero(cv2.bitwise_and(mask, darker).view(bool))
+
+def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Background,
+                      ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
+    """The pixels of `mask` (0/255) that look like a shadow one by one: the background
+    darkened by one factor in `ratio` for all channels (same chromaticity, within
+    `chroma` of the brightest background channel)."""
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    index = np.flatnonzero(cv2.bitwise_and(mask, cv2.compare(grey, background.grey, cv2.CMP_LT)).view(bool))
     f = _channel_rows(np.take(frame.reshape(-1, 3), index, axis=0))
     b = _channel_rows(np.take(background.image.reshape(-1, 3), index, axis=0)) + 1.0
     level = f.sum(axis=0) / b.sum(axis=0)
-    residual = np.abs(f - level * b).max(axis=0)
     like = ((level > ratio[0]) & (level < ratio[1])
-            & (residual < chroma * level * b.max(axis=0)))
+            & (np.abs(f - level * b).max(axis=0) < chroma * level * b.max(axis=0)))
     candidates = np.zeros_like(mask)
     candidates.reshape(-1)[index[like]] = 255
-    disk = _disk(mask.shape)
-    # the opening keeps nothing outside the candidates' own solid areas, so the texture
-    # test (a few blurs) runs only around those
-    x, y, w, h = cv2.boundingRect(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, disk))
-    if not w:
+    return candidates
+
+
+def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
+                    candidates: np.ndarray) -> np.ndarray:
+    """`mask` without the solid areas of shadow `candidates` (``shadow_candidates``)
+    that keep the background's texture (``_textured_alike``: grey clothes over a
+    patterned floor are as dark, but flat). Thin runs of candidates inside the
+    person (dark hair on a grey wall) survive the opening and stay."""
+    box = shadow_box(candidates)
+    if box is None:
         return mask
-    pad = 2 + _vote_size(mask.shape) // 2
-    box = (slice(max(0, y - pad), y + h + pad), slice(max(0, x - pad), x + w + pad))
+    grey = cv2.cvtColor(frame[box], cv2.COLOR_BGR2GRAY)
     shadow = np.zeros_like(mask)
     shadow[box] = cv2.morphologyEx(
-        _textured_alike(candidates[box], grey[box], grey_bg[box], background.sigma, mask.shape),
-        cv2.MORPH_OPEN, disk,
+        _textured_alike(candidates[box], grey, background.grey[box], background.sigma, mask.shape),
+        cv2.MORPH_OPEN, _disk(mask.shape),
         borderType=cv2.BORDER_CONSTANT, borderValue=0)
     return cv2.bitwise_and(mask, cv2.bitwise_not(shadow))
+
+
+def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] | None:
+    """The box that ``without_shadows`` looks in (and `margin` pixels more): around
+    the shadow `candidates`' solid areas (the opening keeps nothing outside them, so
+    the texture test's few blurs run only there), within the texture vote's reach;
+    None when there are none."""
+    x, y, w, h = cv2.boundingRect(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, _disk(candidates.shape)))
+    if not w:
+        return None
+    pad = 2 + _vote_size(candidates.shape) // 2 + margin
+    return slice(max(0, y - pad), y + h + pad), slice(max(0, x - pad), x + w + pad)
 
 
 def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray,

@@ -52,16 +52,14 @@ def held_warning(confidence: np.ndarray) -> str | None:
 
 def write_masks(folder: str | os.PathLike, silhouettes: list, shape: tuple[int, int],
                 size: tuple[int, int]) -> Path:
-    """Every frame's silhouette (session.Silhouette in a processing frame of ``shape``
-    (height, width)) as ``folder/NNNNNN.png``: 8-bit, 255 = performer, the video's
-    ``size`` (width, height); an empty image where nobody was found. The folder is
+    """Every frame's silhouette as written out (passes.Silhouette.written, in a
+    processing frame of ``shape`` (height, width)) as ``folder/NNNNNN.png``: 8-bit,
+    255 = performer, the video's ``size`` (width, height); an empty image where
+    nobody was found. The folder is
     replaced whole (io.export.masks.MaskFolder), as mocap batch writes it."""
     out = MaskFolder(folder)
     for i, sil in enumerate(silhouettes):
-        full = np.zeros(shape, np.uint8)
-        if sil is not None:
-            x0, y0, x1, y1 = sil.box
-            full[y0:y1, x0:x1] = sil.mask() * 255
+        full = np.zeros(shape, np.uint8) if sil is None else sil.written(shape)
         if full.shape[::-1] != tuple(size):
             full = cv2.resize(full, tuple(size), interpolation=cv2.INTER_NEAREST)
         out.add(i, full)
