@@ -30,7 +30,8 @@ ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend sho
 # (upper, lower) angles every 30 degrees all around the shoulder: arm guesses that the
 # frame's edges may pick inside the silhouette
 ARM_GRID = [(float(u), float(u + b)) for u in range(0, 360, 30) for b in range(-150, 151, 30)]
-_GRID_GUESSES = np.array([(*a, r, r) for a in ARM_GRID for r in GUESS_RATIOS])
+_GRID_GUESSES = np.array([(*a, GUESS_RATIOS[0], GUESS_RATIOS[0]) for a in ARM_GRID])
+GRID_SHORTENED = 16              # the grid's best arms that are also tried at the other GUESS_RATIOS
 
 
 def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
@@ -64,10 +65,11 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None)
     contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point
     bent either way or straight and foreshortened, hanging down, the previous
     frame's arm as it was and, where the frame's edges can tell arms inside the
-    silhouette apart, a grid of arms all around the shoulder (ARM_GRID); each new
-    guess at GUESS_RATIOS of the model's lengths (an arm turned toward the camera
-    is shorter in the image, and one hanging in front of the trunk scores alike at
-    any length)."""
+    silhouette apart, a grid of arms all around the shoulder (ARM_GRID, last); each
+    new guess at GUESS_RATIOS of the model's lengths (an arm turned toward the
+    camera is shorter in the image, and one hanging in front of the trunk scores
+    alike at any length), the grid's at the first (``best_arm_guess`` shortens the
+    best of them)."""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
     angles, guesses = [(270.0, 270.0)], []
     if prev is not None:
@@ -119,20 +121,38 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
                    facing: int = 0) -> Pose2D:
     """The arm_candidates guess with the highest S, among those that do not bend the
-    elbow backward (``elbow_bends_back``) where that can be told."""
+    elbow backward (``elbow_bends_back``) where that can be told. The grid's arms
+    are narrowed as Algorithm 1 narrows a search: all at full length first, then
+    the GRID_SHORTENED best of them at the other GUESS_RATIOS, on the partial
+    silhouette that the first round outlines."""
     guesses = arm_candidates(canvas, pose, side, prev)
     backward = elbow_bends_back(guesses[:, 1] - guesses[:, 0], pose.spread, facing)
+    grid = np.arange(len(guesses)) >= len(guesses) - (len(_GRID_GUESSES) if canvas.by_edges else 0)
     if not backward.all():
-        guesses = guesses[~backward]
+        guesses, grid = guesses[~backward], grid[~backward]
+    angle, ratio, scores, score = _scored_guesses(canvas, pose, side, guesses)
+    if grid.any():
+        top = np.flatnonzero(grid)[np.argsort(-scores[grid], kind="stable")[:GRID_SHORTENED]]
+        shorter = np.concatenate([np.column_stack([guesses[top, :2], np.full((len(top), 2), r)])
+                                  for r in GUESS_RATIOS[1:]])
+        more = _scored_guesses(canvas, pose, side, shorter, score)
+        angle, ratio, scores = (np.concatenate(pair) for pair in zip((angle, ratio, scores), more[:3]))
+    best = int(np.argmax(scores))
+    return replace(pose, angle=angle[best], ratio=ratio[best])
+
+
+def _scored_guesses(canvas: Canvas, pose: Pose2D, side: str, guesses: np.ndarray, score=None):
+    """(angles, ratios, S with the edges' support, scorer) of one arm's guesses (G, 4)
+    posed; ``score``: the scorer of an earlier round (``sweep_scorer``), else the
+    guesses outline the partial silhouette themselves."""
     both = Knob("angle", ARM[side])
     pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
     angle[:, both.indices[1]] = guesses[:, 1]
     ratio[:, both.indices] = guesses[:, 2:]
     joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-    scores, _ = sweep_scorer(canvas, joint_quads(joints, pose.scale, both.indices, spread))
-    scores = scores + canvas.edge_scores(joints, both.indices, pose.scale)
-    best = int(np.argmax(scores))
-    return replace(pose, angle=angle[best], ratio=ratio[best])
+    quads = joint_quads(joints, pose.scale, both.indices, spread)
+    scores, score = sweep_scorer(canvas, quads) if score is None else (score(quads), score)
+    return angle, ratio, scores + canvas.edge_scores(joints, both.indices, pose.scale), score
 
 
 def facing_of_knees(pose: Pose2D) -> int:

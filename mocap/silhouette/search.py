@@ -62,7 +62,7 @@ class Knob:
         return [SEGMENT_INDEX[s] for s in self.segments]
 
 
-def coarse_to_fine(score, n: int, opening: list[int], opening_scores: np.ndarray, start: int,
+def coarse_to_fine(score, n: int, opening: list[int], opening_scores: list[float], start: int,
                    interval: int) -> int:
     """The shared narrowing search of Algorithms 1 and 6 over n ordered values.
 
@@ -71,15 +71,15 @@ def coarse_to_fine(score, n: int, opening: list[int], opening_scores: np.ndarray
     (the paper starts from S = 0, which lets a flat score drift to the range's
     start). The interval of two divisions around the best (``interval`` values
     wide) is then divided at full resolution, which ends the narrowing. ``score``
-    maps index arrays to S.
+    maps a list of indices to their S.
     """
-    known = dict(zip(opening, opening_scores.tolist()))
+    known = dict(zip(opening, opening_scores))
     best = max(opening, key=lambda i: (known[i], i == start))
     near = [i for i in range(max(best - interval // 2, 0), min(best + interval // 2, n - 1) + 1)
             if i not in known]
     if not near:
         return best
-    known.update(zip(near, score(np.array(near)).tolist()))
+    known.update(zip(near, score(near)))
     top = max(near, key=known.__getitem__)
     return top if known[top] > known[best] else best
 
@@ -124,12 +124,13 @@ def search(pose: Pose2D, job: Search) -> Pose2D:
     def edges(i) -> np.ndarray:
         return job.canvas.edge_scores(joints[i], drawn, pose.scale)
     if n <= ONE_ROUND:
-        scores = sweep_scorer(job.canvas, quads, opening)[0] + edges(slice(None))
-        best = coarse_to_fine(scores.__getitem__, n, opening, scores[opening], start, 2 * every)
+        scores = (sweep_scorer(job.canvas, quads, opening)[0] + edges(slice(None))).tolist()
+        best = coarse_to_fine(lambda i: [scores[k] for k in i], n, opening, [scores[k] for k in opening],
+                              start, 2 * every)
     else:
         first, score = sweep_scorer(job.canvas, quads[opening])
-        best = coarse_to_fine(lambda i: score(quads[i]) + edges(i), n, opening, first + edges(opening),
-                              start, 2 * every)
+        best = coarse_to_fine(lambda i: (score(quads[i]) + edges(i)).tolist(), n, opening,
+                              (first + edges(opening)).tolist(), start, 2 * every)
     return job.knob.apply(pose, float(values[best]))
 
 
