@@ -10,14 +10,18 @@ import json
 import numpy as np
 import pytest
 
-from helpers import render_walk_with_exit, render_walk_with_occluder
+from helpers import SHARED_DATA, render_walk_with_exit, render_walk_with_occluder
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import parse_annotations
 from mocap.io.export.motion_json import read_motion
 from mocap.io.video import open_video
 from mocap.pipeline import open_session
-from mocap.track.loss import bridged, ramp, stretches
+from mocap.synth import render_motion
+from mocap.track import blocks
+from mocap.track.loss import DISTINCT, bridged, ramp, stretches
+from mocap.track.reacquire import distinctness
+from mocap.track.tracking import track_video
 
 GONE = slice(10, 24)          # frames the performer is out of the picture
 HIDDEN = slice(10, 18)        # frames a board hides the performer whole
@@ -87,6 +91,44 @@ def test_the_body_is_found_again_without_a_remark(case, tmp_path):
     assert not lost[:gone.start].any() and not lost[gone.stop + 1:].any()
     err = errors(frames, truth)
     assert np.nanmax(err[gone.stop + 1:]) < 5.0 and np.nanmax(err[:gone.start]) < 5.0
+
+
+JUMPS = SHARED_DATA / "bvh" / "cmu_01_01_jumps.bvh"
+
+
+@pytest.mark.skipif(not JUMPS.exists(), reason=f"{JUMPS} is absent")
+def test_a_body_whose_match_falls_where_it_stands_out_is_held(tmp_path):
+    """The first 39 frames of CMU 01_01 (jumps) over a panning, cluttered background:
+    from frame 10 on a pale board behind the head halves the head's and the trunk's
+    match against their usual level from the frames before. The body still stands
+    out of the frame (mocap.track.reacquire.distinctness), and is held where it
+    stands out enough: frames 10-26 (before: every frame from 10 on was lost, the
+    joints held where they were); from 27 on the trunk stands out less and those
+    frames are lost."""
+    video = tmp_path / "jumps.mp4"
+    truth = render_motion(JUMPS, video, frames=(1, 161), fps=30.0, yaw=45.0, size=(320, 240),
+                          perspective=400.0, moving_background=True)
+    result = track_video(video, truth.joints2d[0], orientation="forward_right")
+    err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
+    assert not result.lost[:20].any() and result.lost.mean() < 0.4
+    assert np.median(err[~result.lost], axis=1).max() < 0.03
+
+
+def test_a_block_stands_out_where_the_frame_shows_its_colours_once():
+    """distinctness: a block's S where it lies over its best S a length or more away,
+    on a noisy frame (sensor noise after the colour model was taken)."""
+    rng = np.random.default_rng(0)
+    frame = rng.integers(0, 256, (120, 160, 3)).astype(np.uint8)
+    frame[38:72, 48:62] = (30, 140, 220)                        # the part, wider than its block
+    block = np.array([55.0, 40.0, np.pi / 2, 30.0, 10.0])
+    grid = blocks.make_grid(30.0, 10.0)
+    model = blocks.sample_blocks(frame, block, grid)[0]
+
+    def noisy(image):
+        return np.clip(image + rng.normal(0.0, 4.0, image.shape), 0, 255).astype(np.uint8)
+    assert distinctness(noisy(frame), model, grid, block) > 3 * DISTINCT
+    frame[38:72, 105:119] = (30, 140, 220)                      # its colours again, elsewhere
+    assert distinctness(noisy(frame), model, grid, block) == pytest.approx(1.0, abs=0.2)
 
 
 def test_short_losses_are_bridged_long_ones_stay_lost():

@@ -19,6 +19,9 @@ as tracked and falling to 0 where it looks lost:
 A frame is lost where the head or the trunk, which every limb hangs from, is below
 LOST, and stays lost until the body is found again (mocap.track.reacquire) with both
 above FOUND; the limbs' joints take the trunk's confidence too (``joint_confidence``).
+Where the head and the trunk both stand out of the frame (DISTINCT times better
+matched where they lie than anywhere else, mocap.track.reacquire.distinctness) the
+body is held whatever their match against the usual S (mocap.track.tracker).
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ BORDER_PX = 2.0                      # an end this near the border (or past it) 
 GAP_S = 0.4                          # seconds: lost stretches no longer are bridged (``bridged``)
 FOUND = 0.7                          # ... both above this again: the body is found again
 LOST = 0.3                           # the head's or the trunk's confidence below this: the body is lost
+DISTINCT = 2.5                       # ... unless both match this many times better than anywhere else
 HEAD_M = float(LENGTH[SEGMENT_INDEX["head"]]) * UNIT_M
 
 
