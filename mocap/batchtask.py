@@ -15,7 +15,6 @@ import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import cv2
 import numpy as np
@@ -24,13 +23,15 @@ from mocap.contact import contact_sheet, write_image
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import FORMATS, Clip, write_format
-from mocap.io.export.masks import MaskFolder, mask_name
+from mocap.io.export.masks import mask_name
 from mocap.io.export.motion_json import read_motion
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.library import RECORD, write_failure, write_record
-from mocap.pipeline import SILHOUETTES, Progress, open_session
-from mocap.session import Session
-from mocap.silhouette.passes import Silhouette, iter_silhouettes
+from mocap.pipeline import Progress, open_session
+from mocap.session import Session, SilhouetteSession
+from mocap.silhouette.background import Background
+from mocap.silhouette.masks import write_masks
+from mocap.silhouette.plate import clip_background
 
 ALWAYS = {"json": "motion", "html": "playback"}     # registry format -> the library's name
 EXPORTS = (*(k for k in FORMATS if k not in ALWAYS), "masks")   # what --exports may name
@@ -93,10 +94,10 @@ def _make(job: Job, folder: Path) -> int:
     start = time.perf_counter()
     info = open_video(job.video)
     notes = load_annotations(job.annotations, info.frame_count) if job.annotations else Annotations()
-    masks = Masks(info, folder / MASKS) if "masks" in job.settings["exports"] else None
     session = open_session(info, notes, smooth=job.settings["smooth"],
-                           progress=Report(job.name, info.frame_count, masks))
+                           progress=Report(job.name, info.frame_count))
     clip = dataclasses.replace(session.clip(), name=folder.name)
+    masks = write_masks(folder / MASKS, info, scene(session)) if "masks" in job.settings["exports"] else None
     files = write_exports(folder, clip, job.settings["exports"], masks)
     files.update(write_sheets(folder, info))
     summary = {**summarise(session, notes), "seconds": round(time.perf_counter() - start, 2)}
@@ -111,11 +112,10 @@ REPORT_EVERY_S = 1.0
 class Report:
     """How far a video is, sent to the client about once a second as a Dask event
     (``FRAMES_TOPIC``: name and frames done), for the frames per second of the whole
-    cluster while long videos run. Outside a Dask worker it says nothing. Each step
-    goes on to ``then`` first (the masks)."""
+    cluster while long videos run. Outside a Dask worker it says nothing."""
 
-    def __init__(self, name: str, frames: int, then: Callable[[Progress], None] | None = None):
-        self.name, self.frames, self.then, self.last = name, frames, then, time.monotonic()
+    def __init__(self, name: str, frames: int):
+        self.name, self.frames, self.last = name, frames, time.monotonic()
         try:
             from distributed import get_worker
             self.worker = get_worker()
@@ -123,8 +123,6 @@ class Report:
             self.worker = None
 
     def __call__(self, progress: Progress) -> None:
-        if self.then is not None:
-            self.then(progress)
         now = time.monotonic()
         if self.worker is None or now - self.last < REPORT_EVERY_S:
             return
@@ -133,41 +131,22 @@ class Report:
         self.worker.log_event(FRAMES_TOPIC, {"name": self.name, "frames": done})
 
 
-class Masks:
-    """The video's silhouettes written as its masks (mocap.io.export.masks) as the
-    pipeline reports them: no pass of its own over the video. The tracking method
-    finds no silhouettes; ``finish`` then extracts them (section 3.2)."""
-
-    def __init__(self, info: VideoInfo, folder: Path):
-        self.info, self.scale, self.out = info, processing_scale(info), MaskFolder(folder)
-
-    def __call__(self, progress: Progress) -> None:
-        if progress.stage == SILHOUETTES:
-            self.out.add(progress.frame, self.full(progress.product))
-
-    def full(self, silhouette: Silhouette | None) -> np.ndarray:
-        """A silhouette as written out (its cover) in a mask of the whole frame at the
-        video's size (255 = performer)."""
-        info, scale = self.info, self.scale
-        size = (max(1, round(info.width * scale)), max(1, round(info.height * scale)))
-        mask = np.zeros(size[::-1], np.uint8) if silhouette is None else silhouette.written(size[::-1])
-        if size == (info.width, info.height):
-            return mask
-        return cv2.resize(mask, (info.width, info.height), interpolation=cv2.INTER_NEAREST)
-
-    def finish(self) -> Path:
-        if self.out.count < self.info.frame_count:
-            for index, silhouette in enumerate(iter_silhouettes(self.info, self.scale)):
-                self.out.add(index, self.full(silhouette))
-        return self.out.finish()
+def scene(session: Session) -> Background:
+    """The empty scene the video's masks are told against: the silhouette method's
+    own, else (the tracking method finds no silhouettes) the clip's
+    (mocap.silhouette.plate, section 3.2)."""
+    if isinstance(session, SilhouetteSession) and session.background is not None:
+        return session.background
+    return clip_background(session.info, processing_scale(session.info))
 
 
-def write_exports(folder: Path, clip: Clip, exports: list[str], masks: Masks | None) -> dict[str, str]:
-    """The motion file (each frame naming its mask when there are masks), the playback
-    page and the exports asked for, through the export registry; their names."""
+def write_exports(folder: Path, clip: Clip, exports: list[str], masks: Path | None) -> dict[str, str]:
+    """The motion file (each frame naming its mask when ``masks`` were written
+    there), the playback page and the exports asked for, through the export
+    registry; their names."""
     files = {}
     if masks is not None:
-        files["masks"] = masks.finish().name
+        files["masks"] = masks.name
         frames = [{**f, "mask": f"{MASKS}/{mask_name(f['index'])}"} for f in clip.frames]
         clip = dataclasses.replace(clip, frames=frames)
     for key, fmt in FORMATS.items():

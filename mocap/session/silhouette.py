@@ -89,11 +89,11 @@ class SilhouetteSession(Session):
         return None if confidence is None else held_warning(confidence)
 
     def write_masks(self, folder: str | os.PathLike) -> Path:
-        """The silhouettes as mask files (masks.write_masks); the folder."""
-        if self.silhouettes is None or self.background is None:
-            raise MocapError("this fit kept no silhouettes to write")
-        return write_masks(folder, self.silhouettes, self.background.image.shape[:2],
-                           (self.info.width, self.info.height))
+        """The silhouettes as mask files (masks.write_masks: a pass over the video
+        against the fit's background); the folder."""
+        if self.background is None:
+            raise MocapError("this fit kept no background to write the silhouettes against")
+        return write_masks(folder, self.info, self.background)
 
     def motion_frames(self, motion: Motion) -> list[dict]:
         """The base's entries, with each found frame's ``silhouette_confidence``."""

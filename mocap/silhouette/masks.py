@@ -11,13 +11,17 @@ share of its silhouette that was not.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from mocap.io.export.masks import MaskFolder
+from mocap.io.video import VideoInfo, iter_frames, processing_scale
 from mocap.silhouette.background import Background
+from mocap.silhouette.blend import silhouette_and_cover
+from mocap.silhouette.passes import holds_person
 
 HELD_WARNING = 0.1      # median share of the silhouettes over guessed pixels that warns
 DOUBTFUL = 0.8          # a frame's silhouette confidence below this is worth a look
@@ -50,17 +54,25 @@ def held_warning(confidence: np.ndarray) -> str | None:
             f"with --background (a photo or short video of the empty scene)")
 
 
-def write_masks(folder: str | os.PathLike, silhouettes: list, shape: tuple[int, int],
-                size: tuple[int, int]) -> Path:
-    """Every frame's silhouette as written out (passes.Silhouette.written, in a
-    processing frame of ``shape`` (height, width)) as ``folder/NNNNNN.png``: 8-bit,
-    255 = performer, the video's ``size`` (width, height); an empty image where
-    nobody was found. The folder is
+def write_masks(folder: str | os.PathLike, info: VideoInfo, background: Background) -> Path:
+    """Every frame's silhouette as written out (``written_masks``) as
+    ``folder/NNNNNN.png``: 8-bit, 255 = performer, the video's size. The folder is
     replaced whole (io.export.masks.MaskFolder), as mocap batch writes it."""
     out = MaskFolder(folder)
-    for i, sil in enumerate(silhouettes):
-        full = np.zeros(shape, np.uint8) if sil is None else sil.written(shape)
-        if full.shape[::-1] != tuple(size):
-            full = cv2.resize(full, tuple(size), interpolation=cv2.INTER_NEAREST)
-        out.add(i, full)
+    for i, mask in enumerate(written_masks(info, background)):
+        out.add(i, mask)
     return out.finish()
+
+
+def written_masks(info: VideoInfo, background: Background) -> Iterator[np.ndarray]:
+    """Each frame's silhouette as written out, at the video's size (uint8, 255 =
+    performer), from a pass of its own over the video (the fit does not make them):
+    the cover (mocap.silhouette.blend) where the fit's silhouette holds somebody
+    (passes.holds_person), that silhouette where the cover holds nobody, else empty.
+    ``background`` is the fit's, at the processing scale."""
+    size = (info.width, info.height)
+    for _, frame in iter_frames(info, scale=processing_scale(info)):
+        fit, cover = silhouette_and_cover(frame, background)
+        found = cover if holds_person(cover) else fit
+        mask = np.where(found > 0, 255, 0).astype(np.uint8) if holds_person(fit) else np.zeros_like(fit)
+        yield mask if mask.shape[::-1] == size else cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST)

@@ -15,8 +15,7 @@ import numpy as np
 
 from mocap.body import BODY_HEIGHT, JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
-from mocap.silhouette.background import Background
-from mocap.silhouette.blend import silhouette_and_cover
+from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.plate import clip_background
 from mocap.silhouette.torso import head_top_row, torso_spread, torso_width_readable
@@ -36,24 +35,19 @@ MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a sea
 @dataclass(frozen=True)
 class Silhouette:
     """A frame's silhouette as its bounding box and the packed mask inside it, with
-    the frame's grey levels in the box (the inner edges' source, mocap.edges) and
-    the silhouette written out for the user (``cover``, mocap.silhouette.blend;
-    None: this one)."""
+    the frame's grey levels in the box (the inner edges' source, mocap.edges)."""
 
     box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
     bits: np.ndarray
     grey: np.ndarray | None = None
-    cover: "Silhouette | None" = None
 
     @classmethod
-    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None,
-                  cover: np.ndarray | None = None) -> "Silhouette | None":
-        x, y, w, h = cv2.boundingRect((mask > 0).astype(np.uint8))
-        if w * h == 0 or np.count_nonzero(mask) < MIN_PERSON_FRACTION * mask.size:
+    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None) -> "Silhouette | None":
+        if not holds_person(mask):
             return None
+        x, y, w, h = cv2.boundingRect((mask > 0).astype(np.uint8))
         grey = None if frame is None else cv2.cvtColor(frame[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
-        written = None if cover is None else cls.from_mask(cover)
-        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey, written)
+        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey)
 
     @property
     def height(self) -> int:
@@ -64,14 +58,12 @@ class Silhouette:
         n = (x1 - x0) * (y1 - y0)
         return np.unpackbits(self.bits, count=n).reshape(y1 - y0, x1 - x0)
 
-    def written(self, shape: tuple[int, int]) -> np.ndarray:
-        """The silhouette as written out (``cover``, else this one) in a frame of
-        ``shape`` (height, width): uint8, 255 = performer."""
-        sil = self.cover or self
-        x0, y0, x1, y1 = sil.box
-        full = np.zeros(shape, np.uint8)
-        full[y0:y1, x0:x1] = sil.mask() * 255
-        return full
+
+def holds_person(mask: np.ndarray) -> bool:
+    """Whether a silhouette mask (nonzero = inside) is somebody: at least
+    MIN_PERSON_FRACTION of the frame."""
+    count = np.count_nonzero(mask)
+    return count > 0 and count >= MIN_PERSON_FRACTION * mask.size
 
 
 @dataclass(frozen=True)
@@ -90,11 +82,11 @@ class FrameFit:
 def iter_silhouettes(info: VideoInfo, scale: float,
                      background: Background | None = None) -> Iterator[Silhouette | None]:
     """Pass one (section 3.2): the background (``plate.clip_background`` unless
-    given), then every frame's silhouette (and its cover) in turn."""
+    given), then every frame's silhouette in turn (``background.extract_silhouette``;
+    the cover written out as masks is made when they are written: masks.write_masks)."""
     background = background or clip_background(info, scale)
     for _, frame in iter_frames(info, scale=scale):
-        mask, cover = silhouette_and_cover(frame, background)
-        yield Silhouette.from_mask(mask, frame, cover)
+        yield Silhouette.from_mask(extract_silhouette(frame, background), frame)
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
