@@ -285,7 +285,8 @@ KINEMATIC_MATRIX = _kinematic_matrix()
 
 def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndarray,
                                 ratio: np.ndarray, spread: np.ndarray) -> np.ndarray:
-    """Joints (B, 16, 2) for B poses given as arrays (B,2), (B,10), (B,10), (B,).
+    """Joints (B, 16, 2) for B poses given as arrays (B,2), (B,10), (B,10), (B,)
+    (the pelvis (2,) and the spread a float where the B poses share them).
 
     Every joint is a fixed linear combination of the pelvis, the segment vectors and
     the image-left unit vector scaled by the seen span (KINEMATIC_MATRIX).
@@ -293,7 +294,7 @@ def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndar
     a = np.radians(angle).T                                   # (10, B)
     cos, sin = np.cos(a), np.sin(a)
     length = LENGTH[:, None] * ratio.T * scale
-    basis = np.empty((12, len(pelvis), 2))
+    basis = np.empty((12, len(angle), 2))
     basis[0] = pelvis
     basis[1:11, :, 0] = cos * length
     basis[1:11, :, 1] = -sin * length

@@ -17,13 +17,16 @@ MIN_CORNER_ANGLE = 10.0        # Algorithm 4, degrees
 
 
 def row_runs(band: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every horizontal run of nonzero pixels: (row, start, end) arrays, end exclusive."""
-    padded = np.zeros((band.shape[0], band.shape[1] + 2), np.int8)
+    """Every horizontal run of nonzero pixels: (row, start, end) arrays, end exclusive.
+    Each row padded with a zero either side, the changes along the rows laid end to
+    end alternate between a run's start and its end."""
+    width = band.shape[1] + 2
+    padded = np.zeros((band.shape[0], width), bool)
     padded[:, 1:-1] = band > 0
-    d = np.diff(padded, axis=1)
-    rows, starts = np.nonzero(d == 1)
-    _, ends = np.nonzero(d == -1)
-    return rows, starts, ends
+    flat = padded.reshape(-1)
+    changes = np.flatnonzero(flat[1:] != flat[:-1])
+    rows, starts = np.divmod(changes[0::2], width)
+    return rows, starts, changes[1::2] % width
 
 
 def _line_angles(xs: np.ndarray, ys: np.ndarray, counts: np.ndarray, sx, sy, sxx, syy, sxy,

@@ -147,14 +147,15 @@ def window_percentile(values, i: int, half: int, q: float) -> float:
     return float(np.nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q))
 
 
-def torso_reads(sil: Silhouette, height: float) -> tuple[float, float, bool]:
+def torso_reads(sil: Silhouette, height: float, small: np.ndarray | None = None) -> tuple[float, float, bool]:
     """A frame's torso spread (``torso.torso_spread``) as the fit reads it, on the
     silhouette normalised to ``height`` (FIT_BODY_PX tall), and as the lift reads it, on
     the silhouette at the processing resolution, and whether the torso's width is
     readable (``torso.torso_width_readable``). At the fit's size a profile torso is
     about 12 pixels wide and each pixel moves the spread by 0.1-0.2, so the lift's
-    orientation guess reads it finer."""
-    small = normalise(sil, height)[0]
+    orientation guess reads it finer. ``small``: the normalised silhouette, where
+    the caller has it (``normalise``)."""
+    small = normalise(sil, height)[0] if small is None else small
     return (torso_spread(small, FIT_SCALE), torso_spread(sil.mask(), height * FIT_SCALE / FIT_BODY_PX),
             torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
 
@@ -199,14 +200,15 @@ class Fitter:
         self.latest: FrameFit | None = None     # the last frame fitted, legs not yet chosen
 
     def fit(self, index: int, sil: Silhouette | None, height: float, spread: float,
-            lift_spread: float) -> list[FrameFit]:
-        """Fit a frame with the torso's ``spread``, ``lift_spread`` kept for the lift;
+            lift_spread: float, normalised: tuple | None = None) -> list[FrameFit]:
+        """Fit a frame with the torso's ``spread``, ``lift_spread`` kept for the lift
+        (``normalised``: ``normalise(sil, height)``, where the caller has it);
         returns the fits now decided (``latest``: this frame's fit with the legs of the
         best path so far, until it is decided)."""
         self.latest = None
         if sil is None:
             return list(_frame_fits(self.chain.push(index, None), self.scale))
-        small, origin, step = normalise(sil, height)
+        small, origin, step = normalised or normalise(sil, height)
         best = self.chain.current
         prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
         fit = fit_frame(small, FIT_SCALE, prev, spread, normalised_grey(sil, height))
@@ -243,6 +245,7 @@ class FitStream:
         self._spreads: list[float] = []     # per-frame torso spreads (torso.torso_spread)
         self._lift_reads: list[float] = []  # the same at the processing resolution (torso_reads)
         self._readable: list[bool] = []     # whether each is trusted (torso.torso_width_readable)
+        self._normalised: dict[int, tuple] = {}   # frames read but not fitted yet: normalise's
         self._fitted = 0
         self._provisional: list[FrameFit] = []
 
@@ -272,7 +275,9 @@ class FitStream:
             height = np.nan if sil is None else window_percentile(self._standing, i, half,
                                                                   SCALE_PERCENTILE)
             self._heights.append(height)
-            reads = (np.nan, np.nan, False) if sil is None else torso_reads(sil, height)
+            if sil is not None:
+                self._normalised[i] = normalise(sil, height)
+            reads = (np.nan, np.nan, False) if sil is None else torso_reads(sil, height, self._normalised[i][0])
             for values, value in zip((self._spreads, self._lift_reads, self._readable), reads):
                 values.append(value)
         known, self._provisional = len(self._heights), []
@@ -281,7 +286,8 @@ class FitStream:
             spreads = ((np.nan, np.nan) if self.silhouettes[i] is None else
                        (window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE),
                         lift_spread(self._lift_reads, self._readable, i, self.spread_half)))
-            out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], *spreads)
+            out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], *spreads,
+                                   normalised=self._normalised.pop(i, None))
             if self.fitter.latest is not None and not end:
                 self._provisional.append(self.fitter.latest)
             self._fitted += 1

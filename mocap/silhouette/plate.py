@@ -78,7 +78,7 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
     held_in_median = _without_steady_scene(held_in_median, _steady(background.image, frames, background.sigma))
     image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius, odds)
     threshold = background.threshold.copy()
-    threshold[cv2.dilate(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
+    threshold[dilated(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
     return replace(background, image=image, threshold=threshold, held=held)
 
 
@@ -104,7 +104,7 @@ def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
     disk = _disk(radius)
     count = np.zeros(masks[0].shape, np.float32)
     for mask in masks:
-        count += cv2.dilate(mask, disk) > 0
+        count += dilated(mask, disk) > 0
     points = cv2.findNonZero((count >= HALF * len(masks)).astype(np.uint8))
     if points is None:
         return None
@@ -120,14 +120,14 @@ def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: li
     by the performer-coloured pixels joined to them (steps 3-4); and the colour odds
     table (``_colour_odds``)."""
     disk = _disk(radius)
-    around = cv2.dilate(region, disk)
+    around = dilated(region, disk)
     cut = np.full(region.shape, cv2.GC_BGD, np.uint8)
     cut[around > 0] = cv2.GC_PR_BGD
     cut[region > 0] = cv2.GC_PR_FGD
-    x, y, w, h = cv2.boundingRect(cv2.dilate(around, disk))
+    x, y, w, h = cv2.boundingRect(dilated(around, disk))
     cut_fg = np.zeros(region.shape, np.uint8)
     cut_fg[y:y + h, x:x + w] = _grabcut(image[y:y + h, x:x + w], cut[y:y + h, x:x + w])
-    near = cv2.dilate(cut_fg, disk) > 0
+    near = dilated(cut_fg, disk) > 0
     performer = np.concatenate([f[(m > 0) & ~near] for f, m in zip(frames, masks)])
     odds = _colour_odds(performer, image[around == 0])
     if not cut_fg.any():
@@ -247,6 +247,20 @@ def _replate(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np
 
 def _disk(radius: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+
+
+def dilated(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """``cv2.dilate`` of a mask (0 outside it) by a centred ``kernel``, computed only
+    within the kernel's reach of the mask's box: the same image, at a fraction of
+    the cost of a large disk over the whole frame."""
+    x, y, w, h = cv2.boundingRect(mask)
+    out = np.zeros_like(mask)
+    if not w:
+        return out
+    ry, rx = kernel.shape[0] // 2, kernel.shape[1] // 2
+    box = slice(max(0, y - ry), y + h + ry), slice(max(0, x - rx), x + w + rx)
+    out[box] = cv2.dilate(mask[box], kernel)
+    return out
 
 
 # -- the empty scene given by the user -----------------------------------------------

@@ -34,6 +34,7 @@ HAND_LENGTH = 13.0
 _HAND_REACH = np.zeros(len(SEGMENT_NAMES))       # of the lower arm's drawn length
 _HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = HAND_LENGTH / LENGTH[
     SEGMENT_INDEX["lower_arm_l"]]
+_ALL_SEGMENTS = tuple(range(len(SEGMENT_NAMES)))
 
 
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -53,13 +54,22 @@ def _rectangles(ends: np.ndarray, widths) -> np.ndarray:
 @functools.lru_cache(maxsize=64)
 def _segment_plan(segments: tuple[int, ...]) -> tuple:
     """What ``joint_quads`` needs of some segments, worked out once per tuple of
-    segment indices: their joints' indices, which positions have a foot, the hand's
-    reach of each (None without hands), their widths and where the torso is."""
+    segment indices: their joints' indices, the positions of those with a foot, of
+    those with a hand and the hand's reach of each, their widths and the torso's
+    position (``_positions``)."""
     idx = np.array(segments, int)
-    feet = np.flatnonzero(_HAS_FOOT[idx])
-    hands = _HAND_REACH[idx]
-    return (SEGMENT_JOINTS[idx], feet if len(feet) else None, hands[:, None] if hands.any() else None,
-            WIDTH[idx], np.flatnonzero(idx == _TORSO))
+    hands = _positions(_HAND_REACH[idx] > 0)
+    return (SEGMENT_JOINTS[idx], _positions(_HAS_FOOT[idx]), hands,
+            None if hands is None else _HAND_REACH[idx][hands][:, None], WIDTH[idx], _positions(idx == _TORSO))
+
+
+def _positions(flags: np.ndarray) -> slice | np.ndarray | None:
+    """Where ``flags`` hold: a slice when they are one run (indexing by it is a view,
+    no copy), else their indices; None where none do."""
+    at = np.flatnonzero(flags)
+    if not len(at):
+        return None
+    return slice(int(at[0]), int(at[-1]) + 1) if at[-1] - at[0] == len(at) - 1 else at
 
 
 def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
@@ -67,17 +77,17 @@ def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> 
     the torso is as wide as ``spread`` (shape (...,)) makes it look, each lower leg
     goes on past the ankle by the foot (body.FOOT_LENGTH), which silhouettes show, and
     each lower arm into the hand (HAND_LENGTH)."""
-    ends_at, feet, hand, width, torso = _segment_plan(
-        tuple(range(len(SEGMENT_NAMES))) if segments is None else tuple(int(i) for i in segments))
+    ends_at, feet, hands, reach, width, torso = _segment_plan(
+        _ALL_SEGMENTS if segments is None else tuple(int(i) for i in segments))
     ends = joints[..., ends_at, :]                    # a copy: the foot and hand extend it
     if feet is not None:
         shin = ends[..., feet, 1, :] - ends[..., feet, 0, :]
         length = np.sqrt(shin[..., 0] * shin[..., 0] + shin[..., 1] * shin[..., 1])
         ends[..., feet, 1, :] += shin / np.maximum(length[..., None], 1e-9) * (FOOT_LENGTH * scale)
-    if hand is not None:
-        ends[..., 1, :] += (ends[..., 1, :] - ends[..., 0, :]) * hand
+    if hands is not None:
+        ends[..., hands, 1, :] += (ends[..., hands, 1, :] - ends[..., hands, 0, :]) * reach
     widths = width * scale
-    if len(torso):
+    if torso is not None:
         widths = np.repeat(widths[None], np.size(spread), 0).reshape(np.shape(spread) + widths.shape)
         widths[..., torso] = (torso_width(spread) * scale)[..., None]
     return _rectangles(ends, widths)

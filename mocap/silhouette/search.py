@@ -43,15 +43,18 @@ class Knob:
         return Pose2D(pelvis=pelvis, scale=pose.scale, angle=angle, ratio=ratio, spread=spread)
 
     def batch(self, pose: Pose2D, values: np.ndarray):
-        """(pelvis, angle, ratio, spread) arrays of the pose with each value set."""
+        """(pelvis, angle, ratio, spread) of the pose with each value set: angles and
+        ratios (B, 10); the pelvis (2,) and the spread (a float) as the pose has them
+        unless the knob turns them, then (B, 2) and (B,) (forward_kinematics_2d_batch
+        and raster.joint_quads take either)."""
         n = len(values)
-        pelvis, angle, ratio = (np.repeat(a[None], n, 0) for a in (pose.pelvis, pose.angle, pose.ratio))
-        spread = np.full(n, pose.spread)
+        pelvis, angle, ratio, spread = pose.pelvis, pose.angle[None].repeat(n, 0), pose.ratio[None].repeat(n, 0), pose.spread
         if self.field == "angle":
             angle[:, self.indices] = values[:, None]
         elif self.field == "ratio":
             ratio[:, self.indices] = values[:, None]
         elif self.field == "x":
+            pelvis = np.asarray(pelvis, float)[None].repeat(n, 0)
             pelvis[:, 0] += values
         else:
             spread = values
