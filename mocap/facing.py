@@ -9,10 +9,11 @@ crown (``draw_hair``), and ``facing_away`` reads a video's heads for the orienta
 guess (mocap.lift.orientation): mostly face is seen from the front, mostly hair from
 behind, where the silhouette cannot tell.
 
-The near arm: in a profile the arm on the camera's side crosses in front of the trunk
-and its outline shows there, while the far one passes behind it, hidden
-(``near_arm``); which of the fit's two arms is near names them once the way the
-performer faces is known (mocap.lift.sides).
+The near limbs: in a profile the arm on the camera's side crosses in front of the trunk
+and its outline shows there, while the far one passes behind it, hidden; so does the
+near leg's over the far one where they overlap (``near_limbs``); which of the fit's two
+arms and legs is near names them once the way the performer faces is known
+(mocap.lift.sides).
 """
 
 from __future__ import annotations
@@ -20,8 +21,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS, SIDES,
-                        WIDTH, left_direction, semi_axes, unit)
+from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX,
+                        SEGMENT_JOINTS, SIDES, WIDTH, left_direction, semi_axes, unit)
 from mocap.edges import Edges
 
 # name -> (segment, where along it from its proximal joint, length and radius in model
@@ -137,10 +138,14 @@ def facing_away(silhouettes: list, joints2d: np.ndarray, scale: float) -> np.nda
     """(F,) evidence in [-1, 1] that the performer faces away from the camera (> 0) or
     toward it (< 0), from ``hair_share`` on each frame's silhouette (its box, mask and
     grey levels, mocap.silhouette.passes.Silhouette, in pixels of ``scale`` times the
-    video's) and image joints (F, 16, 2; video pixels); 0 where the head says nothing."""
+    video's) and image joints (F, 16, 2; video pixels); 0 where the head says nothing
+    or an arm lies over it (``arm_over_head``: a raised hand or sleeve is read as face
+    or hair)."""
     out = np.zeros(len(joints2d))
     for i, (sil, joints) in enumerate(zip(silhouettes, joints2d)):
         if sil is None or sil.grey is None or not np.isfinite(joints).all():
+            continue
+        if arm_over_head(joints):
             continue
         origin = np.array(sil.box[:2], float)
         share = hair_share(sil.grey, sil.mask() > 0, joints[_J_NECK] * scale - origin,
@@ -150,26 +155,49 @@ def facing_away(silhouettes: list, joints2d: np.ndarray, scale: float) -> np.nda
     return out
 
 
-# -- the near arm: its outline across the trunk ------------------------------------------
-_ARM_CHAINS = [[JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["arm"]] for s in SIDES]
-_ARM_WIDTHS = WIDTH[[SEGMENT_INDEX["upper_arm_l"], SEGMENT_INDEX["lower_arm_l"]]]
+_KINDS = ("arm", "leg")
+_CHAINS = {kind: [[JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS[kind]] for s in SIDES] for kind in _KINDS}
+_WIDTHS = {kind: WIDTH[[SEGMENT_INDEX[f"{part}_{kind}_l"] for part in ("upper", "lower")]] for kind in _KINDS}
+_ARM_SAMPLES = np.linspace(0.0, 1.0, 9)
 
 
-def near_arm(silhouettes: list, joints2d: np.ndarray, body_px: np.ndarray, scale: float) -> np.ndarray:
-    """(F,) how much more the image-left arm of the fit (joints2d (F, 16, 2), image sides,
-    video pixels; ``body_px`` (F,) video pixels of the model's body height) shows its
-    outline inside the silhouette than the image-right one: the edge support
-    (mocap.edges.Edges.inside, 0..1) along the sides of its two segments, Table 1's
-    widths wide. Where an arm lies over the trunk, the near one's sleeve edges show and
-    the far one's are hidden behind it; an arm off the trunk has its outline on the
-    silhouette's, which does not count. 0 where there is no silhouette."""
-    out = np.zeros(len(joints2d))
+def arm_over_head(joints: np.ndarray) -> bool:
+    """Whether an arm of a pose (16, 2) lies over the upper head that ``hair_share``
+    reads (HEAD_BAND, widened by half an arm's width, Table 1's): points along the
+    upper and lower arms, head lengths from the neck along and across the head."""
+    neck, u = joints[_J_NECK], joints[_J_TOP] - joints[_J_NECK]
+    length2 = float(u @ u)
+    if not length2 > 0:
+        return False
+    ends = joints[_CHAINS["arm"]]                                              # (2, 3, 2)
+    points = ends[:, :-1, None] + _ARM_SAMPLES[:, None] * (ends[:, 1:] - ends[:, :-1])[:, :, None]
+    rel = (points - neck) / length2
+    along, across = rel @ u, rel @ np.array([-u[1], u[0]])
+    start, end, half = HEAD_BAND
+    margin = _WIDTHS["arm"].max() / 2 / LENGTH[SEGMENT_INDEX["head"]]
+    return bool(((along >= start - margin) & (along <= end + margin) & (np.abs(across) <= half + margin)).any())
+
+
+# -- the near limbs: their outlines across the trunk and each other ------------------------
+
+
+def near_limbs(silhouettes: list, joints2d: np.ndarray, body_px: np.ndarray, scale: float) -> np.ndarray:
+    """(F, 2) for the arms and the legs of the fit (joints2d (F, 16, 2), image sides,
+    video pixels; ``body_px`` (F,) video pixels of the model's body height), how much
+    more the image-left limb shows its outline inside the silhouette than the
+    image-right one: the edge support (mocap.edges.Edges.inside, 0..1) along the sides
+    of its two segments, Table 1's widths wide. Where an arm lies over the trunk, or
+    one leg over the other, the near one's edges show and the far one's are hidden
+    behind it; a limb off the body has its outline on the silhouette's, which does
+    not count. 0 where there is no silhouette."""
+    out = np.zeros((len(joints2d), 2))
     for i, (sil, joints) in enumerate(zip(silhouettes, joints2d)):
         if sil is None or sil.grey is None or not np.isfinite(joints).all() or not np.isfinite(body_px[i]):
             continue
         edges = Edges.inside(sil.grey, sil.mask() > 0)
-        chains = joints[_ARM_CHAINS] * scale - np.array(sil.box[:2], float)      # (2, 3, 2)
-        widths = _ARM_WIDTHS * body_px[i] * scale / BODY_HEIGHT
-        support = edges.support(chains[:, :-1], chains[:, 1:], widths)
-        out[i] = float(support[0] - support[1])
+        for k, kind in enumerate(_KINDS):
+            chains = joints[_CHAINS[kind]] * scale - np.array(sil.box[:2], float)      # (2, 3, 2)
+            widths = _WIDTHS[kind] * body_px[i] * scale / BODY_HEIGHT
+            support = edges.support(chains[:, :-1], chains[:, 1:], widths)
+            out[i, k] = float(support[0] - support[1])
     return out

@@ -36,3 +36,19 @@ def smoothest_states(values: np.ndarray, emission: np.ndarray, allowed: np.ndarr
         a, b = arg[a, b], a
         path.append(a)
     return np.array(path[::-1])
+
+
+def two_state_path(costs: np.ndarray, switch: np.ndarray) -> np.ndarray:
+    """(F,) 0/1 minimising sum(costs[t, state]) + sum(switch[t - 1] where the state
+    changes between t - 1 and t): a two-state Viterbi search."""
+    best, back = costs[0].copy(), []
+    for t in range(1, len(costs)):
+        stay, move = best, best[::-1] + switch[t - 1]
+        back.append(move < stay)
+        best = np.minimum(stay, move) + costs[t]
+    state = int(np.argmin(best))
+    path = [state]
+    for moved in reversed(back):
+        state = state ^ int(moved[state])
+        path.append(state)
+    return np.array(path[::-1])

@@ -9,7 +9,7 @@ from helpers import SHARED_DATA
 
 from mocap import body
 from mocap.body import JOINT_INDEX
-from mocap.facing import FACING_MARKS, facing_away, facing_marks, near_arm
+from mocap.facing import FACING_MARKS, arm_over_head, facing_away, facing_marks, near_limbs
 from mocap.lift import taylor as lift
 from mocap.pipeline import open_session
 from mocap.silhouette.passes import fit_arrays
@@ -53,22 +53,24 @@ def test_a_performer_seen_from_behind_is_named_facing_away(tmp_path, yaw, away):
 
 
 @pytest.mark.parametrize("yaw", [0.0, 180.0])
-def test_the_near_arms_outline_names_the_limbs_of_a_profile_walk(tmp_path, yaw):
+def test_the_near_limbs_outlines_name_the_limbs_of_a_profile_walk(tmp_path, yaw):
     """A walk across the frame in profile (facing image right, then left), with no
-    input: the near arm's outline shows over the trunk and the far one's is hidden
-    (near_arm, pooled over the clip, says which of the fit's arms is near), and the
-    limbs are named by it: the knees and ankles, elbows and wrists of each side lie
-    nearer that side's truth than the other's wherever the limbs are apart."""
+    input: the near arm's outline shows over the trunk and the near leg's over the far
+    leg, while the far ones' are hidden (near_limbs, pooled over the clip, says which
+    of the fit's arms and legs is near), and the limbs are named by them: the knees
+    and ankles, elbows and wrists of each side lie nearer that side's truth than the
+    other's wherever the limbs are apart."""
     video = tmp_path / "walk.mp4"
     truth = render_clip(walk_cycle(1.5, 15.0), video, RenderOptions(yaw=yaw, size=(480, 360), fps=15.0))
     session = open_session(video)
     joints, body_px, _ = fit_arrays(session.fits)
     near_side = "r" if lift.yaw_of(truth.joints3d[0]) > 0 else "l"       # facing image right: the right
-    wrists = [JOINT_INDEX[f"wrist_{s}"] for s in ("l", "r", near_side)]
-    image_left_near = (np.linalg.norm(joints[:, wrists[0]] - truth.joints2d[:, wrists[2]], axis=-1)
-                       < np.linalg.norm(joints[:, wrists[1]] - truth.joints2d[:, wrists[2]], axis=-1))
-    evidence = near_arm(session.silhouettes, joints, body_px, 1.0)
-    assert np.sum(evidence * np.where(image_left_near, 1.0, -1.0)) > 0
+    evidence = near_limbs(session.silhouettes, joints, body_px, 1.0)
+    for k, tip in enumerate(("wrist", "ankle")):
+        ends = [JOINT_INDEX[f"{tip}_{s}"] for s in ("l", "r", near_side)]
+        image_left_near = (np.linalg.norm(joints[:, ends[0]] - truth.joints2d[:, ends[2]], axis=-1)
+                           < np.linalg.norm(joints[:, ends[1]] - truth.joints2d[:, ends[2]], axis=-1))
+        assert np.sum(evidence[:, k] * np.where(image_left_near, 1.0, -1.0)) > 0, tip
     named, true = session.inputs.joints2d, truth.joints2d
     for kind in (("knee", "ankle"), ("elbow", "wrist")):
         sides = [[JOINT_INDEX[f"{n}_{s}"] for n in kind] for s in "lr"]
@@ -76,3 +78,26 @@ def test_the_near_arms_outline_names_the_limbs_of_a_profile_walk(tmp_path, yaw):
         other = sum(np.linalg.norm(named[:, j] - true[:, k], axis=-1).sum(1) for j, k in zip(sides, sides[::-1]))
         apart = np.linalg.norm(true[:, sides[0][-1]] - true[:, sides[1][-1]], axis=-1) > 0.05 * truth.body_height_px
         assert np.mean(own[apart] < other[apart]) >= 0.7, kind
+
+
+def test_the_heads_look_is_not_read_where_an_arm_lies_over_the_head():
+    """A hand raised to the head shows skin or sleeve where hair or face would be:
+    arm_over_head says so for an arm reaching over the head's upper part (the band
+    hair_share reads), not for arms hanging down or stretched out to the sides, nor
+    for a hand held beside the neck, below the band."""
+    stand = walk_cycle(0.5, 30.0, in_place=True)[0]
+    joints = stand[:, :2] * [1.0, -1.0] * 200 + [320.0, 240.0]              # image pixels, y down
+    j = {name: JOINT_INDEX[name] for name in ("neck", "head_top", "shoulder_r", "elbow_r", "wrist_r")}
+    assert not arm_over_head(joints)
+    head = joints[j["head_top"]] - joints[j["neck"]]
+    raised = joints.copy()
+    raised[j["elbow_r"]] = joints[j["neck"]] + [-0.6 * np.linalg.norm(head), 0.0] + 0.5 * head
+    raised[j["wrist_r"]] = joints[j["neck"]] + 0.8 * head                 # the hand on the crown's side
+    assert arm_over_head(raised)
+    out = joints.copy()
+    out[j["elbow_r"]] = joints[j["shoulder_r"]] + [-40.0, 0.0]
+    out[j["wrist_r"]] = joints[j["shoulder_r"]] + [-80.0, 0.0]
+    assert not arm_over_head(out)
+    beside = joints.copy()
+    beside[j["wrist_r"]] = joints[j["neck"]] + [-0.3 * np.linalg.norm(head), 0.1 * np.linalg.norm(head)]
+    assert not arm_over_head(beside)

@@ -15,7 +15,7 @@ from mocap.track.calibration import default_camera
 from mocap.lift.sides import known_sides, track_sides
 from mocap.lift.taylor import LENGTH, anatomical_joints, clip_lengths, exchange_legs, lift_pose, runs
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
-                               legs_crossed, segment_vectors, yaws)
+                               legs_crossed, facing_evidence, rule_evidence, segment_vectors, yaws)
 
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
 # fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
@@ -102,8 +102,10 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     arms steadied (``steadied_arms``); the overrides put in; segment lengths from the
     clip (lift.clip_lengths); the signs guessed with the user's held signs as
     constraints (orientation.held_user_signs). ``away`` (F,): the heads' look
-    (mocap.facing.facing_away) and ``near`` (F,): the near arm (mocap.facing.near_arm),
-    which name the limbs of a profile where nothing else does."""
+    (mocap.facing.facing_away), which weighs the guessed orientation's image-side
+    rule even in a profile (orientation.rule_evidence), and ``near`` (F, 2): the near
+    arm and leg (mocap.facing.near_limbs), which name the limbs of a profile where
+    nothing else does."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if guessed is None:
@@ -112,8 +114,10 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
-    swap = track_sides(joints_image, known_sides(orientation, overrides, joints_image), facing_x, fps,
-                       looks_away(away, fps, n), near)
+    rule = rule_evidence(orientation, spread, facing_evidence(joints_image, body_px, fps, away))
+    rule = np.where([s is None for s in said], rule, 0.0)
+    swap = track_sides(joints_image, known_sides(said, overrides, joints_image), facing_x, fps,
+                       looks_away(away, fps, n), near, rule)
     ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
     values, since = annotations.held_signs(n)

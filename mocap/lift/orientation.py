@@ -34,12 +34,14 @@ from scipy.ndimage import median_filter
 
 from mocap.body import (JOINT_INDEX, LIMB_JOINTS, LIMBS, SEGMENT_INDEX, SEGMENT_JOINTS, SIDE_SIGN, SIDES,
                         knee_bend, limb, limb_penalty, unit)
-from mocap.lift.taylor import (LENGTH, TOWARD, exchange_legs, facing_yaw, lateral_axis, relative_depths,
-                        runs)
-from mocap.smoothest import smoothest_states
+from mocap.lift.taylor import (LENGTH, TOWARD, exchange_legs, facing_yaw, image_left_is_right, lateral_axis,
+                               relative_depths, runs)
+from mocap.smoothest import smoothest_states, two_state_path
 
 NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not matter
 PROFILE_SPREAD = 0.5       # torso spread below which the body is in profile (yaw 60..120)
+RULE_SPREAD = (0.25, 0.65)  # torso spread over which a profile's image-side rule ramps up (rule_evidence)
+PROFILE_RULE = 0.1         # the image-side rule's weight in a profile, at most (rule_evidence)
 WALK_SPEED = 0.15          # body heights per second: slower pelvis tracks say nothing
 GROWTH = 0.05              # relative body-size change per second that says toward/away
 AWAY_SAYS = 0.25           # pooled head evidence (mocap.facing.facing_away) that says away
@@ -93,25 +95,56 @@ def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.nda
     """Each frame's orientation (None where nobody is): facing side from the walking
     direction and knee bends, profile when the torso's spread is below
     PROFILE_SPREAD, backward when the body shrinks (walks away) or, where it does not
-    grow, when the head's look says so (``away`` (F,): mocap.facing.facing_away, pooled
-    over CUE_WINDOW_S above AWAY_SAYS), and runs shorter than MIN_RUN_S merged into
-    their neighbours."""
+    grow, when the head's look says so (``facing_evidence`` below -1/2), and runs
+    shorter than MIN_RUN_S merged into their neighbours."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
-    side, growth, behind = (np.full(len(ok), np.nan) for _ in range(3))
+    side = np.full(len(ok), np.nan)
     for r in runs(ok):
         side[r] = pooled(facing_side_cues(joints2d[r], body_px[r], fps), fps)
-        log_px = np.log(body_px[r])
-        growth[r] = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps)
-        behind[r] = pooled(np.zeros(r.stop - r.start) if away is None else away[r], fps)
+    backward = facing_evidence(joints2d, body_px, fps, away) < -0.5
     names = [None] * len(ok)
     for i in np.flatnonzero(ok):
         facing = "left" if side[i] < 0 else "right"
         if spread[i] < PROFILE_SPREAD:
             names[i] = facing
         else:
-            backward = growth[i] < -GROWTH or (growth[i] <= GROWTH and behind[i] > AWAY_SAYS)
-            names[i] = f"{'backward' if backward else 'forward'}_{facing}"
+            names[i] = f"{'backward' if backward[i] else 'forward'}_{facing}"
     return merge_short_runs(names, max(1, int(round(MIN_RUN_S * fps))))
+
+
+def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
+                    away: np.ndarray | None = None) -> np.ndarray:
+    """(F,) in [-1, 1]: how much the performer is turned toward the camera (> 0)
+    rather than away (< 0), were the torso not in profile: +-1 where the body grows
+    or shrinks by more than GROWTH per second (walks toward or away), else the head's
+    look (``away`` (F,): mocap.facing.facing_away, pooled over CUE_WINDOW_S) in units
+    of twice AWAY_SAYS, its sign turned; 0 where neither says anything."""
+    ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
+    out = np.zeros(len(ok))
+    for r in runs(ok):
+        log_px = np.log(body_px[r])
+        growth = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps)
+        behind = pooled(np.zeros(r.stop - r.start) if away is None else away[r], fps)
+        out[r] = np.where(np.abs(growth) > GROWTH, np.sign(growth),
+                          np.clip(-behind / (2 * AWAY_SAYS), -1.0, 1.0))
+    return out
+
+
+def rule_evidence(orientations: list[str | None], spread: np.ndarray, facing: np.ndarray) -> np.ndarray:
+    """(F,) how much the image-side rule (``image_left_is_right``) says the image-left
+    limbs are the right ones (> 0) or the left ones (< 0), for mocap.lift.sides: +-1
+    where the orientation names a turned view; in a profile, where the spread is too
+    low to name one but may be a turned view's read low (raised arms, a crouch, a
+    wide silhouette), the way ``facing`` (F,): ``facing_evidence``) says the
+    performer is turned, times PROFILE_RULE and the spread's ramp from
+    RULE_SPREAD[0] (a true profile's) to RULE_SPREAD[1]; 0 where nobody is."""
+    low, high = RULE_SPREAD
+    ramp = np.clip((np.nan_to_num(spread, nan=0.0) - low) / (high - low), 0.0, 1.0)
+    out = PROFILE_RULE * ramp * facing
+    for i, name in enumerate(orientations):
+        rule = None if name is None else image_left_is_right(name)
+        out[i] = 0.0 if name is None else out[i] if rule is None else (1.0 if rule else -1.0)
+    return out
 
 
 def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]:
@@ -267,7 +300,7 @@ def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
     apart = np.linalg.norm(legs[:, 0] - legs[:, 1], axis=-1).sum(-1) / (
         px_per_unit * (lengths[SEGMENT_INDEX["upper_leg_l"]] + lengths[SEGMENT_INDEX["lower_leg_l"]]))
     switch = SWITCH_WEIGHT * np.minimum(apart[1:], apart[:-1])
-    return _two_state_path(costs, switch).astype(bool)
+    return two_state_path(costs, switch).astype(bool)
 
 
 def _leg_sign_cost(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
@@ -278,19 +311,3 @@ def _leg_sign_cost(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
     sagittal = sagittal_depth(vec[..., 0], yaw, lengths)[:, _LEG_SEGMENTS]
     turned = np.abs(np.sin(np.radians(yaw))) >= SAGITTAL_SHOWS
     return turned * np.maximum(0.0, -user_signs[:, _LEG_SEGMENTS] * sagittal).sum(-1)
-
-
-def _two_state_path(costs: np.ndarray, switch: np.ndarray) -> np.ndarray:
-    """(F,) 0/1 minimising sum(costs[t, state]) + sum(switch[t - 1] where the state
-    changes between t - 1 and t): a two-state Viterbi search."""
-    best, back = costs[0].copy(), []
-    for t in range(1, len(costs)):
-        stay, move = best, best[::-1] + switch[t - 1]
-        back.append(move < stay)
-        best = np.minimum(stay, move) + costs[t]
-    state = int(np.argmin(best))
-    path = [state]
-    for moved in reversed(back):
-        state = state ^ int(moved[state])
-        path.append(state)
-    return np.array(path[::-1])

@@ -3,9 +3,13 @@
 right leg (arm)"; the 2D fit names limbs by image side, section 3.3).
 
 Turned toward or away from the camera the orientation's image-side rule says it
-(``mocap.lift.taylor.image_left_is_right``); in a profile it cannot, and the limbs
-are followed through time from frames where it is known, across the moments where
-the legs pass each other (``bridge_parity``).
+(``mocap.lift.taylor.image_left_is_right``); in a profile it cannot, and the legs are
+followed through time across the moments where they pass each other
+(``bridge_parity``). The naming is one choice over each run of frames (``naming_path``,
+a two-state Viterbi search): every frame's evidence weighs against renaming the legs
+where they are followed surely, so a weak cue or a stretch of a few frames does not
+flip the naming, while one the evidence contradicts over a long stretch gives way
+where the following is least sure.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from scipy.ndimage import maximum_filter1d
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SIDES
 from mocap.lift.taylor import image_left_is_right, runs
+from mocap.smoothest import two_state_path
 
 SEPARATED = 0.25     # distal joints this many limb lengths apart tell two limbs apart
 # limb lengths of joint distance that a radian of segment turn counts as: a segment
@@ -22,56 +27,114 @@ SEPARATED = 0.25     # distal joints this many limb lengths apart tell two limbs
 ANGLE_WEIGHT = 0.5
 MIN_APART = 3        # frames: shorter stretches apart are fit noise inside a crossing
 STEP_S = 0.5         # s: about one step of a walk or run, so in a gait each leg leads within it
+CROSSING_S = 0.15    # s with the legs close together that a constant pace carries them across
+# The costs of a naming, in the units of bridge_parity's certainty (limb lengths of
+# joint distance between the two ways of following the legs, a crossing's 1-2):
+LINK_FLOOR = 0.5         # renaming the legs where nothing follows them (close together throughout)
+NEAR_WEIGHT = (0.1, 3.0)  # per unit of the near arm's and the near leg's evidence (mocap.facing.near_limbs)
+CONVENTION_COST = 1e-3   # per frame against the forward (or, looking away, backward) convention
+KNOWN_COST = 1e6         # per frame against what the user said
 _J = JOINT_INDEX
+_STATES = np.array([[False, True]])      # the legs' naming: keep, swap
 # the joints whose image sides the arms' and the legs' parities swap
 _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 
 
 def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
-                away: np.ndarray | None = None, near: np.ndarray | None = None) -> np.ndarray:
+                away: np.ndarray | None = None, near: np.ndarray | None = None,
+                rule: np.ndarray | None = None) -> np.ndarray:
     """(F, 2) bool: for arms and legs, whether the image-left limb is the right one.
 
-    ``known`` (F, 2) holds 1 (swap), 0 (keep) or -1 (unknown: a profile, where the 2D
-    fit names limbs by their image order, back and front). In a profile the legs keep
-    their identity through the moments where they pass each other by
-    ``bridge_parity``; the arms, which the fit cannot see cross, are named from the
-    legs (``_stepping``). A run in profile throughout, facing one image side, takes
-    the naming whose arms agree over the run with the near arm (``near`` (F,):
-    mocap.facing.near_arm, > 0 where the image-left arm's outline shows across the
-    trunk; facing image right the near arm is the performer's right one); where it
-    says nothing, or the run turns, a stretch with nothing known takes the
-    forward-facing convention (swap), or the backward one (keep) where the head's
-    look says the performer faces away over most of the run (``away`` (F,) bool),
-    which the user corrects with one joint override. ``facing_x`` (F,) is +1 facing
-    image right; ``fps`` sets the window of a step.
+    Per run of frames with a person, the legs' naming minimises each frame's cost of
+    it (``_naming_costs``) plus, wherever it departs from the legs as followed through
+    time (``bridge_parity``), how sure the following is there (``naming_path``). The
+    evidence: ``known`` (F, 2) 1 (swap), 0 (keep), -1 (unknown), held as given (the
+    user's orientation and joint overrides); ``rule`` (F,) the guessed orientation's
+    image-side rule, > 0 swap, +-1 in a turned view and weaker in a profile
+    (mocap.lift.orientation.rule_evidence); and where nothing says anything, the
+    forward-facing convention (swap), or the backward one (keep) where the head's look
+    says the performer faces away (``away`` (F,) bool). A run in profile throughout,
+    facing one image side (``facing_x`` (F,) +1: image right), then takes that naming
+    or its opposite on every frame, whichever agrees better with the near limbs too
+    (``near`` (F, 2): mocap.facing.near_limbs, > 0 where the image-left arm's, leg's
+    outline shows across the body; facing image right the near ones are the
+    performer's right ones; ``_nearer_naming``). The arms take the legs' naming in a
+    turned view and are named from the legs in a profile (``_arm_sides``). ``fps``
+    sets the windows of a step and a crossing.
     """
+    n = len(known)
     out = np.zeros(known.shape, bool)
-    away = np.zeros(len(known), bool) if away is None else away
-    near = np.zeros(len(known)) if near is None else near
+    away = np.zeros(n, bool) if away is None else away
+    near = np.zeros((n, 2)) if near is None else near
+    rule = np.zeros(n) if rule is None else rule
     half = max(1, int(round(STEP_S * fps)))
     ok = np.isfinite(joints2d).all(axis=(1, 2))
     for r in runs(ok):
         legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
         arms = _limb_pair(joints2d[r], _PAIR_JOINTS["arms"])
-        chains = _limb_pair(joints2d[r], LIMB_JOINTS["leg"])
         leg_px = _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])
-        parity = _anchored(bridge_parity(chains, leg_px), known[r, 1], away[r])
-        out[r, 1] = np.where(known[r, 1] >= 0, known[r, 1] == 1, parity)
-        out[r, 0] = _arm_sides(legs, arms, out[r, 1], known[r, 0], facing_x[r], leg_px, half)
-        one_way = (known[r] < 0).all() and (facing_x[r] == facing_x[r.start]).all()
-        if one_way and np.sum(near[r] * facing_x[r] * np.where(out[r, 0], 1.0, -1.0)) < 0:
-            out[r, 1] = ~out[r, 1]
-            out[r, 0] = _arm_sides(legs, arms, out[r, 1], known[r, 0], facing_x[r], leg_px, half)
+        parity, links = bridge_parity(_limb_pair(joints2d[r], LIMB_JOINTS["leg"]), leg_px,
+                                      max(1, int(round(CROSSING_S * fps))))
+        followed = parity.astype(bool)
+        arms_kept = _arm_sides(legs, arms, followed, facing_x[r], leg_px, half) ^ followed
+        turned = (known[r, 1] >= 0) | (np.abs(rule[r]) >= 1.0)
+        profile = (known[r] < 0).all() and not turned.any() and (facing_x[r] == facing_x[r.start]).all()
+        costs = _naming_costs(known[r], rule[r], arms_kept, away[r])
+        out[r, 1] = naming_path(costs, parity, np.maximum(links, LINK_FLOOR))
+        if profile:
+            out[r, 1] = _nearer_naming(out[r, 1], costs + _near_costs(near[r] * facing_x[r, None], arms_kept))
+        arm_sides = np.where(turned, out[r, 1], _arm_sides(legs, arms, out[r, 1], facing_x[r], leg_px, half))
+        out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, arm_sides)
     return out
 
 
-def _arm_sides(legs: np.ndarray, arms: np.ndarray, legs_swap: np.ndarray, known: np.ndarray,
-               facing_x: np.ndarray, leg_px: float, half: int) -> np.ndarray:
-    """(F,) bool: whether the image-left arm is the right one, from the legs' sides
-    (``_stepping``, ``_counter_phase``) where ``known`` (F,) says nothing (-1)."""
+def _naming_costs(known: np.ndarray, rule: np.ndarray, arms_kept: np.ndarray, away: np.ndarray) -> np.ndarray:
+    """(F, 2) each frame's cost of the legs' naming keep (0) and swap (1): against
+    ``known`` (F, 2, as ``track_sides``) KNOWN_COST (on the legs, or on the arms, which
+    the legs' naming names through ``arms_kept`` (F,): the arms' naming were the legs
+    kept), against ``rule`` (F,) its size, and against the convention (``away`` (F,))
+    CONVENTION_COST."""
+    arm_swap = arms_kept[:, None] ^ _STATES
+    costs = (np.abs(rule)[:, None] * (_STATES != (rule > 0)[:, None])
+             + CONVENTION_COST * (_STATES == away[:, None]))
+    costs += KNOWN_COST * ((known[:, [1]] >= 0) & (_STATES != (known[:, [1]] == 1)))
+    return costs + KNOWN_COST * ((known[:, [0]] >= 0) & (arm_swap != (known[:, [0]] == 1)))
+
+
+def _near_costs(near: np.ndarray, arms_kept: np.ndarray) -> np.ndarray:
+    """(F, 2) each frame's cost of the legs' naming keep and swap against the near
+    limbs (``near`` (F, 2) arms, legs: > 0 where the image-left one is the right one),
+    NEAR_WEIGHT times their sizes; the arms' naming per the legs' through ``arms_kept``."""
+    arm_swap = arms_kept[:, None] ^ _STATES
+    return (NEAR_WEIGHT[0] * np.abs(near[:, [0]]) * (arm_swap != (near[:, [0]] > 0))
+            + NEAR_WEIGHT[1] * np.abs(near[:, [1]]) * (_STATES != (near[:, [1]] > 0)))
+
+
+def _nearer_naming(swap: np.ndarray, costs: np.ndarray) -> np.ndarray:
+    """``swap`` (F,) bool or its opposite on every frame, whichever ``costs`` (F, 2)
+    sums lower: the near limbs tell which leg is near from how their outlines
+    correlate with the naming over a whole profile, not frame by frame (one frame's
+    outlines say little: a limb's own shading, the far one showing past the near)."""
+    frames = np.arange(len(swap))
+    return ~swap if costs[frames, (~swap).astype(int)].sum() < costs[frames, swap.astype(int)].sum() else swap
+
+
+def naming_path(costs: np.ndarray, parity: np.ndarray, links: np.ndarray) -> np.ndarray:
+    """(F,) bool: the legs' naming (swap) minimising the frames' ``costs`` (F, 2) plus,
+    wherever it departs from the legs as followed (``parity`` (F,) 0/1, relative to
+    the first frames), that link's certainty (``links`` (F - 1,)): a two-state Viterbi
+    search over which anatomical leg the followed first one is."""
+    flip = parity.astype(bool)
+    anchored = np.where(flip[:, None], costs[:, ::-1], costs)
+    return two_state_path(anchored, links).astype(bool) ^ flip
+
+
+def _arm_sides(legs: np.ndarray, arms: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray,
+               leg_px: float, half: int) -> np.ndarray:
+    """(F,) bool: whether the image-left arm is the right one in a profile, from the
+    legs' sides (``_stepping``, ``_counter_phase``)."""
     stepping = _stepping(legs, legs_swap, facing_x, leg_px, half)
-    sides = np.where(stepping, _counter_phase(legs, legs_swap, arms, facing_x), legs_swap)
-    return np.where(known >= 0, known == 1, sides)
+    return np.where(stepping, _counter_phase(legs, legs_swap, arms, facing_x), legs_swap)
 
 
 def _limb_pair(joints2d: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
@@ -86,38 +149,49 @@ def _limb_px(joints2d: np.ndarray, root: str, tip: str) -> float:
     return max(float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=-1))), 1e-6)
 
 
-def bridge_parity(pair: np.ndarray, limb_px: float) -> np.ndarray:
+def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """(F,) 0/1: whether each frame's two limbs are swapped relative to the first
-    stretch where they are apart. ``pair`` (F, 2, 3, 2): each limb's root, middle and
-    distal joint. While apart, each frame's limbs follow the nearer ones of the frame
-    before; across each stretch where they are close together the swap is decided by
-    ``_crosses``; close frames take the parity of the nearer side."""
+    stretch where they are apart, and (F - 1,) how sure each link between
+    consecutive frames is. ``pair`` (F, 2, 3, 2): each limb's root, middle and distal
+    joint. While apart, each frame's limbs follow the nearer ones of the frame
+    before, as sure as the other pairing is farther (in limb lengths); across each
+    stretch where they are close together the swap is decided by ``_crosses``, as
+    sure as its margin, shrunk in proportion where the stretch lasts longer than
+    ``crossing`` frames (a constant pace carries a limb through a crossing, not
+    through a turn on the spot); close frames take the parity of the nearer side;
+    before the first and after the last stretch apart nothing is sure."""
+    n = len(pair)
     apart = np.linalg.norm(pair[:, 0, 2] - pair[:, 1, 2], axis=-1) / limb_px > SEPARATED
     pieces = [p for p in runs(apart) if p.stop - p.start >= MIN_APART]
-    parity = np.zeros(len(pair), int)
+    parity, links = np.zeros(n, int), np.zeros(max(n - 1, 0))
     if not pieces:
-        return parity
-    flat = pair[:, :, 1:].reshape(len(pair), 2, -1)
+        return parity, links
+    flat = pair[:, :, 1:].reshape(n, 2, -1)
     current = 0
     for k, piece in enumerate(pieces):
         if k:
-            current = int(_crosses(pair, pieces[k - 1], piece, parity, limb_px))
+            margin = _crosses(pair, pieces[k - 1], piece, parity, limb_px)
+            current = int(margin > 0)
             middle = (pieces[k - 1].stop + piece.start + 1) // 2
             parity[middle:piece.start] = current
-        for t in range(piece.start, piece.stop):
-            if t > piece.start:
-                step = np.linalg.norm(flat[t] - flat[t - 1], axis=-1).sum()
-                cross = np.linalg.norm(flat[t, ::-1] - flat[t - 1], axis=-1).sum()
-                current ^= int(cross < step)
+            close = piece.start - pieces[k - 1].stop
+            links[pieces[k - 1].stop - 1:piece.start] = abs(margin) * min(1.0, crossing / close)
+        parity[piece.start] = current
+        for t in range(piece.start + 1, piece.stop):
+            step = np.linalg.norm(flat[t] - flat[t - 1], axis=-1).sum()
+            cross = np.linalg.norm(flat[t, ::-1] - flat[t - 1], axis=-1).sum()
+            current ^= int(cross < step)
+            links[t - 1] = abs(cross - step) / limb_px
             parity[t] = current
-        end = pieces[k + 1].start if k + 1 < len(pieces) else len(pair)
+        end = pieces[k + 1].start if k + 1 < len(pieces) else n
         parity[piece.stop:end] = current
-    return parity
+    return parity, links
 
 
-def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, limb_px: float) -> bool:
-    """Whether the limbs of ``after``'s first frame, as labelled, are in the other
-    order than ``before``'s limbs put in one order by ``parity`` so far.
+def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, limb_px: float) -> float:
+    """How much more the limbs of ``after``'s first frame, as labelled, look to be in
+    the other order than ``before``'s limbs put in one order by ``parity`` so far
+    (> 0: they crossed).
 
     Each limb is followed across the stretch between at constant velocity from
     either side (crossing limbs continue, turning limbs come back): its middle and
@@ -134,7 +208,7 @@ def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, 
     keep = _mismatch(ahead, pair[t1], limb_px) + _mismatch(back, ordered[t0], limb_px)
     swap = (_mismatch(ahead, pair[t1, ::-1], limb_px)
             + _mismatch((back[0][::-1], back[1][::-1]), ordered[t0], limb_px))
-    return swap < keep
+    return keep - swap
 
 
 def _limb_features(limbs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -170,23 +244,6 @@ def _same_order(flat: np.ndarray, t: int, u: int) -> bool:
     """Whether the limbs of frame u follow those of frame t in the same order."""
     return (np.linalg.norm(flat[u] - flat[t], axis=-1).sum()
             <= np.linalg.norm(flat[u, ::-1] - flat[t], axis=-1).sum())
-
-
-def _anchored(parity: np.ndarray, known: np.ndarray, away: np.ndarray, reach: int = 10) -> np.ndarray:
-    """Relative parity -> swap per frame. Each stretch of unknown frames takes the
-    constant that agrees with most known frames within ``reach`` of it (else in the
-    whole run); with none known, the forward-facing convention (swap), or the
-    backward one (keep) if the head looks away (``away``) in most frames."""
-    out = (parity ^ int(away.mean() <= 0.5)).astype(bool)
-    for stretch in runs(known < 0):
-        near = slice(max(0, stretch.start - reach), min(len(known), stretch.stop + reach))
-        votes = np.flatnonzero(known[near] >= 0) + near.start
-        if not len(votes):
-            votes = np.flatnonzero(known >= 0)
-        if len(votes):
-            flip = np.mean(parity[votes] != known[votes]) > 0.5
-            out[stretch] = (parity[stretch] ^ int(flip)).astype(bool)
-    return out
 
 
 def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg_px: float,

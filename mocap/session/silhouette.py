@@ -18,7 +18,7 @@ import numpy as np
 
 from mocap.body import JOINTS
 from mocap.errors import MocapError
-from mocap.facing import facing_away, near_arm
+from mocap.facing import facing_away, near_limbs
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
 from mocap.lift.inputs import Inputs, resolve_inputs
@@ -62,11 +62,11 @@ class SilhouetteSession(Session):
 
     @cached_property
     def _near(self) -> np.ndarray | None:
-        """(F,) which of the fit's arms shows across the trunk (mocap.facing.near_arm),
-        None without the silhouettes (once per session)."""
+        """(F, 2) which of the fit's arms and legs shows its outline across the body
+        (mocap.facing.near_limbs), None without the silhouettes (once per session)."""
         joints, body_px, _ = self._arrays
         return (None if self.silhouettes is None else
-                near_arm(self.silhouettes, joints, body_px, processing_scale(self.info)))
+                near_limbs(self.silhouettes, joints, body_px, processing_scale(self.info)))
 
     @cached_property
     def _guessed(self) -> list[str | None]:
