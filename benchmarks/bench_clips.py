@@ -72,11 +72,13 @@ def fit_true_masks(name: str, out_dir: Path, mode: str) -> float:
     return time.perf_counter() - start
 
 
-def true_mask_session(name: str, mode: str = "auto"):
+def true_mask_session(name: str, mode: str = "auto", grow: int = 0):
     """The silhouette method's session of one clip fitted on its true masks (the
     pipeline's own pass two), with the clip's oracle.json annotations in mode
-    "oracle", none otherwise."""
+    "oracle", none otherwise; each mask dilated by ``grow`` pixels (eroded where
+    negative)."""
     import cv2
+    import numpy as np
 
     from mocap.io.annotations import Annotations, load_annotations
     from mocap.io.video import iter_frames, open_video, processing_scale
@@ -90,6 +92,9 @@ def true_mask_session(name: str, mode: str = "auto"):
     for index, frame in iter_frames(info, scale=scale):
         mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
         mask = cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST)
+        if grow:
+            square = np.ones((2 * abs(grow) + 1,) * 2, np.uint8)
+            mask = (cv2.dilate if grow > 0 else cv2.erode)(mask, square)
         silhouettes.append(Silhouette.from_mask(mask, frame))
     stream, fits = FitStream(scale, info.fps), []
     for silhouette in silhouettes:          # the pipeline's own pass two
