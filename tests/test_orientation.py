@@ -20,7 +20,7 @@ from mocap.lift.inputs import resolve_inputs
 from mocap.lift.sides import SEPARATED, known_sides, naming_path, track_sides
 from mocap.lift.taylor import runs
 from mocap.lift.orientation import (NEGLIGIBLE, PROFILE_SPREAD, guess_orientations, guess_signs, held_user_signs,
-                                   legs_crossed)
+                                   legs_crossed, merge_short_runs)
 from mocap.smoothest import smoothest_states
 from mocap.walk import walk_cycle
 
@@ -350,3 +350,13 @@ def test_a_turn_through_a_profile_and_back_keeps_the_legs_names():
     inputs = resolve_inputs(np.array(data["joints2d"]), np.array(data["body_px"]), np.array(data["spread"]),
                             data["fps"], Annotations(), away=np.array(data["away"]), near=np.array(data["near"]))
     assert clear.sum() > 50 and np.mean(inputs.swap[clear, 1] == truth[clear]) >= 0.75
+
+
+def test_short_runs_at_the_start_take_the_first_long_runs_name():
+    """Frames at the threshold of the torso's spread flicker between a profile and a
+    turned view; at the start of a clip, where no run precedes them, they take the
+    name of the first run that is long enough, not that of the short run after them
+    (which named the first two frames of a profile run across the frame turned)."""
+    names = ["right", "forward_right"] + ["right"] * 20 + ["forward_right"] * 3 + ["right"] * 20
+    assert merge_short_runs(names, 12) == ["right"] * len(names)
+    assert merge_short_runs([None, "left"] + ["backward_left"] * 15, 12) == [None] + ["backward_left"] * 16

@@ -149,18 +149,19 @@ def rule_evidence(orientations: list[str | None], spread: np.ndarray, facing: np
 
 def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]:
     """Runs of one name shorter than ``shortest`` frames take the preceding run's name
-    (the following one's at the start), so the user sees few changes."""
+    (where none precedes, the following run's that is not short itself, else the
+    following one's), so the user sees few changes."""
     out = list(names)
     bounds = [i for i in range(1, len(out) + 1) if i == len(out) or out[i] != out[i - 1]]
-    start = 0
-    for end in bounds:
+    pieces = list(zip([0] + bounds[:-1], bounds))
+    for start, end in pieces:
         if out[start] is not None and end - start < shortest:
             left = out[start - 1] if start > 0 else None
-            right = out[end] if end < len(out) else None
+            right = next((names[a] for a, b in pieces if a >= end and names[a] is not None and b - a >= shortest),
+                         out[end] if end < len(out) else None)
             fill = left if left is not None else right
             if fill is not None:
                 out[start:end] = [fill] * (end - start)
-        start = end
     return out
 
 
