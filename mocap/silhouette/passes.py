@@ -45,7 +45,7 @@ class Silhouette:
     def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None) -> "Silhouette | None":
         if not holds_person(mask):
             return None
-        x, y, w, h = cv2.boundingRect((mask > 0).astype(np.uint8))
+        x, y, w, h = cv2.boundingRect(mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8))
         grey = None if frame is None else cv2.cvtColor(frame[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
         return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey)
 
