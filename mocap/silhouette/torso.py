@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import LENGTH, SEGMENT_INDEX, Pose2D, spread_for_width
+from mocap.body import BODY_HEIGHT, FOOT_LENGTH, LENGTH, SEGMENT_INDEX, Pose2D, spread_for_width
 from mocap.silhouette.contour import row_runs
 from mocap.silhouette.raster import Canvas
 from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, search,
@@ -17,6 +17,15 @@ from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, sea
 
 TORSO_HEAD = ("torso", "head")
 WAIST_RANGE = (45.0, 135.0)      # Table 1
+# A crouching body's trunk (bent over, or leaning over folded legs) may lean further
+# than Table 1's waist, down to this far above level (a deep squat's, 20-30 degrees).
+CROUCH_RANGE = (15.0, 165.0)
+# Of the height a crouching body lacks, the share the trunk takes up by leaning: the
+# legs fold the rest (under an upright trunk the pelvis would be at the feet).
+CROUCH_TRUNK_SHARE = 0.5
+# Below this share of the standing height a body is crouching: a walk's or a run's
+# longest strides (legs 30 degrees apart) hold the hips up to 8% of it lower.
+CROUCH_SPAN = 0.9
 NECK_RANGE = (45.0, 135.0)       # Table 1
 SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
 # A head (15-20 units wide, round from any side) is 14 units wide about 3 units under
@@ -68,20 +77,53 @@ def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
 
 def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     """The torso's angle (Algorithm 1, head drawn along it), the pelvis under the head
-    at that lean, and the horizontal position."""
-    lo, hi, c = around(prev, "torso", *WAIST_RANGE, 90.0)
-    pose = search_angle(canvas, pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
-    return fit_pelvis_x(canvas, under_the_head(canvas.sil, pose))
+    at that lean, and the horizontal position. Beyond the paper, a crouching body's
+    torso is turned over CROUCH_RANGE about its pelvis where ``crouch_pelvis`` puts
+    it: turned about a pelvis under the upright trunk, at the feet, an upright trunk
+    through the folded legs explains as much silhouette as a leaning one."""
+    pelvis = crouch_pelvis(canvas.sil, pose)
+    crouching = pelvis is not None
+    lo, hi, c = around(prev, "torso", *(CROUCH_RANGE if crouching else WAIST_RANGE), 90.0)
+    pose = search_angle(canvas, replace(pose, pelvis=pelvis) if crouching else pose,
+                        TORSO_HEAD, TORSO_HEAD, lo, hi, c)
+    return fit_pelvis_x(canvas, pose if crouching else under_the_head(canvas.sil, pose))
+
+
+def crouch_pelvis(silhouette: np.ndarray, pose: Pose2D) -> np.ndarray | None:
+    """The pelvis of a crouching body, None for an upright one. A body is crouching
+    when its silhouette from the head's top (``head_top_row``) to the feet is shorter
+    than CROUCH_SPAN of the standing height. Its pelvis lies as far under the head's
+    top as the upright trunk reaches (Table 1) less CROUCH_TRUNK_SHARE of the height
+    it lacks (taken in as the body comes another 1 - CROUCH_SPAN lower, so that a body
+    just short enough is placed as an upright one), in the silhouette's middle on that row."""
+    bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
+    top, standing = head_top_row(silhouette, pose.scale), standing_px(pose.scale)
+    short, allowed = standing - (bottom - top), (1.0 - CROUCH_SPAN) * standing
+    if short <= allowed:
+        return None
+    y = min(top + trunk_reach(pose.scale) - CROUCH_TRUNK_SHARE * short * min(short / allowed - 1.0, 1.0),
+            bottom)
+    xs = np.flatnonzero(silhouette[int(round(y))])
+    return np.array([float(np.median(xs)) if len(xs) else pose.pelvis[0], y])
+
+
+def standing_px(scale: float) -> float:
+    """Pixels from the head's top to the soles of an upright body."""
+    return (BODY_HEIGHT + FOOT_LENGTH) * scale
+
+
+def trunk_reach(scale: float) -> float:
+    """Pixels from the head's top to the pelvis of an upright body (Table 1)."""
+    return (LENGTH[SEGMENT_INDEX["head"]] + LENGTH[SEGMENT_INDEX["torso"]]) * scale
 
 
 def under_the_head(silhouette: np.ndarray, pose: Pose2D) -> Pose2D:
     """The pelvis as far under the head's top as the leaning torso and head reach
     down (Table 1's lengths at the torso's angle): a body bending over or crouching
     has its pelvis higher under its head than when upright."""
-    reach = (LENGTH[SEGMENT_INDEX["head"]] + LENGTH[SEGMENT_INDEX["torso"]]) * pose.scale
     lean = np.sin(np.radians(pose.angle[SEGMENT_INDEX["torso"]]))
     bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
-    y = min(head_top_row(silhouette, pose.scale) + reach * lean, bottom)
+    y = min(head_top_row(silhouette, pose.scale) + trunk_reach(pose.scale) * lean, bottom)
     return replace(pose, pelvis=np.array([pose.pelvis[0], y]))
 
 
