@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from mocap import synth
 
 from mocap.track import blocks
-from mocap.body import JOINT_INDEX, JOINTS
+from mocap.body import JOINT_INDEX, JOINTS, unit
 from mocap.errors import MocapError
 from mocap.track.headmotion import adapt_threshold, head_displacement, two_peak_displacement
 from mocap.track.marks import check_marks
@@ -21,7 +21,8 @@ from mocap.track.tracking import (LOW_RELIABILITY, carried_pins, fill_unreliable
 from mocap.edges import Edges
 from mocap.track.calibration import FACING_CAMERA, KEY, Calibration, Pinhole
 from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
-                               around_root, arm_limits_cost, limb_penalty, outline_cost, overlap,
+                               around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
+                               outline_cost, overlap,
                                settled_knee, twin_overlap)
 from mocap.track.parts import PARTS, far_arm, far_forearm, mirrored_model
 from mocap.walk import walk_cycle
@@ -206,26 +207,41 @@ def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
     assert on_trunk == pytest.approx(OUTLINE_COST)
 
 
-def test_an_arm_through_the_trunk_costs_more_than_one_beside_it():
-    """The arms' joint limits in 3D (arm_limits_cost): the model's left arm hanging
-    or bent forward at the elbow costs only the little it hangs off its rest; the
-    same arm reaching through the trunk to the right costs many times more."""
+LIMB_POSES = {  # limb -> (directions of its upper and lower bone: allowed poses, poses out of range)
+    "arm": ([((0, -1, 0), (0, -1, 0)), ((0, -1, 0), (0, 0, 1))],           # hanging, bent forward
+            [((-1, 0, 0), (-1, 0, 0))]),                                  # through the trunk
+    "leg": ([((0, -1, 0), (0, -1, 0)), ((0, -0.9, 0.44), (0, -0.7, -0.7))],  # standing, mid-stride
+            [((-0.7, -0.7, 0), (0, -1, 0)), ((0, -1, 0), (0.8, 0.6, 0))]),  # across the other leg,
+}                                                                         # a shin out sideways
+
+
+@pytest.mark.parametrize("kind", LIMB_POSES)
+def test_a_limb_out_of_its_range_costs_more_than_one_in_it(kind):
+    """The limbs' joint limits in 3D (arm_limits_cost, leg_limits_cost): the model's
+    left arm hanging or bent forward at the elbow, its left leg standing or in
+    mid-stride, cost only the little they leave their rest; the arm reaching through
+    the trunk to the right, the thigh across the other leg or the shin sticking out
+    sideways cost many times more."""
     camera = Pinhole(800.0, 320.0, 240.0)
     turned = Rotation.from_matrix(FACING_CAMERA) * Rotation.from_euler("y", np.radians(30.0))
     pose = Calibration(turned.as_rotvec(), np.array([0.4, -0.3, 6.0]), 0.36)
     model = pose.model()
-    cost = arm_limits_cost(camera, pose.to_camera(model[KEY]), 0)
-    shoulder = model[JOINT_INDEX["shoulder_l"]]
+    key = pose.to_camera(model[KEY])
+    if kind == "arm":
+        root, lengths, cost = model[JOINT_INDEX["shoulder_l"]], ARM_M, arm_limits_cost(camera, key, 0)
+    else:
+        root, lengths = model[JOINT_INDEX["hip_l"]], marked_lengths(camera.project(pose.to_camera(model)),
+                                                                    camera, 6.0, "leg")
+        cost = leg_limits_cost(camera, key, camera.project(pose.to_camera(root)), 0, lengths)
 
-    def arm_cost(elbow_dir, wrist_dir) -> float:
-        elbow = shoulder + ARM_M[0] * np.asarray(elbow_dir, float)
-        wrist = elbow + ARM_M[1] * np.asarray(wrist_dir, float)
-        pixels = camera.project(pose.to_camera(np.array([elbow, wrist])))
+    def limb_cost(upper_dir, lower_dir) -> float:
+        middle = root + lengths[0] * unit(np.asarray(upper_dir, float))
+        end = middle + lengths[1] * unit(np.asarray(lower_dir, float))
+        pixels = camera.project(pose.to_camera(np.array([middle, end])))
         return float(cost(blocks.between(pixels[:1], pixels[1:], 5.0))[0])
-    hanging, bent_forward = arm_cost((0, -1, 0), (0, -1, 0)), arm_cost((0, -1, 0), (0, 0, 1))
-    through_the_trunk = arm_cost((-1, 0, 0), (-1, 0, 0))
-    assert hanging < 0.15 * LIMITS_COST and bent_forward < 0.15 * LIMITS_COST
-    assert through_the_trunk > 0.8 * LIMITS_COST
+    allowed, out_of_range = LIMB_POSES[kind]
+    assert max(limb_cost(*p) for p in allowed) < 0.15 * LIMITS_COST
+    assert min(limb_cost(*p) for p in out_of_range) > 0.8 * LIMITS_COST
 
 
 def test_a_knee_slid_up_a_thigh_of_its_colour_settles_back():

@@ -4,8 +4,8 @@ tracking"): the best pair of directions of its parts all around its root
 (``around_root``), and the penalties that keep its lower part off the places where
 it cannot be: its own upper part, the head for an arm, its twin's lower part, far
 from where it was (``limb_penalty``), sides without edges (``outline_cost``), a pose
-a human arm cannot take in 3D (``arm_limits_cost``, from the key triangle followed
-as the reconstruction does, ``TrunkDepth``); a leg's knee settled where its thigh and
+a human limb cannot take in 3D (``arm_limits_cost``, ``leg_limits_cost``, from the key
+triangle followed as the reconstruction does, ``TrunkDepth``); a leg's knee settled where its thigh and
 shin match best together (``settled_knee``).
 """
 
@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap.body import LENGTH, SEGMENT_INDEX
+from mocap import body
+from mocap.body import JOINT_INDEX, LENGTH, SEGMENT_INDEX
 from mocap.edges import Edges
 from mocap.track import blocks
 from mocap.track.blocks import M, N, THETA, X, Y, block_end
-from mocap.track.calibration import UNIT_M, Pinhole, calibrate
+from mocap.track.calibration import MODEL, UNIT_M, Pinhole, calibrate
 from mocap.track.keydepths import body_axes, frame_key_depths
 from mocap.track.rays import limb_candidates, limb_penalty as joint_limits
 
@@ -103,6 +104,7 @@ class TrunkDepth:
     def __init__(self, marks: np.ndarray, camera: Pinhole, turn: str | None):
         self.camera, self.turn = camera, turn
         self.depths, self.sides = calibrate(marks, camera, turn).key_triangle()
+        self.leg_lengths = marked_lengths(marks, camera, float(self.depths.mean()), "leg")
 
     def follow(self, key2d: np.ndarray) -> np.ndarray:
         """(3, 3) the key joints (pinhole frame) of a new frame's (3, 2) key pixels."""
@@ -111,26 +113,63 @@ class TrunkDepth:
         return self.depths[:, None] * rays
 
 
+def marked_lengths(marks: np.ndarray, camera: Pinhole, depth: float, kind: str) -> tuple[float, float]:
+    """The (upper, lower) bone lengths (metres) of a kind of limb ("arm", "leg") as
+    the marks (16, 2) show them at ``depth``: each the longer of its two sides'.
+    Bones foreshortened on the marked frame read short; the model's lengths
+    (body.LENGTH) are no better: at the scale of the key triangle calibrated on
+    the marks they are 1.2 to 1.4 times the marked legs of the shared perspective
+    clips (motion capture), and a bone taken too long is given depth it does not
+    have."""
+    out = []
+    for n in range(2):
+        seen = [np.linalg.norm(marks[JOINT_INDEX[one.joints[n + 1]]] - marks[JOINT_INDEX[one.joints[n]]])
+                for one in body.LIMBS if one.kind == kind]
+        out.append(max(seen) * depth / camera.focal)
+    return out[0], out[1]
+
+
 def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int,
                     cost: float = LIMITS_COST) -> blocks.Penalty:
     """Beyond the paper: the penalty (grey levels) of an arm's candidate lower blocks
-    (K, 5) for the pose they give it in 3D. The elbow (the block's start) and the
-    wrist (its end) lie on their viewing rays at the model's bone lengths from the
-    shoulder, a key joint of ``key`` (3, 3), in one of four ways
-    (mocap.track.rays.limb_candidates); ``cost`` times the least joint-limit penalty of the
-    four (the silhouette method's limits: elbows bent forward, no upper arm through
-    the trunk, arms near the sagittal plane) in the body frame of ``key``. Where the
-    colours leave an arm's place open (a sleeve over the shirt, a hidden arm), the
-    places a human arm can take win. ``arm``: 0 left, 1 right."""
-    shoulder, axes = key[arm], body_axes(key)
-    side = 1.0 if arm == 0 else -1.0
+    (K, 5) for the pose they give it in 3D (``limits_cost`` from the shoulder, a key
+    joint of ``key`` (3, 3), at the model's arm lengths ARM_M). Where the colours
+    leave an arm's place open (a sleeve over the shirt, a hidden arm), the places a
+    human arm can take win. ``arm``: 0 left, 1 right."""
+    return limits_cost(camera, key[arm], body_axes(key), ARM_M, 1.0 if arm == 0 else -1.0, False, cost)
 
+
+def leg_limits_cost(camera: Pinhole, key: np.ndarray, hip: np.ndarray, leg: int,
+                    lengths: tuple[float, float], cost: float = LIMITS_COST) -> blocks.Penalty:
+    """Beyond the paper: the penalty (grey levels) of a leg's candidate lower blocks
+    (K, 5) for the pose they give it in 3D (``limits_cost`` at bone ``lengths``
+    (TrunkDepth.leg_lengths) from the hip, on the ray of its pixel ``hip`` (2,) at
+    the depth the model trunk carried rigidly by ``key`` (3, 3) gives it). Twin legs
+    look alike, and dark trousers match dark clutter: a shin folded up beside its
+    thigh, a thigh across the other leg, are places a human leg does not take.
+    ``leg``: 0 left, 1 right."""
+    axes = body_axes(key)
+    rigid = key[2] + axes @ (MODEL[JOINT_INDEX[("hip_l", "hip_r")[leg]]] - MODEL[JOINT_INDEX["chest"]])
+    root = rigid[2] * camera.rays(hip)
+    return limits_cost(camera, root, axes, lengths, 1.0 if leg == 0 else -1.0, True, cost)
+
+
+def limits_cost(camera: Pinhole, root: np.ndarray, axes: np.ndarray, lengths: tuple[float, float],
+                side: float, leg: bool, cost: float = LIMITS_COST) -> blocks.Penalty:
+    """The penalty (grey levels) of a limb's candidate lower blocks (K, 5) for the
+    pose they give it in 3D. The middle joint (the block's start) and the end joint
+    (its end) lie on their viewing rays at bone ``lengths`` from the limb's ``root``
+    (3,), pinhole frame, in one of four ways (mocap.track.rays.limb_candidates);
+    ``cost`` times the least joint-limit penalty of the four (the silhouette method's
+    limits: hinges bent the right way, no upper arm or thigh through the trunk, limbs
+    near the sagittal plane) in the body frame ``axes`` (3, 3) (columns: the
+    performer's left, up, forward). ``side``: +1 left, -1 right."""
     def penalty(lowers: np.ndarray) -> np.ndarray:
         rays = camera.rays(np.stack([lowers[:, :2], block_end(lowers)], axis=1))
-        roots = np.broadcast_to(shoulder, (len(lowers), 3))
-        placed = limb_candidates(roots, rays, ARM_M)
+        roots = np.broadcast_to(root, (len(lowers), 3))
+        placed = limb_candidates(roots, rays, lengths)
         body = np.broadcast_to(axes, (len(lowers), 3, 3))
-        return cost * joint_limits(roots, placed, body, False, side).min(axis=1)
+        return cost * joint_limits(roots, placed, body, leg, side).min(axis=1)
     return penalty
 
 

@@ -25,8 +25,9 @@ model. Every later frame is tracked head to feet:
    it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
    limb's lower part, ``_part_twins``) and near where it was on the last frame;
    a limb's blocks pay for sides the frame shows no edge along (``outline_cost``),
-   an arm's also for a pose a human arm cannot take in 3D (``arm_limits_cost``, measured
-   from the key triangle followed in 3D as the reconstruction does, ``TrunkDepth``);
+   and its lower block for a pose a human limb cannot take in 3D (``arm_limits_cost``,
+   ``leg_limits_cost``, measured from the key triangle followed in 3D as the
+   reconstruction does, ``TrunkDepth``);
    a leg's knee is then settled where its thigh and shin blocks match best together
    (``settled_knee``). The far arm's forearm matches either its own colours or its
    twin's mirrored (``far_forearm``): marked behind the trunk, its own are the shirt's;
@@ -55,12 +56,12 @@ from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
 from mocap.track.loss import DISTINCT, body_lost, part_confidence
 from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVERLAP, TrunkDepth, added,
-                               arm_limits_cost, around_root, limb_cost, limb_penalty, outline_cost,
-                               settled_knee, twin_overlap)
+                               arm_limits_cost, around_root, leg_limits_cost, limb_cost, limb_penalty,
+                               outline_cost, settled_knee, twin_overlap)
 from mocap.track.marks import body_scale
 from mocap.track.reacquire import carried, distinctness, reacquired, scan_heads
-from mocap.track.parts import (ARMS, HEAD, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS, far_forearm,
-                               mirrored_model, part_lengths, part_widths, search_part, skeleton)
+from mocap.track.parts import (ARMS, HEAD, LEGS, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS,
+                               far_forearm, mirrored_model, part_lengths, part_widths, search_part, skeleton)
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
 MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
@@ -280,14 +281,16 @@ class BodyTracker:
     def _limb_costs(self, new: np.ndarray, edges: Edges) -> dict:
         """Each limb's (upper, lower) block penalties on a frame whose trunk is placed:
         the frame's ``edges`` along both (outline_cost: OUTLINE_COST for an arm,
-        LEG_OUTLINE_COST for a leg), an arm's lower block also the joint limits
-        (``arm_limits_cost``) in the key triangle's 3D (``TrunkDepth``)."""
+        LEG_OUTLINE_COST for a leg), the lower block also the joint limits
+        (``arm_limits_cost``, ``leg_limits_cost``) in the key triangle's 3D (``TrunkDepth``)."""
         key = self.trunk.follow(np.array([*(self._root(k, new) for k in ARMS),
                                           from_block(self.chest, new[TORSO])]))
         arm, leg = outline_cost(edges), outline_cost(edges, LEG_OUTLINE_COST)
         costs = {k: (arm, added(arm, arm_limits_cost(self.trunk.camera, key, n)))
                  for n, k in enumerate(ARMS)}
-        return costs | {k: (leg, leg) for k in LIMBS if k not in ARMS}
+        return costs | {k: (leg, added(leg, leg_limits_cost(self.trunk.camera, key, self._root(k, new), n,
+                                                            self.trunk.leg_lengths)))
+                        for n, k in enumerate(LEGS)}
 
     def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
                     avoid: tuple) -> None:
