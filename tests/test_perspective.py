@@ -292,6 +292,25 @@ def test_measured_lengths_read_bones_seen_side_on():
     assert np.all(found <= true * 1.05)
 
 
+def test_frames_where_the_body_was_lost_measure_no_bones():
+    """The walk seen side-on, the blocks of a third of its frames left on clutter (the
+    joints there spread to twice their distance from the pelvis): the bones measured
+    over the frames seen are those of the walk alone; over every frame, longer."""
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
+                                                           yaw=90.0))
+    truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
+    camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    depth = -truth.pelvis_camera[:, 2]
+    seen = np.arange(len(depth)) % 3 != 0
+    tracked = truth.joints2d.copy()
+    pelvis = tracked[~seen, JOINT_INDEX["pelvis"], None]
+    tracked[~seen] = pelvis + 2.0 * (tracked[~seen] - pelvis)
+    walk = P.measured_lengths(truth.joints2d[seen], depth[seen], camera)
+    assert np.allclose(P.measured_lengths(tracked, depth, camera, seen), walk)
+    shins = list(P.BONE_PAIRS[-1])
+    assert np.all(P.measured_lengths(tracked, depth, camera)[shins] > 1.05 * walk[shins])
+
+
 def test_steady_depths_keep_joints_on_their_rays_and_take_out_jitter():
     n, fps = 60, 30.0
     depth = -4.0 + 0.01 * np.arange(n)                          # walking away slowly

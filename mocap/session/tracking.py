@@ -188,9 +188,11 @@ class TrackSession(Session):
 
     def _placed_joints(self, steady: np.ndarray, key: np.ndarray,
                        fixed: np.ndarray | None = None) -> np.ndarray:
-        """(F, 16, 3) pinhole-frame joints placed from the key joints (place_joints),
-        their depths smoothed along their rays (steady_depths)."""
-        return steady_depths(place_joints(steady, key, self.camera, fixed=fixed), self.info.fps)
+        """(F, 16, 3) pinhole-frame joints placed from the key joints (place_joints, the
+        bones measured where the body was not lost), their depths smoothed along their
+        rays (steady_depths)."""
+        return steady_depths(place_joints(steady, key, self.camera, fixed=fixed, seen=~self.lost),
+                             self.info.fps)
 
     @staticmethod
     def _shown(joints: np.ndarray, camera: np.ndarray,

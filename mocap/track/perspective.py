@@ -110,10 +110,12 @@ def bone_lengths(joints3d: np.ndarray) -> np.ndarray:
     return np.linalg.norm(joints3d[..., bones[:, 1], :] - joints3d[..., bones[:, 0], :], axis=-1)
 
 
-def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -> np.ndarray:
+def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
+                     seen: np.ndarray | None = None) -> np.ndarray:
     """(13,) bone lengths (metres) measured over a clip: a percentile
     (LENGTH_PERCENTILES) of each bone's image length at the body's depth ``depth``
-    (F,), both sides of a pair pooled; the metric scale is the model key triangle's.
+    (F,), both sides of a pair pooled, over the frames ``seen`` (F,) bool (default
+    all; where none is, all); the metric scale is the model key triangle's.
     The hips keep the model's span: a body turned from the camera never shows it
     (turned 45 degrees the median reads it a third short, and each hip then sinks to
     the pelvis' depth), and hip spans differ little from body to body (see
@@ -131,7 +133,11 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole) -
     73.4 mm). The shins are the other exception: tracked best (the ankles' blocks end
     on the feet) and upright through every stance, where they show their whole
     length, so their upper quartile measures them (PA-MPJPE 77.1 -> 75.3 mm on the
-    tracked 2D, every clip better; the 90th percentile overshoots: 76.4)."""
+    tracked 2D, every clip better; the 90th percentile overshoots: 76.4). A frame
+    where the tracking lost the body holds no bones at all, only what the blocks
+    followed (``seen`` leaves it out)."""
+    if seen is not None and seen.any():
+        joints2d, depth = joints2d[seen], depth[seen]
     ends = joints2d[:, np.array(BONES)]                                     # (F, 13, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) * depth[:, None] / camera.focal
     out = np.empty(len(BONES))
@@ -190,20 +196,23 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
 
 
 def reconstruct(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
-                lengths: np.ndarray | None = None) -> np.ndarray:
+                lengths: np.ndarray | None = None, seen: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) joints in the pinhole frame (metres) from 2D joints (F, 16, 2): the
-    key joints turned to ``turns`` (``key_joints``), then the others (``place_joints``)."""
-    return place_joints(joints2d, key_joints(joints2d, camera, turns), camera, lengths)
+    key joints turned to ``turns`` (``key_joints``), then the others (``place_joints``,
+    the bones measured over the frames ``seen``)."""
+    return place_joints(joints2d, key_joints(joints2d, camera, turns), camera, lengths, seen=seen)
 
 
 def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,
-                 lengths: np.ndarray | None = None, fixed: np.ndarray | None = None) -> np.ndarray:
+                 lengths: np.ndarray | None = None, fixed: np.ndarray | None = None,
+                 seen: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) every joint from the key joints ``key`` (F, 3, 3) centre to fringe at
-    their bone ``lengths`` (default: ``measured_lengths``), each limb's and the
+    their bone ``lengths`` (default: ``measured_lengths`` over the frames ``seen``,
+    default all), each limb's and the
     trunk's depth choices kept to the user's foreshortening ``fixed`` (F, 10) where
     given (+1 toward, -1 away, 0 not said)."""
     if lengths is None:
-        lengths = measured_lengths(joints2d, key[:, :, 2].mean(axis=1), camera)
+        lengths = measured_lengths(joints2d, key[:, :, 2].mean(axis=1), camera, seen)
     rays = camera.rays(joints2d)
     joints = add_limbs(trunk_joints(key, rays, lengths, fixed), rays, lengths, fixed)
     return toward_swing_planes(joints, rays, lengths, fixed)

@@ -248,7 +248,7 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
     joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
     joints2d = fill_unreliable(joints, reliability)
     turn = turn or guessed_turn(joints2d, info.fps)
-    joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps))
+    joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps, ~lost))
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal, joint_confidence(parts), lost)
 
 
@@ -260,12 +260,14 @@ def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 
-def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns: Turns, fps: float) -> np.ndarray:
+def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns: Turns, fps: float,
+                          seen: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) pinhole-frame joints (metres) of tracked 2D joints (F, 16, 2): the
     perspective reconstruction of the joints lightly smoothed (``steady_joints``), the
-    trunk turned to ``turns`` (one side, or each frame's: keydepths.key_joints),
+    trunk turned to ``turns`` (one side, or each frame's: keydepths.key_joints), the
+    bones measured over the frames ``seen`` (default all: the body not lost),
     every joint's depth then smoothed along its ray (``steady_depths``)."""
-    return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turns), fps)
+    return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turns, seen=seen), fps)
 
 
 def steady_joints(joints2d: np.ndarray, fps: float) -> np.ndarray:
