@@ -170,8 +170,8 @@ def test_profile_elbow_bends_the_way_the_knees_point():
     err = {j: np.linalg.norm(fit.joints[JOINT_INDEX[j]] - want[JOINT_INDEX[j]]) / (175 * FIT_SCALE)
            for j in ("elbow_r", "wrist_r")}
     assert max(err.values()) < 0.05, err
-    bend = fit.pose.angle[SEGMENT_INDEX["lower_arm_r"]] - fit.pose.angle[SEGMENT_INDEX["upper_arm_r"]]
-    assert not elbow_bends_back(np.array([bend]), 0.0, facing=1)[0]
+    upper, lower = (fit.pose.angle[SEGMENT_INDEX[s]] for s in ("upper_arm_r", "lower_arm_r"))
+    assert not elbow_bends_back(upper, lower, 0.0, facing=1)
 
 
 def test_reported_hips_lie_below_where_the_thighs_attach_along_the_trunk():

@@ -126,7 +126,7 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
     the GRID_SHORTENED best of them at the other GUESS_RATIOS, on the partial
     silhouette that the first round outlines."""
     guesses = arm_candidates(canvas, pose, side, prev)
-    backward = elbow_bends_back(guesses[:, 1] - guesses[:, 0], pose.spread, facing)
+    backward = elbow_bends_back(guesses[:, 0], guesses[:, 1], pose.spread, facing)
     grid = np.arange(len(guesses)) >= len(guesses) - (len(_GRID_GUESSES) if canvas.by_edges else 0)
     if not backward.all():
         guesses, grid = guesses[~backward], grid[~backward]
@@ -164,11 +164,17 @@ def facing_of_knees(pose: Pose2D) -> int:
     return 0 if abs(bend) < KNEE_FACING else int(np.sign(bend))
 
 
-def elbow_bends_back(bend: np.ndarray, spread: float, facing: int) -> np.ndarray:
-    """Whether arms whose lower arm turns ``bend`` degrees (counter-clockwise, y up)
-    from the upper arm bend the elbow backward by more than ELBOW_BACK: elbows flex
-    toward the front, which the image shows when the body is seen near profile
-    (torso spread below ELBOW_SHOWS_SPREAD) and the facing side is known."""
+def elbow_bends_back(upper: np.ndarray, lower: np.ndarray, spread: float, facing: int) -> np.ndarray:
+    """Whether arms whose upper and lower arm point at ``upper`` and ``lower`` degrees
+    (counter-clockwise, y up) bend the elbow backward by more than ELBOW_BACK: elbows
+    flex toward the front, which the image shows when the body is seen near profile
+    (torso spread below ELBOW_SHOWS_SPREAD) and the facing side is known. Not for an
+    arm held up (the elbow above the shoulder and the hand above the elbow): raised
+    sideways, it turns its bend any way in the image, and arms held up draw the
+    shoulders in over a narrowed torso, whose width then reads a profile that is not
+    there (a back view with both hands up)."""
+    upper, lower = np.asarray(upper, float), np.asarray(lower, float)
     if not facing or spread >= ELBOW_SHOWS_SPREAD:
-        return np.zeros(np.shape(bend), bool)
-    return facing * ((np.asarray(bend) + 180.0) % 360.0 - 180.0) < -ELBOW_BACK
+        return np.zeros(np.shape(upper), bool)
+    held_up = (np.sin(np.radians(upper)) > 0) & (np.sin(np.radians(lower)) > 0)
+    return (facing * ((lower - upper + 180.0) % 360.0 - 180.0) < -ELBOW_BACK) & ~held_up
