@@ -15,10 +15,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, Pose2D,
+from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, WIDTH, Pose2D,
                         forward_kinematics_2d, forward_kinematics_2d_batch, image_angle, knee_bend, limb)
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
-from mocap.silhouette.raster import HAND_LENGTH, Canvas, joint_quads, sweep_scorer
+from mocap.silhouette.raster import HAND_LENGTH, Canvas, draw_model, joint_quads, pose_quads, sweep_scorer
 from mocap.silhouette.search import Knob, span, refine_limb, search_angle
 
 ARM = {side: limb("arm", side).segments for side in SIDES}
@@ -27,6 +27,7 @@ ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first g
 KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
 ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
 ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend shows in the image
+CROSS_SPREAD = 0.3               # torso spread below which (near profile) an arm may cross the torso's axis
 # (upper, lower) angles every 30 degrees all around the shoulder: arm guesses that the
 # frame's edges may pick inside the silhouette
 ARM_GRID = [(float(u), float(u + b)) for u in range(0, 360, 30) for b in range(-150, 151, 30)]
@@ -60,34 +61,45 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
     return out
 
 
-def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None):
+def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, crossing: bool = False):
     """First guesses (G, 4) for one arm's (upper, lower) angles and foreshortening ratios:
-    contour analysis (Algorithms 2-4), the arm reaching the curve's farthest point
-    bent either way or straight and foreshortened, hanging down, the previous
-    frame's arm as it was and, where the frame's edges can tell arms inside the
-    silhouette apart, a grid of arms all around the shoulder (ARM_GRID, last); each
-    new guess at GUESS_RATIOS of the model's lengths (an arm turned toward the
-    camera is shorter in the image, and one hanging in front of the trunk scores
-    alike at any length), the grid's at the first (``best_arm_guess`` shortens the
-    best of them)."""
+    contour analysis (Algorithms 2-4) of the arm curve on its image side (``crossing``:
+    on either side), the arm reaching the curve's farthest point bent either way or
+    straight and foreshortened, hanging down, the previous frame's arm as it was and,
+    where the frame's edges can tell arms inside the silhouette apart, a grid of arms
+    all around the shoulder (ARM_GRID, last); each new guess at GUESS_RATIOS of the
+    model's lengths (an arm turned toward the camera is shorter in the image, and one
+    hanging in front of the trunk scores alike at any length), the grid's at the
+    first (``best_arm_guess`` shortens the best of them)."""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
     angles, guesses = [(270.0, 270.0)], []
     if prev is not None:
         guesses.append(((prev.angle[upper], prev.angle[lower]), (prev.ratio[upper], prev.ratio[lower])))
     joints = forward_kinematics_2d(pose)
-    points = arm_curve(canvas, joints, side, pose.scale)
-    if len(points) >= 3:
-        angles.append(_contour_guess(points, guesses[0][0] if guesses else angles[0]))
-        shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
-        tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
-        # the curve ends with the hand
-        l1, l2 = LENGTH[upper] * pose.scale, (LENGTH[lower] + HAND_LENGTH) * pose.scale
-        angles += two_link_angles(shoulder, tip, l1, l2)
-        toward, ratio = image_angle(tip - shoulder), min(float(np.hypot(*(tip - shoulder))) / (l1 + l2), 1.0)
-        guesses.append(((toward, toward), (ratio, ratio)))
+    shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
+    # the curve ends with the hand
+    reach = LENGTH[upper] * pose.scale, (LENGTH[lower] + HAND_LENGTH) * pose.scale
+    default = guesses[0][0] if guesses else angles[0]
+    for runs in SIDES if crossing else (side,):
+        points = arm_curve(canvas, joints, side, pose.scale, runs)
+        if len(points) >= 3:
+            more, straight = _curve_guesses(points, shoulder, default, reach)
+            angles += more
+            guesses.append(straight)
     guesses += [(a, (r, r)) for a in angles for r in GUESS_RATIOS]
     guesses = np.array([(*a, *r) for a, r in guesses])
     return np.concatenate([guesses, _GRID_GUESSES]) if canvas.by_edges else guesses
+
+
+def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[float, float],
+                   reach: tuple[float, float]):
+    """An arm curve's (upper, lower) angle guesses (Algorithms 3-4, and the arm of
+    ``reach`` lengths reaching its farthest point bent either way), and the straight
+    arm pointing there foreshortened to reach it: ((upper, lower), (ratio, ratio))."""
+    tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
+    toward = image_angle(tip - shoulder)
+    ratio = min(float(np.hypot(*(tip - shoulder))) / sum(reach), 1.0)
+    return [_contour_guess(points, default), *two_link_angles(shoulder, tip, *reach)], ((toward, toward), (ratio, ratio))
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
@@ -104,14 +116,50 @@ def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
     return (cross < 0 if side == "l" else cross > 0) | (ys < joints[JOINT_INDEX["head_top"], 1])
 
 
+def fit_arms(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, facing: int = 0) -> Pose2D:
+    """Both arms, each committed to the canvas once fitted: the image-left one first,
+    each on its image side (``fit_arm``). Near profile (torso spread below
+    CROSS_SPREAD) both shoulders lie on the torso's axis, which parts the arms only
+    when one is in front of the body and one behind it, while arms held in front (a
+    guard, a forearm across the chest, a hand raised to the face) lie on one side of
+    it: there the arm on the side the performer faces (``facing``, from the knees)
+    comes first, on its side, and the other may take whatever silhouette the first
+    left anywhere (facing unknown, the image-left arm first); where it then explains
+    less than half a hand's area of silhouette beyond the fitted parts (placed by the
+    frame's inner edges alone, which the head's own features also show), it is
+    fitted again on its side."""
+    profile = pose.spread < CROSS_SPREAD
+    order = ("r", "l") if profile and facing > 0 else SIDES
+    for side in order:
+        crossing = profile and side == order[1]
+        arm = fit_arm(canvas, pose, side, prev, facing, crossing)
+        if crossing and 2 * own_pixels(canvas, arm, side) < hand_area(pose.scale):
+            arm = fit_arm(canvas, pose, side, prev, facing)
+        pose = arm
+        canvas.commit(pose_quads(pose, ARM[side]))
+    return pose
+
+
+def hand_area(scale: float) -> float:
+    """Pixels a hand covers (HAND_LENGTH by a lower arm's width) at ``scale``."""
+    return HAND_LENGTH * WIDTH[SEGMENT_INDEX["lower_arm_l"]] * scale ** 2
+
+
+def own_pixels(canvas: Canvas, pose: Pose2D, side: str) -> int:
+    """Silhouette pixels that one arm of pose covers and the canvas's fitted part does not."""
+    drawn = draw_model(pose, canvas.sil.shape, ARM[side])
+    return int(np.count_nonzero(drawn & canvas.sil & canvas.free))
+
+
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
-            facing: int = 0) -> Pose2D:
-    """One arm, on its image side: the best-scoring first guess (among those whose
-    elbow bends the way the performer faces, ``facing`` +1 image right, -1 left, 0
-    unknown), refined by Algorithm 1 (upper arm with the lower arm attached, then the
-    lower arm) and Algorithm 6."""
-    own = canvas.fork(keep=image_side(canvas.sil.shape, pose, side), by_edges=True)
-    pose = best_arm_guess(own, pose, side, prev, facing)
+            facing: int = 0, crossing: bool = False) -> Pose2D:
+    """One arm, on its image side (``crossing``: anywhere): the best-scoring first
+    guess (among those whose elbow bends the way the performer faces, ``facing`` +1
+    image right, -1 left, 0 unknown), refined by Algorithm 1 (upper arm with the lower
+    arm attached, then the lower arm) and Algorithm 6."""
+    keep = None if crossing else image_side(canvas.sil.shape, pose, side)
+    own = canvas.fork(keep=keep, by_edges=True)
+    pose = best_arm_guess(own, pose, side, prev, facing, crossing)
     upper = ARM[side][0]
     pose = search_angle(own, pose, (upper,), ARM[side],
                         *span(pose.angle[SEGMENT_INDEX[upper]], ARM_REFINE_HALF_RANGE))
@@ -119,13 +167,13 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 
 def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
-                   facing: int = 0) -> Pose2D:
+                   facing: int = 0, crossing: bool = False) -> Pose2D:
     """The arm_candidates guess with the highest S, among those that do not bend the
     elbow backward (``elbow_bends_back``) where that can be told. The grid's arms
     are narrowed as Algorithm 1 narrows a search: all at full length first, then
     the GRID_SHORTENED best of them at the other GUESS_RATIOS, on the partial
     silhouette that the first round outlines."""
-    guesses = arm_candidates(canvas, pose, side, prev)
+    guesses = arm_candidates(canvas, pose, side, prev, crossing)
     backward = elbow_bends_back(guesses[:, 0], guesses[:, 1], pose.spread, facing)
     grid = np.arange(len(guesses)) >= len(guesses) - (len(_GRID_GUESSES) if canvas.by_edges else 0)
     if not backward.all():

@@ -136,9 +136,10 @@ def lower_legs_cross(line_counts) -> bool:
     return bool(np.mean(rest >= 2) > 0.8 and two[0] >= 2)
 
 
-def arm_curve(canvas, joints: np.ndarray, side: str, scale: float) -> np.ndarray:
+def arm_curve(canvas, joints: np.ndarray, side: str, scale: float, runs: str | None = None) -> np.ndarray:
     """GetLeft/RightArmCurve of Algorithm 2: from the shoulder, the centres of the
-    outermost runs of silhouette not explained by torso, head or legs, on that image side."""
+    outermost runs of silhouette not explained by torso, head or legs, on that image side
+    (``runs``: on that one, for an arm that crosses the torso's axis)."""
     shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
     neck, pelvis = joints[JOINT_INDEX["neck"]], joints[JOINT_INDEX["pelvis"]]
     reach = (LENGTH[SEGMENT_INDEX["upper_arm_l"]] + LENGTH[SEGMENT_INDEX["lower_arm_l"]]) * scale
@@ -152,11 +153,12 @@ def arm_curve(canvas, joints: np.ndarray, side: str, scale: float) -> np.ndarray
     # torso axis x on each row: the arm's image side is relative to it
     t = (rows - pelvis[1]) / (neck[1] - pelvis[1]) if abs(neck[1] - pelvis[1]) > 1e-6 else 0 * rows
     axis_x = pelvis[0] + t * (neck[0] - pelvis[0])
-    on_side = centres < axis_x if side == "l" else centres > axis_x
+    runs = runs or side
+    on_side = centres < axis_x if runs == "l" else centres > axis_x
     rows, centres = rows[on_side], centres[on_side]
     if len(rows) == 0:
         return np.zeros((0, 2))
-    order = np.lexsort((centres if side == "l" else -centres, rows))
+    order = np.lexsort((centres if runs == "l" else -centres, rows))
     rows, centres = rows[order], centres[order]
     first = np.r_[True, rows[1:] != rows[:-1]]                   # outermost run per row
     pts = np.column_stack([centres[first], rows[first].astype(float)])

@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from mocap.body import BODY_HEIGHT, FOOT_LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d
-from mocap.silhouette.arms import ARM, facing_of_knees, fit_arm
+from mocap.silhouette.arms import facing_of_knees, fit_arms
 from mocap.silhouette.legs import LEGS, leg_hypotheses
 from mocap.silhouette.raster import Canvas, draw_model, pose_quads, similarity
 from mocap.silhouette.torso import TORSO_HEAD, fit_torso_head, initial_pose
@@ -60,10 +60,7 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
     legs = leg_hypotheses(canvas, pose, prev)
     pose = legs[0]
     canvas.commit(pose_quads(pose, LEGS))
-    facing = facing_of_knees(pose)
-    for side in ("l", "r"):
-        pose = fit_arm(canvas, pose, side, prev, facing)
-        canvas.commit(pose_quads(pose, ARM[side]))
+    pose = fit_arms(canvas, pose, prev, facing_of_knees(pose))
     others = tuple(with_legs(canvas.sil, pose, other) for other in legs[1:])
     return Fit2D(pose, forward_kinematics_2d(pose), canvas.score_model(), others)
 
