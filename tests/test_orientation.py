@@ -174,6 +174,23 @@ def test_a_kicking_leg_keeps_its_name_through_the_crossing_its_thigh_swings_thro
     assert not swap[25:].any()                              # named right after the crossing
 
 
+def test_a_crossing_one_following_barely_tells_gives_way_to_the_evidence():
+    """The same kick fitted with the crouching trunk (kick_34's true masks, frames
+    40-99): the kicking leg swings past the standing one and its foot lands, where
+    the fit draws the shin folded back. Carried on at its pace from before, the
+    landing foot overshoots and barely tells the two orders apart; carried back
+    from after, the misdrawn shin says surely that the legs kept their order. A
+    crossing is as sure as the less sure of the two, so the weak image-side evidence
+    of the profile after it, over 40 frames, renames the legs."""
+    data = json.loads((Path(__file__).parent / "data" / "kick_crouch_crossing.json").read_text())
+    joints, truth = np.array(data["joints2d"]), np.array(data["right_is_image_left"], bool)
+    known = np.full((len(joints), 2), -1, np.int8)
+    swap = track_sides(joints, known, np.ones(len(joints)), 25.0, rule=np.array(data["rule"]))[:, 1]
+    assert truth[5:19].all() and not truth[19:].any()       # the legs pass each other at frame 59
+    assert swap[5:19].all()                                 # turned toward the camera: the rule
+    assert not swap[27:].any()                              # named right from the next stretch apart on
+
+
 def waving_in_place(seconds: float, fps: float) -> np.ndarray:
     """(F, 16, 3) world joints of a performer standing with the feet apart and waving
     both arms, stretched out to the sides, up and down out of phase (model proportions)."""

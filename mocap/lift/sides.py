@@ -191,24 +191,25 @@ def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[
 def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, limb_px: float) -> float:
     """How much more the limbs of ``after``'s first frame, as labelled, look to be in
     the other order than ``before``'s limbs put in one order by ``parity`` so far
-    (> 0: they crossed).
+    (> 0: they crossed), as sure as the less sure of the two ways they are followed
+    across; 0 where the two disagree.
 
     Each limb is followed across the stretch between at constant velocity from
     either side (crossing limbs continue, turning limbs come back): its middle and
     distal joints and its two segments' image angles. The angles carry a limb that
     swings past the other, even one that speeds up (a kick), where its joints come
-    close to the other's and a fit that loses one segment there misplaces them."""
+    close to the other's and a fit that loses one segment there misplaces them.
+    Either way alone may mislead: a kicking foot that lands is carried on past the
+    ground, and a shin the fit draws folded back on one side is carried back folded;
+    each way is a witness of its own, so the crossing is no surer than the weaker."""
     ordered = pair.copy()
     ordered[parity == 1] = pair[parity == 1, ::-1]
     t0, t1 = before.stop - 1, after.start
     a0, a1 = max(before.start, t0 - 2), min(after.stop - 1, t1 + 2)
     later = pair[a1] if _same_order(pair[:, :, 1:], t1, a1) else pair[a1, ::-1]
-    ahead = _ahead(ordered[a0], ordered[t0], t0 - a0, t1 - t0)
-    back = _ahead(later, pair[t1], a1 - t1, t1 - t0)
-    keep = _mismatch(ahead, pair[t1], limb_px) + _mismatch(back, ordered[t0], limb_px)
-    swap = (_mismatch(ahead, pair[t1, ::-1], limb_px)
-            + _mismatch((back[0][::-1], back[1][::-1]), ordered[t0], limb_px))
-    return keep - swap
+    ahead = _order_margin(_ahead(ordered[a0], ordered[t0], t0 - a0, t1 - t0), pair[t1], limb_px)
+    back = _order_margin(_ahead(later, pair[t1], a1 - t1, t1 - t0), ordered[t0], limb_px)
+    return min(ahead, back, key=abs) if ahead * back > 0 else 0.0
 
 
 def _limb_features(limbs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -224,6 +225,12 @@ def _ahead(earlier: np.ndarray, last: np.ndarray, span: int, frames: int) -> tup
     (p0, q0), (p1, q1) = _limb_features(earlier), _limb_features(last)
     pace = frames / max(1, span)
     return p1 + (p1 - p0) * pace, q1 + _wrapped(q1 - q0) * pace
+
+
+def _order_margin(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
+    """How much nearer two limbs (2, 3, 2) in the other order lie to a prediction
+    (``_ahead``) than in their own (``_mismatch``; > 0: the other order)."""
+    return _mismatch(predicted, limbs, limb_px) - _mismatch(predicted, limbs[::-1], limb_px)
 
 
 def _mismatch(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
