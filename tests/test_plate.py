@@ -17,7 +17,7 @@ from mocap.cli import main as mocap_main
 from mocap.errors import MocapError
 from mocap.review import GUESSED
 from mocap.io.video import iter_frames, open_video, write_video
-from mocap.silhouette.background import estimate_background, extract_silhouette
+from mocap.silhouette.background import estimate_background, extract_silhouette, noise_floor
 from mocap.silhouette.masks import held_warning, silhouette_confidence
 from mocap.silhouette.passes import Silhouette
 from mocap.silhouette.plate import clean_plate, clip_background, performer_free
@@ -87,12 +87,13 @@ def test_a_boxer_whose_legs_stay_put_keeps_them(tmp_path):
     assert background.held is not None and background.held[200:][legs].mean() > 0.5
 
 
-def test_a_short_walk_gets_the_scene_back_and_says_where_it_guessed():
+def test_a_short_walk_gets_the_scene_back_where_the_legs_uncover_it():
     """12 frames (0.8 s) of a walk across: the legs cover their pixels on most samples,
-    so the median holds them. The performer-free background gives most of the body
-    (IoU 0.83 before the scene was taken only from scene-coloured samples; the median
-    alone 0.67; 0.86 with the feet, each planted on its pixels for most of the 12
-    frames), and the share told from a guess is reported."""
+    so the median holds them, but every pixel shows the scene on some sample. The
+    performer-free background has the scene back there (within the noise floor on
+    96% of the pixels it changed; 73% when each pixel took the samples of the scene's
+    colours, IoU 0.878), gives most of the body (the median alone 0.67), and little
+    of its silhouettes is told from a guess."""
     options = RenderOptions(size=(320, 240), fps=15.0, seed=1, view="side")
     joints = walk_cycle(12 / options.fps, options.fps)
     scene = synth.plan_scene(joints, options)
@@ -102,11 +103,14 @@ def test_a_short_walk_gets_the_scene_back_and_says_where_it_guessed():
     masks = [cv2.absdiff(synth.draw_frame(exact, i), empty).max(axis=2) > 0 for i in range(len(joints))]
     median = estimate_background(frames)
     free = performer_free(median, frames)
+    changed = cv2.absdiff(free.image, median.image).max(axis=2) > 0
+    wrong = cv2.absdiff(free.image, empty).max(axis=2) > noise_floor(median.sigma)
+    assert changed.sum() > 1000 and (wrong & changed).sum() < 0.1 * changed.sum()
     assert mean_iou(frames, masks, median) < 0.75
-    assert mean_iou(frames, masks, free) > 0.85
+    assert mean_iou(frames, masks, free) > 0.87
     silhouettes = [Silhouette.from_mask(extract_silhouette(f, free), f) for f in frames]
     confidence = silhouette_confidence(silhouettes, free)
-    assert np.isfinite(confidence).all() and held_warning(confidence) is not None
+    assert np.isfinite(confidence).all() and held_warning(confidence) is None
 
 
 def test_a_still_object_of_the_performers_colour_beside_them_stays_scene(in_place):

@@ -20,11 +20,14 @@ silhouette. This module finds those pixels and puts the empty scene back in them
    them (most samples show the median there) whose border lies mostly outside them
    is the scene taken in by its colour, not a still part of the performer, which
    the moving parts border;
-5. each such pixel takes the median of the samples that differ from the median
-   image there and have the scene's colours (the scene, uncovered, not another
-   part of the performer passing), or, where the performer never leaves it, the
-   scene inpainted from around (Telea's method) -- ``held``, the pixels the
-   silhouettes there depend on a guess;
+5. each such pixel takes the scene that the samples uncover there, found from the
+   region's border inwards: the samples that show the scene at a neighbour and
+   agree with each other there, not with the median (``uncover.uncovered_scene``); else
+   the median of the samples that differ from the median image there and have the
+   scene's colours (the scene, uncovered, not another part of the performer
+   passing); or, where the performer never leaves it, the scene inpainted from
+   around (Telea's method) -- ``held``, the pixels the silhouettes there depend on
+   a guess;
 6. in the performer's region the difference threshold is the clip's noise floor:
    the per-pixel noise measured against a median that held the performer is not
    the scene's.
@@ -45,6 +48,7 @@ from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, open_video, read_frame, sample_frames
 from mocap.silhouette.background import (MAD_TO_SIGMA, Background, estimate_background, exposure_gain,
                                          foreground, median_level, noise_floor, remove_shadows)
+from mocap.silhouette.uncover import uncovered_scene
 
 HALF = 0.5              # evidence on at least this fraction of samples: the performer stays
 RADIUS = 0.07           # of the evidence's height: a body part's reach around evidence
@@ -76,7 +80,8 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
         return background
     held_in_median, odds = _median_holds(background.image, region, radius, frames, masks)
     held_in_median = _without_steady_scene(held_in_median, _steady(background.image, frames, background.sigma))
-    image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius, odds)
+    image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius, odds,
+                          noise_floor(background.sigma))
     threshold = background.threshold.copy()
     threshold[dilated(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
     return replace(background, image=image, threshold=threshold, held=held)
@@ -114,11 +119,11 @@ def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
 
 
 def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray],
-                  masks: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+                  masks: list[np.ndarray]) -> np.ndarray:
     """Pixels (bool) where the median image shows the performer: GrabCut's foreground
-    within the region, kept by pieces whose colours are the performer's, and grown
-    by the performer-coloured pixels joined to them (steps 3-4); and the colour odds
-    table (``_colour_odds``)."""
+    within the region, kept by pieces whose colours are the performer's
+    (``_colour_odds``), and grown by the performer-coloured pixels joined to them
+    (steps 3-4)."""
     disk = _disk(radius)
     around = dilated(region, disk)
     cut = np.full(region.shape, cv2.GC_BGD, np.uint8)
@@ -221,28 +226,41 @@ def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
 
 
 def _replate(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
-             radius: int, odds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+             radius: int, odds: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
     """Step 5: the median image with the scene put back where it ``holds`` the
     performer, and the pixels where the scene had to be inpainted (bool). The scene
-    is the median of the samples that differ from the median image there and are
+    is the one the samples uncover from the border inwards (``uncover.uncovered_scene``),
+    else the median of the samples that differ from the median image there and are
     scene-coloured (colour ``odds`` under one: another part of the performer passing
-    is not the scene)."""
-    index = np.flatnonzero(holds)
-    plate = image.copy()
-    held = np.zeros(holds.shape, bool)
-    if not len(index):
-        return plate, held
-    values = frames.reshape(len(frames), -1, 3)[:, index]
-    uncovered = (masks.reshape(len(masks), -1)[:, index] > 0) & (_odds_of(values, odds) < 1.0)
-    seen = uncovered.sum(axis=0) >= MIN_UNCOVERED
-    values = values.astype(np.float32)
-    values[~uncovered] = np.nan
-    scene = np.nanmedian(values[:, seen], axis=0)
-    plate.reshape(-1, 3)[index[seen]] = np.round(scene).astype(np.uint8)
-    held.reshape(-1)[index[~seen]] = True
+    is not the scene; ``_scene_coloured``) -- the scene seen through a gap between
+    the legs, which no path from the border reaches."""
+    scene, seen = uncovered_scene(image, holds, frames, floor)
+    coloured, by_colour = _scene_coloured(image, holds & ~seen, frames, masks, odds)
+    plate = np.where(seen[..., None], scene, coloured)
+    held = holds & ~seen & ~by_colour
     if held.any():
         plate = cv2.inpaint(plate, held.astype(np.uint8), radius, cv2.INPAINT_TELEA)
     return plate, held
+
+
+def _scene_coloured(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
+                    odds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``image`` with the median of the scene-coloured samples that differ from it
+    (``masks``) where it ``holds`` the performer and MIN_UNCOVERED of them do, and
+    where they do (bool)."""
+    index = np.flatnonzero(holds)
+    plate = image.copy()
+    seen = np.zeros(holds.shape, bool)
+    if not len(index):
+        return plate, seen
+    values = frames.reshape(len(frames), -1, 3)[:, index]
+    uncovered = (masks.reshape(len(masks), -1)[:, index] > 0) & (_odds_of(values, odds) < 1.0)
+    found = uncovered.sum(axis=0) >= MIN_UNCOVERED
+    values = values.astype(np.float32)
+    values[~uncovered] = np.nan
+    plate.reshape(-1, 3)[index[found]] = np.round(np.nanmedian(values[:, found], axis=0)).astype(np.uint8)
+    seen.reshape(-1)[index[found]] = True
+    return plate, seen
 
 
 def _disk(radius: int) -> np.ndarray:

@@ -1,0 +1,82 @@
+"""The scene behind a performer who stays in place, from the samples that uncover it.
+
+Where the clip's temporal median shows the performer (mocap.silhouette.plate), some
+samples show the scene: the performer uncovers connected patches of it as they move.
+Colours alone do not tell which samples those are (the performer's shaded trousers
+against a dark sky, a pale object behind them against their skin); the patches'
+connection to the scene around the performer does.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from mocap.silhouette.background import mask_box
+
+AGREEING = 0.25     # of the samples: a group that agrees on a pixel's scene
+MIN_GROUP = 3       # samples, whatever the share
+
+
+def uncovered_scene(image: np.ndarray, holds: np.ndarray, frames: np.ndarray,
+                    floor: int) -> tuple[np.ndarray, np.ndarray]:
+    """The scene (uint8 image) where the median ``image`` ``holds`` the performer, and
+    where it was seen (bool), peeled in from the region's border one ring at a time:
+    a sample that shows the scene at a pixel's neighbour (within the noise ``floor``
+    of its scene) is a candidate to show it there too, since the performer uncovers
+    connected patches of it; the scene there is the median of the largest group of
+    candidates that agree within the floor and differ from the median (which shows
+    the performer), if it holds AGREEING of the samples (a body part that rests on
+    the pixel for a few samples is not the scene), and the samples that show it are
+    those within the floor of it. Colours alone do not tell the performer's shaded
+    trousers from a dark sky, nor a pale object behind them from their skin; the
+    samples that uncover a patch do."""
+    scene = image.copy()
+    seen = np.zeros(holds.shape, bool)
+    box = mask_box(holds.astype(np.uint8), 1)
+    if box is None:
+        return scene, seen
+    stack = frames[(slice(None), *box)].astype(np.int16)
+    median, inside = image[box].astype(np.int16), holds[box]
+    shows = np.abs(stack - median).max(axis=3) <= floor      # (S, h, w): where the median is the scene
+    shows[:, inside] = False
+    known = ~inside
+    rings = cv2.distanceTransform(inside.astype(np.uint8), cv2.DIST_C, 3)
+    for ring in range(1, int(rings.max()) + 1):
+        ys, xs = np.nonzero(rings == ring)
+        near = _near(shows & known, ys, xs)                  # (S, n): shown at a known neighbour
+        values = stack[:, ys, xs]                            # (S, n, 3)
+        near &= np.abs(values - median[ys, xs]).max(axis=2) > floor
+        found, colour = _largest_agreeing(values, near, floor)
+        scene[box][ys[found], xs[found]] = colour[found].astype(np.uint8)
+        shows[:, ys[found], xs[found]] = np.abs(values[:, found] - colour[found]).max(axis=2) <= floor
+        known[ys[found], xs[found]] = True
+        seen[box][ys[found], xs[found]] = True
+    return scene, seen
+
+
+def _near(mask: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+    """(S, n): whether any 8-neighbour of each pixel (``ys``, ``xs``) is set in the
+    (S, h, w) ``mask`` (pixels beyond its edges are not)."""
+    padded = np.pad(mask, ((0, 0), (1, 1), (1, 1)))
+    out = np.zeros((len(mask), len(ys)), bool)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            out |= padded[:, ys + dy, xs + dx]
+    return out
+
+
+def _largest_agreeing(values: np.ndarray, candidates: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per pixel of ``values`` (S, n, 3), whether the largest group of ``candidates``
+    (S, n) within ``floor`` of one of them has AGREEING of the samples (and
+    MIN_GROUP), and its median: (n,) bool and (n, 3) float."""
+    agree = np.abs(values[:, None] - values[None]).max(axis=3) <= floor    # (S, S, n)
+    agree &= candidates[:, None] & candidates[None]
+    best = agree.sum(axis=1).argmax(axis=0)
+    members = agree[best, :, np.arange(values.shape[1])].T                # (S, n)
+    found = members.sum(axis=0) >= max(MIN_GROUP, AGREEING * len(values))
+    grouped = np.where(members[..., None], values, np.nan).astype(np.float32)
+    colour = np.zeros((values.shape[1], 3), np.float32)
+    if found.any():
+        colour[found] = np.round(np.nanmedian(grouped[:, found], axis=0))
+    return found, colour
