@@ -152,11 +152,19 @@ def _transform(wxyz, position, scale) -> np.ndarray:
 
 
 def unhidden_point(app, segment: str | None = None, mark: int | None = None) -> np.ndarray:
+    """``visible_point``, which must be found."""
+    point = visible_point(app, segment, mark)
+    if point is None:
+        raise AssertionError(f"{segment if mark is None else f'mark {mark}'} is hidden in both 3D views")
+    return point
+
+
+def visible_point(app, segment: str | None = None, mark: int | None = None) -> np.ndarray | None:
     """A scene point on a segment's cylinder (along its axis, middle first) or on facing
     mark number ``mark`` (along the cone's axis, halfway up first), in the camera or the
     side view, that the tab's camera sees first: the ray from the camera through it,
     and rays a canvas pixel around it (where a click lands, rounded to the pixel),
-    must each hit that mesh before any other of the scene's."""
+    must each hit that mesh before any other of the scene's; None where there is none."""
     from mocap.body import SEGMENT_INDEX
     camera = next(iter(app.server.get_clients().values())).camera
     eye = np.asarray(camera.position, float)
@@ -173,7 +181,7 @@ def unhidden_point(app, segment: str | None = None, mark: int | None = None) -> 
             first = mesh.ray.intersects_first(np.tile(eye, (len(rays), 1)), rays)
             if np.all(first >= 0) and np.all(owners[first] == (view, want)):
                 return point
-    raise AssertionError(f"{segment if mark is None else f'mark {mark}'} is hidden in both 3D views")
+    return None
 
 
 def _rays_around(eye: np.ndarray, point: np.ndarray, spread: float) -> np.ndarray:
