@@ -17,6 +17,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from mocap.percentile import percentile
+
 INNER_PX = 2                       # edges this close to the silhouette's outline are left out
 SIDE_SAMPLES = np.linspace(0.15, 0.85, 6)   # points along each side, fractions of the length
 EDGE_WEIGHT = 0.3                  # S that a segment outlined by full-strength edges gains
@@ -42,7 +44,7 @@ class Edges:
         if where is not None:
             sample = sample[where[::STRONG_STRIDE, ::STRONG_STRIDE]]
         magnitude = np.linalg.norm(sample.reshape(-1, 2), axis=-1)
-        strong = float(np.percentile(magnitude, STRONG_PERCENTILE)) if magnitude.size else 0.0
+        strong = percentile(magnitude, STRONG_PERCENTILE) if magnitude.size else 0.0
         self.gradient = gradient                                   # (H, W, 2): x and y
         self.unit = 1.0 / strong if strong > 0 else 0.0
 

@@ -30,6 +30,7 @@ import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, sample_frames
+from mocap.percentile import percentile
 
 MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
@@ -186,7 +187,7 @@ def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
     f, r = f[:, usable], r[:, usable]
     ratio = r / f
     residual = np.abs(f * np.median(ratio, axis=1)[:, None] - r).max(axis=0)
-    keep = residual <= np.percentile(residual, 75)
+    keep = residual <= percentile(residual, 75)
     return np.median(ratio[:, keep], axis=1).astype(np.float32)
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from mocap.body import BODY_HEIGHT, JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
+from mocap.percentile import nanpercentile, percentile
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.plate import clip_background
@@ -144,7 +145,7 @@ def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
 
 def window_percentile(values, i: int, half: int, q: float) -> float:
     """The q-th percentile of the finite values within +-half of entry i."""
-    return float(np.nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q))
+    return nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q)
 
 
 def torso_reads(sil: Silhouette, height: float, small: np.ndarray | None = None) -> tuple[float, float, bool]:
@@ -172,8 +173,8 @@ def lift_spread(spreads, readable, i: int, half: int) -> float:
     values = np.asarray(spreads[lo:hi], float)
     good = values[np.asarray(readable[lo:hi], bool) & np.isfinite(values)]
     if len(good):
-        return float(np.percentile(good, LIFT_SPREAD_PERCENTILE))
-    return float(np.nanpercentile(values, SPREAD_FALLBACK_PERCENTILE))
+        return percentile(good, LIFT_SPREAD_PERCENTILE)
+    return nanpercentile(values, SPREAD_FALLBACK_PERCENTILE)
 
 
 def half_window(seconds: float, fps: float) -> int:

@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from mocap.body import BODY_HEIGHT, FOOT_LENGTH, LENGTH, SEGMENT_INDEX, Pose2D, spread_for_width
+from mocap.percentile import percentile
 from mocap.silhouette.contour import row_runs
 from mocap.silhouette.raster import Canvas
 from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, search,
@@ -144,7 +145,7 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
         return 1.0
     widest = np.zeros(band.shape[0])
     np.maximum.at(widest, rows, ends - starts)
-    width = (np.percentile(widest[widest > 0], 25) - SILHOUETTE_BLEED_PX) / scale
+    width = (percentile(widest[widest > 0], 25) - SILHOUETTE_BLEED_PX) / scale
     return float(spread_for_width(width))
 
 
