@@ -42,7 +42,10 @@ def _add_fit(sub) -> None:
 
 
 def _run_fit(args) -> None:
+    import cv2
+
     from mocap.pipeline import fit_video_to_file
+    cv2.setNumThreads(1)     # on a frame's small images OpenCV's threads cost more CPU than they save
     paths = {key: getattr(args, "out" if key == "json" else key) for key in FORMATS}
     written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
                                 annotations=args.annotations, method=args.method,
