@@ -22,8 +22,8 @@ from mocap.edges import Edges
 from mocap.track.calibration import FACING_CAMERA, KEY, Calibration, Pinhole
 from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
                                around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
-                               centre_colour, outline_cost, overlap, sameness, settled_knee, trunk_cost,
-                               twin_overlap)
+                               outline_cost, overlap,
+                               settled_knee, twin_overlap)
 from mocap.track.parts import PARTS, far_arm, far_forearm, mirrored_model
 from mocap.walk import walk_cycle
 
@@ -205,29 +205,6 @@ def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
                                          [45.0, 20.0, np.radians(90), 50.0, 8.0]]))
     assert on_arm < 0.2 * OUTLINE_COST
     assert on_trunk == pytest.approx(OUTLINE_COST)
-
-
-def test_an_arm_raised_off_a_trunk_of_its_colour_is_not_kept_on_the_trunk():
-    """A sleeve marked over a shirt of its colour matches anywhere down the trunk
-    better than the arm raised out to the side (a shade off its model, over
-    another colour); the trunk's cost (trunk_cost, as alike as ``sameness``
-    finds the two) leaves the arm where it is."""
-    image = np.full((120, 160, 3), (120, 40, 160), np.uint8)
-    image[10:110, 40:80] = 150                                               # the trunk
-    cv2.line(image, (78, 20), (138, 20), (156,) * 3, 8)                      # the raised arm
-    root, grid = np.array([78.0, 20.0]), blocks.make_grid(30, 8)
-    model = np.full((len(grid.along), len(grid.across), 3), 150.0, np.float32)
-    part = (model, grid, 8.0, 30.0)
-    trunk = np.array([60.0, 10.0, np.radians(90), 100.0, 40.0])
-    alike = sameness(centre_colour(model, grid), image[60, 60].astype(np.float32))
-    nothing = lambda candidates: np.zeros(len(candidates))  # noqa: E731
-    by_colour = around_root(image, root, part, part, nothing)
-    kept_off = around_root(image, root, part, part, trunk_cost(root, 8.0, trunk, (alike, alike)))
-    assert alike == pytest.approx(1.0)
-    assert sameness(np.zeros(3), np.full(3, 30.0)) == 0.0
-    assert abs(np.degrees(by_colour[2])) > 30.0                            # down the trunk
-    assert np.degrees(kept_off[2]) == pytest.approx(0.0, abs=1e-6)
-    assert np.hypot(*(kept_off[:2] - [108.0, 20.0])) < 1.0
 
 
 LIMB_POSES = {  # limb -> (directions of its upper and lower bone: allowed poses, poses out of range)

@@ -3,8 +3,7 @@
 tracking"): the best pair of directions of its parts all around its root
 (``around_root``), and the penalties that keep its lower part off the places where
 it cannot be: its own upper part, the head for an arm, its twin's lower part, far
-from where it was (``limb_penalty``), an arm inside a trunk of its colour
-(``trunk_cost``), sides without edges (``outline_cost``), a pose
+from where it was (``limb_penalty``), sides without edges (``outline_cost``), a pose
 a human limb cannot take in 3D (``arm_limits_cost``, ``leg_limits_cost``, from the key
 triangle followed as the reconstruction does, ``TrunkDepth``); a leg's knee settled where its thigh and
 shin match best together (``settled_knee``).
@@ -27,8 +26,6 @@ AROUND_STEP = 15.0         # degrees between the directions tried around a limb'
 FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block,
 HEAD_COST = 40.0           # ... an arm's lower block on the head,
 TWIN_COST = 25.0           # ... a lower block on its twin's
-TRUNK_COST = 40.0          # ... an arm's block on a trunk of its colour (as on the head)
-SAME_COLOUR = 30.0         # grey levels between a part's colour and the trunk's at which they differ
 JUMP_COST = 8.0            # grey levels per usual length that a lower block's ends moved
 TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
 OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
@@ -82,37 +79,6 @@ def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float
                 + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)) / length
         return FOLD_COST * overlap(lowers, uppers) + JUMP_COST * jump + sum(
             cost * overlap(lowers, block) for cost, block in avoid)
-    return penalty
-
-
-def centre_colour(model: np.ndarray, grid: blocks.Grid) -> np.ndarray:
-    """(3,) the median colour of a colour model (R, C, 3) over its centre region b_1
-    (Eq. 5): the part itself, not what lies beside or beyond it."""
-    return np.median(model[grid.weights == grid.weights.max()], axis=0)
-
-
-def sameness(colour: np.ndarray, trunk_colour: np.ndarray) -> float:
-    """How alike a part's colour and the trunk's are, in [0, 1]: 1 for the same
-    colour, 0 from SAME_COLOUR grey levels apart (blocks.CHANNEL_WEIGHTS)."""
-    return float(np.clip(1.0 - np.abs(colour - trunk_colour) @ blocks.CHANNEL_WEIGHTS / SAME_COLOUR, 0.0, 1.0))
-
-
-def trunk_cost(root: np.ndarray, width: float, trunk: np.ndarray, alike: tuple[float, float]) -> blocks.Penalty:
-    """Beyond the paper: the penalty (grey levels) of candidate lower blocks of an arm
-    whose upper part, ``width`` wide, runs from ``root`` to the lower block's start,
-    for lying on the ``trunk`` block: TRUNK_COST times each part's ``alike``
-    (``sameness`` of its colour and the trunk's) times how far it lies inside the
-    trunk (``overlap`` with the trunk block at half its width: 1 along its middle
-    line, 0 from its sides out).
-    A sleeve over a shirt of its colour matches anywhere on the trunk, the more so
-    as the model also holds what lay beside and beyond the arm on the marked frame;
-    there the match says nothing of where the arm is."""
-    inside = trunk.copy()
-    inside[N] /= 2
-
-    def penalty(lowers: np.ndarray) -> np.ndarray:
-        uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
-        return TRUNK_COST * (alike[0] * overlap(uppers, inside) + alike[1] * overlap(lowers, inside))
     return penalty
 
 

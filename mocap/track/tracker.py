@@ -55,9 +55,9 @@ from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_bloc
 from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
 from mocap.track.loss import DISTINCT, body_lost, part_confidence
-from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVERLAP, TrunkDepth, added, centre_colour,
+from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVERLAP, TrunkDepth, added,
                                arm_limits_cost, around_root, leg_limits_cost, limb_cost, limb_penalty,
-                               outline_cost, sameness, settled_knee, trunk_cost, twin_overlap)
+                               outline_cost, settled_knee, twin_overlap)
 from mocap.track.marks import body_scale
 from mocap.track.reacquire import carried, distinctness, reacquired, scan_heads
 from mocap.track.parts import (ARMS, HEAD, LEGS, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS,
@@ -104,9 +104,6 @@ class BodyTracker:
         self.models = [blocks.sample_blocks(frame0, b, g)[0]
                        for b, g in zip(self.blocks, self.grids)]
         self.marked = list(self.models)
-        trunk_colour = centre_colour(self.models[TORSO], self.grids[TORSO])
-        self.alike = {k: tuple(sameness(centre_colour(self.models[i], self.grids[i]), trunk_colour)
-                               for i in (k, k + 1)) for k in ARMS}
         self.good = self.blocks.copy()
         self.history: deque[np.ndarray] = deque(maxlen=HISTORY)
         self.chest = to_block(marks[JOINT_INDEX["chest"]], self.blocks[TORSO])
@@ -308,8 +305,6 @@ class BodyTracker:
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
         upper_cost, lower_cost = self.limb_costs[k]
         penalty = added(penalty, lower_cost)
-        if k in ARMS:
-            penalty = added(penalty, trunk_cost(root, new[k, N], new[TORSO], self.alike[k]))
         lower = around_root(image, root, *parts, penalty, upper_cost)
         self._hang(image, new, s, k, root, lower, penalty)
 
