@@ -69,8 +69,10 @@ def deepest_segment(state, frame: int | None = None) -> str:
 def download_export(page, button: str, folder: Path) -> Path:
     """Open the app page's Export folder, click a button and save the file it sends."""
     page.get_by_text("Export", exact=True).first.click()
-    with page.expect_download() as download:
-        page.get_by_role("button", name=button).click()
+    export = page.get_by_role("button", name=button)
+    export.wait_for()
+    with page.expect_download(timeout=60_000) as download:  # the file is made on the click
+        export.click()
     path = folder / download.value.suggested_filename
     download.value.save_as(path)
     return path
