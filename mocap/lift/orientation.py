@@ -72,12 +72,13 @@ def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> n
     return 2.0 * walk + np.clip(10.0 * knees, -1.0, 1.0)
 
 
-def pooled(values: np.ndarray, fps: float) -> np.ndarray:
-    """Each frame's value averaged over the finite values within CUE_WINDOW_S."""
+def pooled(values: np.ndarray, fps: float, pool=np.nanmean) -> np.ndarray:
+    """Each frame's value pooled (``pool``: averaged) over the finite values within
+    CUE_WINDOW_S."""
     half = max(1, int(round(CUE_WINDOW_S * fps)))
     out = np.full(len(values), np.nan)
     for i in np.flatnonzero(np.isfinite(values)):
-        out[i] = np.nanmean(values[max(0, i - half): i + half + 1])
+        out[i] = pool(values[max(0, i - half): i + half + 1])
     return out
 
 
@@ -116,14 +117,17 @@ def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
                     away: np.ndarray | None = None) -> np.ndarray:
     """(F,) in [-1, 1]: how much the performer is turned toward the camera (> 0)
     rather than away (< 0), were the torso not in profile: +-1 where the body grows
-    or shrinks by more than GROWTH per second (walks toward or away), else the head's
-    look (``away`` (F,): mocap.facing.facing_away, pooled over CUE_WINDOW_S) in units
-    of twice AWAY_SAYS, its sign turned; 0 where neither says anything."""
+    or shrinks steadily by more than GROWTH per second (walks toward or away: the
+    median growth over CUE_WINDOW_S, so a size that jumps on a few frames, as the
+    body heights do where a crouch or a jump enters their window, says nothing),
+    else the head's look (``away`` (F,): mocap.facing.facing_away, pooled over
+    CUE_WINDOW_S) in units of twice AWAY_SAYS, its sign turned; 0 where neither says
+    anything."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
     out = np.zeros(len(ok))
     for r in runs(ok):
         log_px = np.log(body_px[r])
-        growth = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps)
+        growth = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps, np.nanmedian)
         behind = pooled(np.zeros(r.stop - r.start) if away is None else away[r], fps)
         out[r] = np.where(np.abs(growth) > GROWTH, np.sign(growth),
                           np.clip(-behind / (2 * AWAY_SAYS), -1.0, 1.0))
@@ -136,15 +140,27 @@ def rule_evidence(orientations: list[str | None], spread: np.ndarray, facing: np
     where the orientation names a turned view; in a profile, where the spread is too
     low to name one but may be a turned view's read low (raised arms, a crouch, a
     wide silhouette), the way ``facing`` (F,): ``facing_evidence``) says the
-    performer is turned, times PROFILE_RULE and the spread's ramp from
-    RULE_SPREAD[0] (a true profile's) to RULE_SPREAD[1]; 0 where nobody is."""
+    performer is turned, times PROFILE_RULE and the spread's ramp over the width of
+    RULE_SPREAD from a true profile's read (``profile_read``); 0 where nobody is."""
     low, high = RULE_SPREAD
-    ramp = np.clip((np.nan_to_num(spread, nan=0.0) - low) / (high - low), 0.0, 1.0)
+    ramp = np.clip((np.nan_to_num(spread, nan=0.0) - profile_read(spread)) / (high - low), 0.0, 1.0)
     out = PROFILE_RULE * ramp * facing
     for i, name in enumerate(orientations):
         rule = None if name is None else image_left_is_right(name)
         out[i] = 0.0 if name is None else out[i] if rule is None else (1.0 if rule else -1.0)
     return out
+
+
+def profile_read(spread: np.ndarray) -> float:
+    """The torso spread (F,) a true profile reads on this clip: RULE_SPREAD[0], or the
+    clip's narrowest read where it is lower. A slim performer's torso reads narrow at
+    every turn (on the development clips a three-quarter view's 0.3 where the truth's
+    |cos yaw| is 0.7, and the clip's profile 0.07): the model's torso is broader than
+    their waist, so a read above their own profile's says they are turned even where
+    it is a profile's of the model's build."""
+    seen = np.asarray(spread, float)
+    seen = seen[np.isfinite(seen)]
+    return min(RULE_SPREAD[0], float(seen.min())) if len(seen) else RULE_SPREAD[0]
 
 
 def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]:
