@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
+import sys
 
 import cv2
 import numpy as np
@@ -113,6 +114,17 @@ def test_ffmpeg_messages_stay_off_stderr(tmp_path, mocap_command):
     assert done.returncode == 2
     assert done.stderr.splitlines() == [
         f"mocap: error: {video}: not a video file (unrecognised format)"]
+
+
+def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
+    """`mocap fit` imports what a fit needs, not the GLB writer's trimesh and pygltflib
+    nor --smooth's scipy.interpolate: a third of a second of every run's start-up."""
+    code = "import sys; from mocap.cli import main; main(['fit', sys.argv[1]]); print(*sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "missing.mp4")],
+                          capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
+    imported = set(done.stdout.split())
+    assert "mocap.pipeline" in imported
+    assert not imported & {"trimesh", "pygltflib", "scipy.interpolate"}
 
 
 # -- mocap synth ----------------------------------------------------------------------

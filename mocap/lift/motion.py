@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 from scipy.ndimage import gaussian_filter1d
 from scipy.spatial.transform import Rotation, Slerp
 
@@ -189,6 +188,7 @@ def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndar
     """Gaussian smoothing along time (axis 0) plus the difference at the keyframes
     interpolated by a natural cubic spline (held outside), so that keyframes keep
     their exact values and no corner comes back at them."""
+    from scipy.interpolate import CubicSpline   # here: only --smooth needs it, and it takes 0.13 s to import
     smooth = gaussian_filter1d(track, sigma, axis=0, mode="nearest")
     residual = track[keys] - smooth[keys]
     if len(keys) == 1:

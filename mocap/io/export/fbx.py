@@ -20,7 +20,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mocap.errors import MocapError
-from mocap.io.export.glb import glb_bytes
 
 if TYPE_CHECKING:
     from mocap.lift.motion import Motion
@@ -35,6 +34,8 @@ def has_blender() -> bool:
 
 def fbx_bytes(motion: "Motion") -> bytes:
     """The motion as an FBX file (mocap.io.export.formats checks that bpy is here)."""
+    # imported here: every command reads has_blender, and the GLB writer's trimesh takes 0.25 s
+    from mocap.io.export.glb import glb_bytes
     with tempfile.TemporaryDirectory(prefix="mocap-fbx-") as folder:
         glb, fbx = Path(folder) / "motion.glb", Path(folder) / "motion.fbx"
         glb.write_bytes(glb_bytes(motion))
