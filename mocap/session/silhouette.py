@@ -61,12 +61,12 @@ class SilhouetteSession(Session):
                 facing_away(self.silhouettes, joints, processing_scale(self.info)))
 
     @cached_property
-    def _near(self) -> np.ndarray | None:
-        """(F, 2) which of the fit's arms and legs shows its outline across the body
+    def _near(self) -> "NearLimbs | None":
+        """Which of the fit's arms and legs shows its outline across the body
         (mocap.facing.near_limbs), None without the silhouettes (once per session)."""
         joints, body_px, _ = self._arrays
         return (None if self.silhouettes is None else
-                near_limbs(self.silhouettes, joints, body_px, processing_scale(self.info)))
+                NearLimbs(self.silhouettes, joints, body_px, processing_scale(self.info)))
 
     @cached_property
     def _guessed(self) -> list[str | None]:
@@ -157,3 +157,22 @@ class SilhouetteSession(Session):
             return self._lifted[2]
         self._lifted = (inputs, lifts, inputs.smooth_depths(lifts, self.info.fps))
         return self._lifted[2]
+
+
+class NearLimbs:
+    """mocap.facing.near_limbs of a clip's fits, worked out for a run of frames when
+    it is read (``near[frames]``, a slice: (len, 2)) and kept. The sides read it only
+    in a run seen in profile (mocap.lift.sides.track_sides), and a frame's inner edges
+    cost half a millisecond."""
+
+    def __init__(self, silhouettes: list[Silhouette | None], joints2d: np.ndarray,
+                 body_px: np.ndarray, scale: float):
+        self.silhouettes, self.joints2d, self.body_px, self.scale = silhouettes, joints2d, body_px, scale
+        self._runs: dict[tuple[int, int], np.ndarray] = {}
+
+    def __getitem__(self, frames: slice) -> np.ndarray:
+        start, stop, _ = frames.indices(len(self.joints2d))
+        if (start, stop) not in self._runs:
+            self._runs[start, stop] = near_limbs(self.silhouettes[start:stop], self.joints2d[start:stop],
+                                                 self.body_px[start:stop], self.scale)
+        return self._runs[start, stop]
