@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import resource
 import subprocess
 import sys
 import tempfile
@@ -52,6 +53,17 @@ def stage_times(video: Path, out: Path) -> np.ndarray:
     return np.diff(np.array(points), axis=0)
 
 
+def command_time(video: Path, out: Path) -> tuple[float, float]:
+    """Wall and CPU seconds of the `mocap fit` command, start-up included (the CPU of
+    the child process, from the operating system's accounting)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(["mocap", "fit", str(video), "--out", str(out), "--quiet"], check=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+
+
 def prepare(video: Path | None, folder: Path, seconds: float) -> Path:
     """The 640x480 clip: --video resized, or the rendered jumps."""
     path = folder / "clip.mp4"
@@ -79,15 +91,14 @@ def main() -> int:
         out = Path(tmp) / "clip.motion.json"
         runs = [stage_times(video, out) for _ in range(args.repeats)]
         best = min(runs, key=lambda r: r[:, 0].sum())
-        start = time.perf_counter()
-        subprocess.run(["mocap", "fit", str(video), "--out", str(out), "--quiet"], check=True)
-        command = time.perf_counter() - start
+        command = min((command_time(video, out) for _ in range(args.repeats)), key=lambda t: t[0])
     print(f"{'stage':32s} {'ms/frame':>9s} {'CPU ms/frame':>13s} {'frames/s':>9s}")
     for name, (wall, cpu) in zip(STAGES, best):
         print(f"{name:32s} {1000 * wall / n:9.2f} {1000 * cpu / n:13.2f} {n / wall:9.1f}")
     wall, cpu = best.sum(axis=0)
     print(f"{'mocap fit (its code)':32s} {1000 * wall / n:9.2f} {1000 * cpu / n:13.2f} {n / wall:9.1f}")
-    print(f"{'mocap fit, whole command':32s} {1000 * command / n:9.2f} {'':13s} {n / command:9.1f}")
+    print(f"{'mocap fit, whole command':32s} {1000 * command[0] / n:9.2f} {1000 * command[1] / n:13.2f} "
+          f"{n / command[0]:9.1f}")
     print(f"{n} frames {SIZE[0]}x{SIZE[1]}; best of {args.repeats} runs")
     return 0
 
