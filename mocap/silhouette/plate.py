@@ -27,7 +27,8 @@ silhouette. This module finds those pixels and puts the empty scene back in them
    scene's colours (the scene, uncovered, not another part of the performer
    passing); or, where the performer never leaves it, the scene inpainted from
    around (Telea's method) -- ``held``, the pixels the silhouettes there depend on
-   a guess;
+   a guess; the peeling starts beyond the pixels around them where the median is
+   a mix of what passes (no steady view), which take the scene found there too;
 6. in the performer's region the difference threshold is the clip's noise floor:
    the per-pixel noise measured against a median that held the performer is not
    the scene's.
@@ -79,9 +80,11 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
     if region is None:
         return background
     held_in_median, odds = _median_holds(background.image, region, radius, frames, masks)
-    held_in_median = _without_steady_scene(held_in_median, _steady(background.image, frames, background.sigma))
-    image, held = _replate(background.image, held_in_median, np.stack(frames), np.stack(masks), radius, odds,
-                          noise_floor(background.sigma))
+    steady = _steady(background.image, frames, background.sigma)
+    held_in_median = _without_steady_scene(held_in_median, steady)
+    mixed = _mixed_around(held_in_median, steady, radius)
+    image, held = _replate(background.image, held_in_median, mixed, np.stack(frames), np.stack(masks), radius,
+                          odds, noise_floor(background.sigma))
     threshold = background.threshold.copy()
     threshold[dilated(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
     return replace(background, image=image, threshold=threshold, held=held)
@@ -225,16 +228,29 @@ def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
     return holds & ~drop[label]
 
 
-def _replate(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
+def _mixed_around(holds: np.ndarray, steady: np.ndarray, radius: int) -> np.ndarray:
+    """The pixels within ``radius`` of ``holds`` that no steady view covers, joined to
+    it (bool; ``holds`` not included): where the performer passes over a pixel most of
+    the time, the median is a mix of the colours that pass, neither scene nor
+    performer, and the samples that show the scene there are not those within the
+    noise floor of it."""
+    near = dilated(holds.astype(np.uint8), _disk(radius)) > 0
+    return _joined(holds, near & ~steady) & ~holds
+
+
+def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np.ndarray, masks: np.ndarray,
              radius: int, odds: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
     """Step 5: the median image with the scene put back where it ``holds`` the
-    performer, and the pixels where the scene had to be inpainted (bool). The scene
-    is the one the samples uncover from the border inwards (``uncover.uncovered_scene``),
+    performer or is a ``mixed`` one (``_mixed_around``; there it stays where nothing
+    uncovers the scene), and the pixels where the scene had to be inpainted (bool).
+    The scene is the one the samples uncover from the border inwards (``uncover.uncovered_scene``),
     else the median of the samples that differ from the median image there and are
     scene-coloured (colour ``odds`` under one: another part of the performer passing
     is not the scene; ``_scene_coloured``) -- the scene seen through a gap between
     the legs, which no path from the border reaches."""
-    scene, seen = uncovered_scene(image, holds, frames, floor)
+    scene, seen = uncovered_scene(image, holds | mixed, frames, floor)
+    image = np.where((mixed & seen)[..., None], scene, image)
+    seen &= holds
     coloured, by_colour = _scene_coloured(image, holds & ~seen, frames, masks, odds)
     plate = np.where(seen[..., None], scene, coloured)
     held = holds & ~seen & ~by_colour
