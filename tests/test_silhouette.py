@@ -227,6 +227,22 @@ def test_clean_mask_keeps_split_leg_and_drops_far_blobs():
     assert not person[24, 24] and not person[75, 275]     # far pieces dropped
 
 
+def test_clean_mask_drops_a_piece_apart_where_the_median_showed_the_performer():
+    """A performer who stood on the spot jumps: where their feet stood, the floor
+    uncovered differs from the background's guess of it, a piece apart below the
+    body. The median showed the performer there (``stood``), whose parts there joined
+    their body: that piece goes; an arm cut off by a gap, outside it, stays."""
+    mask = np.zeros((240, 320), np.uint8)
+    cv2.rectangle(mask, (150, 20), (175, 175), 255, -1)     # the body in the air
+    cv2.rectangle(mask, (180, 60), (186, 120), 255, -1)     # an arm, 4 px beside it
+    cv2.rectangle(mask, (145, 185), (180, 200), 255, -1)    # the floor where the feet stood
+    stood = np.zeros(mask.shape, bool)
+    stood[100:201, 140:179] = True
+    assert clean_mask(mask)[192, 160]
+    person = clean_mask(mask, stood=stood)
+    assert not person[192, 160] and person[90, 183] and person[100, 160]
+
+
 def test_clean_mask_keeps_large_holes_open():
     mask = np.zeros((240, 320), np.uint8)
     cv2.rectangle(mask, (100, 30), (200, 210), 255, -1)

@@ -47,12 +47,14 @@ class Background:
     """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel difference `threshold`
     (HxW uint8 grey levels) and the clip's global noise `sigma` (grey levels);
     `held` (HxW bool, or None) marks the pixels the performer never left in the
-    samples, where `image` is a guess (mocap.silhouette.plate)."""
+    samples, where `image` is a guess, and `stood` (HxW bool, or None) those where
+    the clip's median showed the performer (mocap.silhouette.plate)."""
 
     image: np.ndarray
     threshold: np.ndarray
     sigma: float
     held: np.ndarray | None = None
+    stood: np.ndarray | None = None
 
     @cached_property
     def grey(self) -> np.ndarray:
@@ -208,7 +210,7 @@ def extract_silhouette(frame: np.ndarray, background: Background,
     """
     frame = at_exposure(frame, background)
     mask = foreground(frame, background)
-    return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma))
+    return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma), stood=background.stood)
 
 
 def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
@@ -345,23 +347,26 @@ def _local_spread(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001,
-               min_piece: float = 0.02) -> np.ndarray:
+               min_piece: float = 0.02, stood: np.ndarray | None = None) -> np.ndarray:
     """Open (speckle), close (small gaps), keep the person, fill its small holes.
 
     The person is the largest region (none if under `min_area` of the frame) plus
     regions of at least `min_piece` of its area near it, such as a leg cut off by a
-    thin gap; its holes under `max_hole` of its area are filled.
+    thin gap, but not those lying mostly where the clip's median showed the performer
+    (`stood`, ``Background.stood``: see ``_apart_where_stood``); its holes under
+    `max_hole` of its area are filled.
     """
     out, disk = np.zeros_like(mask), _disk(mask.shape)
     box = mask_box(mask, 2 * disk.shape[0] + 2)  # beyond the closing's reach, and a ring of zeros
     if box is None:
         return out
-    out[box] = _cleaned(mask[box], disk, max_hole, min_area * mask.size, min_piece)
+    out[box] = _cleaned(mask[box], disk, max_hole, min_area * mask.size, min_piece,
+                        None if stood is None else stood[box])
     return out
 
 
 def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: float,
-             min_piece: float) -> np.ndarray:
+             min_piece: float, stood: np.ndarray | None = None) -> np.ndarray:
     """``clean_mask`` on a box of the mask that holds all of it (``min_area`` in pixels)."""
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, disk)
@@ -374,6 +379,8 @@ def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: floa
     keep = _person_regions(contours, parents, areas, min_area, min_piece)
     if not keep:
         return person
+    if stood is not None:
+        keep = [keep[0]] + [i for i in keep[1:] if not _apart_where_stood(contours[i], stood)]
     cv2.drawContours(person, [contours[i] for i in keep], -1, 255, cv2.FILLED)
     limit = max_hole * areas[keep].sum()
     holes = [c for c, p, a in zip(contours, parents, areas) if p in keep and a >= limit]
@@ -402,6 +409,18 @@ def _person_regions(contours, parents, areas, min_area: float, min_piece: float)
         if i != main and near and areas[i] >= min_piece * areas[main]:
             keep.append(int(i))
     return keep
+
+
+def _apart_where_stood(contour: np.ndarray, stood: np.ndarray) -> bool:
+    """Whether a region apart from the person's largest one lies mostly (more than
+    half its pixels) where the clip's median showed the performer (``stood``): the
+    parts of a performer who stands there join their body, as the median showed
+    them; a region apart there is the scene, uncovered when they left (a jump), that
+    differs from the background's guess of it (the median's still feet)."""
+    inside = np.zeros(stood.shape, np.uint8)
+    cv2.drawContours(inside, [contour], -1, 1, cv2.FILLED)
+    area = cv2.countNonZero(inside)
+    return area > 0 and np.count_nonzero(stood[inside > 0]) > 0.5 * area
 
 
 def _check_frames(frames: list[np.ndarray]) -> np.ndarray:

@@ -43,11 +43,12 @@ def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.
     candidates = shadow_candidates(differs, frame, background)
     hued = keeps_hue(candidates, frame, background)
     plain = without_shadows(differs, frame, background, candidates)
-    fit = clean_mask(plain)
+    fit = clean_mask(plain, stood=background.stood)
     if cv2.countNonZero(hued) == cv2.countNonZero(candidates):
         return fit, trim_blends(fit, plain, frame, background.image, background.threshold)
     body = without_shadows(differs, frame, background, hued)
-    return fit, trim_blends(clean_mask(body), body, frame, background.image, background.threshold)
+    return fit, trim_blends(clean_mask(body, stood=background.stood), body, frame, background.image,
+                            background.threshold)
 
 
 def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,

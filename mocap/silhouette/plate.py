@@ -31,7 +31,10 @@ silhouette. This module finds those pixels and puts the empty scene back in them
    a mix of what passes (no steady view), which take the scene found there too;
 6. in the performer's region the difference threshold is the clip's noise floor:
    the per-pixel noise measured against a median that held the performer is not
-   the scene's.
+   the scene's;
+7. the pixels where the median showed the performer (step 4's, ``stood``) go with
+   the background: a silhouette's piece apart from the body there is the scene the
+   performer uncovered by leaving (``background.clean_mask``).
 
 Or the user gives the empty scene (``clean_plate``): a photo, a video of it, or
 frames of the clip itself.
@@ -80,6 +83,7 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
     if region is None:
         return background
     held_in_median, odds = _median_holds(background.image, region, radius, frames, masks)
+    stood = held_in_median
     steady = _steady(background.image, frames, background.sigma)
     held_in_median = _without_steady_scene(held_in_median, steady)
     mixed = _mixed_around(held_in_median, steady, radius)
@@ -87,7 +91,7 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
                           odds, noise_floor(background.sigma))
     threshold = background.threshold.copy()
     threshold[dilated(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
-    return replace(background, image=image, threshold=threshold, held=held)
+    return replace(background, image=image, threshold=threshold, held=held, stood=stood)
 
 
 def _evidence(frame: np.ndarray, background: Background) -> np.ndarray:
