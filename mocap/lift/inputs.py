@@ -98,7 +98,9 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding, the
-    user's leg signs telling where the legs cross: orientation.legs_crossed); the
+    knees and ankles put where the fit's legs lie where it drew the thighs crossed:
+    sides.track_sides, the user's leg signs telling where the legs cross:
+    orientation.legs_crossed); the
     arms steadied (``steadied_arms``); the overrides put in; segment lengths from the
     clip (lift.clip_lengths); the signs guessed with the user's held signs as
     constraints (orientation.held_user_signs). ``away`` (F,): the heads' look
@@ -116,12 +118,13 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
     rule = rule_evidence(orientation, spread, facing_evidence(joints_image, body_px, fps, away))
     rule = np.where([s is None for s in said], rule, 0.0)
-    swap = track_sides(joints_image, known_sides(said, overrides, joints_image), facing_x, fps,
-                       looks_away(away, fps, n), near, rule)
+    names = track_sides(joints_image, known_sides(said, overrides, joints_image), facing_x, fps,
+                        looks_away(away, fps, n), near, rule)
+    swap = names[:, :2]
     ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
     values, since = annotations.held_signs(n)
-    joints = anatomical_joints(joints_image, swap)
+    joints = exchange_legs(anatomical_joints(joints_image, swap), names[:, 2])
     if person.any():
         seen = clip_lengths(joints_image[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
         held = _held_signs(joints, ppu, seen, values, since, person)

@@ -9,13 +9,16 @@ followed through time across the moments where they pass each other
 a two-state Viterbi search): every frame's evidence weighs against renaming the legs
 where they are followed surely, so a weak cue or a stretch of a few frames does not
 flip the naming, while one the evidence contradicts over a long stretch gives way
-where the following is least sure.
+where the following is least sure. The rule names limbs by where they lie in the
+image, and the fit, which orders the hips by image side, may draw a leg stepped
+across the other with the thighs crossed: there the knees and ankles are named
+apart from the hips (``_leg_order``).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d
+from scipy.ndimage import maximum_filter1d, median_filter
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SIDES
 from mocap.lift.taylor import image_left_is_right, runs
@@ -43,7 +46,8 @@ _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
                 away: np.ndarray | None = None, near: np.ndarray | None = None,
                 rule: np.ndarray | None = None) -> np.ndarray:
-    """(F, 2) bool: for arms and legs, whether the image-left limb is the right one.
+    """(F, 3) bool: for arms and legs (with their hips), whether the image-left limb
+    is the right one, and whether the knees and ankles belong to the other hip.
 
     Per run of frames with a person, the legs' naming minimises each frame's cost of
     it (``_naming_costs``) plus, wherever it departs from the legs as followed through
@@ -58,12 +62,15 @@ def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, f
     or its opposite on every frame, whichever agrees better with the near limbs too
     (``near`` (F, 2): mocap.facing.near_limbs, > 0 where the image-left arm's, leg's
     outline shows across the body; facing image right the near ones are the
-    performer's right ones; ``_nearer_naming``). The arms take the legs' naming in a
-    turned view and are named from the legs in a profile (``_arm_sides``). ``fps``
-    sets the windows of a step and a crossing.
+    performer's right ones; ``_nearer_naming``). The image-side rule names the hips;
+    the knees and ankles are named the same way with the rule read on where the fit's
+    legs lie (``_leg_order``), and where the two namings differ the fit drew the
+    thighs crossed. The arms take the hips' naming in a turned view and are named
+    from it in a profile (``_arm_sides``). ``fps`` sets the windows of a step and a
+    crossing.
     """
     n = len(known)
-    out = np.zeros(known.shape, bool)
+    out = np.zeros((n, 3), bool)
     away = np.zeros(n, bool) if away is None else away
     near = np.zeros((n, 2)) if near is None else near
     rule = np.zeros(n) if rule is None else rule
@@ -73,19 +80,38 @@ def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, f
         legs = _limb_pair(joints2d[r], _PAIR_JOINTS["legs"])
         arms = _limb_pair(joints2d[r], _PAIR_JOINTS["arms"])
         leg_px = _limb_px(joints2d[r], *LIMB_JOINTS["leg"][::2])
-        parity, links = bridge_parity(_limb_pair(joints2d[r], LIMB_JOINTS["leg"]), leg_px,
-                                      max(1, int(round(CROSSING_S * fps))))
+        crossing = max(1, int(round(CROSSING_S * fps)))
+        parity, links = bridge_parity(_limb_pair(joints2d[r], LIMB_JOINTS["leg"]), leg_px, crossing)
         followed = parity.astype(bool)
         arms_kept = _arm_sides(legs, arms, followed, facing_x[r], leg_px, half) ^ followed
         turned = (known[r, 1] >= 0) | (np.abs(rule[r]) >= 1.0)
         profile = (known[r] < 0).all() and not turned.any() and (facing_x[r] == facing_x[r.start]).all()
-        costs = _naming_costs(known[r], rule[r], arms_kept, away[r])
-        out[r, 1] = naming_path(costs, parity, np.maximum(links, LINK_FLOOR))
+        links = np.maximum(links, LINK_FLOOR)
+        hips = naming_path(_naming_costs(known[r], rule[r], arms_kept, away[r]), parity, links)
+        costs = _naming_costs(known[r], rule[r] * _leg_order(legs, leg_px, crossing), arms_kept, away[r])
+        knees = naming_path(costs, parity, links)
         if profile:
-            out[r, 1] = _nearer_naming(out[r, 1], costs + _near_costs(near[r] * facing_x[r, None], arms_kept))
-        arm_sides = np.where(turned, out[r, 1], _arm_sides(legs, arms, out[r, 1], facing_x[r], leg_px, half))
+            flip = _nearer_naming(knees, costs + _near_costs(near[r] * facing_x[r, None], arms_kept)) != knees
+            knees, hips = knees ^ flip, hips ^ flip
+        out[r, 1], out[r, 2] = hips, hips != knees
+        arm_sides = np.where(turned, hips, _arm_sides(legs, arms, hips, facing_x[r], leg_px, half))
         out[r, 0] = np.where(known[r, 0] >= 0, known[r, 0] == 1, arm_sides)
     return out
+
+
+def _leg_order(legs: np.ndarray, leg_px: float, crossing: int) -> np.ndarray:
+    """(F,) in [-1, 1]: 1 where the fit's image-left leg (``legs`` (F, 2, 2, 2): knee
+    and ankle of the image-left and image-right leg) lies on the image left, down to
+    -1 where its knee and ankle lie SEPARATED leg lengths on the image right of the
+    other's, held over ``crossing`` frames either side (the median: legs that pass
+    each other are reversed for less). The image-side rule names the legs by where
+    they lie in the image, and the fit, which orders the hips by image side, draws
+    the thighs crossed where one leg steps across the other (the silhouette does not
+    show which thigh is which): there the rule names its image-right leg the
+    image-left one."""
+    across = (legs[:, 1, :, 0] - legs[:, 0, :, 0]).mean(-1) / (SEPARATED * leg_px)
+    held = median_filter(across, 2 * crossing + 1, mode="nearest")
+    return np.where(held < 0, np.clip(held, -1.0, 0.0), 1.0)
 
 
 def _naming_costs(known: np.ndarray, rule: np.ndarray, arms_kept: np.ndarray, away: np.ndarray) -> np.ndarray:
