@@ -24,7 +24,7 @@ from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_CO
                                around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
                                outline_cost, overlap,
                                settled_knee, twin_overlap)
-from mocap.track.parts import PARTS, far_arm, far_forearm, mirrored_model
+from mocap.track.parts import PARTS, far_arm, far_forearm, mirrored_model, told_apart
 from mocap.walk import walk_cycle
 
 
@@ -205,6 +205,37 @@ def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
                                          [45.0, 20.0, np.radians(90), 50.0, 8.0]]))
     assert on_arm < 0.2 * OUTLINE_COST
     assert on_trunk == pytest.approx(OUTLINE_COST)
+
+
+def sleeve_scene(arm_x: int, sleeve: tuple) -> np.ndarray:
+    """A red trunk on grey and an arm hanging at ``arm_x``: a ``sleeve`` over its upper
+    part, skin at its end."""
+    image = np.full((120, 200, 3), (110, 110, 110), np.uint8)
+    image[10:110, 20:55] = (40, 40, 160)
+    image[20:65, arm_x - 5:arm_x + 5] = sleeve
+    image[65:80, arm_x - 4:arm_x + 4] = (150, 180, 220)
+    return image
+
+
+def test_an_arm_is_matched_by_what_tells_it_from_its_surroundings():
+    """Marked hanging beside a shirt of its colour, then raised over the background and
+    lit brighter, the arm's place wins over the shirt where it hung only when its
+    sub-pixels weigh as much as they tell it from what lay beside it (the sleeve
+    little, the skin fully)."""
+    marked = sleeve_scene(60, (40, 40, 160))
+    hung, raised = np.array([[60.0, 20.0, np.pi / 2, 60.0, 10.0], [140.0, 20.0, np.pi / 2, 60.0, 10.0]])
+    later = sleeve_scene(140, (70, 70, 200))
+    later[20:80, 55:65] = (40, 40, 160)
+    grid = blocks.make_grid(60, 10, 0.3)
+    model = blocks.sample_blocks(marked, hung, grid)[0]
+    told = told_apart(marked, hung, grid)
+    assert told.weights.sum() == pytest.approx(1.0)
+    skin, sleeve = told.weights[9:11, 1:].mean(), told.weights[5:9, 2:5].mean()
+    assert skin > 5 * sleeve
+    on_shirt, in_place = 1.0 / blocks.score(later, model, grid, np.stack([hung, raised]))
+    assert on_shirt < in_place
+    on_shirt, in_place = 1.0 / blocks.score(later, model, told, np.stack([hung, raised]))
+    assert in_place < 0.5 * on_shirt
 
 
 LIMB_POSES = {  # limb -> (directions of its upper and lower bone: allowed poses, poses out of range)

@@ -4,7 +4,8 @@ parts is a morph block (mocap.track.blocks) from one of its joints to the other,
 wide as its cylinder (body.WIDTH; the torso as wide as the marked shoulders show it
 turned), searched coarse to fine along the search path of Fig. 6 (``search_part``);
 the far arm's forearm is matched by its own colours or its twin's mirrored
-(``far_forearm``).
+(``far_forearm``); an arm's sub-pixels weigh as much as they tell it from what lies
+beside it on the marked frame (``told_apart``).
 """
 
 from __future__ import annotations
@@ -18,12 +19,14 @@ from mocap import body
 from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SEGMENTS, SHOULDER_HALF_SPAN, WIDTH,
                         torso_width)
 from mocap.track import blocks
-from mocap.track.blocks import M, block_end, from_block
+from mocap.track.blocks import M, N, THETA, block_end, from_block
 
 SHORTEST = 0.3             # of a part's longest length: the shortest it is seen (search_part)
 LENGTHEN_STEPS = np.arange(1, 6) * 0.03   # of the longest: lengthenings tried (blocks.lengthen)
 LENGTHEN_TOLERANCE = 0.03  # relative loss of S a lengthening may cost
 FAR_MARGIN_M = 0.1         # metres one shoulder of the marks lies deeper than the other: the far arm
+TOLD_APART = 40.0          # grey levels from what lies beside an arm at which its sub-pixel weighs fully
+LEAST_WEIGHT = 0.05        # ... the share of its weight a sub-pixel like what lies beside keeps
 
 
 @dataclass(frozen=True)
@@ -164,3 +167,37 @@ def mirrored_model(model: np.ndarray, shape: tuple) -> np.ndarray:
     ``shape``."""
     flipped = np.ascontiguousarray(model[:, ::-1])
     return cv2.resize(flipped, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
+
+
+def beside(block: np.ndarray, side: float) -> np.ndarray:
+    """The block moved ``side`` times its width across its middle line."""
+    moved = block.copy()
+    moved[:2] += side * block[N] * np.array([-np.sin(block[THETA]), np.cos(block[THETA])])
+    return moved
+
+
+def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid) -> blocks.Grid:
+    """Beyond the paper: ``grid`` with each sub-pixel's region weight (W_1 or W_2 of
+    Eq. 5) times how well it tells the part from what lies beside it on ``frame``
+    (the marked frame): its difference (Eq. 3) from the same sub-pixel of the block
+    moved one width to either side, the smaller, over TOLD_APART grey levels, kept
+    within [LEAST_WEIGHT, 1].
+
+    A sleeve hanging beside a shirt of its colour, the shirt or the background the
+    block spans beside a narrow arm, match the trunk or the background anywhere; the
+    arm's block then matched the trunk better than the raised arm (lit otherwise,
+    over another background), its own colours (a forearm's skin) outweighed."""
+    model = blocks.sample_blocks(frame, block, grid)[0]
+    around = blocks.sample_blocks(frame, np.stack([beside(block, -1.0), beside(block, 1.0)]), grid)
+    nearest = (np.abs(model - around) @ blocks.CHANNEL_WEIGHTS).min(axis=0)
+    weights = grid.weights * np.clip(nearest / TOLD_APART, LEAST_WEIGHT, 1.0)
+    return blocks.Grid(grid.along, grid.across, (weights / weights.sum()).astype(np.float32))
+
+
+def arm_grids(frame: np.ndarray, parts: np.ndarray, grids: list, far: int | None) -> list:
+    """Every part's grid, an arm's parts ``told_apart`` on the marked ``frame`` but those
+    of the far arm (``far``: its forearm, ``far_forearm``), whose marked colours are
+    mostly the trunk it is behind."""
+    hidden = () if far is None else (far - 1, far)
+    arms = {k + i for k in ARMS for i in (0, 1)} - set(hidden)
+    return [told_apart(frame, parts[k], grid) if k in arms else grid for k, grid in enumerate(grids)]

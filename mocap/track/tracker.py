@@ -5,7 +5,8 @@ section "Feature tracking").
 Each of the 10 body parts is a morph block (mocap.track.blocks) from one of its joints to the
 other, as wide as its cylinder (body.WIDTH; the torso as wide as the marked shoulders
 show it turned) at the marked skeleton's scale. Its colours on frame 0 are its colour
-model. Every later frame is tracked head to feet:
+model; beyond the paper, an arm's sub-pixels weigh as much as they tell the arm from what
+lies beside it there (mocap.track.parts.told_apart). Every later frame is tracked head to feet:
 
 1. the head (calvaria to neck): its calvaria predicted by image difference
    (mocap.track.headmotion, Eq. 1-5 of the head part) or by constant velocity, whichever
@@ -61,7 +62,7 @@ from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVER
 from mocap.track.marks import body_scale
 from mocap.track.reacquire import carried, distinctness, reacquired, scan_heads
 from mocap.track.parts import (ARMS, HEAD, LEGS, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS,
-                               far_forearm, mirrored_model, part_lengths, part_widths, search_part, skeleton)
+                               arm_grids, far_forearm, mirrored_model, part_lengths, part_widths, search_part, skeleton)
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
 MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
@@ -99,15 +100,15 @@ class BodyTracker:
         self.confidence = np.ones(len(PARTS))
         self.lost = self.held = False
         self.velocity = np.zeros_like(self.blocks)
-        self.grids = [blocks.make_grid(b[M], b[N], 0.0 if k == HEAD else BEYOND)
-                      for k, b in enumerate(self.blocks)]
+        self.far_forearm = far_forearm(self.trunk.depths)
+        self.grids = arm_grids(frame0, self.blocks, [blocks.make_grid(b[M], b[N], 0.0 if k == HEAD else BEYOND)
+                                                     for k, b in enumerate(self.blocks)], self.far_forearm)
         self.models = [blocks.sample_blocks(frame0, b, g)[0]
                        for b, g in zip(self.blocks, self.grids)]
         self.marked = list(self.models)
         self.good = self.blocks.copy()
         self.history: deque[np.ndarray] = deque(maxlen=HISTORY)
         self.chest = to_block(marks[JOINT_INDEX["chest"]], self.blocks[TORSO])
-        self.far_forearm = far_forearm(self.trunk.depths)
         self.p = P_START
         self.frame = frame0
 
