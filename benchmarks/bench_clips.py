@@ -77,31 +77,44 @@ def true_mask_session(name: str, mode: str = "auto", grow: int = 0):
     pipeline's own pass two), with the clip's oracle.json annotations in mode
     "oracle", none otherwise; each mask dilated by ``grow`` pixels (eroded where
     negative)."""
-    import cv2
-    import numpy as np
-
     from mocap.io.annotations import Annotations, load_annotations
-    from mocap.io.video import iter_frames, open_video, processing_scale
     from mocap.session.silhouette import SilhouetteSession
-    from mocap.silhouette.passes import FitStream, Silhouette
+    from mocap.silhouette.passes import FitStream
 
     clip = CLIPS / name
-    info = open_video(clip / "video.mp4")
-    scale = processing_scale(info)
-    silhouettes = []
-    for index, frame in iter_frames(info, scale=scale):
-        mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
-        mask = cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST)
-        if grow:
-            square = np.ones((2 * abs(grow) + 1,) * 2, np.uint8)
-            mask = (cv2.dilate if grow > 0 else cv2.erode)(mask, square)
-        silhouettes.append(Silhouette.from_mask(mask, frame))
+    info, scale, silhouettes = mask_silhouettes(clip, clip / "masks", grow)
     stream, fits = FitStream(scale, info.fps), []
     for silhouette in silhouettes:          # the pipeline's own pass two
         fits += stream.push(silhouette)
     fits += stream.finish()
     notes = load_annotations(clip / "oracle.json", info.frame_count) if mode == "oracle" else Annotations()
     return SilhouetteSession(info, fits, notes, silhouettes=silhouettes)   # their grey levels: the heads' look
+
+
+def mask_silhouettes(clip: Path, masks: Path, grow: int = 0):
+    """(video info, processing scale, Silhouettes) of a clip's frames from the masks
+    in ``masks`` (000000.png ..., any size), with the frames' grey levels; each mask
+    dilated by ``grow`` pixels (eroded where negative)."""
+    import cv2
+    import numpy as np
+
+    from mocap.io.video import iter_frames, open_video, processing_scale
+    from mocap.silhouette.passes import Silhouette
+
+    info = open_video(clip / "video.mp4")
+    scale = processing_scale(info)
+    silhouettes = []
+    for index, frame in iter_frames(info, scale=scale):
+        path = masks / f"{index:06d}.png"
+        if not path.is_file():
+            raise SystemExit(f"no mask {path} for frame {index} of {clip.name}")
+        mask = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        mask = cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST)
+        if grow:
+            square = np.ones((2 * abs(grow) + 1,) * 2, np.uint8)
+            mask = (cv2.dilate if grow > 0 else cv2.erode)(mask, square)
+        silhouettes.append(Silhouette.from_mask(mask, frame))
+    return info, scale, silhouettes
 
 
 def background_photo(clip: Path) -> Path:
