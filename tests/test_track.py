@@ -24,7 +24,7 @@ from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_CO
                                around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
                                outline_cost, overlap,
                                settled_knee, twin_overlap)
-from mocap.track.parts import PARTS, far_arm, far_forearm, mirrored_model, told_apart
+from mocap.track.parts import PARTS, beside, far_arm, far_forearm, mirrored_model, own_colour, told_apart
 from mocap.walk import walk_cycle
 
 
@@ -236,6 +236,26 @@ def test_an_arm_is_matched_by_what_tells_it_from_its_surroundings():
     assert on_shirt < in_place
     on_shirt, in_place = 1.0 / blocks.score(later, model, told, np.stack([hung, raised]))
     assert in_place < 0.5 * on_shirt
+
+
+def test_a_forearm_s_own_colour_leaves_out_the_sleeve_at_its_elbow():
+    """A forearm marked with its elbow end in a sleeve of the shirt's colour: between
+    the joints only its skin is its own colour; past the joints all of it counts."""
+    image = np.full((120, 200, 3), (110, 110, 110), np.uint8)
+    image[10:110, 20:55] = (40, 40, 160)                       # the shirt
+    image[20:35, 55:65] = (40, 40, 160)                        # the sleeve over the elbow
+    image[35:80, 56:64] = (150, 180, 220)                      # the skin
+    block = np.array([60.0, 20.0, np.pi / 2, 60.0, 10.0])
+    grid = blocks.make_grid(60, 10, 0.3)
+    model = blocks.sample_blocks(image, block, grid)[0]
+    around = blocks.sample_blocks(image, np.stack([beside(block, -1.0), beside(block, 1.0)]), grid)
+    own = own_colour(model, around, grid)
+    y = 20 + 60 * grid.along
+    assert own[(y < 0) | (y > 80)].all()
+    assert not own[(y > 22) & (y < 33)].any()
+    assert own[(y > 38) & (y < 78)][:, 1:-1].all()
+    told = told_apart(image, block, grid, own=True)
+    assert told.weights[(y > 22) & (y < 33)].sum() == 0.0
 
 
 LIMB_POSES = {  # limb -> (directions of its upper and lower bone: allowed poses, poses out of range)

@@ -176,12 +176,13 @@ def beside(block: np.ndarray, side: float) -> np.ndarray:
     return moved
 
 
-def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid) -> blocks.Grid:
+def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid, own: bool = False) -> blocks.Grid:
     """Beyond the paper: ``grid`` with each sub-pixel's region weight (W_1 or W_2 of
     Eq. 5) times how well it tells the part from what lies beside it on ``frame``
     (the marked frame): its difference (Eq. 3) from the same sub-pixel of the block
     moved one width to either side, the smaller, over TOLD_APART grey levels, kept
-    within [LEAST_WEIGHT, 1].
+    within [LEAST_WEIGHT, 1]; with ``own``, nothing for a sub-pixel between the
+    joints that is not of the part's own colour (``own_colour``).
 
     A sleeve hanging beside a shirt of its colour, the shirt or the background the
     block spans beside a narrow arm, match the trunk or the background anywhere; the
@@ -191,13 +192,33 @@ def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid) -> block
     around = blocks.sample_blocks(frame, np.stack([beside(block, -1.0), beside(block, 1.0)]), grid)
     nearest = (np.abs(model - around) @ blocks.CHANNEL_WEIGHTS).min(axis=0)
     weights = grid.weights * np.clip(nearest / TOLD_APART, LEAST_WEIGHT, 1.0)
+    if own:
+        weights = weights * own_colour(model, around, grid)
     return blocks.Grid(grid.along, grid.across, (weights / weights.sum()).astype(np.float32))
 
 
+def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.ndarray:
+    """(R, C) whether each sub-pixel of a part's marked colours ``model`` (R, C, 3) is of
+    the part's own colour: past its joints, always; between them, where its colour
+    lies nearer the part's (the median of its middle third of columns between the
+    joints) than the nearer of the colours about a width out from its long sides in
+    its row (the outer columns of ``around`` (2, R, C, 3), the block moved one width to
+    either side)."""
+    inside = (grid.along >= 0) & (grid.along <= 1)
+    middle = np.argsort(np.abs(grid.across))[:max(1, len(grid.across) // 3)]
+    own = np.median(model[inside][:, middle].reshape(-1, 3), axis=0)
+    outside = np.stack([around[0, :, 0], around[1, :, -1]], axis=1)                   # (R, 2, 3)
+    to_own = np.abs(model - own) @ blocks.CHANNEL_WEIGHTS
+    to_outside = (np.abs(model[:, :, None] - outside[:, None]) @ blocks.CHANNEL_WEIGHTS).min(axis=-1)
+    return (to_own <= to_outside) | ~inside[:, None]
+
+
 def arm_grids(frame: np.ndarray, parts: np.ndarray, grids: list, far: int | None) -> list:
-    """Every part's grid, an arm's parts ``told_apart`` on the marked ``frame`` but those
-    of the far arm (``far``: its forearm, ``far_forearm``), whose marked colours are
-    mostly the trunk it is behind."""
+    """Every part's grid, an arm's parts ``told_apart`` on the marked ``frame`` (a
+    forearm's of its own colour only, the sleeve or shirt its block spans at the elbow
+    left out) but those of the far arm (``far``: its forearm, ``far_forearm``), whose
+    marked colours are mostly the trunk it is behind."""
     hidden = () if far is None else (far - 1, far)
     arms = {k + i for k in ARMS for i in (0, 1)} - set(hidden)
-    return [told_apart(frame, parts[k], grid) if k in arms else grid for k, grid in enumerate(grids)]
+    return [told_apart(frame, parts[k], grid, k - 1 in ARMS) if k in arms else grid
+            for k, grid in enumerate(grids)]
