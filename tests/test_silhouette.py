@@ -210,6 +210,16 @@ def test_the_sorting_network_gives_numpys_median_and_quartile(n):
     assert background_module.median_level(stack[..., 0]) == np.median(stack[..., 0])
 
 
+def test_foreground_is_where_the_largest_channel_difference_exceeds_the_threshold():
+    rng = np.random.default_rng(4)
+    image, frame = rng.integers(0, 256, (2, 47, 61, 3)).astype(np.uint8)
+    threshold = rng.integers(0, 256, (47, 61)).astype(np.uint8)
+    largest = np.abs(frame.astype(int) - image).max(axis=2)
+    mask = background_module.foreground(frame, background_module.Background(image, threshold, 1.0))
+    assert mask.dtype == np.uint8 and np.array_equal(mask, np.where(largest > threshold, 255, 0))
+    assert 0 < np.count_nonzero(mask) < mask.size
+
+
 def test_no_frames_is_refused():
     with pytest.raises(MocapError, match="no frames"):
         estimate_background([])

@@ -30,7 +30,7 @@ import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, sample_frames
-from mocap.percentile import percentile
+from mocap.percentile import percentile, row_medians
 
 MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
@@ -60,6 +60,11 @@ class Background:
     def grey(self) -> np.ndarray:
         """The image in grey levels (the shadow test's texture), computed once."""
         return cv2.cvtColor(self.image, cv2.COLOR_BGR2GRAY)
+
+    @cached_property
+    def channel_threshold(self) -> np.ndarray:
+        """The threshold for each of the three channels (HxWx3), computed once."""
+        return cv2.merge([self.threshold] * 3)
 
 
 def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
@@ -188,9 +193,9 @@ def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
         return np.ones(3, np.float32)
     f, r = f[:, usable], r[:, usable]
     ratio = r / f
-    residual = np.abs(f * np.median(ratio, axis=1)[:, None] - r).max(axis=0)
+    residual = np.abs(f * row_medians(ratio)[:, None] - r).max(axis=0)
     keep = residual <= percentile(residual, 75)
-    return np.median(ratio[:, keep], axis=1).astype(np.float32)
+    return row_medians(ratio[:, keep]).astype(np.float32)
 
 
 def _gain_grid(shape: tuple[int, ...]) -> tuple[slice, slice]:
@@ -223,8 +228,11 @@ def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
 
 
 def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
-    """Pixels whose largest channel difference exceeds the pixel's threshold."""
-    return cv2.compare(_largest_channel(cv2.absdiff(frame, background.image)), background.threshold, cv2.CMP_GT)
+    """Pixels (255) whose largest channel difference exceeds the pixel's threshold:
+    those where any channel's does, whose 0/255 comparisons make a nonzero grey
+    level (each channel weighs at least 29 of 255 in it)."""
+    over = cv2.compare(cv2.absdiff(frame, background.image), background.channel_threshold, cv2.CMP_GT)
+    return cv2.compare(cv2.cvtColor(over, cv2.COLOR_BGR2GRAY), 0, cv2.CMP_GT)
 
 
 def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
