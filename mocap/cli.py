@@ -159,11 +159,11 @@ def _warn_in_one_line(show):
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    _progress.quiet = getattr(args, "quiet", False)
-    args.progress = _progress
-    _quiet_video_libraries()
     try:
+        args = build_parser().parse_args(argv)    # imports what the commands need: a Ctrl+C lands here too
+        _progress.quiet = getattr(args, "quiet", False)
+        args.progress = _progress
+        _quiet_video_libraries()
         with warnings.catch_warnings():
             warnings.simplefilter("default", MocapWarning)   # each one once
             warnings.showwarning = _warn_in_one_line(warnings.showwarning)

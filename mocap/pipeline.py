@@ -20,7 +20,7 @@ from typing import Callable
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import require, write_format
-from mocap.io.fileio import check_writable
+from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
@@ -140,6 +140,10 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports
     check_writable(*paths.values())
+    if masks is not None:
+        if (method or notes.method) == "track":
+            raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
+        check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
     session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress)
     if session.background_warning:
@@ -147,8 +151,6 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     clip = session.clip(foot_lock)
     folders = []
     if masks is not None:
-        if not isinstance(session, SilhouetteSession):
-            raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
         folders = [session.write_masks(masks)]
         relative = os.path.relpath(folders[0].resolve(), Path(paths["json"]).resolve().parent)
         clip = replace(clip, extra={"masks": Path(relative).as_posix()})

@@ -87,6 +87,60 @@ def test_synth_refuses_an_unwritable_output(tmp_path, capsys, case):
     assert_one_line_error(err, str(out), problem)
 
 
+@pytest.mark.parametrize("case", ["missing", "under a file", "/proc"])
+def test_fit_refuses_a_masks_folder_it_cannot_make_before_fitting(walk, tmp_path, capsys, case):
+    masks, problem = _unwritable(tmp_path, "masks")[case]
+    out = tmp_path / "m.json"
+    code, err = run(capsys, "fit", walk, "--out", out, "--masks", masks, "--quiet")
+    assert code == 2
+    assert_one_line_error(err, str(masks), problem)
+    assert not out.exists() and not masks.exists()
+
+
+def test_fit_refuses_masks_named_like_a_file(walk, tmp_path, capsys):
+    masks = tmp_path / "masks"
+    masks.write_text("a file, not a folder")
+    code, err = run(capsys, "fit", walk, "--out", tmp_path / "m.json", "--masks", masks, "--quiet")
+    assert code == 2
+    assert_one_line_error(err, f"{masks}: is a file, not a folder")
+
+
+def test_masks_with_the_tracking_method_are_refused_before_tracking(walk, tmp_path, capsys):
+    """Refused for the masks, not after a tracking for the marks it lacks."""
+    code, err = run(capsys, "fit", walk, "--method", "track", "--masks", tmp_path / "masks", "--quiet")
+    assert code == 2
+    assert_one_line_error(err, "--masks needs the silhouette method")
+
+
+# -- Ctrl+C: one line, exit 130, nothing written and the annotations as they were ----
+
+def test_ctrl_c_while_starting_up_is_one_line(monkeypatch, capsys):
+    """The parser imports the commands' modules: a Ctrl+C there is no traceback either."""
+    import mocap.cli
+
+    def interrupted():
+        raise KeyboardInterrupt
+    monkeypatch.setattr(mocap.cli, "build_parser", interrupted)
+    assert run(capsys, "fit", "any.mp4") == (130, ["mocap: interrupted"])
+
+
+def test_ctrl_c_during_a_fit_writes_nothing_and_keeps_the_annotations(walk, tmp_path, capsys, monkeypatch):
+    import mocap.pipeline
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+    notes = tmp_path / "walk.annotations.json"
+    notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1,
+                                 "frames": {"3": {"orientation": "left"}}}))
+    before = notes.read_bytes()
+    monkeypatch.setattr(mocap.pipeline, "silhouette_passes", interrupted)
+    out = tmp_path / "m.json"
+    code, err = run(capsys, "fit", walk, "--annotations", notes, "--out", out, "--masks", tmp_path / "masks")
+    assert (code, err) == (130, ["mocap: interrupted"])
+    assert notes.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["walk.annotations.json"]
+
+
 # -- broken motion files --------------------------------------------------------------
 
 @pytest.mark.parametrize("key, damage, place, problem", [

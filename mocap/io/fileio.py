@@ -35,21 +35,36 @@ def atomic_write_json(path: str | os.PathLike, obj) -> Path:
 
 def check_writable(*paths: str | os.PathLike | None) -> None:
     """Refuse, before the long work that ends in writing them, output paths whose
-    folder is missing or takes no new file (None: not asked for). The probe is a real
-    file made and removed there: permission bits say nothing to root, and read-only
-    mounts and folders like /proc refuse files whatever the bits say."""
+    folder is missing or takes no new file (None: not asked for)."""
     for path in (Path(p) for p in paths if p is not None):
-        folder = path.parent
         if path.is_dir():
             raise MocapError(f"{path}: is a folder, not a file")
-        if folder.exists() and not folder.is_dir():
-            raise MocapError(f"{path}: {folder} is a file, not a folder")
-        if not folder.is_dir():
-            raise MocapError(f"{path}: folder {folder} does not exist")
-        try:
-            fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-            os.close(fd)
-            os.unlink(probe)
-        except OSError as exc:
-            raise MocapError(f"{path}: cannot write in folder {folder} "
-                             f"({exc.strerror or exc})") from None
+        _check_folder_takes_files(path)
+
+
+def check_writable_folder(folder: str | os.PathLike) -> None:
+    """Refuse, before the long work, an output folder that cannot be made or
+    replaced: a file of that name, or a folder around it that is missing or takes
+    no new file (the folder is written beside itself first, io.export.masks)."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise MocapError(f"{folder}: is a file, not a folder")
+    _check_folder_takes_files(folder)
+
+
+def _check_folder_takes_files(path: Path) -> None:
+    """Refuse ``path`` unless its folder exists and takes a new file. The probe is a
+    real file made and removed there: permission bits say nothing to root, and
+    read-only mounts and folders like /proc refuse files whatever the bits say."""
+    folder = path.parent
+    if folder.exists() and not folder.is_dir():
+        raise MocapError(f"{path}: {folder} is a file, not a folder")
+    if not folder.is_dir():
+        raise MocapError(f"{path}: folder {folder} does not exist")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise MocapError(f"{path}: cannot write in folder {folder} "
+                         f"({exc.strerror or exc})") from None
