@@ -239,7 +239,10 @@ def review_text(state: AppState) -> str:
     if not queue:
         return "No doubtful frame."
     lines = [f"- **{d.frame}**: {'; '.join(d.reasons)}" for d in queue[:REVIEW_LINES]]
-    return far_arm_text(state) + f"{len(queue)} frames to review, most doubtful first:\n" + "\n".join(lines)
+    head = (f"{len(queue)} frames to review, most doubtful first:" if len(queue) <= REVIEW_LINES else
+            f"{len(queue)} frames to review; the {REVIEW_LINES} most doubtful (Next doubtful frame "
+            "walks them all):")
+    return far_arm_text(state) + head + "\n" + "\n".join(lines)
 
 
 def far_arm_text(state: AppState) -> str:

@@ -12,7 +12,7 @@ apart from the orange and blue the views give the left and right limbs).
 from __future__ import annotations
 
 from app.state import FrameView
-from mocap.body import AWAY, SEGMENT_INDEX, SEGMENT_NAMES, SIDES, TOWARD, limb
+from mocap.body import AWAY, SEGMENT_INDEX, SEGMENT_NAMES, SIDES, TOWARD, limb, segment_label
 
 # sign -> (word, icon, colour)
 SIGN_LOOK = {TOWARD: ("toward", "circle-dot", (94, 60, 153)),
@@ -28,12 +28,6 @@ def sign_groups() -> tuple[tuple[str, tuple[str, ...]], ...]:
     centre = tuple(s for s in SEGMENT_NAMES if not s.endswith(tuple(f"_{side}" for side in SIDES)))
     return (("Torso and head", centre),) + tuple(
         (f"{SIDE_NAMES[side]} {kind}", limb(kind, side).segments) for kind in ("arm", "leg") for side in SIDES)
-
-
-def segment_label(segment: str) -> str:
-    """'upper_arm_l' -> 'upper arm L'."""
-    words = segment.split("_")
-    return " ".join(words[:-1]) + f" {words[-1].upper()}" if words[-1] in SIDES else segment
 
 
 def build_signs(gui) -> dict:

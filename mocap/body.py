@@ -62,6 +62,12 @@ def segment_kind(segment: str) -> str:
     return segment[:-2] if segment.endswith(("_l", "_r")) else segment
 
 
+def segment_label(segment: str) -> str:
+    """A segment's name for people: 'upper_arm_l' -> 'upper arm L'; 'torso' -> 'torso'."""
+    kind = segment_kind(segment).replace("_", " ")
+    return kind if kind == segment else f"{kind} {segment[-1].upper()}"
+
+
 LENGTH = np.array([_KIND_LENGTH[segment_kind(s)] for s in SEGMENT_NAMES])
 WIDTH = np.array([_KIND_WIDTH[segment_kind(s)] for s in SEGMENT_NAMES])
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from mocap.track.loss import stretches
 from mocap.body import (ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS,
-                        SEGMENT_NAMES)
+                        SEGMENT_NAMES, segment_label)
 from mocap.silhouette.masks import DOUBTFUL
 
 LOW_SCORE = 0.7           # S below this is a doubtful fit
@@ -147,6 +147,6 @@ def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray,
              swaps: np.ndarray) -> tuple[str, ...]:
     """One frame's doubts in words (``score``: the frame's score, named)."""
     return ((f"low {score}",) * bool(low)
-            + tuple(f"{SEGMENT_NAMES[k]} seen end-on" for k in np.flatnonzero(end_on))
-            + tuple(f"{name} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
+            + tuple(f"{segment_label(SEGMENT_NAMES[k])} seen end-on" for k in np.flatnonzero(end_on))
+            + tuple(f"{segment_label(name)} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
             + tuple(f"{('hands', 'feet')[p]} may have swapped sides" for p in np.flatnonzero(swaps)))

@@ -18,6 +18,7 @@ from helpers import render_walk, write_empty_scene
 from mocap.silhouette.passes import iter_fits, iter_silhouettes
 from mocap import review
 from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_queue
+from app.controls import REVIEW_LINES, review_text
 from app.edits import toggled_keyframe
 from app.saving import annotations_path
 from app.state import AppState
@@ -219,6 +220,14 @@ def test_doubt_signs_on_made_up_joints():
     assert swaps[:, 0].tolist() == [False, False, True]
 
 
+def test_doubts_name_segments_as_the_body_tab_does():
+    end_on = np.zeros(10, bool)
+    end_on[SEGMENT_INDEX["upper_arm_l"]] = True
+    limits = np.array([True, False, False, True])                    # waist, and the right hip
+    assert review._reasons("S 0.9", False, end_on, limits, np.zeros(2, bool)) == (
+        "upper arm L seen end-on", "torso outside its joint limit", "upper leg R outside its joint limit")
+
+
 def test_a_covering_review_stops_in_the_middle_of_every_stretch_worst_first():
     """Stretches of 6 frames (pins carry 3 to either side) over 20 frames: stops on
     3, 9, 15 and 19 (the short last stretch's last frame), the stretch of the most
@@ -246,6 +255,9 @@ def test_review_queue_ranks_and_cycles(every_fit_doubtful, app):
     assert len(frames) == TINY_FRAMES
     visits = [app.state.next_doubtful() for _ in range(len(frames) + 1)]
     assert visits == frames + frames[:1]
+    text = review_text(app.state)          # the page lists the head of the queue, and says so
+    assert f"{TINY_FRAMES} frames to review; the {REVIEW_LINES} most doubtful" in text
+    assert text.count("\n- **") == REVIEW_LINES
 
 
 # -- scene geometry and the views a server pushes ---------------------------------------
