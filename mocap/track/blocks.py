@@ -88,9 +88,14 @@ def to_block(point: np.ndarray, block: np.ndarray) -> np.ndarray:
 
 def from_block(coords: np.ndarray, block: np.ndarray) -> np.ndarray:
     """The pixel at block-frame coordinates (the inverse of ``to_block``)."""
+    return block[:2] + turned(coords * block[M], block)
+
+
+def turned(offset, block: np.ndarray) -> np.ndarray:
+    """An offset (along, across) from a block's frame, in pixels, turned into the image's."""
     c, s = np.cos(block[THETA]), np.sin(block[THETA])
-    a, b = coords * block[M]
-    return block[:2] + np.array([a * c - b * s, a * s + b * c])
+    a, b = offset
+    return np.array([a * c - b * s, a * s + b * c])
 
 
 def block_points(blocks: np.ndarray, grid: Grid) -> tuple[np.ndarray, np.ndarray]:

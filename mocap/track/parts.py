@@ -19,7 +19,7 @@ from mocap import body
 from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SEGMENTS, SHOULDER_HALF_SPAN, WIDTH,
                         torso_width)
 from mocap.track import blocks
-from mocap.track.blocks import M, N, THETA, block_end, from_block
+from mocap.track.blocks import M, N, block_end, from_block
 
 SHORTEST = 0.3             # of a part's longest length: the shortest it is seen (search_part)
 LENGTHEN_STEPS = np.arange(1, 6) * 0.03   # of the longest: lengthenings tried (blocks.lengthen)
@@ -172,7 +172,7 @@ def mirrored_model(model: np.ndarray, shape: tuple) -> np.ndarray:
 def beside(block: np.ndarray, side: float) -> np.ndarray:
     """The block moved ``side`` times its width across its middle line."""
     moved = block.copy()
-    moved[:2] += side * block[N] * np.array([-np.sin(block[THETA]), np.cos(block[THETA])])
+    moved[:2] += blocks.turned((0.0, side * block[N]), block)
     return moved
 
 
