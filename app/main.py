@@ -280,7 +280,8 @@ class App:
         if p.error is not None:
             text = f"**Stopped:** {p.error}"
         elif p.ready:
-            text = f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`."
+            text = (f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`. "
+                    + next_step(bool(self.state.review_stops())))
             if view.method != "track" and self.state.background_warning:
                 text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."
         elif view.method == "track" and not self.state.tracking:
@@ -292,6 +293,12 @@ class App:
             work = "Tracking" if view.method == "track" else "Preprocessing"
             text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%"
         _set(c.status, content=text)
+
+
+def next_step(doubtful: bool) -> str:
+    """What a user who has the whole clip fitted does next."""
+    return ("Next: check the doubtful frames (Review tab, key N), then Export." if doubtful
+            else "Next: Export.")
 
 
 def _set(handle, **props) -> None:

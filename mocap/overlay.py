@@ -7,7 +7,7 @@ import numpy as np
 
 from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
 
-# BGR per segment kind: torso/head white, image-left limbs orange, image-right blue
+# BGR per segment kind: torso/head white, the performer's left limbs orange, right ones blue
 _COLOURS = {"torso": (240, 240, 240), "head": (240, 240, 240)}
 _LEFT, _RIGHT = (40, 160, 255), (255, 140, 40)
 

@@ -255,6 +255,8 @@ def test_review_queue_ranks_and_cycles(every_fit_doubtful, app):
     assert len(frames) == TINY_FRAMES
     visits = [app.state.next_doubtful() for _ in range(len(frames) + 1)]
     assert visits == frames + frames[:1]
+    assert app.controls.status.content.endswith("Next: check the doubtful frames (Review tab, key N), "
+                                                "then Export.")
     text = review_text(app.state)          # the page lists the head of the queue, and says so
     assert f"{TINY_FRAMES} frames to review; the {REVIEW_LINES} most doubtful" in text
     assert text.count("\n- **") == REVIEW_LINES
