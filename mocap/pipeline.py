@@ -19,7 +19,7 @@ from typing import Callable
 
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.annotations import Annotations, load_annotations
-from mocap.io.export.formats import require, write_format
+from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
@@ -134,8 +134,9 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     file; ``foot_lock``: planted feet kept in place. A background that holds the
     performer is a MocapWarning; a format this installation cannot write is refused
     before the video is read."""
-    for key in exports:
+    for key, path in exports.items():
         require(key)
+        check_ending(key, path)
     info = open_video(video)
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports

@@ -112,6 +112,36 @@ def test_masks_with_the_tracking_method_are_refused_before_tracking(walk, tmp_pa
     assert_one_line_error(err, "--masks needs the silhouette method")
 
 
+@pytest.mark.parametrize("option, name, problem", [
+    ("--glb", "walk.bvh", "the GLB would go into a file named like a BVH (.bvh); name it .glb"),
+    ("--bvh", "walk.glb", "the BVH would go into a file named like a GLB (.glb); name it .bvh"),
+    ("--out", "walk.csv", "the motion JSON would go into a file named like a CSV (.csv)"),
+])
+def test_fit_refuses_an_output_named_like_another_format(walk, tmp_path, capsys, option, name, problem):
+    out = tmp_path / name
+    code, err = run(capsys, "fit", walk, option, out, "--quiet")
+    assert code == 2
+    assert_one_line_error(err, f"{out}: {problem}")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("option, problem", [
+    ("--annotations", "is a folder, not an annotation file"),
+    ("--background", "is a folder, not a background image or video"),
+])
+def test_fit_refuses_a_folder_for_an_input_file(walk, tmp_path, capsys, option, problem):
+    code, err = run(capsys, "fit", walk, option, tmp_path, "--out", tmp_path / "m.json", "--quiet")
+    assert code == 2
+    assert_one_line_error(err, f"{tmp_path}: {problem}")
+
+
+def test_a_motion_file_given_as_annotations_is_told_by_its_format(fitted_walk, walk, tmp_path, capsys):
+    motion = fitted_walk("side").motion
+    code, err = run(capsys, "fit", walk, "--annotations", motion, "--out", tmp_path / "m.json", "--quiet")
+    assert code == 2
+    assert_one_line_error(err, f'{motion}: format: expected "mocap-annotations", got "mocap-motion"')
+
+
 # -- Ctrl+C: one line, exit 130, nothing written and the annotations as they were ----
 
 def test_ctrl_c_while_starting_up_is_one_line(monkeypatch, capsys):

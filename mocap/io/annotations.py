@@ -250,11 +250,11 @@ def _note(value, place: str) -> FrameNote:
 def parse_annotations(data, frame_count: int | None = None) -> Annotations:
     """Check a decoded annotation document; raises Bad naming the place."""
     expect(data, dict, "", "a JSON object")
+    if data.get("format") != FORMAT:        # first: a motion file is told by its format
+        raise Bad("format", f"expected \"{FORMAT}\", got {json.dumps(data.get('format'))[:40]}")
     for key in data:
         if key not in _TOP_KEYS:
             raise Bad("", f"unknown key {json.dumps(key)[:40]} (expected {', '.join(_TOP_KEYS)})")
-    if data.get("format") != FORMAT:
-        raise Bad("format", f"expected \"{FORMAT}\", got {json.dumps(data.get('format'))[:40]}")
     version = data.get("version")
     if not (isinstance(version, int) and not isinstance(version, bool) and version == VERSION):
         raise Bad("version", f"expected {VERSION}, got {json.dumps(version)[:40]}")
@@ -292,6 +292,8 @@ def load_annotations(path: str | os.PathLike, frame_count: int | None = None) ->
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
         raise MocapError(f"{path}: no such annotation file") from None
+    except IsADirectoryError:
+        raise MocapError(f"{path}: is a folder, not an annotation file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise MocapError(f"{path}: cannot read annotations ({exc})") from None
     return annotations_from_text(text, frame_count, str(path))

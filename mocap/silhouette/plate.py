@@ -368,6 +368,8 @@ def match_tones(plate: np.ndarray, scene: np.ndarray, rounds: int = 3) -> np.nda
 def _plate_image(path: str, size: tuple[int, int]) -> np.ndarray:
     """A photo of the empty scene, or the median of a video of it, checked against the
     clip's frame size (the same shape, any resolution)."""
+    if os.path.isdir(path):
+        raise MocapError(f"{path}: is a folder, not a background image or video")
     if not os.path.isfile(path):
         raise MocapError(f"{path}: no such background image or video")
     if cv2.haveImageReader(path):

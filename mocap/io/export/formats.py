@@ -118,6 +118,16 @@ def require(key: str) -> Format:
     return fmt
 
 
+def check_ending(key: str, path: str | os.PathLike) -> None:
+    """Refuse a file for format ``key`` named with another format's ending (``--glb
+    walk.bvh``): the options mixed up."""
+    fmt, name = FORMATS[key], os.fspath(path).lower()
+    for other in FORMATS.values():
+        if name.endswith(other.suffix) and not name.endswith(fmt.suffix):
+            raise MocapError(f"{path}: the {fmt.label} would go into a file named like a {other.label} "
+                             f"({other.suffix}); name it {fmt.suffix}")
+
+
 def export_file(key: str, clip: Clip) -> tuple[str, bytes]:
     """(file name, content) of a clip in a format."""
     fmt = require(key)
