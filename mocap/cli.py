@@ -135,8 +135,27 @@ def _quiet_video_libraries() -> None:
         cv2.setLogLevel(_OPENCV_LOG_ERROR)
 
 
+DESCRIPTION = ("Motion capture from one fixed camera: `mocap fit VIDEO` fits a body to every frame "
+               "and writes the motion and its exports; `mocap serve VIDEO` reviews and corrects "
+               "the fit in the browser. `mocap COMMAND --help` lists a command's options.")
+
+
+class _Version(argparse.Action):
+    """--version: the installed version, looked up only when asked (importlib.metadata
+    costs every run's start a tenth of a second)."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, help="print mocap's version and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from importlib.metadata import version
+        print(f"mocap {version('mocap')}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="mocap", description=__doc__)
+    parser = argparse.ArgumentParser(prog="mocap", description=DESCRIPTION)
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
     _add_fit(sub)
     _add_synth(sub)

@@ -127,6 +127,16 @@ def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
     assert not imported & {"trimesh", "pygltflib", "scipy.interpolate"}
 
 
+def test_version_and_help_say_what_the_command_is(capsys):
+    from importlib.metadata import version
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out == f"mocap {version('mocap')}\n"
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "`mocap fit VIDEO`" in capsys.readouterr().out
+
+
 # -- mocap synth ----------------------------------------------------------------------
 
 @pytest.mark.parametrize("args, problem", [
