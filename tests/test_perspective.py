@@ -20,25 +20,42 @@ from mocap.walk import walk_cycle
 CAMERA = C.Pinhole(800.0, 320.0, 240.0)
 
 
-def known_pose(yaw_deg: float, span: float = 0.36) -> C.Calibration:
+def known_pose(yaw_deg: float, span: float = 0.36, chest: float = C.MODEL[C.KEY[2], 1]) -> C.Calibration:
     """A body turned by ``yaw_deg`` (and slightly tilted), 6 m in front of CAMERA."""
     turn = Rotation.from_euler("y", np.radians(yaw_deg)) * Rotation.from_euler("x", 0.05)
     rotation = Rotation.from_matrix(C.FACING_CAMERA) * turn
-    return C.Calibration(rotation.as_rotvec(), np.array([0.4, -0.3, 6.0]), span)
+    return C.Calibration(rotation.as_rotvec(), np.array([0.4, -0.3, 6.0]), span, chest)
 
 
-@pytest.mark.parametrize("yaw, span", [(35.0, 0.36), (-50.0, 0.30), (20.0, 0.42)])
-def test_calibration_recovers_a_known_camera(yaw, span):
-    truth = known_pose(yaw, span)
+@pytest.mark.parametrize("yaw, span, chest", [(35.0, 0.36, 0.31), (-50.0, 0.30, 0.27), (20.0, 0.42, 0.34)])
+def test_calibration_recovers_a_known_camera(yaw, span, chest):
+    """The pose, the shoulder span and the chest's height of a trunk seen exactly."""
+    truth = known_pose(yaw, span, chest)
     marks = CAMERA.project(truth.to_camera(truth.model()))
     found = C.calibrate(marks, CAMERA, "right" if yaw > 0 else "left")
     turn = Rotation.from_rotvec(found.rotvec).inv() * Rotation.from_rotvec(truth.rotvec)
     assert np.degrees(turn.magnitude()) < 1e-3
     assert np.abs(found.translation - truth.translation).max() < 1e-4
     assert found.span == pytest.approx(span, abs=1e-5)
+    assert found.chest == pytest.approx(chest, abs=1e-5)
     assert found.yaw == pytest.approx(yaw, abs=0.2)          # the slight tilt moves it a little
-    assert np.abs(C.line_distances(np.r_[found.rotvec, found.translation, found.span],
-                                   CAMERA, marks)).max() < 1e-6
+    assert np.abs(C.line_distances(found.params, CAMERA, marks)).max() < 1e-6
+
+
+def test_the_key_triangle_keeps_the_marked_chest():
+    """A trunk whose chest sits lower than the model's (0.63 of the shoulders' height,
+    as in the shared motion capture, against the model's 0.68): the calibration
+    finds its chest, and so the key triangle that later frames keep (Eq. 10-11) is
+    the marked body's; held at the model's chest, its sides from the shoulders to
+    the chest come out more than 5% short."""
+    truth = known_pose(30.0, 0.30, 0.63 * C.MODEL[C.KEY[0], 1])
+    marks = CAMERA.project(truth.to_camera(truth.model()))
+    sides = truth.key_triangle()[1]
+    found = C.calibrate(marks, CAMERA, "right")
+    held = C.calibrate(marks, CAMERA, "right", chest=C.MODEL[C.KEY[2], 1])
+    assert found.yaw == pytest.approx(30.0, abs=0.3)
+    assert np.allclose(found.key_triangle()[1], sides, atol=1e-4)
+    assert (held.key_triangle()[1][1:] < 0.95 * sides[1:]).all()
 
 
 def test_the_turn_picks_between_the_two_fits():

@@ -36,6 +36,9 @@ HIP_TRIANGLE = (*(body.limb("leg", side).joints[0] for side in body.SIDES), KEY_
 CALIBRATION_LINES = tuple((JOINT_INDEX[t[i]], JOINT_INDEX[t[j]])
                           for t in (KEY_TRIANGLE, HIP_TRIANGLE) for i, j in KEY_LINES)
 SPAN_RANGE = (0.2, 0.5)         # metres: shoulder spans the calibration may find
+# the chest's height above the pelvis that the calibration may find, as fractions of the
+# shoulders' height above it
+CHEST_RANGE = (0.45, 0.85)
 MAX_CALIBRATION_ERROR = 0.03    # of the marked body's size: a worse fit is refused
 NEWTON_STEPS = 30
 # body frame -> pinhole frame for a performer facing the camera (left to image right,
@@ -96,20 +99,28 @@ class Calibration:
     """The body's pose in the pinhole frame on frame 0 (the camera's, seen from the
     body): X' = R P + t (Eq. 6) with R the rotation vector (W_x, W_y, W_z) and t the
     translation (the paper's D_x, D_y, D_z, here a true 3D translation rather than
-    image offsets), and the performer's shoulder span in metres."""
+    image offsets), the performer's shoulder span and the chest's height above the
+    pelvis in metres."""
 
     rotvec: np.ndarray
     translation: np.ndarray
     span: float
+    chest: float = float(MODEL[KEY[2], 1])
 
     @classmethod
     def from_params(cls, params: np.ndarray) -> "Calibration":
-        return cls(params[:3], params[3:6], float(params[6]))
+        return cls(params[:3], params[3:6], float(params[6]), float(params[7]))
+
+    @property
+    def params(self) -> np.ndarray:
+        """(8,) the parameters ``from_params`` reads."""
+        return np.r_[self.rotvec, self.translation, self.span, self.chest]
 
     def model(self) -> np.ndarray:
-        """(16, 3) the standing model with this shoulder span (body frame)."""
+        """(16, 3) the standing model with this shoulder span and chest (body frame)."""
         out = MODEL.copy()
         out[[KEY[0], KEY[1]], 0] = self.span / 2, -self.span / 2
+        out[KEY[2], 1] = self.chest
         return out
 
     def to_camera(self, points: np.ndarray) -> np.ndarray:
@@ -171,16 +182,17 @@ def newton(residual, params: np.ndarray, steps: int = NEWTON_STEPS,
 
 
 def initial_params(marks: np.ndarray, camera: Pinhole) -> list[np.ndarray]:
-    """Start values (7,) for the calibration: the model upright at the depth where its
-    chest-to-pelvis length matches the marks, turned by either of the two yaws whose
-    cosine the marked hip span gives (left hip on the image right: facing the camera),
-    with the shoulder span that the marked shoulders then show."""
+    """Start values (8,) for the calibration: the model upright at the depth where the
+    height of its shoulders above its pelvis matches the marks, turned by either of
+    the two yaws whose cosine the marked hip span gives (left hip on the image right:
+    facing the camera), with the shoulder span that the marked shoulders then show
+    and the model's chest."""
     j = JOINT_INDEX
 
     def seen(a: str, b: str) -> np.ndarray:
         return marks[j[a]] - marks[j[b]]
-    depth = camera.focal * np.linalg.norm(MODEL[j["chest"]] - MODEL[j["pelvis"]]) / max(
-        np.hypot(*seen("chest", "pelvis")), 1e-6)
+    shoulders = (marks[j["shoulder_l"]] + marks[j["shoulder_r"]]) / 2 - marks[j["pelvis"]]
+    depth = camera.focal * MODEL[j["shoulder_l"], 1] / max(np.hypot(*shoulders), 1e-6)
     hips = 2 * body.HIP_HALF_SPAN * UNIT_M * camera.focal / depth
     cos = np.clip(seen("hip_l", "hip_r")[0] / hips, -1.0, 1.0)
     span = np.clip(abs(seen("shoulder_l", "shoulder_r")[0]) * depth / camera.focal
@@ -189,40 +201,74 @@ def initial_params(marks: np.ndarray, camera: Pinhole) -> list[np.ndarray]:
     for yaw in (np.arccos(cos), -np.arccos(cos)):
         rotation = Rotation.from_matrix(FACING_CAMERA @ Rotation.from_euler("y", yaw).as_matrix())
         centre = camera.rays(marks[j["chest"]]) * depth
-        out.append(np.r_[rotation.as_rotvec(), centre - rotation.apply(MODEL[j["chest"]]), span])
+        out.append(np.r_[rotation.as_rotvec(), centre - rotation.apply(MODEL[j["chest"]]), span,
+                         MODEL[j["chest"], 1]])
     return out
 
 
-def spanned_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray) -> np.ndarray:
-    """The calibration's parameters (7,) fitted to the marks (16, 2) from ``start``
-    (Eq. 9 by Newton's method), the shoulder span kept within SPAN_RANGE: where the
-    free fit leaves it, the fit again with the span held at the range's nearer end.
+def shape_ranges() -> np.ndarray:
+    """(2, 2) the ranges of the calibration's shape unknowns: the shoulder span
+    (SPAN_RANGE) and the chest's height (CHEST_RANGE of the model shoulders')."""
+    return np.array([SPAN_RANGE, np.array(CHEST_RANGE) * MODEL[KEY[0], 1]])
+
+
+def bounded_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray,
+                ranges: np.ndarray) -> np.ndarray:
+    """The calibration's parameters (8,) fitted to the marks (16, 2) from ``start``
+    (Eq. 9 by Newton's method), the shape unknowns kept within ``ranges`` (2, 2; a
+    range of one value holds that one): where the free fit leaves them, the fit
+    again with those held at their range's nearer end.
 
     Seen nearly from the side, the shoulders' image span hardly depends on the span,
     and the free fit's reads anything from 0.14 to 0.51 m from exact projections of
     motion capture 10 degrees from profile (benchmarks/bench_track.py's motions),
     while the pose it fits is sound."""
-    free = newton(lambda p: line_distances(p, camera, marks), start)
-    if SPAN_RANGE[0] <= free[6] <= SPAN_RANGE[1]:
+    fixed = ranges[:, 0] == ranges[:, 1]
+    free = held_fit(marks, camera, np.r_[start[:6], np.where(fixed, ranges[:, 0], start[6:])], fixed)
+    held = np.clip(free[6:], ranges[:, 0], ranges[:, 1])
+    out = (held != free[6:]) & ~fixed
+    if not out.any():
         return free
-    span = float(np.clip(free[6], *SPAN_RANGE))
-    return np.r_[newton(lambda p: line_distances(np.r_[p, span], camera, marks), start[:6]), span]
+    return held_fit(marks, camera, np.r_[start[:6], held], fixed | out)
 
 
-def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None) -> Calibration:
+def held_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """The calibration's parameters (8,) fitted to the marks (16, 2) from ``start``
+    (Eq. 9), the shape unknowns ``held`` (2,) bool kept at their start values."""
+    vary = np.r_[np.ones(6, bool), ~held]
+
+    def full(p: np.ndarray) -> np.ndarray:
+        out = start.copy()
+        out[vary] = p
+        return out
+    return full(newton(lambda p: line_distances(full(p), camera, marks), start[vary]))
+
+
+def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None,
+              chest: float | None = None) -> Calibration:
     """The body's pose relative to the camera on frame 0 from its 16 marked joints
     (16, 2), by Newton's method on Eq. 9 over the key triangle's three lines (both
     shoulders and the chest) and, beyond the paper, the three lines of the triangle of
-    the hips and the chest (12 equations, 7 unknowns: Gauss-Newton).
+    the hips and the chest (12 equations, 8 unknowns: Gauss-Newton).
 
     Beyond the paper, the shoulder span is a seventh unknown: real shoulder spans
     differ by +-25% (0.26 to 0.44 m in the CMU skeletons) and the key triangle alone
     reads such a difference as a turn of the body; the hips (a steadier 0.18 to 0.21 m)
-    fix the turn. Two upright poses fit equally, turned to either side; ``turn``
+    fix the turn. The chest's height above the pelvis is the eighth (``chest`` holds
+    it): where a body or a skeleton puts the chest differs (0.63 to 0.68 of the
+    shoulders' height in the motion capture at hand, the model's 0.68), and a key
+    triangle of the wrong height is fitted nearer or farther and turned to match
+    the shoulders' image: the model's chest put the shared perspective clips' bodies
+    at 0.72-0.79 of their distance, turned 15-17 degrees too far (from the exact 2D,
+    track_salsa 49.3 -> 43.4 mm PA-MPJPE, track_walk 45.8 -> 39.2, laugh_arms_up
+    52.6 -> 52.7). Two upright poses fit equally, turned to either side; ``turn``
     "left" or "right" (the side of CONTRACT.md's orientation, e.g. the "right" of
     forward_right) picks one, else the one with the smaller residual.
     """
-    fits = [spanned_fit(marks, camera, p0) for p0 in initial_params(marks, camera)]
+    ranges = shape_ranges()
+    if chest is not None:
+        ranges[1] = chest
+    fits = [bounded_fit(marks, camera, p0, ranges) for p0 in initial_params(marks, camera)]
     error = [np.abs(line_distances(p, camera, marks)).max() for p in fits]
     if min(error) > MAX_CALIBRATION_ERROR * np.ptp(marks, axis=0).max():
         raise MocapError("cannot calibrate the camera from the marked shoulders, chest and "
