@@ -15,9 +15,10 @@ the frames answered. "lost" counts the frames the motion file marks lost. "exact
 is the PA-MPJPE of the same 3D reconstruction (mocap.session.TrackSession, with the
 marks file's orientation and foreshortening) from the truth's 2D joints on every
 frame: what the 3D step costs alone, the rest of "PA-MPJPE mm" is what the 2D
-tracking's errors cost.
+tracking's errors cost. ``--joints`` adds each joint's PA-MPJPE from the tracked and
+from the exact 2D: which joints carry the 3D step's error and which the tracking's.
 
-    python benchmarks/bench_track_clips.py [--clips track_salsa laugh_arms_up] [--keep DIR]
+    python benchmarks/bench_track_clips.py [--clips track_salsa laugh_arms_up] [--keep DIR] [--joints]
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from score import score  # noqa: E402
 from mocap.body import JOINTS  # noqa: E402
 from mocap.io.annotations import load_annotations  # noqa: E402
 from mocap.io.video import open_video  # noqa: E402
-from mocap.metrics import pa_mpjpe  # noqa: E402
+from mocap.metrics import procrustes_aligned  # noqa: E402
 from mocap.session.tracking import TrackSession  # noqa: E402
 from mocap.track.calibration import default_camera  # noqa: E402
 from mocap.track.tracking import TrackResult  # noqa: E402
@@ -54,6 +55,8 @@ SHARED = ("track_salsa", "track_walk")
 RENDERED = {"laugh_arms_up": ("cmu_13_14_laugh.bvh", (1080, 1560), 30.0, 7),
             "salsa_spin": ("cmu_60_05_salsa.bvh", (600, 840), 90.0, 11)}
 SIZE, FOCAL = (480, 360), 600.0
+# the joints' names in five characters: head_top -> head, shoulder_l -> shoL
+SHORT = tuple(j[:3] + j[-1].upper() if j[-2] == "_" else j.split("_")[0][:5] for j in JOINTS)
 
 
 def scored_truth(truth: dict) -> dict:
@@ -93,9 +96,9 @@ def clip_files(name: str, folder: Path) -> tuple[Path, Path, Path]:
     return render(name, folder)
 
 
-def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> float:
-    """PA-MPJPE (mm) of the tracking method's 3D from the truth's 2D joints on every
-    frame, with the annotations of ``marks``."""
+def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> np.ndarray:
+    """(16,) each joint's PA-MPJPE (mm) of the tracking method's 3D from the truth's 2D
+    joints on every frame, with the annotations of ``marks``."""
     info = open_video(video)
     frames = json.loads(truth.read_text())["frames"]
     joints2d = np.array([f["joints2d"] for f in frames])
@@ -104,7 +107,9 @@ def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> float:
                           default_camera(info.width, info.height).focal, ones, np.zeros(len(frames), bool))
     session = TrackSession(info, tracked, load_annotations(marks, info.frame_count))
     joints3d = np.array([session.pose3d(f) for f in range(len(frames))])
-    return pa_mpjpe(joints3d, np.array([f["joints3d"] for f in frames])) * 1000
+    truth3d = np.array([f["joints3d"] for f in frames])
+    aligned = np.array([procrustes_aligned(p, t) for p, t in zip(joints3d, truth3d)])
+    return np.linalg.norm(aligned - truth3d, axis=-1).mean(axis=0) * 1000
 
 
 def run(name: str, folder: Path) -> dict:
@@ -122,10 +127,20 @@ def run(name: str, folder: Path) -> dict:
     return result
 
 
+def print_joints(result: dict) -> None:
+    """Each joint's PA-MPJPE (mm) of a clip's ``run`` from the tracked and the exact 2D."""
+    print("  " + " ".join(f"{short:>5s}" for short in SHORT) + "  (joint PA-MPJPE mm)")
+    tracked = [result["per_joint"][joint]["pampjpe_mm"] for joint in JOINTS]
+    for label, values in (("tracked", tracked), ("exact 2D", result["exact"])):
+        print("  " + " ".join(f"{v:>5.0f}" for v in values) + f"  {label}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", nargs="+", default=[*SHARED, *RENDERED])
     parser.add_argument("--keep", type=Path, help="folder for the renders and motion files")
+    parser.add_argument("--joints", action="store_true",
+                        help="each joint's PA-MPJPE from the tracked and from the exact 2D")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.keep or Path(tmp)
@@ -135,8 +150,10 @@ def main() -> None:
         for name in args.clips:
             r = run(name, folder)
             print(f"{name:<15} {r['frames']:>6} {r['failed']:>6} {r['lost']:>5} {r['err2d_median_pct']:>8.2f} "
-                  f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['exact']:>8.1f} {r['seconds']:>5.0f}",
+                  f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['exact'].mean():>8.1f} {r['seconds']:>5.0f}",
                   flush=True)
+            if args.joints:
+                print_joints(r)
 
 
 if __name__ == "__main__":

@@ -309,6 +309,23 @@ def test_measured_lengths_read_bones_seen_side_on():
     assert np.all(found <= true * 1.05)
 
 
+def test_forearms_foreshortened_more_often_than_not_measure_their_length():
+    """The model facing the camera, its forearms held forward (foreshortened to a third)
+    on six frames of eleven and hanging on the rest: the forearms measure their length
+    (their 60th percentile), not what the median frame shows."""
+    hanging = C.MODEL.copy()
+    forward = C.MODEL.copy()
+    for side in ("l", "r"):
+        elbow, wrist = JOINT_INDEX[f"elbow_{side}"], JOINT_INDEX[f"wrist_{side}"]
+        length = np.linalg.norm(C.MODEL[wrist] - C.MODEL[elbow])
+        forward[wrist] = C.MODEL[elbow] + length * np.array([0.0, -np.sin(0.35), np.cos(0.35)])
+    pose = C.Calibration(Rotation.from_matrix(C.FACING_CAMERA).as_rotvec(), np.array([0.0, 0.0, 5.0]), 0.36)
+    joints2d = CAMERA.project(pose.to_camera(np.array([forward] * 6 + [hanging] * 5)))
+    found = P.measured_lengths(joints2d, np.full(11, 5.0), CAMERA)
+    forearms = [P.BONE_INDEX[JOINT_INDEX[f"elbow_{s}"], JOINT_INDEX[f"wrist_{s}"]] for s in ("l", "r")]
+    assert found[forearms] == pytest.approx(P.bone_lengths(C.MODEL)[forearms], rel=0.02)
+
+
 def test_frames_where_the_body_was_lost_measure_no_bones():
     """The walk seen side-on, the blocks of a third of its frames left on clutter (the
     joints there spread to twice their distance from the pelvis): the bones measured

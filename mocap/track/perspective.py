@@ -41,8 +41,9 @@ TORSO_BONES = len(BONES) - 2 * len(body.LIMBS)   # the first bones move with the
 HIP_BONES = tuple(n for n, (_, b) in enumerate(BONES[:TORSO_BONES])
                   if JOINTS[b] in {one.joints[0] for one in body.LIMBS})
 # of each bone's seen lengths over the clip (measured_lengths), by the joint it places (the
-# side left out): the median; the head's and the torso's lower quartile, the shins' upper
-LENGTH_PERCENTILES = {"head_top": 25, "pelvis": 25, "ankle": 75}
+# side left out): the median; the head's and the torso's lower quartile, the shins' upper, the
+# forearms' 60th percentile
+LENGTH_PERCENTILES = {"head_top": 25, "pelvis": 25, "ankle": 75, "wrist": 60}
 SEGMENT_OF = {(int(a), int(b)): k for k, (a, b) in enumerate(SEGMENT_JOINTS)}
 # degrees the head's top leans forward of the neck in the trunk that guides the trunk's
 # depth choices (``guide_trunk``)
@@ -133,7 +134,15 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
     73.4 mm). The shins are the other exception: tracked best (the ankles' blocks end
     on the feet) and upright through every stance, where they show their whole
     length, so their upper quartile measures them (PA-MPJPE 77.1 -> 75.3 mm on the
-    tracked 2D, every clip better; the 90th percentile overshoots: 76.4). A frame
+    tracked 2D, every clip better; the 90th percentile overshoots: 76.4). The
+    forearms read long too, for the opposite reason: the hands work in front of the
+    body, so a forearm is foreshortened more often than not, and the median read
+    track_salsa's forearms 0.64 of their length where the upper arms read 0.75 of
+    theirs. Their 60th percentile: benchmarks/bench_track_clips.py from the tracked
+    2D, track_salsa 77.5 -> 76.3 mm, track_walk 72.3 -> 71.8, laugh_arms_up 68.7 ->
+    66.7; bench_track.py 67.9 -> 67.9 (exact 2D 35.2 -> 34.6). The upper quartile
+    reads them better from the exact 2D (34.3) but takes more of the tracked wrists'
+    errors into depth (cmu_walk yaw 45: 65.4 -> 68.5; track_salsa 74.3). A frame
     where the tracking lost the body holds no bones at all, only what the blocks
     followed (``seen`` leaves it out)."""
     if seen is not None and seen.any():
