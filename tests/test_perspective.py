@@ -326,6 +326,21 @@ def test_forearms_foreshortened_more_often_than_not_measure_their_length():
     assert found[forearms] == pytest.approx(P.bone_lengths(C.MODEL)[forearms], rel=0.02)
 
 
+def test_forearms_never_seen_at_their_length_measure_their_least_share_of_the_upper_arm():
+    """The model facing the camera, its forearms held forward (foreshortened to a third)
+    on every frame: each reads FOREARM_PER_UPPER_ARM of its upper arm, not the third."""
+    forward = C.MODEL.copy()
+    for side in ("l", "r"):
+        elbow, wrist = JOINT_INDEX[f"elbow_{side}"], JOINT_INDEX[f"wrist_{side}"]
+        length = np.linalg.norm(C.MODEL[wrist] - C.MODEL[elbow])
+        forward[wrist] = C.MODEL[elbow] + length * np.array([0.0, -np.sin(0.35), np.cos(0.35)])
+    pose = C.Calibration(Rotation.from_matrix(C.FACING_CAMERA).as_rotvec(), np.array([0.0, 0.0, 5.0]), 0.36)
+    found = P.measured_lengths(CAMERA.project(pose.to_camera(forward[None])), np.full(1, 5.0), CAMERA)
+    for upper, fore in P.ARM_BONES:
+        assert found[fore] == pytest.approx(P.FOREARM_PER_UPPER_ARM * found[upper])
+        assert found[upper] == pytest.approx(P.bone_lengths(C.MODEL)[upper], rel=1e-3)
+
+
 def test_frames_where_the_body_was_lost_measure_no_bones():
     """The walk seen side-on, the blocks of a third of its frames left on clutter (the
     joints there spread to twice their distance from the pelvis): the bones measured

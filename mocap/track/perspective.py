@@ -44,6 +44,10 @@ HIP_BONES = tuple(n for n, (_, b) in enumerate(BONES[:TORSO_BONES])
 # side left out): the median; the head's and the torso's lower quartile, the shins' upper, the
 # forearms' 60th percentile
 LENGTH_PERCENTILES = {"head_top": 25, "pelvis": 25, "ankle": 75, "wrist": 60}
+# the least a forearm's measured length is of its upper arm's (``measured_lengths``):
+# 0.78 in anthropometric tables (0.146 and 0.186 of the stature), 0.70 to 1.02 in the
+# motion capture at hand
+FOREARM_PER_UPPER_ARM = 0.7
 SEGMENT_OF = {(int(a), int(b)): k for k, (a, b) in enumerate(SEGMENT_JOINTS)}
 # degrees the head's top leans forward of the neck in the trunk that guides the trunk's
 # depth choices (``guide_trunk``)
@@ -96,6 +100,9 @@ def guide_trunk() -> np.ndarray:
 
 GUIDE = guide_trunk()
 BONE_PAIRS = _pooled_bones()     # measured, left/right pooled
+# (upper arm, forearm) bones of each arm
+ARM_BONES = tuple((BONE_INDEX[JOINT_INDEX[a], JOINT_INDEX[b]], BONE_INDEX[JOINT_INDEX[b], JOINT_INDEX[c]])
+                  for a, b, c in (one.joints for one in body.LIMBS if one.kind == "arm"))
 TRUNK_SIGNS = _trunk_signs()
 # of the way from its ray-sphere root to its limb's swing plane (toward_swing_planes) that an
 # elbow or wrist, a knee or ankle is moved; the cosines between the joint's line of sight
@@ -142,7 +149,13 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
     2D, track_salsa 77.5 -> 76.3 mm, track_walk 72.3 -> 71.8, laugh_arms_up 68.7 ->
     66.7; bench_track.py 67.9 -> 67.9 (exact 2D 35.2 -> 34.6). The upper quartile
     reads them better from the exact 2D (34.3) but takes more of the tracked wrists'
-    errors into depth (cmu_walk yaw 45: 65.4 -> 68.5; track_salsa 74.3). A frame
+    errors into depth (cmu_walk yaw 45: 65.4 -> 68.5; track_salsa 74.3). A forearm
+    that the clip never shows at its length (track_salsa's right one points 50-60
+    degrees away from the camera throughout) reads short at any percentile: it is
+    taken at least FOREARM_PER_UPPER_ARM of the upper arm (track_salsa 76.3 -> 74.2
+    mm, exact 2D 41.3 -> 38.8; the other clips and bench_track.py's within 0.1 mm;
+    0.78, the tables' ratio, gives track_salsa 73.5 but cmu_01_01_jumps, whose
+    forearms are 0.70 of its upper arms, 68.6 -> 69.5 mm from yaw 45). A frame
     where the tracking lost the body holds no bones at all, only what the blocks
     followed (``seen`` leaves it out)."""
     if seen is not None and seen.any():
@@ -155,6 +168,8 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
         placed = JOINTS[BONES[group[0]][1]]
         percentile = LENGTH_PERCENTILES.get(placed.removesuffix("_l").removesuffix("_r"), 50)
         out[list(group)] = np.percentile(seen[:, list(group)], percentile)
+    for upper, fore in ARM_BONES:
+        out[fore] = max(out[fore], FOREARM_PER_UPPER_ARM * out[upper])
     return out
 
 
