@@ -309,33 +309,31 @@ def test_measured_lengths_read_bones_seen_side_on():
     assert np.all(found <= true * 1.05)
 
 
-def test_forearms_foreshortened_more_often_than_not_measure_their_length():
-    """The model facing the camera, its forearms held forward (foreshortened to a third)
-    on six frames of eleven and hanging on the rest: the forearms measure their length
-    (their 60th percentile), not what the median frame shows."""
-    hanging = C.MODEL.copy()
-    forward = C.MODEL.copy()
+def forearms_forward_2d(forward: int, hanging: int) -> np.ndarray:
+    """(forward + hanging, 16, 2) the model 5 m in front of CAMERA facing it, its
+    forearms held forward (foreshortened to a third) on ``forward`` frames and hanging
+    on ``hanging`` more."""
+    held = C.MODEL.copy()
     for side in ("l", "r"):
         elbow, wrist = JOINT_INDEX[f"elbow_{side}"], JOINT_INDEX[f"wrist_{side}"]
         length = np.linalg.norm(C.MODEL[wrist] - C.MODEL[elbow])
-        forward[wrist] = C.MODEL[elbow] + length * np.array([0.0, -np.sin(0.35), np.cos(0.35)])
+        held[wrist] = C.MODEL[elbow] + length * np.array([0.0, -np.sin(0.35), np.cos(0.35)])
     pose = C.Calibration(Rotation.from_matrix(C.FACING_CAMERA).as_rotvec(), np.array([0.0, 0.0, 5.0]), 0.36)
-    joints2d = CAMERA.project(pose.to_camera(np.array([forward] * 6 + [hanging] * 5)))
-    found = P.measured_lengths(joints2d, np.full(11, 5.0), CAMERA)
-    forearms = [P.BONE_INDEX[JOINT_INDEX[f"elbow_{s}"], JOINT_INDEX[f"wrist_{s}"]] for s in ("l", "r")]
+    return CAMERA.project(pose.to_camera(np.array([held] * forward + [C.MODEL] * hanging)))
+
+
+def test_forearms_foreshortened_more_often_than_not_measure_their_length():
+    """The forearms held forward on six frames of eleven and hanging on the rest
+    measure their length (their 60th percentile), not what the median frame shows."""
+    found = P.measured_lengths(forearms_forward_2d(6, 5), np.full(11, 5.0), CAMERA)
+    forearms = [fore for _, fore in P.ARM_BONES]
     assert found[forearms] == pytest.approx(P.bone_lengths(C.MODEL)[forearms], rel=0.02)
 
 
 def test_forearms_never_seen_at_their_length_measure_their_least_share_of_the_upper_arm():
-    """The model facing the camera, its forearms held forward (foreshortened to a third)
-    on every frame: each reads FOREARM_PER_UPPER_ARM of its upper arm, not the third."""
-    forward = C.MODEL.copy()
-    for side in ("l", "r"):
-        elbow, wrist = JOINT_INDEX[f"elbow_{side}"], JOINT_INDEX[f"wrist_{side}"]
-        length = np.linalg.norm(C.MODEL[wrist] - C.MODEL[elbow])
-        forward[wrist] = C.MODEL[elbow] + length * np.array([0.0, -np.sin(0.35), np.cos(0.35)])
-    pose = C.Calibration(Rotation.from_matrix(C.FACING_CAMERA).as_rotvec(), np.array([0.0, 0.0, 5.0]), 0.36)
-    found = P.measured_lengths(CAMERA.project(pose.to_camera(forward[None])), np.full(1, 5.0), CAMERA)
+    """The forearms held forward on every frame each read FOREARM_PER_UPPER_ARM of
+    their upper arm, not the third they show."""
+    found = P.measured_lengths(forearms_forward_2d(3, 0), np.full(3, 5.0), CAMERA)
     for upper, fore in P.ARM_BONES:
         assert found[fore] == pytest.approx(P.FOREARM_PER_UPPER_ARM * found[upper])
         assert found[upper] == pytest.approx(P.bone_lengths(C.MODEL)[upper], rel=1e-3)
