@@ -102,11 +102,17 @@ class Preprocessing:
 
     def set_background(self, text: str) -> None:
         """Use the empty stage the user names (``stage_of``): saved in the annotations,
-        then the silhouettes are found again and refitted. Refused while fitting."""
+        then the silhouettes are found again and refitted. Refused while fitting, and
+        when it is the stage already used (the refit would take the page's fits away
+        and bring the same ones back; a file of the same name may have changed)."""
         background = stage_of(text, self.n_frames)
         with self._lock:
             if not self.ready.is_set():
                 raise MocapError("the fit is still running: set the empty stage when it is done")
+            if background == self._annotations.background and not isinstance(background, str):
+                used = ("estimated from the clip" if background is None
+                        else "frames {}-{}".format(*background))
+                raise MocapError(f"the empty stage is already {used}: nothing to refit")
             notes = self._annotations.with_background(background)
             source = notes.background_source(self.path)
             if isinstance(source, str) and not os.path.isfile(source):

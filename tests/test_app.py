@@ -411,6 +411,17 @@ def test_play_follows_the_clock_from_a_moved_frame_and_stops_at_the_end(app):
     assert not app.player.playing and state.frame == stopped == app.controls.frame.value
 
 
+def test_the_empty_stage_in_use_is_not_refitted(app):
+    """"Use as the empty stage" with the stage in use refuses, and keeps every fit shown."""
+    with pytest.raises(MocapError, match="already estimated from the clip: nothing to refit"):
+        app.state.set_background("")
+    app.state.set_background("0-3")
+    assert app.state.ready.wait(60) and app.state.progress.error is None
+    with pytest.raises(MocapError, match="already frames 0-3"):
+        app.state.set_background(" 0 - 3 ")
+    assert app.state.ready.is_set() and app.state.view().pose3d is not None
+
+
 def test_a_new_empty_stage_while_playing_stops_playing(app):
     """Refitting takes the animation away: playing stops, the page shows the refit."""
     app.player.toggle()
