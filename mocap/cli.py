@@ -52,7 +52,21 @@ def _run_fit(args) -> None:
                                 smooth=smooth_of(args), background=args.background, masks=args.masks,
                                 foot_lock=args.foot_lock,
                                 progress=_progress.step)
-    print("wrote " + ", ".join(str(p) for p in written))
+    print("wrote " + ", ".join(str(p) for p in written.paths))
+    print(doubt_summary(written, args.video))
+
+
+SUMMARY_FRAMES = 5          # doubtful frames named after a fit
+
+
+def doubt_summary(written, video: str) -> str:
+    """How many frames the review would show (pipeline.Written), the first few."""
+    if not written.doubtful:
+        return f"no doubtful frame of {written.n_frames}"
+    first = ", ".join(str(d.frame) for d in written.doubtful[:SUMMARY_FRAMES])
+    more = ", ..." if len(written.doubtful) > SUMMARY_FRAMES else ""
+    return (f"{len(written.doubtful)} of {written.n_frames} frames doubtful, most first: {first}{more} "
+            f"(`mocap serve {video}` shows why, on its Review tab)")
 
 
 def _add_synth(sub) -> None:

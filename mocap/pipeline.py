@@ -22,6 +22,7 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
+from mocap.review import Doubt
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
 from mocap.silhouette.passes import FitStream, FrameFit, Silhouette, iter_silhouettes
@@ -121,15 +122,25 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
     return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene)
 
 
+@dataclass(frozen=True)
+class Written:
+    """What `mocap fit` wrote, and the frames the app's review would show (every
+    doubtful one, most doubtful first: mocap.review) of the clip's ``n_frames``."""
+
+    paths: list[Path]
+    doubtful: list[Doubt]
+    n_frames: int
+
+
 def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.PathLike], *,
                       annotations: str | os.PathLike | None = None, method: str | None = None,
                       smooth: float = 0.0, background: str | os.PathLike | None = None,
                       masks: str | os.PathLike | None = None, foot_lock: bool = False,
-                      progress: Report | None = None) -> list[Path]:
+                      progress: Report | None = None) -> Written:
     """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
     interpolate and write the files asked for, {format key: path} of
     mocap.io.export.formats (the motion file "json" always: VIDEO.motion.json unless
-    given); returns the paths written. ``background``: the empty scene (else the
+    given). ``background``: the empty scene (else the
     annotations'); ``masks``: a folder for the silhouettes, named in the motion
     file; ``foot_lock``: planted feet kept in place. A background that holds the
     performer is a MocapWarning; a format this installation cannot write is refused
@@ -155,4 +166,5 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
         folders = [session.write_masks(masks)]
         relative = os.path.relpath(folders[0].resolve(), Path(paths["json"]).resolve().parent)
         clip = replace(clip, extra={"masks": Path(relative).as_posix()})
-    return [write_format(key, path, clip) for key, path in paths.items()] + folders
+    written = [write_format(key, path, clip) for key, path in paths.items()] + folders
+    return Written(written, session.review_queue(), info.frame_count)

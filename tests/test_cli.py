@@ -5,6 +5,7 @@ the problem, never a traceback), a 4K video, `mocap synth` bad arguments, and
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -125,6 +126,23 @@ def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
     imported = set(done.stdout.split())
     assert "mocap.pipeline" in imported
     assert not imported & {"trimesh", "pygltflib", "scipy.interpolate"}
+
+
+def test_fit_names_the_frames_the_review_would_show(tmp_path, capsys, monkeypatch):
+    """After what it wrote, `mocap fit` says how many frames are doubtful (the app's
+    review queue, most doubtful first) and names the first ones."""
+    from mocap import review
+    video = tmp_path / "walk.avi"
+    render_walk(video, seconds=0.6)
+    monkeypatch.setattr(review, "LOW_SCORE", 1.1)         # every fit doubtful, ranked by S
+    assert main(["fit", str(video), "--quiet"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    n = len(read_motion(video.with_suffix(".motion.json"))["frames"])
+    assert lines[0] == f"wrote {video.with_suffix('.motion.json')}"
+    said = re.fullmatch(rf"{n} of {n} frames doubtful, most first: ([0-9, ]+), \.\.\. "
+                        rf"\(`mocap serve {re.escape(str(video))}` shows why, on its Review tab\)", lines[1])
+    named = [int(f) for f in said.group(1).split(", ")]
+    assert len(set(named)) == 5 and all(0 <= f < n for f in named)
 
 
 def test_version_and_help_say_what_the_command_is(capsys):
