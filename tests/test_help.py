@@ -72,7 +72,8 @@ def test_help_mentions_every_shortcut_the_app_registers():
 
 def test_help_explains_the_topics_with_a_picture():
     text = HELP_FILE.read_text(encoding="utf-8").lower()
-    for topic in ("foreshortening", "toward", "away", "occluded", "review", "keyboard shortcuts"):
+    for topic in ("the four panels", "orange", "blue", "green", "foreshortening", "toward", "away",
+                  "occluded", "review", "keyboard shortcuts"):
         assert topic in text, topic
     for orientation in ORIENTATIONS:
         assert orientation.replace("_", " ") in text, orientation
