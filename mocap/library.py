@@ -151,7 +151,8 @@ def review_target(path: str | os.PathLike) -> tuple[str, Path] | None:
     record = read_record(folder)
     if record is None:
         if path.is_dir():
-            raise MocapError(f"{path}: not a folder of `mocap batch` (no {RECORD} in it)")
+            raise MocapError(f"{path}: is a folder, not a video nor a video's folder of a "
+                             f"`mocap batch` library (no {RECORD} in it)")
         return None
     notes = folder / ANNOTATIONS
     used = record.get("annotations")

@@ -325,4 +325,5 @@ def test_serve_takes_a_library_folder_or_a_file_in_it(library, videos, tmp_path,
     assert video == str(videos / "walk_a.mp4") and notes == out / "walk_a" / ANNOTATIONS
     assert review_target(videos / "walk_a.mp4") is None          # a video: served as before
     assert main(["serve", str(tmp_path)]) == 2                   # a folder of something else
-    assert "not a folder of `mocap batch`" in capsys.readouterr().err
+    assert f"{tmp_path}: is a folder, not a video nor a video's folder of a `mocap batch`" in (
+        capsys.readouterr().err)
