@@ -85,7 +85,9 @@ def silhouette_passes(info: VideoInfo, progress: Report | None = None, backgroun
             report(Progress(i + 1 + len(fits), 2 * n, FITTING, frame=fit.index, product=fit,
                             final=False))
     if all(s is None for s in stream.silhouettes):
-        raise MocapError(f"{info.path}: no person found in any of its {n} frames")
+        frames = "its only frame" if n == 1 else f"any of its {n} frames"
+        raise MocapError(f"{info.path}: no person found in {frames} (one who never moves shows only "
+                         "against a photo of the empty scene: --background, or the app's Stage tab)")
     fitted(stream.finish())
     return stream.silhouettes, fits
 

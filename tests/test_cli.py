@@ -39,6 +39,13 @@ def _nobody_avi(tmp_path):
     return path
 
 
+def _one_frame_avi(tmp_path):
+    path, first = tmp_path / "one.avi", tmp_path / "first.avi"
+    render_walk(first, seconds=0.2)
+    write_video(path, (f for i, f in iter_frames(first) if i == 0), 15.0, (320, 240))
+    return path
+
+
 @pytest.mark.parametrize("make, problem", [
     (lambda p: p / "missing.mp4", "no such file"),
     (lambda p: p, "is a directory"),
@@ -46,6 +53,8 @@ def _nobody_avi(tmp_path):
     (png_avi, "still image"),
     (_header_only_avi, "no frames"),
     (_nobody_avi, "no person found in any of its 20 frames"),
+    (_one_frame_avi, "no person found in its only frame (one who never moves shows only against a photo "
+                     "of the empty scene: --background"),
 ])
 def test_fit_refuses_bad_input_in_one_line(tmp_path, capsys, make, problem):
     video, out = make(tmp_path), tmp_path / "out.motion.json"
