@@ -13,8 +13,7 @@ from mocap.options import add_smooth, smooth_of
 from mocap.progressbar import Bar
 
 
-def _add_fit(sub) -> None:
-    p = sub.add_parser("fit", help="fit the body model to every frame of a video and lift it to 3D")
+def _add_fit(p) -> None:
     p.add_argument("video", help="input video (any container/codec OpenCV reads)")
     p.add_argument("--method", choices=("silhouette", "track"), default=None,
                    help="silhouette: fit the cylinder body to each frame's silhouette (static "
@@ -69,20 +68,17 @@ def doubt_summary(written, video: str) -> str:
             f"(`mocap serve {video}` shows why, on its Review tab)")
 
 
-def _add_synth(sub) -> None:
+def _add_synth(p) -> None:
     from mocap.synth import add_synth_arguments
-    p = sub.add_parser("synth", help="render the cylinder body into a video with ground truth")
     add_synth_arguments(p)
 
 
-def _add_sheet(sub) -> None:
+def _add_sheet(p) -> None:
     from mocap.contact import add_sheet_arguments
-    p = sub.add_parser("sheet", help="contact sheet: frames beside their silhouettes and fitted skeletons")
     add_sheet_arguments(p)
 
 
-def _add_serve(sub) -> None:
-    p = sub.add_parser("serve", help="review and correct a video's fit in the browser, export the animation")
+def _add_serve(p) -> None:
     p.add_argument("video", nargs="?", default=None,
                    help="input video (default: the bundled sample_videos/walk.mp4), or a video's "
                         "folder of a `mocap batch` library, DIR/<name>: its edits are saved there "
@@ -111,16 +107,12 @@ def _port(text: str) -> int:
     return int(text)
 
 
-def _add_batch(sub) -> None:
+def _add_batch(p) -> None:
     from mocap.batch import add_batch_arguments
-    p = sub.add_parser("batch", help="many videos at once on a Dask cluster, into a motion library "
-                                     "(resumable)")
     add_batch_arguments(p)
 
 
-def _add_export(sub) -> None:
-    p = sub.add_parser("export", help="turn a motion file into a playback page (one HTML file, "
-                                      "no server needed)")
+def _add_export(p) -> None:
     p.add_argument("motion", help="motion JSON written by `mocap fit` or the app")
     p.add_argument("--html", metavar="FILE", required=True,
                    help="the self-contained playback page to write (opens from disk, no network)")
@@ -167,17 +159,34 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def build_parser() -> argparse.ArgumentParser:
+_COMMANDS = {    # name: (help, the function that adds its arguments)
+    "fit": ("fit the body model to every frame of a video and lift it to 3D", _add_fit),
+    "synth": ("render the cylinder body into a video with ground truth", _add_synth),
+    "sheet": ("contact sheet: frames beside their silhouettes and fitted skeletons", _add_sheet),
+    "serve": ("review and correct a video's fit in the browser, export the animation", _add_serve),
+    "export": ("turn a motion file into a playback page (one HTML file, no server needed)", _add_export),
+    "batch": ("many videos at once on a Dask cluster, into a motion library (resumable)", _add_batch),
+}
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command, with the arguments of ``command`` only where it is
+    given: a command's arguments import its modules (`mocap fit` would otherwise start
+    by importing the renderer, the contact sheet and the batch runner)."""
     parser = argparse.ArgumentParser(prog="mocap", description=DESCRIPTION)
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
-    _add_fit(sub)
-    _add_synth(sub)
-    _add_sheet(sub)
-    _add_serve(sub)
-    _add_export(sub)
-    _add_batch(sub)
+    for name, (summary, add_arguments) in _COMMANDS.items():
+        p = sub.add_parser(name, help=summary)
+        if command in (None, name):
+            add_arguments(p)
     return parser
+
+
+def _command(argv: list[str]) -> str | None:
+    """The command named on a command line: its first word that is not an option
+    (`mocap` itself takes only --help and --version)."""
+    return next((word for word in argv if not word.startswith("-")), None)
 
 
 def _warn_in_one_line(show):
@@ -193,7 +202,9 @@ def _warn_in_one_line(show):
 
 def main(argv: list[str] | None = None) -> int:
     try:
-        args = build_parser().parse_args(argv)    # imports what the commands need: a Ctrl+C lands here too
+        argv = sys.argv[1:] if argv is None else argv
+        # imports what the command needs: a Ctrl+C lands here too
+        args = build_parser(_command(argv)).parse_args(argv)
         _progress.quiet = getattr(args, "quiet", False)
         args.progress = _progress
         _quiet_video_libraries()
