@@ -130,16 +130,14 @@ def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
     """`mocap fit` imports what a fit needs, not the GLB writer's trimesh and pygltflib
     nor --smooth's scipy.interpolate: a third of a second of every run's start-up; nor
     the other commands' modules (the renderer, the contact sheet, the batch runner) nor,
-    with no bar to draw, tqdm; nor scipy.ndimage and scipy.spatial (the lift's filters and
-    rotations are mocap.filters and mocap.rotation, the tracker's calibration imports
-    scipy's when it calibrates): another quarter of a second."""
+    with no bar to draw, tqdm."""
     code = "import sys; from mocap.cli import main; main(['fit', sys.argv[1]]); print(*sys.modules)"
     done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "missing.mp4")],
                           capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
     imported = set(done.stdout.split())
     assert "mocap.pipeline" in imported
     assert not imported & {"trimesh", "pygltflib", "scipy.interpolate", "tqdm", "mocap.synth",
-                           "mocap.contact", "mocap.batch", "scipy.ndimage", "scipy.spatial"}
+                           "mocap.contact", "mocap.batch"}
 
 
 def test_fit_names_the_frames_the_review_would_show(tmp_path, capsys, monkeypatch):

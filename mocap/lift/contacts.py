@@ -14,9 +14,9 @@ image of a fixed camera. ``foot_lock`` keeps a planted ankle where it is for its
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import binary_closing, binary_opening, gaussian_filter1d, percentile_filter
 
 from mocap.body import JOINT_INDEX
-from mocap.filters import closed_then_opened, gaussian_smooth, running_percentile
 
 FEET = ("ankle_l", "ankle_r")
 _ANKLES = [JOINT_INDEX[a] for a in FEET]
@@ -36,11 +36,15 @@ BLEND_S = 0.1            # a pin fades in and out over this much time around its
 def foot_contacts(world: np.ndarray, fps: float) -> np.ndarray:
     """(F, 2) bool: the left and right foot planted on each frame of world joints
     (F, 16, 3; metres, y up)."""
-    ankles = gaussian_smooth(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6))
-    floor = running_percentile(ankles[..., 1].min(axis=1), FLOOR_PERCENTILE, int(round(FLOOR_WINDOW_S * fps)) | 1)
+    ankles = gaussian_filter1d(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6), axis=0,
+                               mode="nearest")
+    floor = percentile_filter(ankles[..., 1].min(axis=1), FLOOR_PERCENTILE,
+                              size=int(round(FLOOR_WINDOW_S * fps)) | 1, mode="nearest")
     speed = np.linalg.norm(np.gradient(ankles[..., :2], axis=0), axis=-1) * fps
     planted = (ankles[..., 1] - floor[:, None] < CONTACT_HEIGHT_M) & (speed < CONTACT_SPEED_M_S)
-    return closed_then_opened(planted, max(1, int(round(MIN_RUN_S * fps))))
+    width = max(1, int(round(MIN_RUN_S * fps)))
+    structure = np.ones((width, 1), bool)
+    return binary_opening(binary_closing(planted, structure, border_value=0), structure)
 
 
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:

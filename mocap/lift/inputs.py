@@ -6,10 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d, median_filter
 
 from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
-from mocap.filters import gaussian_smooth, running_median
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
 from mocap.lift.sides import known_sides, track_sides
@@ -69,7 +69,8 @@ class Inputs:
         depths change smoothly."""
         out = lifted.copy()
         for r in runs(self.person):
-            out[r, :, 2] = gaussian_smooth(lifted[r, :, 2], DEPTH_SMOOTH_S * fps)
+            out[r, :, 2] = gaussian_filter1d(lifted[r, :, 2], DEPTH_SMOOTH_S * fps, axis=0,
+                                             mode="nearest")
         return out
 
     def changed_frames(self, before: "Inputs") -> np.ndarray:
@@ -158,7 +159,7 @@ def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndar
     width = 2 * int(round(ARM_MEDIAN_S * fps / 2)) + 1
     arms = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["arm"][1:] for s in SIDES]
     for r in runs(person):
-        out[r, arms] = running_median(joints[r, arms], width)
+        out[r, arms] = median_filter(joints[r, arms], size=(width, 1, 1), mode="nearest")
     return out
 
 

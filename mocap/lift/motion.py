@@ -18,14 +18,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
+from scipy.spatial.transform import Rotation, Slerp
 
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
-from mocap.filters import gaussian_smooth
 from mocap.lift.contacts import foot_contacts, foot_lock
 from mocap.lift.skeleton import (ANKLE_HEIGHT, JOINT_BONES, UNIT_M, clip_offsets,
                                  forward_kinematics, pose_rotations)
-from mocap.rotation import Rotation, Slerp
 
 # the floor: this low percentile of the lower ankle's height over the clip, less the
 # ankle's height above the sole (a percentile, not the minimum: a fit's stray frame)
@@ -189,7 +189,7 @@ def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndar
     interpolated by a natural cubic spline (held outside), so that keyframes keep
     their exact values and no corner comes back at them."""
     from scipy.interpolate import CubicSpline   # here: only --smooth needs it, and it takes 0.13 s to import
-    smooth = gaussian_smooth(track, sigma)
+    smooth = gaussian_filter1d(track, sigma, axis=0, mode="nearest")
     residual = track[keys] - smooth[keys]
     if len(keys) == 1:
         return smooth + residual

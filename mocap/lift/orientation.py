@@ -30,8 +30,8 @@ through the whole stretch where the segment stays out of the image plane.
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import median_filter
 
-from mocap.filters import running_median
 from mocap.body import (JOINT_INDEX, LIMB_JOINTS, LIMBS, SEGMENT_INDEX, SEGMENT_JOINTS, SIDE_SIGN, SIDES,
                         knee_bend, limb, limb_penalty, unit)
 from mocap.lift.taylor import (LENGTH, TOWARD, exchange_legs, facing_yaw, image_left_is_right, lateral_axis,
@@ -219,7 +219,7 @@ def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
     fixed = np.zeros((len(joints2d), 10), int) if fixed is None else fixed
     vec, depth = segment_vectors(joints2d, px_per_unit, lengths)
     width = 2 * int(round(DEPTH_FILTER_S * fps / 2)) + 1
-    depth = running_median(depth, width)
+    depth = median_filter(depth, size=(width, 1), mode="nearest")
     yaw = np.asarray(yaw, float)
     facing, left = _frame_axes(yaw)
     sagittal = sagittal_depth(vec[..., 0], yaw, lengths)                          # (F, 10)

@@ -18,9 +18,9 @@ apart from the hips (``_leg_order``).
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d, median_filter
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SIDES
-from mocap.filters import running_any, running_median
 from mocap.lift.taylor import image_left_is_right, runs
 from mocap.smoothest import two_state_path
 
@@ -110,7 +110,7 @@ def _leg_order(legs: np.ndarray, leg_px: float, crossing: int) -> np.ndarray:
     show which thigh is which): there the rule names its image-right leg the
     image-left one."""
     across = (legs[:, 1, :, 0] - legs[:, 0, :, 0]).mean(-1) / (SEPARATED * leg_px)
-    held = running_median(across, 2 * crossing + 1)
+    held = median_filter(across, 2 * crossing + 1, mode="nearest")
     return np.where(held < 0, np.clip(held, -1.0, 0.0), 1.0)
 
 
@@ -289,7 +289,8 @@ def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg
     lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
     clear = np.abs(lead) > SEPARATED * leg_px
     right_ahead = legs_swap == (lead < 0)
-    took_turns = [running_any(clear & ahead, 2 * half + 1) for ahead in (right_ahead, ~right_ahead)]
+    took_turns = [maximum_filter1d((clear & ahead).astype(np.uint8), 2 * half + 1, mode="constant") > 0
+                  for ahead in (right_ahead, ~right_ahead)]
     return took_turns[0] & took_turns[1]
 
 

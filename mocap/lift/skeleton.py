@@ -21,9 +21,9 @@ forearms and feet level, pointing where the hips face.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINTS
-from mocap.rotation import Rotation
 
 UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT
 # Proportions of the parts the contract body lacks, model units (of 175; anthropometric

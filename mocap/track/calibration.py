@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS
@@ -124,7 +125,7 @@ class Calibration:
 
     def to_camera(self, points: np.ndarray) -> np.ndarray:
         """Body points (..., 3) in the pinhole frame (Eq. 6)."""
-        return _rotation().from_rotvec(self.rotvec).apply(points) + self.translation
+        return Rotation.from_rotvec(self.rotvec).apply(points) + self.translation
 
     def key_triangle(self) -> tuple[np.ndarray, np.ndarray]:
         """The key joints' depths (3,) on the calibrated frame and the key triangle's
@@ -137,16 +138,8 @@ class Calibration:
     def yaw(self) -> float:
         """The body's yaw in degrees (as lift.facing_yaw: 0 faces the camera, +90
         faces image right)."""
-        forward = _rotation().from_rotvec(self.rotvec).apply([0.0, 0.0, 1.0])
+        forward = Rotation.from_rotvec(self.rotvec).apply([0.0, 0.0, 1.0])
         return float(np.degrees(np.arctan2(forward[0], -forward[2])))
-
-
-def _rotation():
-    """scipy's Rotation, imported when a clip is first calibrated: the silhouette method
-    imports this module (its constants) and never calibrates, and importing scipy.spatial
-    takes a quarter of a second."""
-    from scipy.spatial.transform import Rotation
-    return Rotation
 
 
 def line_distances(params: np.ndarray, camera: Pinhole, marks: np.ndarray) -> np.ndarray:
@@ -206,7 +199,7 @@ def initial_params(marks: np.ndarray, camera: Pinhole) -> list[np.ndarray]:
                    / max(abs(cos), 0.3), *SPAN_RANGE)
     out = []
     for yaw in (np.arccos(cos), -np.arccos(cos)):
-        rotation = _rotation().from_matrix(FACING_CAMERA @ _rotation().from_euler("y", yaw).as_matrix())
+        rotation = Rotation.from_matrix(FACING_CAMERA @ Rotation.from_euler("y", yaw).as_matrix())
         centre = camera.rays(marks[j["chest"]]) * depth
         out.append(np.r_[rotation.as_rotvec(), centre - rotation.apply(MODEL[j["chest"]]), span,
                          MODEL[j["chest"], 1]])

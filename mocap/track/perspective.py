@@ -23,10 +23,10 @@ optical axis); ``to_contract`` turns them into CONTRACT.md's frame.
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_JOINTS
-from mocap.filters import gaussian_smooth
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import KEY, MODEL, UNIT_M, Pinhole
 from mocap.track.keydepths import Turns, body_axes, key_joints
@@ -288,7 +288,7 @@ def steady_depths(points: np.ndarray, fps: float) -> np.ndarray:
     smoothed over time (a Gaussian of inputs.DEPTH_SMOOTH_S, as the silhouette
     method's lifted depths): the ray-sphere roots carry the 2D tracking's jitter
     into depth, which real motion does not have."""
-    z = gaussian_smooth(points[..., 2], DEPTH_SMOOTH_S * fps)
+    z = gaussian_filter1d(points[..., 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
     return points * (z / points[..., 2])[..., None]
 
 

@@ -19,10 +19,10 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 
 from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, limb
 from mocap.errors import MocapError
-from mocap.filters import gaussian_smooth
 from mocap.track.marks import check_marks
 from mocap.track.calibration import Pinhole, default_camera
 from mocap.track.keydepths import Turns
@@ -272,4 +272,4 @@ def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns: Turns, f
 
 def steady_joints(joints2d: np.ndarray, fps: float) -> np.ndarray:
     """The 2D joints (F, 16, 2) the 3D is reconstructed from: smoothed over SMOOTH_S."""
-    return gaussian_smooth(joints2d, SMOOTH_S * fps)
+    return gaussian_filter1d(joints2d, SMOOTH_S * fps, axis=0, mode="nearest")
