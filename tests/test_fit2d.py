@@ -17,6 +17,7 @@ from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.search import coarse_to_fine
 from mocap.silhouette.torso import head_top_row
 from mocap.silhouette.legchain import LegChain
+from mocap.silhouette.legs import ends_in_foot, raised_leg
 from mocap.metrics import side_matched_errors
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
 from mocap.silhouette.torso import torso_spread
@@ -95,6 +96,56 @@ def test_fit_recovers_the_model_from_its_own_mask():
     err = np.linalg.norm(fit.joints - forward_kinematics_2d(truth), axis=1) / (175 * FIT_SCALE)
     assert np.median(err) < 0.02, dict(zip(JOINTS, err.round(3)))
     assert fit.score > 0.8
+
+
+def kicking_pose(thigh: float, shin: float, spread: float) -> Pose2D:
+    """The model standing on its image-left leg, the right thigh raised to ``thigh``
+    and its lower leg at ``shin`` degrees."""
+    angle = default_angles()
+    for name, a in (("torso", 95), ("upper_leg_l", 265), ("lower_leg_l", 260), ("upper_leg_r", thigh),
+                    ("lower_leg_r", shin), ("upper_arm_l", 240), ("lower_arm_l", 200),
+                    ("upper_arm_r", 290), ("lower_arm_r", 300)):
+        angle[SEGMENT_INDEX[name]] = a
+    return Pose2D(pelvis=np.array([90.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=spread)
+
+
+@pytest.mark.parametrize("thigh, shin, spread", [(350, 300, 0.3), (355, 310, 0.5)])
+def test_a_kicking_lower_leg_is_found_below_its_raised_knee(thigh, shin, spread):
+    """The model's own mask kicking forward: the raised knee's lower leg lies above the
+    rows that Algorithm 2 reads, whose curves are the standing leg's (the kicking
+    ankle was fitted 10-14% of the body height off, its lower leg hanging from the
+    knee within 20 degrees of the standing one; within 1%)."""
+    truth = kicking_pose(thigh, shin, spread)
+    fit = fit_frame(draw_model(truth, (160, 200)) * 255, FIT_SCALE)
+    err = side_matched_errors(fit.joints[None], forward_kinematics_2d(truth)[None])[0] / (175 * FIT_SCALE)
+    assert err[[JOINT_INDEX["knee_r"], JOINT_INDEX["ankle_r"]]].max() < 0.02, dict(zip(JOINTS, err.round(3)))
+
+
+def test_a_raised_knee_is_taken_for_a_leg_only_where_it_looks_like_one():
+    """On the model's own mask kicking: each lower leg as drawn ends where the
+    silhouette does (legs.ends_in_foot), but not the kicking one hanging from its
+    knee (its ankle in the air) nor either one shortened (the silhouette runs on
+    past its ankle, as past a "lower leg" hung from a hand at a squat's knees); and
+    the raised knee is one on a thigh as long as the other (legs.raised_leg), not on
+    a thigh half as long (a hip reaching for a hand)."""
+    truth = kicking_pose(350, 300, 0.3)
+    mask = draw_model(truth, (160, 200))
+    assert ends_in_foot(mask, truth, "r") and ends_in_foot(mask, truth, "l")
+    assert not ends_in_foot(mask, with_segment(truth, "lower_leg_r", 265, 1.0), "r")
+    for side in "lr":
+        assert not ends_in_foot(mask, with_segment(truth, f"lower_leg_{side}", None, 0.6), side)
+    knee_y = forward_kinematics_2d(truth)[JOINT_INDEX["knee_r"], 1]
+    assert raised_leg(truth, "r", knee_y + 1) and not raised_leg(truth, "r", knee_y - 1)
+    assert not raised_leg(with_segment(truth, "upper_leg_r", None, 0.5), "r", knee_y + 1)
+
+
+def with_segment(pose: Pose2D, segment: str, angle: float | None, ratio: float) -> Pose2D:
+    """The pose with one segment's angle (unless None) and foreshortening ratio set."""
+    angles, ratios = pose.angle.copy(), pose.ratio.copy()
+    i = SEGMENT_INDEX[segment]
+    angles[i] = angles[i] if angle is None else angle
+    ratios[i] = ratio
+    return replace(pose, angle=angles, ratio=ratios)
 
 
 def test_fit_on_rendered_motion_capture(tmp_path):

@@ -79,15 +79,24 @@ def find_elbow_corner(points: np.ndarray) -> int:
     return int(idx[np.argmax(diff)])
 
 
-def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
-    """GetLeft/RightLowerKneeCurve of Algorithm 2: per scan line below the knees, the
-    centre of the leftmost and rightmost leg; also each line's run count (Algorithm 5)."""
+def lower_leg_band(sil: np.ndarray, joints: np.ndarray, scale: float) -> tuple[int, int]:
+    """The rows (first, end) that Algorithm 2 reads the lower legs on: from just below
+    the knees of legs standing straight under the pelvis (the feet on the
+    silhouette's bottom) to just above the feet."""
     pelvis = joints[JOINT_INDEX["pelvis"]]
     ys = np.nonzero(sil.any(axis=1))[0]
     bottom = ys.max() if len(ys) else int(pelvis[1])
     thigh = LENGTH[SEGMENT_INDEX["upper_leg_l"]]
     knee_y = pelvis[1] + (bottom - pelvis[1]) * thigh / (thigh + LENGTH[SEGMENT_INDEX["lower_leg_l"]])
-    y0, y1 = int(knee_y + 2 * scale), int(bottom - 2 * scale)
+    return int(knee_y + 2 * scale), int(bottom - 2 * scale)
+
+
+def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
+    """GetLeft/RightLowerKneeCurve of Algorithm 2: per scan line of the lower legs'
+    band (``lower_leg_band``), the centre of the leftmost and rightmost leg; also each
+    line's run count (Algorithm 5)."""
+    pelvis = joints[JOINT_INDEX["pelvis"]]
+    y0, y1 = lower_leg_band(sil, joints, scale)
     half = 45 * scale
     x0 = max(int(pelvis[0] - half), 0)
     band = sil[max(y0, 0):max(y1, y0 + 1), x0:int(pelvis[0] + half)]

@@ -3,9 +3,10 @@ analysis (Algorithm 2) with the knee-crossing test (Algorithm 5), upper legs by
 Algorithm 1 with the lower legs attached, ratios by Algorithm 6. Beyond the paper:
 both ways of joining lower to upper legs are scored so that a wrong crossing verdict
 is undone, thighs crossing in the image are given back their own knees unless the
-crossing explains clearly more, and the legs come as a few hypotheses scored
-together (``leg_hypotheses``), among which ``mocap.silhouette.legchain`` chooses
-over time.
+crossing explains clearly more, a raised knee's lower leg (which Algorithm 2's rows
+below the knees do not show) is searched over every bend of the knee, and the legs
+come as a few hypotheses scored together (``leg_hypotheses``), among which
+``mocap.silhouette.legchain`` chooses over time.
 """
 
 from __future__ import annotations
@@ -14,9 +15,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, Pose2D,
+from mocap.body import (FOOT_LENGTH, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, Pose2D,
                         forward_kinematics_2d, image_angle, limb)
-from mocap.silhouette.contour import find_angle, lower_leg_curves, lower_legs_cross
+from mocap.silhouette.contour import find_angle, lower_leg_band, lower_leg_curves, lower_legs_cross
 from mocap.silhouette.raster import Canvas, pose_quads, poses_quads, sweep_scorer
 from mocap.silhouette.search import (RATIO_RANGE, TRACK_HALF_RANGE, Knob, around, span,
                                      refine_limb, search_angle)
@@ -32,14 +33,26 @@ THIGH_TRACK_HALF_RANGE = 40.0    # degrees searched around a previous thigh, whi
 CROSSED_GAIN = 0.02              # S by which crossed thighs must explain more to be kept
 CROSSED_TURN = 30.0              # degrees less thigh turn since the last frame that keeps a crossing
 UNCROSS_SPREAD = 0.3             # torso spread below which (near profile) thighs may cross
+KNEE_REACH = 150.0               # degrees a knee folds at most, seen in the image
+RAISED_KNEE = 0.5                # of a thigh's length above Algorithm 2's rows: a raised knee
+ONE_LEG_SHARE = 0.5              # of Algorithm 2's rows with two runs or more, below which they show one leg
+FOOT_REACH = 1.5                 # feet's lengths (FOOT_LENGTH) of silhouette past a raised ankle at most
+THIGH_MATCH = 0.75               # of the other thigh's length in the image, below which a raised "thigh" is not one
 DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this close are one
 
 
-def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
+def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised: float) -> Pose2D:
     """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5),
     upper legs by Algorithm 1 with the lower legs attached (Fig. 3b-c), each lower
-    leg refined by Algorithm 1, then ratios (Algorithm 6)."""
-    curves, runs = lower_leg_curves(canvas.sil, forward_kinematics_2d(pose), pose.scale)
+    leg refined by Algorithm 1, then ratios (Algorithm 6). Beyond the paper: a knee
+    raised above the rows that Algorithm 2 reads while they show one lower leg (a
+    kick, a knee lift: ``raised_knee_row``) on a thigh like the other (``raised_leg``)
+    had its lower leg's angle from the other leg's curve, so that lower leg is
+    searched over every bend of its knee (``search_shin``), beside the other leg,
+    before it is refined. ``reading``: the
+    lower legs' curves and run counts (``contour.lower_leg_curves``), ``raised``: the
+    row above which a knee is raised (``raised_knee_row``)."""
+    curves, runs = reading
     crossed = lower_legs_cross(runs)
     for side, other in (("l", "r"), ("r", "l")):
         default = (prev or pose).angle[SEGMENT_INDEX[LEG[side][1]]]
@@ -49,8 +62,66 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
         pose = search_thigh(canvas, pose, side, prev)
     pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose), prev)
     for side in SIDES:
+        if raised_leg(pose, side, raised):
+            pose = search_shin(canvas.fork(pose_quads(pose, LEG[other_side(side)])), pose, side)
         pose = refine_limb(pose, LEG[side], canvas, TRACK_HALF_RANGE)
     return pose
+
+
+def raised_knee_row(sil: np.ndarray, joints: np.ndarray, scale: float, runs) -> float:
+    """The row above which a knee is raised clear of the rows that Algorithm 2 reads
+    (``contour.lower_leg_band``; RAISED_KNEE of a thigh's length above the first),
+    where those rows show one lower leg (fewer than ONE_LEG_SHARE of them two or
+    more): the raised leg's lower leg curve was then the other's. -inf where they
+    show two. ``joints``: the pose's, ``scale``: its pixels per model unit."""
+    if not len(runs) or np.mean(np.asarray(runs) >= 2) >= ONE_LEG_SHARE:
+        return -np.inf
+    top = lower_leg_band(sil, joints, scale)[0]
+    return top - RAISED_KNEE * LENGTH[SEGMENT_INDEX[LEG["l"][0]]] * scale
+
+
+def raised_leg(pose: Pose2D, side: str, row: float) -> bool:
+    """Whether one side's knee lies above an image row (``raised_knee_row``) on a
+    thigh about as long in the image as the other (at least THIGH_MATCH of it): a
+    "knee" raised on a short thigh is a hand hanging by the legs, as in a squat,
+    reached from the hip."""
+    up, other = SEGMENT_INDEX[LEG[side][0]], SEGMENT_INDEX[LEG[other_side(side)][0]]
+    return bool(row > -np.inf and pose.ratio[up] >= THIGH_MATCH * pose.ratio[other]
+                and forward_kinematics_2d(pose)[JOINT_INDEX[f"knee_{side}"], 1] < row)
+
+
+def other_side(side: str) -> str:
+    """'r' for 'l' and 'l' for 'r'."""
+    return "r" if side == "l" else "l"
+
+
+def search_shin(canvas: Canvas, pose: Pose2D, side: str) -> Pose2D:
+    """One lower leg by Algorithm 1 over every bend of its knee (up to KNEE_REACH
+    either way of its thigh's line in the image) that points no higher than a thigh
+    may (THIGH_RANGE: an upright performer), from where it is; kept where it ends
+    the silhouette as a raised lower leg does (``ends_in_foot``), else the pose as
+    it was."""
+    t, at = (pose.angle[SEGMENT_INDEX[s]] for s in LEG[side])
+    lo, hi = max(t - KNEE_REACH, THIGH_RANGE[0]), min(t + KNEE_REACH, THIGH_RANGE[1])
+    at = 270.0 + (at - 270.0 + 180.0) % 360.0 - 180.0
+    found = search_angle(canvas, pose, (LEG[side][1],), (LEG[side][1],), lo, hi, min(max(at, lo), hi))
+    return found if ends_in_foot(canvas.sil, found, side) else pose
+
+
+def ends_in_foot(sil: np.ndarray, pose: Pose2D, side: str) -> bool:
+    """Whether one side's lower leg ends where the silhouette does, as a raised one
+    does: its ankle inside, and the silhouette past it along the lower leg no longer
+    than FOOT_REACH feet (FOOT_LENGTH, which the model draws past the ankle). A lower
+    leg that runs on into the silhouette was hung from a hand or laid along the
+    other leg."""
+    j = forward_kinematics_2d(pose)
+    knee, ankle = j[JOINT_INDEX[f"knee_{side}"]], j[JOINT_INDEX[f"ankle_{side}"]]
+    step = (ankle - knee) / max(np.hypot(*(ankle - knee)), 1e-6)
+    reach = np.arange(int(FOOT_REACH * FOOT_LENGTH * pose.scale) + 2)
+    x, y = np.round(ankle + step * reach[:, None]).astype(int).T
+    inside = (0 <= x) & (x < sil.shape[1]) & (0 <= y) & (y < sil.shape[0])
+    inside[inside] = sil[y[inside], x[inside]] > 0
+    return bool(inside[0] and not inside[1:].all())
 
 
 def search_thigh(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
@@ -70,8 +141,11 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
     (``refit_leg_beside``); near profile, each fit also enters with its legs'
     names exchanged, since there the two legs look alike and only their motion over
     time tells which is which (``mocap.silhouette.legchain`` chooses)."""
-    first = fit_legs(canvas, pose, prev)
-    poses = [first] + [refit_leg_beside(canvas, first, side, prev) for side in SIDES]
+    joints = forward_kinematics_2d(pose)
+    reading = lower_leg_curves(canvas.sil, joints, pose.scale)
+    raised = raised_knee_row(canvas.sil, joints, pose.scale, reading[1])
+    first = fit_legs(canvas, pose, prev, reading, raised)
+    poses = [first] + [refit_leg_beside(canvas, first, side, prev, raised) for side in SIDES]
     if pose.spread < UNCROSS_SPREAD:
         poses += [_exchange_legs(p) for p in poses]
     poses = _distinct(poses)
@@ -79,16 +153,19 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
     return [poses[i] for i in order]
 
 
-def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
+def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, raised: float) -> Pose2D:
     """One leg's angles fitted again with the other leg taken as fitted, so that it
     explains what the other leaves unexplained: the thigh by Algorithm 1 from the
-    previous frame's lower leg angle, then the lower leg. Its lengths stay: where the
-    other leg explains everything, Algorithm 6 beside it would shrink this one."""
-    other = LEG["r" if side == "l" else "l"]
-    beside = canvas.fork(pose_quads(pose, other))
+    previous frame's lower leg angle, then the lower leg (near where it was, or over
+    every bend of a knee above the row ``raised``: ``search_shin``). Its lengths
+    stay: where the other leg explains everything, Algorithm 6 beside it would shrink
+    this one."""
+    beside = canvas.fork(pose_quads(pose, LEG[other_side(side)]))
     lower = LEG[side][1]
     pose = Knob("angle", (lower,)).apply(pose, (prev or pose).angle[SEGMENT_INDEX[lower]])
     pose = search_thigh(beside, pose, side, prev)
+    if raised_leg(pose, side, raised):
+        return search_shin(beside, pose, side)
     return search_angle(beside, pose, (lower,), (lower,),
                         *span(pose.angle[SEGMENT_INDEX[lower]], TRACK_HALF_RANGE))
 
