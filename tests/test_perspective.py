@@ -131,6 +131,21 @@ def test_key_joints_solve_again_only_the_frames_that_moved(monkeypatch):
     assert np.array_equal(again[:12], first[:12])
 
 
+def test_key_joints_followed_turned_the_wrong_way_are_turned_back_by_the_limbs():
+    """The model's walk seen from yaw 50: its key joints followed on the wrong side
+    (every frame's mirror image, turned about -40 degrees instead of 40) come back on
+    every frame, where the knees and elbows bend the way they can."""
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
+                                                           yaw=50.0))
+    joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
+    camera = C.default_camera(320, 240)
+    right = K.key_joints(joints2d, camera, "right")
+    wrong = K.mirror_images(right)
+    assert (K.triangle_yaw(wrong) < -25.0).all() and (K.triangle_yaw(right) > 25.0).all()
+    assert np.allclose(P.sided_key(joints2d, wrong, camera), right, atol=1e-6)
+    assert np.allclose(P.sided_key(joints2d, right, camera), right)
+
+
 def turning_trunk(yaws: np.ndarray, span: float) -> tuple[np.ndarray, np.ndarray]:
     """Rays (F, 3, 3) of the key joints of known_pose turning through ``yaws``, and
     the key triangle's sides with a shoulder span ``span``."""

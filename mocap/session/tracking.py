@@ -28,7 +28,7 @@ from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw
 from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
 from mocap.track.calibration import UNIT_M, calibrate, default_camera
 from mocap.track.keydepths import key_joints
-from mocap.track.perspective import place_joints, steady_depths, to_contract
+from mocap.track.perspective import place_joints, sided_key, steady_depths, to_contract
 from mocap.session.base import Session
 from mocap.silhouette.passes import SCALE_PERCENTILE
 from mocap.track.parts import far_arm
@@ -88,8 +88,9 @@ class TrackSession(Session):
         super().__init__(info, annotations, smooth)
         self.tracked = tracked
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
-        # (steady 2D joints, turns, key joints, their placement free of user signs)
-        self._placed: tuple[np.ndarray, list, np.ndarray, np.ndarray] | None = None
+        # (steady 2D joints, turns, key joints followed from frame to frame, those on the
+        # side the limbs take, their placement free of user signs)
+        self._placed: tuple[np.ndarray, list, np.ndarray, np.ndarray, np.ndarray] | None = None
         self._resolution: tuple[Inputs, np.ndarray, np.ndarray] | None = None
 
     @property
@@ -127,7 +128,7 @@ class TrackSession(Session):
         joint mends, with a third of the pins (64.8 -> 58.7 mm, against 53.5; from the
         held-out views, --yaws 60 120: 76.2 -> 70.6, against 62.9)."""
         self._resolved()
-        return far_arm(self._placed[2][0, :, 2])
+        return far_arm(self._placed[3][0, :, 2])
 
     @property
     def inputs(self) -> Inputs:
@@ -211,15 +212,17 @@ class TrackSession(Session):
         return inputs, joints3d, root
 
     def _free_placement(self, steady: np.ndarray, turns: list) -> tuple[np.ndarray, np.ndarray]:
-        """The key joints of every frame (Eq. 6-11) and every joint placed without the
-        user's signs (contract frame): kept while the 2D joints and the turns stay the
+        """The key joints of every frame (Eq. 6-11, on the side the limbs take:
+        perspective.sided_key) and every joint placed without the user's signs
+        (contract frame): kept while the 2D joints and the turns stay the
         same; after a joint override only the frames it moved are solved again."""
         last = self._placed
         if last is None or last[1] != turns or not np.array_equal(last[0], steady):
             before = (last[0], last[2]) if last is not None and last[1] == turns else None
-            key = key_joints(steady, self.camera, turns, before)
-            self._placed = (steady, turns, key, self._placed_joints(steady, key))
-        return self._placed[2], self._placed[3]
+            followed = key_joints(steady, self.camera, turns, before)
+            key = sided_key(steady, followed, self.camera, turns, seen=~self.lost)
+            self._placed = (steady, turns, followed, key, self._placed_joints(steady, key))
+        return self._placed[3], self._placed[4]
 
 
 def body_px(joints2d: np.ndarray) -> float:

@@ -99,3 +99,26 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
             out[f] = before[1][f]
             depths = out[f, :, 2]
     return out
+
+
+
+def mirror_images(key: np.ndarray, steps: int = 20) -> np.ndarray:
+    """(F, 3, 3) the other solution of Eq. 10-11 on every frame of key joints (F, 3, 3):
+    the triangle with their median side lengths on the same rays, from their depths
+    mirrored about their mean (as ``frame_key_depths``), by Gauss-Newton steps on all
+    frames at once (Eq. 11's Jacobian in closed form)."""
+    lines = np.array(KEY_LINES)
+    sides = np.median(np.linalg.norm(key[:, lines[:, 0]] - key[:, lines[:, 1]], axis=-1), axis=0)
+    rays = key / key[..., 2:]
+    z = 2 * key[..., 2].mean(axis=1, keepdims=True) - key[..., 2]
+    rows = np.arange(len(lines))
+    for _ in range(steps):
+        points = z[..., None] * rays
+        gap = points[:, lines[:, 0]] - points[:, lines[:, 1]]                   # (F, 3, 3)
+        length = np.maximum(np.linalg.norm(gap, axis=-1), 1e-12)
+        jac = np.zeros((len(key), len(lines), 3))
+        jac[:, rows, lines[:, 0]] = (gap * rays[:, lines[:, 0]]).sum(-1) / length
+        jac[:, rows, lines[:, 1]] = -(gap * rays[:, lines[:, 1]]).sum(-1) / length
+        normal = jac.transpose(0, 2, 1) @ jac + 1e-9 * np.eye(3)
+        z = z - np.linalg.solve(normal, (jac.transpose(0, 2, 1) @ (length - sides)[..., None]))[..., 0]
+    return z[..., None] * rays
