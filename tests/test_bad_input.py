@@ -148,7 +148,7 @@ def test_ctrl_c_while_starting_up_is_one_line(monkeypatch, capsys):
     """The parser imports the commands' modules: a Ctrl+C there is no traceback either."""
     import mocap.cli
 
-    def interrupted():
+    def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
     monkeypatch.setattr(mocap.cli, "build_parser", interrupted)
     assert run(capsys, "fit", "any.mp4") == (130, ["mocap: interrupted"])
