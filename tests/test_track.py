@@ -24,6 +24,7 @@ from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_CO
                                around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
                                outline_cost, overlap,
                                settled_knee, twin_overlap)
+from mocap.track.tracker import FAR_UPPER_SCALES, FAR_UPPER_WEIGHT
 from mocap.track.parts import PARTS, beside, far_arm, far_forearm, mirrored_model, own_colour, told_apart
 from mocap.walk import walk_cycle
 
@@ -205,6 +206,37 @@ def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
                                          [45.0, 20.0, np.radians(90), 50.0, 8.0]]))
     assert on_arm < 0.2 * OUTLINE_COST
     assert on_trunk == pytest.approx(OUTLINE_COST)
+
+
+def raised_far_arm() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A red trunk on grey and an arm raised beside it from the shoulder (78, 50): its
+    sleeve lit brighter than the trunk, 36 px to the elbow, a skin forearm 30 px up
+    and out; the shoulder, elbow and wrist."""
+    image = np.full((160, 200, 3), 110, np.uint8)
+    image[20:140, 40:80] = (40, 40, 160)
+    root, elbow = np.array([78.0, 50.0]), np.array([114.0, 50.0])
+    wrist = elbow + 30 * np.array([np.cos(np.radians(-45)), np.sin(np.radians(-45))])
+    cv2.line(image, tuple(np.int32(root)), tuple(np.int32(elbow)), (90, 90, 250), 8)
+    cv2.line(image, tuple(np.int32(elbow)), tuple(np.int32(wrist)), (120, 140, 200), 8)
+    return image, np.stack([root, elbow, wrist])
+
+
+def test_a_far_arm_is_found_by_its_forearm_where_its_sleeve_matches_the_trunk():
+    """The far arm's upper arm, its colours marked as the trunk's shaded shirt, matches
+    the trunk better than its own lit sleeve; weighed FAR_UPPER_WEIGHT and tried
+    FAR_UPPER_SCALES shorter than its usual 40 px, the forearm's skin places the arm."""
+    image, (root, elbow, wrist) = raised_far_arm()
+    grid = blocks.make_grid(40, 8)
+    sleeve = np.full((len(grid.along), len(grid.across), 3), (40, 40, 160), np.float32)
+    upper, lower = (sleeve, grid, 8.0, 40.0), (np.full_like(sleeve, (120, 140, 200)), grid, 8.0, 30.0)
+    nothing = lambda candidates: np.zeros(len(candidates))  # noqa: E731
+    by_sleeve = around_root(image, root, upper, lower, nothing, nothing)
+    weighed = around_root(image, root, upper, lower, nothing, nothing, FAR_UPPER_WEIGHT)
+    found = around_root(image, root, upper, lower, nothing, nothing, FAR_UPPER_WEIGHT, FAR_UPPER_SCALES)
+    assert np.linalg.norm(blocks.block_end(by_sleeve) - wrist) > 40.0          # the sleeve on the trunk
+    assert np.linalg.norm(weighed[:2] - elbow) > 3.0                      # at the usual length only
+    assert np.linalg.norm(found[:2] - elbow) < 1.0
+    assert np.linalg.norm(blocks.block_end(found) - wrist) < 1.0
 
 
 def sleeve_scene(arm_x: int, sleeve: tuple) -> np.ndarray:

@@ -187,25 +187,28 @@ def limb_cost(s: np.ndarray, k: int) -> float:
 
 
 def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
-                penalty: blocks.Penalty, upper_penalty: blocks.Penalty | None = None) -> np.ndarray:
+                penalty: blocks.Penalty, upper_penalty: blocks.Penalty | None = None,
+                upper_weight: float = 1.0, upper_scales: tuple[float, ...] = (1.0,)) -> np.ndarray:
     """Beyond the paper: the lower block of a limb hanging from ``root`` of the pair
     of directions of its two parts, AROUND_STEP degrees apart, each part at its
-    usual length, of least cost (the sum of the two 1/S, the lower block's
-    ``penalty`` and the upper block's ``upper_penalty``). A limb lost to clutter or
-    to its twin is found again where it shows. ``upper`` and ``lower`` are each
-    (colour model, grid, width, length)."""
+    usual length (the upper part at each of ``upper_scales`` times it), of least
+    cost (``upper_weight`` times the upper block's 1/S plus the lower block's, the
+    lower block's ``penalty`` and the upper block's ``upper_penalty``). A limb lost
+    to clutter or to its twin is found again where it shows. ``upper`` and
+    ``lower`` are each (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
-    uppers = blocks.between(np.broadcast_to(root, (len(angles), 2)),
-                            root + m_u * np.c_[np.cos(angles), np.sin(angles)], n_u)
+    ways = np.c_[np.cos(angles), np.sin(angles)]
+    reach = np.repeat(np.asarray(upper_scales) * m_u, len(angles))[:, None]
+    uppers = blocks.between(np.broadcast_to(root, (len(reach), 2)),
+                            root + reach * np.tile(ways, (len(upper_scales), 1)), n_u)
     starts = np.repeat(block_end(uppers), len(angles), axis=0)
-    turns = np.tile(np.c_[np.cos(angles), np.sin(angles)], (len(angles), 1))
-    lowers = blocks.between(starts, starts + m_l * turns, n_l)
-    upper_cost = 1.0 / blocks.score(image, model_u, grid_u, uppers)
+    lowers = blocks.between(starts, starts + m_l * np.tile(ways, (len(uppers), 1)), n_l)
+    upper_cost = upper_weight / blocks.score(image, model_u, grid_u, uppers)
     if upper_penalty is not None:
         upper_cost += upper_penalty(uppers)
     cost = upper_cost[:, None] + (1.0 / blocks.score(image, model_l, grid_l, lowers)
-           + penalty(lowers)).reshape(len(angles), -1)
+           + penalty(lowers)).reshape(len(uppers), -1)
     return lowers[int(np.argmin(cost))]
 
 

@@ -32,6 +32,7 @@ lies beside it there (mocap.track.parts.told_apart). Every later frame is tracke
    a leg's knee is then settled where its thigh and shin blocks match best together
    (``settled_knee``). The far arm's forearm matches either its own colours or its
    twin's mirrored (``far_forearm``): marked behind the trunk, its own are the shirt's;
+   its upper arm's match weighs less around the root (``_upper_trust``);
 4. every colour model updated by linear weighting with its new block when the match
    is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
    the marked frame's colours, so that a model cannot drift onto clutter.
@@ -73,6 +74,8 @@ HISTORY = 150              # frames of S that the median looks back on
 USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
 ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's) scale stays in it
 HEAD_RETRY = 0.3           # of the head's median S: a worse match is searched again (_track_head)
+FAR_UPPER_WEIGHT = 0.3     # of its 1/S: what the far arm's upper arm's match weighs around its root
+FAR_UPPER_SCALES = (1.0, 0.9)   # of its usual length: the far arm's upper arm's lengths tried there
 
 
 class BodyTracker:
@@ -306,8 +309,22 @@ class BodyTracker:
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
         upper_cost, lower_cost = self.limb_costs[k]
         penalty = added(penalty, lower_cost)
-        lower = around_root(image, root, *parts, penalty, upper_cost)
+        lower = around_root(image, root, *parts, penalty, upper_cost, *self._upper_trust(k))
         self._hang(image, new, s, k, root, lower, penalty)
+
+    def _upper_trust(self, k: int) -> tuple[float, tuple[float, ...]]:
+        """Beyond the paper: the weight of limb k's upper block's 1/S around its root
+        (``around_root``) and the lengths tried there, of its usual one. The far
+        arm's upper arm (of ``far_forearm``), marked on or behind the trunk in the
+        shaded shirt's colours, matches the trunk better than its own place
+        (track_salsa's raised left sleeve, lit 1.6 times brighter: 28-36 grey levels
+        there, 7-9 on the trunk): it weighs FAR_UPPER_WEIGHT, so that its forearm's
+        skin decides, and, often turned toward or away from the camera, is also tried
+        shorter (FAR_UPPER_SCALES), or the forearm hung from its end misses. A far arm
+        hidden behind the trunk then strays more (the README gives the measures)."""
+        if k + 1 == self.far_forearm:
+            return FAR_UPPER_WEIGHT, FAR_UPPER_SCALES
+        return 1.0, (1.0,)
 
     def _avoided(self, k: int, new: np.ndarray) -> tuple:
         """The (cost, block) pairs limb k's lower part keeps off: the head for an arm
