@@ -292,15 +292,20 @@ KINEMATIC_MATRIX = _kinematic_matrix()
 def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndarray,
                                 ratio: np.ndarray, spread: np.ndarray) -> np.ndarray:
     """Joints (B, 16, 2) for B poses given as arrays (B,2), (B,10), (B,10), (B,)
-    (the pelvis (2,) and the spread a float where the B poses share them).
+    (the pelvis (2,) and the spread a float where the B poses share them): each a
+    fixed linear combination (KINEMATIC_MATRIX) of ``kinematic_basis``'s vectors."""
+    return joints_of_basis(kinematic_basis(pelvis, scale, angle, ratio, spread)[0])
 
-    Every joint is a fixed linear combination of the pelvis, the segment vectors and
-    the image-left unit vector scaled by the seen span (KINEMATIC_MATRIX).
-    """
+
+def kinematic_basis(pelvis: np.ndarray, scale: float, angle: np.ndarray, ratio: np.ndarray,
+                    spread, rows: int = 12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pelvis, the 10 segment vectors and the image-left unit vector scaled by the
+    seen span of B poses: the first 12 of ``rows`` vectors (rows, B, 2), the rest left
+    to the caller; and the cosines and sines (10, B) of the segments' angles."""
     a = np.radians(angle).T                                   # (10, B)
     cos, sin = np.cos(a), np.sin(a)
     length = LENGTH[:, None] * ratio.T * scale
-    basis = np.empty((12, len(angle), 2))
+    basis = np.empty((rows, len(angle), 2))
     basis[0] = pelvis
     basis[1:11, :, 0] = cos * length
     basis[1:11, :, 1] = -sin * length
@@ -309,7 +314,12 @@ def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndar
     # image-left normal of the torso axis: (-sin t, -cos t), flipped if the torso points down
     basis[11, :, 0] = -np.abs(sin_t) * span
     basis[11, :, 1] = -np.copysign(cos_t, sin_t) * span
-    return (KINEMATIC_MATRIX @ basis.reshape(12, -1)).reshape(len(JOINTS), -1, 2).transpose(1, 0, 2)
+    return basis, cos, sin
+
+
+def joints_of_basis(basis: np.ndarray) -> np.ndarray:
+    """Joints (B, 16, 2) of ``kinematic_basis``'s vectors."""
+    return (KINEMATIC_MATRIX @ basis[:12].reshape(12, -1)).reshape(len(JOINTS), -1, 2).transpose(1, 0, 2)
 
 
 SEGMENT_JOINTS = np.array([[JOINT_INDEX[a], JOINT_INDEX[b]] for a, b in SEGMENTS.values()])

@@ -16,9 +16,9 @@ from dataclasses import replace
 import numpy as np
 
 from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, WIDTH, Pose2D,
-                        forward_kinematics_2d, forward_kinematics_2d_batch, image_angle, knee_bend, limb)
+                        forward_kinematics_2d, image_angle, knee_bend, limb)
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
-from mocap.silhouette.raster import HAND_LENGTH, Canvas, draw_model, joint_quads, pose_quads, sweep_scorer
+from mocap.silhouette.raster import HAND_LENGTH, Canvas, draw_model, pose_quads, posed_quads, sweep_scorer
 from mocap.silhouette.search import Knob, span, refine_limb, search_angle
 
 ARM = {side: limb("arm", side).segments for side in SIDES}
@@ -197,8 +197,7 @@ def _scored_guesses(canvas: Canvas, pose: Pose2D, side: str, guesses: np.ndarray
     pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
     angle[:, both.indices[1]] = guesses[:, 1]
     ratio[:, both.indices] = guesses[:, 2:]
-    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
-    quads = joint_quads(joints, pose.scale, both.indices, spread)
+    quads, joints = posed_quads(pelvis, pose.scale, angle, ratio, spread, both.indices)
     scores, score = sweep_scorer(canvas, quads) if score is None else (score(quads), score)
     return angle, ratio, scores + canvas.edge_scores(joints, both.indices, pose.scale), score
 

@@ -14,15 +14,15 @@ import math
 import cv2
 import numpy as np
 
-from mocap.body import (FOOT_LENGTH, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, WIDTH,
-                        Pose2D, forward_kinematics_2d, forward_kinematics_2d_batch, torso_width)
+from mocap.body import (FOOT_LENGTH, KINEMATIC_MATRIX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES,
+                        WIDTH, Pose2D, joints_of_basis, kinematic_basis, torso_width)
 from mocap.edges import EDGE_WEIGHT, Edges
 
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
 _PERPENDICULAR = np.array([-1.0, 1.0])   # (dx, dy) reversed times this: the normal (-dy, dx)
 _CORNER_END = np.array([0, 1, 1, 0])     # a rectangle's corners: at which end of the segment,
-_CORNER_SIDE = np.array([1.0, 1.0, -1.0, -1.0])[:, None]   # and on which side of it
+_CORNER_SIDE = np.array([1.0, 1.0, -1.0, -1.0])   # and on which side of it
 _TORSO = SEGMENT_INDEX["torso"]
 _HAS_FOOT = np.isin(np.arange(len(SEGMENT_NAMES)), [SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]])
 # The hand (not in the paper's 10 cylinders nor the contract's joints): drawn as the
@@ -35,6 +35,8 @@ _HAND_REACH = np.zeros(len(SEGMENT_NAMES))       # of the lower arm's drawn leng
 _HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = HAND_LENGTH / LENGTH[
     SEGMENT_INDEX["lower_arm_l"]]
 _ALL_SEGMENTS = tuple(range(len(SEGMENT_NAMES)))
+# rows of ``_corner_basis``: body.kinematic_basis's 12, then the segments' directions and normals
+_DIRECTIONS, _NORMALS, _BASIS_ROWS = 12, 12 + len(SEGMENT_NAMES), 12 + 2 * len(SEGMENT_NAMES)
 
 
 def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -48,64 +50,69 @@ def _rectangles(ends: np.ndarray, widths) -> np.ndarray:
     d = ends[..., 1, :] - ends[..., 0, :]
     half = widths / (2 * np.maximum(np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]), 1e-9))
     h = d[..., ::-1] * (half[..., None] * _PERPENDICULAR)
-    return ends[..., _CORNER_END, :] + h[..., None, :] * _CORNER_SIDE
+    return ends[..., _CORNER_END, :] + h[..., None, :] * _CORNER_SIDE[:, None]
 
 
 @functools.lru_cache(maxsize=64)
-def _segment_plan(segments: tuple[int, ...]) -> tuple:
-    """What ``joint_quads`` needs of some segments, worked out once per tuple of
-    segment indices: their joints' indices, the positions of those with a foot, of
-    those with a hand and the hand's reach of each, their widths and the torso's
-    position (``_positions``)."""
+def _corner_weights(segments: tuple[int, ...], scale: float) -> np.ndarray:
+    """The weights (4k, _BASIS_ROWS) that give the corners of some segments' rectangles
+    (``posed_quads``) from ``_corner_basis``'s vectors: each corner is the segment's
+    proximal joint or its distal one (on into the hand, _HAND_REACH, and past the
+    ankle by the foot, at the distal corners), plus or minus half the segment's width
+    along its normal (the torso's normal comes scaled to its half width)."""
     idx = np.array(segments, int)
-    hands = _positions(_HAND_REACH[idx] > 0)
-    return (SEGMENT_JOINTS[idx], _positions(_HAS_FOOT[idx]), hands,
-            None if hands is None else _HAND_REACH[idx][hands][:, None], WIDTH[idx], _positions(idx == _TORSO))
+    start, end = KINEMATIC_MATRIX[SEGMENT_JOINTS[idx, 0]], KINEMATIC_MATRIX[SEGMENT_JOINTS[idx, 1]]
+    end = end + _HAND_REACH[idx, None] * (end - start)
+    k, rows = len(idx), np.arange(len(idx))
+    weights = np.zeros((k, 4, _BASIS_ROWS))
+    weights[:, :, :_DIRECTIONS] = np.stack([start, end, end, start], axis=1)
+    foot = np.where(_HAS_FOOT[idx], FOOT_LENGTH * scale, 0.0)
+    weights[rows[:, None], [1, 2], _DIRECTIONS + idx[:, None]] = foot[:, None]
+    half = np.where(idx == _TORSO, 1.0, WIDTH[idx] * scale / 2)
+    weights[rows, :, _NORMALS + idx] = half[:, None] * _CORNER_SIDE
+    return weights.reshape(4 * k, _BASIS_ROWS)
 
 
-def _positions(flags: np.ndarray) -> slice | np.ndarray | None:
-    """Where ``flags`` hold: a slice when they are one run (indexing by it is a view,
-    no copy), else their indices; None where none do."""
-    at = np.flatnonzero(flags)
-    if not len(at):
-        return None
-    return slice(int(at[0]), int(at[-1]) + 1) if at[-1] - at[0] == len(at) - 1 else at
+def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
+                  torso: bool) -> np.ndarray:
+    """``body.kinematic_basis``'s 12 vectors, then each segment's unit direction
+    (cos, -sin) and normal (sin, cos): (_BASIS_ROWS, B, 2); the torso's normal times its
+    seen half width where ``torso`` (it is drawn)."""
+    basis, cos, sin = kinematic_basis(pelvis, scale, angle, ratio, spread, rows=_BASIS_ROWS)
+    basis[_DIRECTIONS:_NORMALS, :, 0] = basis[_NORMALS:, :, 1] = cos
+    basis[_DIRECTIONS:_NORMALS, :, 1] = -sin
+    basis[_NORMALS:, :, 0] = sin
+    if torso:
+        basis[_NORMALS + _TORSO] *= np.reshape(torso_width(spread) * (scale / 2), (-1, 1))
+    return basis
 
 
-def joint_quads(joints: np.ndarray, scale: float, segments=None, spread=1.0) -> np.ndarray:
-    """Rectangles (..., k, 4, 2) of the segments (indices) of posed joints (..., 16, 2);
-    the torso is as wide as ``spread`` (shape (...,)) makes it look, each lower leg
-    goes on past the ankle by the foot (body.FOOT_LENGTH), which silhouettes show, and
-    each lower arm into the hand (HAND_LENGTH)."""
-    ends_at, feet, hands, reach, width, torso = _segment_plan(
-        _ALL_SEGMENTS if segments is None else tuple(int(i) for i in segments))
-    ends = joints[..., ends_at, :]                    # a copy: the foot and hand extend it
-    if feet is not None:
-        shin = ends[..., feet, 1, :] - ends[..., feet, 0, :]
-        length = np.sqrt(shin[..., 0] * shin[..., 0] + shin[..., 1] * shin[..., 1])
-        ends[..., feet, 1, :] += shin / np.maximum(length[..., None], 1e-9) * (FOOT_LENGTH * scale)
-    if hands is not None:
-        ends[..., hands, 1, :] += (ends[..., hands, 1, :] - ends[..., hands, 0, :]) * reach
-    widths = width * scale
-    if torso is not None:
-        widths = np.repeat(widths[None], np.size(spread), 0).reshape(np.shape(spread) + widths.shape)
-        widths[..., torso] = (torso_width(spread) * scale)[..., None]
-    return _rectangles(ends, widths)
+def posed_quads(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
+                segments=None) -> tuple[np.ndarray, np.ndarray]:
+    """Rectangles (B, k, 4, 2) of the segments (indices) of B poses given as
+    ``body.forward_kinematics_2d_batch`` takes them, and their joints (B, 16, 2).
+    The torso is as wide as ``spread`` makes it look, each lower leg goes on past the
+    ankle by the foot (body.FOOT_LENGTH), which silhouettes show, and each lower arm
+    into the hand (HAND_LENGTH). Every corner is a fixed combination of a few vectors
+    of each pose (``_corner_weights``): one product poses them all (this poses
+    every candidate of every search)."""
+    segments = _ALL_SEGMENTS if segments is None else tuple(segments)
+    basis = _corner_basis(pelvis, scale, angle, ratio, spread, _TORSO in segments)
+    weights = _corner_weights(segments, scale)
+    quads = (weights @ basis.reshape(_BASIS_ROWS, -1)).reshape(-1, 4, len(angle), 2)
+    return quads.transpose(2, 0, 1, 3), joints_of_basis(basis)
 
 
 def pose_quads(pose: Pose2D, segments=SEGMENT_NAMES) -> np.ndarray:
     """The rectangles (k, 4, 2) of the named segments of a 2D pose."""
-    return joint_quads(forward_kinematics_2d(pose), pose.scale,
-                       [SEGMENT_INDEX[s] for s in segments], pose.spread)
+    return poses_quads([pose], segments)[0]
 
 
 def poses_quads(poses: list[Pose2D], segments=SEGMENT_NAMES) -> np.ndarray:
     """The rectangles (P, k, 4, 2) of the named segments of 2D poses of one scale."""
-    spread = np.array([p.spread for p in poses])
-    joints = forward_kinematics_2d_batch(np.array([p.pelvis for p in poses], float), poses[0].scale,
-                                         np.array([p.angle for p in poses]), np.array([p.ratio for p in poses]),
-                                         spread)
-    return joint_quads(joints, poses[0].scale, [SEGMENT_INDEX[s] for s in segments], spread)
+    return posed_quads(np.array([p.pelvis for p in poses], float), poses[0].scale,
+                       np.array([p.angle for p in poses]), np.array([p.ratio for p in poses]),
+                       np.array([p.spread for p in poses]), [SEGMENT_INDEX[s] for s in segments])[0]
 
 
 def fill_quads(mask: np.ndarray, quads: np.ndarray, offset=(0, 0)) -> np.ndarray:
@@ -143,7 +150,7 @@ def similarity(silhouette: np.ndarray, model: np.ndarray) -> float:
 
 def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
-    pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32)   # windows keep them >= 0
+    pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32, order="C")   # windows keep them >= 0
     planes = np.zeros((len(pts),) + shape, np.uint8)
     fill, line = cv2.fillConvexPoly, cv2.LINE_8
     for k in range(pts.shape[1]):               # segment by segment: a fifth less loop overhead

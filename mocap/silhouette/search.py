@@ -9,8 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mocap.body import LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d_batch
-from mocap.silhouette.raster import Canvas, joint_quads, sweep_scorer
+from mocap.body import LENGTH, SEGMENT_INDEX, Pose2D
+from mocap.silhouette.raster import Canvas, posed_quads, sweep_scorer
 
 RATIO_RANGE = (0.15, 1.15)       # Algorithm 6 searches [0, 1]; real limbs differ from Table 1
 TRACK_HALF_RANGE = 20.0          # degrees searched around a previous estimate
@@ -45,8 +45,8 @@ class Knob:
     def batch(self, pose: Pose2D, values: np.ndarray):
         """(pelvis, angle, ratio, spread) of the pose with each value set: angles and
         ratios (B, 10); the pelvis (2,) and the spread (a float) as the pose has them
-        unless the knob turns them, then (B, 2) and (B,) (forward_kinematics_2d_batch
-        and raster.joint_quads take either)."""
+        unless the knob turns them, then (B, 2) and (B,) (raster.posed_quads takes
+        either)."""
         n = len(values)
         pelvis, angle, ratio, spread = pose.pelvis, pose.angle[None].repeat(n, 0), pose.ratio[None].repeat(n, 0), pose.spread
         if self.field == "angle":
@@ -117,9 +117,8 @@ def search(pose: Pose2D, job: Search) -> Pose2D:
     step = (job.hi - job.lo) / (n - 1)
     values = job.lo + step * np.arange(n)
     pelvis, angle, ratio, spread = job.knob.batch(pose, values)
-    joints = forward_kinematics_2d_batch(pelvis, pose.scale, angle, ratio, spread)
     drawn = [SEGMENT_INDEX[d] for d in job.drawn]
-    quads = joint_quads(joints, pose.scale, drawn, spread)
+    quads, joints = posed_quads(pelvis, pose.scale, angle, ratio, spread, drawn)
     every = max(1, int(round(job.sweep_step / step)))
     start = min(max(int(round((job.center - job.lo) / step)), 0), n - 1)
     opening = sorted({*range(0, n, every), n - 1, start})
