@@ -107,6 +107,12 @@ def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -
     return tracked_video(info, notes, lambda done, total: report(Progress(done, total, TRACKING)))
 
 
+def tracks(method: str | None, notes: Annotations) -> bool:
+    """Whether a run takes the tracking method: ``method`` if given, else the
+    annotations' (the silhouette method when they name none)."""
+    return (method or notes.method) == "track"
+
+
 def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None = None, *,
                  method: str | None = None, smooth: float = 0.0,
                  background: str | os.PathLike | tuple[int, int] | None = None,
@@ -117,7 +123,7 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
     None: the annotations', resolved by the caller, else estimated)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
-    if (method or notes.method) == "track":
+    if tracks(method, notes):
         return TrackSession(info, track(info, notes, progress), notes, smooth)
     scene = clip_background(info, processing_scale(info), background)
     silhouettes, fits = silhouette_passes(info, progress, scene)
@@ -155,7 +161,7 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports
     check_writable(*paths.values())
     if masks is not None:
-        if (method or notes.method) == "track":
+        if tracks(method, notes):
             raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
         check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
