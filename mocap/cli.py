@@ -10,6 +10,7 @@ import warnings
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
 from mocap.options import add_smooth, smooth_of
+from mocap.person import CHOICES as PERSON_MODELS
 from mocap.progressbar import Bar
 
 
@@ -29,6 +30,10 @@ def _add_fit(p) -> None:
     p.add_argument("--background", metavar="IMAGE|VIDEO",
                    help="a photo or short video of the empty scene, same camera (silhouette method; "
                         "default: the annotations' background, else estimated from the clip)")
+    p.add_argument("--person-model", choices=PERSON_MODELS, default=None,
+                   help="the learned person model the silhouette method also looks through (its "
+                        "mask and joints); none: background subtraction alone, the paper's "
+                        "classical path. Default: mediapipe where installed, else none")
     p.add_argument("--masks", metavar="DIR",
                    help="also write each frame's silhouette as DIR/NNNNNN.png (255 = performer) and "
                         "name the folder in the motion file")
@@ -49,7 +54,7 @@ def _run_fit(args) -> None:
     written = fit_video_to_file(args.video, {k: p for k, p in paths.items() if p is not None},
                                 annotations=args.annotations, method=args.method,
                                 smooth=smooth_of(args), background=args.background, masks=args.masks,
-                                foot_lock=args.foot_lock,
+                                foot_lock=args.foot_lock, person=args.person_model,
                                 progress=_progress.step)
     print("wrote " + ", ".join(str(p) for p in written.paths))
     print(doubt_summary(written, args.video))

@@ -22,6 +22,7 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
+from mocap.person import DEFAULT_MODEL, NONE, PersonModel, available, install_hint, open_person_model
 from mocap.review import Doubt
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
@@ -62,14 +63,25 @@ def _quiet(_: Progress) -> None:
     pass
 
 
-def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None
-                      ) -> tuple[list[Silhouette | None], list[FrameFit]]:
+def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None,
+                      person: str = NONE) -> tuple[list[Silhouette | None], list[FrameFit]]:
     """The silhouette method's two passes over a video, streamed together
     (``FitStream``): each frame's silhouette (against ``background``, else the
-    clip's, mocap.silhouette.plate) and each frame's 2D fit as soon as the silhouettes
-    it needs are in, each reported as it comes (``done`` counts both)."""
-    report, n = progress or _quiet, info.frame_count
-    scale = processing_scale(info)
+    clip's, mocap.silhouette.plate), seen also by the ``person`` model named
+    (mocap.person; "none": background subtraction alone), and each frame's 2D fit as
+    soon as the silhouettes it needs are in, each reported as it comes (``done``
+    counts both)."""
+    model = open_person_model(person)
+    try:
+        return _passes(info, progress or _quiet, background, model)
+    finally:
+        if model is not None:
+            model.close()
+
+
+def _passes(info: VideoInfo, report: Report, background: Background | None, model: PersonModel | None
+            ) -> tuple[list[Silhouette | None], list[FrameFit]]:
+    n, scale = info.frame_count, processing_scale(info)
     stream, fits = FitStream(scale, info.fps), []
 
     def fitted(batch: list[FrameFit]) -> None:
@@ -77,7 +89,7 @@ def silhouette_passes(info: VideoInfo, progress: Report | None = None, backgroun
             fits.append(fit)
             report(Progress(len(stream.silhouettes) + len(fits), 2 * n, FITTING, frame=fit.index,
                             product=fit))
-    for i, sil in enumerate(iter_silhouettes(info, scale, background)):
+    for i, sil in enumerate(iter_silhouettes(info, scale, background, model)):
         batch = stream.push(sil)
         report(Progress(i + 1 + len(fits), 2 * n, SILHOUETTES, frame=i, product=sil))
         fitted(batch)
@@ -92,11 +104,24 @@ def silhouette_passes(info: VideoInfo, progress: Report | None = None, backgroun
     return stream.silhouettes, fits
 
 
-def fit_video(video: str | os.PathLike | VideoInfo,
-              progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:
-    """Silhouettes and 2D fits for every frame of a video (a path or an opened one)."""
+def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = None,
+              person: str = NONE) -> tuple[VideoInfo, list[FrameFit]]:
+    """Silhouettes and 2D fits for every frame of a video (a path or an opened one),
+    with the ``person`` model named (mocap.person)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
-    return info, silhouette_passes(info, progress)[1]
+    return info, silhouette_passes(info, progress, person=person)[1]
+
+
+def person_model(name: str | None) -> str:
+    """The person model a run uses: ``name``, else the default one where it is
+    installed; without it a MocapWarning says how to get it, and the run takes the
+    paper's classical path ("none")."""
+    name = DEFAULT_MODEL if name is None else name
+    if name == NONE or available(name):
+        return name
+    warnings.warn(f"no person model, fitting by silhouettes alone: {install_hint(name)}", MocapWarning,
+                  stacklevel=2)
+    return NONE
 
 
 def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
@@ -116,18 +141,19 @@ def tracks(method: str | None, notes: Annotations) -> bool:
 def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None = None, *,
                  method: str | None = None, smooth: float = 0.0,
                  background: str | os.PathLike | tuple[int, int] | None = None,
-                 progress: Report | None = None) -> Session:
+                 progress: Report | None = None, person: str = NONE) -> Session:
     """Run a method over a video and return its session. ``method`` None: the
     annotations' method, else the silhouette method; ``background``: the empty
     scene for it (a photo or video file, or first and last frames of the clip;
-    None: the annotations', resolved by the caller, else estimated)."""
+    None: the annotations', resolved by the caller, else estimated); ``person``: the
+    person model the silhouette method also looks through (``person_model``)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
     if tracks(method, notes):
         return TrackSession(info, track(info, notes, progress), notes, smooth)
     scene = clip_background(info, processing_scale(info), background)
-    silhouettes, fits = silhouette_passes(info, progress, scene)
-    return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene)
+    silhouettes, fits = silhouette_passes(info, progress, scene, person)
+    return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene, person=person)
 
 
 @dataclass(frozen=True)
@@ -144,13 +170,14 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
                       annotations: str | os.PathLike | None = None, method: str | None = None,
                       smooth: float = 0.0, background: str | os.PathLike | None = None,
                       masks: str | os.PathLike | None = None, foot_lock: bool = False,
-                      progress: Report | None = None) -> Written:
+                      progress: Report | None = None, person: str | None = None) -> Written:
     """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
     interpolate and write the files asked for, {format key: path} of
     mocap.io.export.formats (the motion file "json" always: VIDEO.motion.json unless
     given). ``background``: the empty scene (else the
     annotations'); ``masks``: a folder for the silhouettes, named in the motion
-    file; ``foot_lock``: planted feet kept in place. A background that holds the
+    file; ``foot_lock``: planted feet kept in place; ``person``: the person model
+    (``person_model``: None, the default where installed). A background that holds the
     performer is a MocapWarning; a format this installation cannot write is refused
     before the video is read."""
     for key, path in exports.items():
@@ -165,7 +192,9 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
             raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
         check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
-    session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress)
+    person = NONE if tracks(method, notes) else person_model(person)
+    session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress,
+                           person=person)
     if session.background_warning:
         warnings.warn(session.background_warning, MocapWarning, stacklevel=2)
     clip = session.clip(foot_lock)

@@ -26,7 +26,8 @@ from mocap.lift.motion import Motion
 from mocap.lift.orientation import guess_orientations
 from mocap.session.base import Session
 from mocap.silhouette.background import Background
-from mocap.silhouette.masks import held_warning, silhouette_confidence, write_masks
+from mocap.person import NONE
+from mocap.silhouette.masks import held_warning, silhouette_confidence, write_masks, write_silhouettes
 from mocap.silhouette.passes import FrameFit, Silhouette, fit_arrays
 from mocap.track.marks import shoulders_as_hips
 
@@ -40,10 +41,11 @@ class SilhouetteSession(Session):
     def __init__(self, info: VideoInfo, fits: list[FrameFit],
                  annotations: Annotations | None = None, smooth: float = 0.0, *,
                  silhouettes: list[Silhouette | None] | None = None,
-                 background: Background | None = None):
+                 background: Background | None = None, person: str = NONE):
         super().__init__(info, annotations, smooth)
         self.fits = fits
         self.silhouettes, self.background = silhouettes, background
+        self.person_model = person          # the person model the fit looked through (mocap.person)
         self._inputs: Inputs | None = None
         # the inputs lifted last, their frames' lifts, and those smoothed over time
         self._lifted: tuple[Inputs, np.ndarray, np.ndarray] | None = None
@@ -89,8 +91,11 @@ class SilhouetteSession(Session):
         return None if confidence is None else held_warning(confidence)
 
     def write_masks(self, folder: str | os.PathLike) -> Path:
-        """The silhouettes as mask files (masks.write_masks: a pass over the video
+        """The silhouettes as mask files: the fit's own where a person model looked
+        (masks.write_silhouettes), else masks.write_masks' (a pass over the video
         against the fit's background); the folder."""
+        if self.person_model != NONE and self.silhouettes is not None:
+            return write_silhouettes(folder, self.info, self.silhouettes)
         if self.background is None:
             raise MocapError("this fit kept no background to write the silhouettes against")
         return write_masks(folder, self.info, self.background)

@@ -46,12 +46,14 @@ class Fit2D:
 
 
 def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
-              spread: float | None = None, grey: np.ndarray | None = None) -> Fit2D:
+              spread: float | None = None, grey: np.ndarray | None = None, targets=None) -> Fit2D:
     """Fit the 10-cylinder model to one normalised silhouette (section 3.3) with the
     best leg hypothesis, the others as ``alternatives``; with ``spread`` the torso's
     horizontal foreshortening is taken as given; with the frame's ``grey`` levels
-    (same size) the arms also follow the edges inside the silhouette."""
-    canvas = Canvas(silhouette, grey)
+    (same size) the arms also follow the edges inside the silhouette; with a person
+    model's ``targets`` (mocap.silhouette.eyes.Targets) every search also draws the
+    joints toward its landmarks (raster.Canvas.landmark_scores)."""
+    canvas = Canvas(silhouette, grey, targets)
     pose = initial_pose(canvas.sil, scale)
     if prev is not None:
         pose = replace(prev, pelvis=pose.pelvis, scale=scale)

@@ -64,6 +64,20 @@ def write_masks(folder: str | os.PathLike, info: VideoInfo, background: Backgrou
     return out.finish()
 
 
+def write_silhouettes(folder: str | os.PathLike, info: VideoInfo, silhouettes: list) -> Path:
+    """The fit's own silhouettes (passes.Silhouette, processing pixels; None: nobody)
+    as ``write_masks`` writes its masks: 8-bit, 255 = performer, the video's size."""
+    out = MaskFolder(folder)
+    scale, size = processing_scale(info), (info.width, info.height)
+    for i, sil in enumerate(silhouettes):
+        mask = np.zeros((round(info.height * scale), round(info.width * scale)), np.uint8)
+        if sil is not None:
+            x0, y0, x1, y1 = sil.box
+            mask[y0:y1, x0:x1] = sil.mask() * 255
+        out.add(i, mask if mask.shape[::-1] == size else cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST))
+    return out.finish()
+
+
 def written_masks(info: VideoInfo, background: Background) -> Iterator[np.ndarray]:
     """Each frame's silhouette as written out, at the video's size (uint8, 255 =
     performer), from a pass of its own over the video (the fit does not make them):

@@ -17,6 +17,8 @@ from mocap.body import BODY_HEIGHT, JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.percentile import nanpercentile, percentile
 from mocap.silhouette.background import Background, extract_silhouette
+from mocap.person import Landmarks, PersonModel
+from mocap.silhouette.eyes import centred_on, fit_targets, fused_mask
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.plate import clip_background
 from mocap.silhouette.torso import head_top_row, torso_spread, torso_width_readable
@@ -36,28 +38,40 @@ MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a sea
 @dataclass(frozen=True)
 class Silhouette:
     """A frame's silhouette as its bounding box and the packed mask inside it, with
-    the frame's grey levels in the box (the inner edges' source, mocap.edges)."""
+    the frame's grey levels in the box (the inner edges' source, mocap.edges); where
+    a person model looked (mocap.person), its ``landmarks`` (processing pixels) and
+    which pixels its mask gave (``learned``, packed like ``bits``)."""
 
     box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
     bits: np.ndarray
     grey: np.ndarray | None = None
+    landmarks: Landmarks | None = None
+    learned: np.ndarray | None = None
 
     @classmethod
-    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None) -> "Silhouette | None":
+    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None, landmarks: Landmarks | None = None,
+                  learned: np.ndarray | None = None) -> "Silhouette | None":
         if not holds_person(mask):
             return None
         x, y, w, h = cv2.boundingRect(mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8))
         grey = None if frame is None else cv2.cvtColor(frame[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
-        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey)
+        learned = None if learned is None else np.packbits(learned[y:y + h, x:x + w])
+        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey, landmarks, learned)
 
     @property
     def height(self) -> int:
         return self.box[3] - self.box[1]
 
     def mask(self) -> np.ndarray:
+        return self._unpacked(self.bits)
+
+    def learned_mask(self) -> np.ndarray | None:
+        """(h, w) 0/1 in the box: the pixels the person model's mask gave, None without it."""
+        return None if self.learned is None else self._unpacked(self.learned)
+
+    def _unpacked(self, bits: np.ndarray) -> np.ndarray:
         x0, y0, x1, y1 = self.box
-        n = (x1 - x0) * (y1 - y0)
-        return np.unpackbits(self.bits, count=n).reshape(y1 - y0, x1 - x0)
+        return np.unpackbits(bits, count=(x1 - x0) * (y1 - y0)).reshape(y1 - y0, x1 - x0)
 
 
 def holds_person(mask: np.ndarray) -> bool:
@@ -78,16 +92,25 @@ class FrameFit:
     fit: Fit2D | None = None
     body_px: float | None = None    # video pixels of the model's 175-unit body height
     spread: float | None = None     # the torso's spread as the lift reads it (lift_spread)
+    landmarks: Landmarks | None = None  # a person model's (mocap.person), in video pixels
 
 
-def iter_silhouettes(info: VideoInfo, scale: float,
-                     background: Background | None = None) -> Iterator[Silhouette | None]:
+def iter_silhouettes(info: VideoInfo, scale: float, background: Background | None = None,
+                     person: PersonModel | None = None) -> Iterator[Silhouette | None]:
     """Pass one (section 3.2): the background (``plate.clip_background`` unless
     given), then every frame's silhouette in turn (``background.extract_silhouette``;
-    the cover written out as masks is made when they are written: masks.write_masks)."""
+    the cover written out as masks is made when they are written: masks.write_masks);
+    with a ``person`` model, fused with its mask and carrying its landmarks
+    (``eyes.fused_mask``) wherever it sees somebody."""
     background = background or clip_background(info, scale)
     for _, frame in iter_frames(info, scale=scale):
-        yield Silhouette.from_mask(extract_silhouette(frame, background), frame)
+        classical = extract_silhouette(frame, background)
+        view = None if person is None else person.observe(frame)
+        fused = None if view is None else fused_mask(classical, view.mask, background.held)
+        if fused is None:
+            yield Silhouette.from_mask(classical, frame)
+        else:
+            yield Silhouette.from_mask(fused[0], frame, view.landmarks, fused[1])
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
@@ -212,8 +235,11 @@ class Fitter:
         small, origin, step = normalised or normalise(sil, height)
         best = self.chain.current
         prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
-        fit = fit_frame(small, FIT_SCALE, prev, spread, normalised_grey(sil, height))
-        item = (index, origin, step, lift_spread)
+        targets = fit_targets(sil.landmarks, origin, step, FIT_SCALE, prev)
+        fit = fit_frame(small, FIT_SCALE, centred_on(prev, targets), spread, normalised_grey(sil, height),
+                        targets)
+        landmarks = None if sil.landmarks is None else sil.landmarks.scaled(1.0 / self.scale)
+        item = (index, origin, step, lift_spread, landmarks)
         decided = list(_frame_fits(self.chain.push(item, fit), self.scale))
         if not decided or decided[-1].index != index:
             self.latest = next(_frame_fits([(item, self.chain.current)], self.scale))
@@ -297,14 +323,14 @@ class FitStream:
 
 def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
     """FrameFits of (item, fit) pairs from ``LegChain``: the item is (index, crop
-    origin, crop step, lift spread) of a fitted frame, the index of one without a person."""
+    origin, crop step, lift spread, landmarks in video pixels) of a fitted frame, the index of one without a person."""
     for item, fit in decided:
         if fit is None:
             yield FrameFit(item, None, None)
             continue
-        index, origin, step, spread = item
+        index, origin, step, spread, landmarks = item
         joints = (origin + (reported_joints(fit.joints, FIT_SCALE) + 0.5) * step - 0.5) / scale
-        yield FrameFit(index, joints, fit.score, fit, BODY_HEIGHT * FIT_SCALE * step / scale, spread)
+        yield FrameFit(index, joints, fit.score, fit, BODY_HEIGHT * FIT_SCALE * step / scale, spread, landmarks)
 
 
 def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

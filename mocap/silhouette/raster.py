@@ -14,10 +14,12 @@ import math
 import cv2
 import numpy as np
 
-from mocap.body import (FOOT_LENGTH, KINEMATIC_MATRIX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES,
+from mocap.body import (BODY_HEIGHT, FOOT_LENGTH, KINEMATIC_MATRIX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES,
                         WIDTH, Pose2D, joints_of_basis, kinematic_basis, torso_width)
 from mocap.edges import EDGE_WEIGHT, Edges
 
+LANDMARK_WEIGHT = 0.2           # S that a confident landmark far from its joint takes away
+LANDMARK_SIGMA = 0.05           # of the body height: a landmark's distance that costs half of it
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
 _PERPENDICULAR = np.array([-1.0, 1.0])   # (dx, dy) reversed times this: the normal (-dy, dx)
@@ -214,12 +216,13 @@ class Canvas:
     (Eq. 1 divides by the union, so unexplained pixels elsewhere lower p).
     """
 
-    def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None):
+    def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None, targets=None):
         self.sil = (silhouette > 0).astype(np.uint8)
         self.fixed = np.zeros_like(self.sil)
         self.free = np.ones_like(self.sil)     # 1 - fixed, which every search reads
         self.edges = None if grey is None else Edges.inside(grey, self.sil)
         self.by_edges = False
+        self.targets = targets                 # a person model's landmarks (mocap.silhouette.eyes.Targets)
 
     def fork(self, quads=(), keep: np.ndarray | None = None, by_edges: bool = False) -> "Canvas":
         """A copy whose fitted part also holds quads, and whose silhouette is only
@@ -229,7 +232,7 @@ class Canvas:
         other = Canvas.__new__(Canvas)
         other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
         other.fixed, other.free = self.fixed.copy(), self.free
-        other.edges = self.edges
+        other.edges, other.targets = self.edges, self.targets
         other.by_edges = by_edges and self.edges is not None
         if len(quads):
             other.commit(quads)
@@ -243,6 +246,18 @@ class Canvas:
             return np.zeros(len(joints))
         ends = joints[:, SEGMENT_JOINTS[segments]]
         return EDGE_WEIGHT * self.edges.support(ends[:, :, 0], ends[:, :, 1], WIDTH[segments] * scale)
+
+    def landmark_scores(self, joints: np.ndarray, segments: list[int], scale: float) -> np.ndarray:
+        """(B,) what the person model's landmarks add to S for posed joints (B, 16, 2):
+        minus LANDMARK_WEIGHT times each joint of the given segments' confidence-weighted
+        robust distance to its landmark, d^2 / (d^2 + sigma^2) with sigma LANDMARK_SIGMA
+        of the body height (a wrong landmark costs at most its weight); 0 without them."""
+        if self.targets is None:
+            return np.zeros(len(joints))
+        idx = np.unique(SEGMENT_JOINTS[segments])
+        d2 = ((joints[:, idx] - self.targets.points[idx]) ** 2).sum(-1)
+        sigma2 = (LANDMARK_SIGMA * BODY_HEIGHT * scale) ** 2
+        return -LANDMARK_WEIGHT * (self.targets.weight[idx] * d2 / (d2 + sigma2)).sum(-1)
 
     def commit(self, quads) -> None:
         """Make quads part of the fitted model."""

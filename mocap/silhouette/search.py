@@ -124,7 +124,8 @@ def search(pose: Pose2D, job: Search) -> Pose2D:
     opening = sorted({*range(0, n, every), n - 1, start})
 
     def edges(i) -> np.ndarray:
-        return job.canvas.edge_scores(joints[i], drawn, pose.scale)
+        return (job.canvas.edge_scores(joints[i], drawn, pose.scale)
+                + job.canvas.landmark_scores(joints[i], drawn, pose.scale))
     if n <= ONE_ROUND:
         scores = (sweep_scorer(job.canvas, quads, opening)[0] + edges(slice(None))).tolist()
         best = coarse_to_fine(lambda i: [scores[k] for k in i], n, opening, [scores[k] for k in opening],

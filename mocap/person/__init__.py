@@ -1,0 +1,97 @@
+"""Learned eyes: a person model that sees, on each frame, the performer's mask, 2D
+joints and 3D joints, as data for the silhouette method's fit and lift.
+
+One small interface (``PersonModel``: frames in, in order, ``PersonView`` out) and a
+registry of implementations by name (``open_person_model``); MediaPipe Pose is the
+one today (``mocap.person.mediapipe_pose``). Another model (RTMPose, ViTPose) is a
+module with a class like it and a line in ``MODELS``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from mocap.errors import MocapError
+
+DEFAULT_MODEL = "mediapipe"
+NONE = "none"                   # the paper's classical path: no person model
+
+
+@dataclass(frozen=True)
+class Landmarks:
+    """A person model's joints on one frame, in the contract's 16 joints and order,
+    sides anatomical: ``joints2d`` (16, 2) pixels of the frame it was given,
+    ``confidence`` (16,) in [0, 1] (how sure it is that the joint is where it says,
+    visible or not), ``world`` (16, 3) metres, pelvis at the origin, x image-right,
+    y up, z toward the camera (CONTRACT.md's 3D)."""
+
+    joints2d: np.ndarray
+    confidence: np.ndarray
+    world: np.ndarray
+
+    def scaled(self, factor: float) -> "Landmarks":
+        """The same landmarks with the 2D in pixels of a frame ``factor`` times as large."""
+        return Landmarks((self.joints2d + 0.5) * factor - 0.5, self.confidence, self.world)
+
+
+@dataclass(frozen=True)
+class PersonView:
+    """What a person model sees on one frame: ``mask`` (H, W) float32, the
+    probability that each pixel is the performer, and the ``landmarks``."""
+
+    mask: np.ndarray
+    landmarks: Landmarks
+
+
+class PersonModel(Protocol):
+    """A person model over one video: ``observe`` each frame in order (BGR uint8);
+    None where it sees nobody. ``close`` frees it."""
+
+    name: str
+
+    def observe(self, frame: np.ndarray) -> PersonView | None: ...
+
+    def close(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A person model of the registry: the module holding its ``Model`` class, the
+    package it needs and the command that installs that package."""
+
+    module: str
+    package: str
+    install: str
+
+
+MODELS = {"mediapipe": Entry("mocap.person.mediapipe_pose", "mediapipe",
+                             ".venv/bin/pip install --no-deps mediapipe==0.10.14")}
+CHOICES = (*MODELS, NONE)
+
+
+def open_person_model(name: str = DEFAULT_MODEL) -> PersonModel | None:
+    """A fresh person model by name, None for ``"none"``; a MocapError in one line
+    when the name is unknown or its package is not installed."""
+    if name == NONE:
+        return None
+    if name not in MODELS:
+        raise MocapError(f"unknown person model {name!r}: choose one of {', '.join(CHOICES)}")
+    if not available(name):
+        raise MocapError(install_hint(name))
+    import importlib
+    return importlib.import_module(MODELS[name].module).Model()
+
+
+def available(name: str = DEFAULT_MODEL) -> bool:
+    """Whether the named person model's package is installed (without importing it)."""
+    import importlib.util
+    return name == NONE or importlib.util.find_spec(MODELS[name].package) is not None
+
+
+def install_hint(name: str) -> str:
+    """One line: the person model's package is missing, and how to install it."""
+    entry = MODELS[name]
+    return f"the person model {name!r} needs {entry.package}, not installed here: {entry.install}"

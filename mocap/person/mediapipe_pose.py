@@ -1,0 +1,106 @@
+"""MediaPipe Pose (BlazePose GHUM, the legacy ``solutions.pose`` graph) as a person
+model: ``model_complexity=1``, whose model files ship inside the mediapipe 0.10.14
+wheel, so it runs offline (complexities 0 and 2 download theirs at first use), in
+video mode (each frame's search starts from the last one's landmarks), with its
+segmentation mask.
+
+Its 33 landmarks map onto the contract's 16 joints (``to_joints``): shoulders,
+elbows, wrists, hips, knees and ankles are its own; the pelvis is the hips' middle;
+the neck and the head's top lie on the line from the shoulders' middle through the
+ears' middle, where body proportions put them (NECK_ALONG, HEAD_TOP_ALONG); the
+chest on the pelvis-neck axis at the body model's CHEST_FRACTION.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+
+import numpy as np
+
+from mocap.body import CHEST_FRACTION, JOINT_INDEX, JOINTS
+from mocap.errors import MocapError
+from mocap.person import MODELS, Landmarks, PersonView
+
+# Heights above the floor in a 1.75 m body (anthropometric tables): shoulders
+# (acromion) 1.44 m, ears (tragion) 1.62 m, the neck's base 1.50 m, the head's top
+# 1.75 m. Along shoulders-middle -> ears-middle, as fractions of that line:
+NECK_ALONG = (1.50 - 1.44) / (1.62 - 1.44)
+HEAD_TOP_ALONG = (1.75 - 1.44) / (1.62 - 1.44)
+
+# MediaPipe's landmark numbers of the joints it has itself (BlazePose's 33 points)
+_OWN = {"shoulder_l": 11, "shoulder_r": 12, "elbow_l": 13, "elbow_r": 14, "wrist_l": 15,
+        "wrist_r": 16, "hip_l": 23, "hip_r": 24, "knee_l": 25, "knee_r": 26, "ankle_l": 27,
+        "ankle_r": 28}
+_EARS, _SHOULDERS, _HIPS = (7, 8), (11, 12), (23, 24)
+
+
+class Model:
+    """MediaPipe Pose over one video's frames in order (``PersonModel``)."""
+
+    name = "mediapipe"
+
+    def __init__(self):
+        try:
+            with _quiet_native_logs():
+                from mediapipe.python.solutions import pose
+                self._pose = pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=True,
+                                       enable_segmentation=True, smooth_segmentation=True)
+        except ImportError as error:     # installed, but a package it needs is not
+            raise MocapError(f"mediapipe does not load ({error}): {MODELS['mediapipe'].install} "
+                             "and the packages mocap lists, or --person-model none") from None
+
+    def observe(self, frame: np.ndarray) -> PersonView | None:
+        """Its view of one BGR frame (the next of the video), None if it sees nobody."""
+        rgb = np.ascontiguousarray(frame[:, :, ::-1])
+        with _quiet_native_logs():
+            result = self._pose.process(rgb)
+        if result.pose_landmarks is None or result.segmentation_mask is None:
+            return None
+        h, w = frame.shape[:2]
+        image = np.array([(p.x * w - 0.5, p.y * h - 0.5, p.visibility) for p in result.pose_landmarks.landmark])
+        world = np.array([(p.x, -p.y, -p.z) for p in result.pose_world_landmarks.landmark])
+        joints2d, confidence = to_joints(image[:, :2], image[:, 2])
+        world16, _ = to_joints(world, image[:, 2])
+        return PersonView(np.asarray(result.segmentation_mask, np.float32),
+                          Landmarks(joints2d, confidence, world16 - world16[JOINT_INDEX["pelvis"]]))
+
+    def close(self) -> None:
+        self._pose.close()
+
+
+def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """BlazePose's 33 points (33, D) and their visibilities -> the contract's 16
+    joints (16, D) and their confidences (a derived joint's: the least of the points
+    it is made of)."""
+    out = np.zeros((len(JOINTS), points.shape[1]))
+    conf = np.zeros(len(JOINTS))
+    for name, k in _OWN.items():
+        out[JOINT_INDEX[name]], conf[JOINT_INDEX[name]] = points[k], visibility[k]
+    shoulders, ears, hips = (points[list(p)].mean(axis=0) for p in (_SHOULDERS, _EARS, _HIPS))
+    neck = shoulders + NECK_ALONG * (ears - shoulders)
+    derived = {"pelvis": (hips, _HIPS), "neck": (neck, _SHOULDERS + _EARS),
+               "head_top": (shoulders + HEAD_TOP_ALONG * (ears - shoulders), _SHOULDERS + _EARS),
+               "chest": (hips + CHEST_FRACTION * (neck - hips), _HIPS + _SHOULDERS + _EARS)}
+    for name, (point, made_of) in derived.items():
+        out[JOINT_INDEX[name]], conf[JOINT_INDEX[name]] = point, visibility[list(made_of)].min()
+    return out, np.clip(conf, 0.0, 1.0)
+
+
+@contextlib.contextmanager
+def _quiet_native_logs():
+    """Standard error closed for the duration: MediaPipe's C++ side prints its own
+    log lines there (TensorFlow Lite's delegate, absl's warnings), which would break
+    the command line's one-line messages."""
+    try:
+        saved = os.dup(2)
+    except OSError:
+        yield
+        return
+    with open(os.devnull, "wb") as null:
+        os.dup2(null.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
