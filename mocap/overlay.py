@@ -1,15 +1,26 @@
-"""Drawing a fitted body over an image (OpenCV): the views of the app and contact sheets."""
+"""Drawing a fitted body over an image (OpenCV): the views of the app and contact sheets,
+and what a person model (mocap.person) added: the silhouette's pixels only its mask
+gave, tinted (LEARNED_BGR), and its joints as small dots on a thin skeleton
+(LANDMARK_BGR)."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.body import JOINT_INDEX, SEGMENT_JOINTS, SEGMENTS, SEGMENT_NAMES
 
 # BGR per segment kind: torso/head white, the performer's left limbs orange, right ones blue
 _COLOURS = {"torso": (240, 240, 240), "head": (240, 240, 240)}
 _LEFT, _RIGHT = (40, 160, 255), (255, 140, 40)
+SILHOUETTE_GREY = 110
+LEARNED_BGR = (150, 140, 30)        # teal: silhouette pixels only the person model's mask gave
+LANDMARK_BGR = (230, 70, 230)       # magenta: the person model's joints
+SURE = 0.5                          # a landmark this confident is a filled dot, else a ring
+# the segments' bones, and the shoulders and hips joined to the neck and the pelvis
+LANDMARK_BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
+    *SEGMENTS.values(), ("neck", "shoulder_l"), ("neck", "shoulder_r"), ("pelvis", "hip_l"),
+    ("pelvis", "hip_r")))
 
 
 def segment_colour(segment: str) -> tuple[int, int, int]:
@@ -30,9 +41,30 @@ def draw_skeleton(image: np.ndarray, joints2d: np.ndarray, thickness: int = 2,
     return image
 
 
-def silhouette_view(mask: np.ndarray, joints2d: np.ndarray | None) -> np.ndarray:
-    """The silhouette in grey with the fitted model drawn over it."""
-    view = cv2.cvtColor((mask > 0).astype(np.uint8) * 110, cv2.COLOR_GRAY2BGR)
+def silhouette_view(mask: np.ndarray, joints2d: np.ndarray | None,
+                    learned: np.ndarray | None = None) -> np.ndarray:
+    """The silhouette in grey with the fitted model drawn over it; the pixels of
+    ``learned`` (nonzero: those only the person model's mask gave) tinted LEARNED_BGR."""
+    view = cv2.cvtColor((mask > 0).astype(np.uint8) * SILHOUETTE_GREY, cv2.COLOR_GRAY2BGR)
+    if learned is not None:
+        view[(learned > 0) & (mask > 0)] = LEARNED_BGR
     if joints2d is not None:
         draw_skeleton(view, joints2d)
     return view
+
+
+def draw_landmarks(image: np.ndarray, joints2d: np.ndarray, confidence: np.ndarray,
+                   radius: float = 3.0) -> np.ndarray:
+    """A person model's 16 joints (pixels of ``image``) as small LANDMARK_BGR dots on
+    a one-pixel skeleton (LANDMARK_BONES), drawn in place and returned: a joint it is
+    sure of (confidence >= SURE) a filled dot, any other a ring; a bone only between
+    two sure joints."""
+    pts = np.round(np.asarray(joints2d, float) * 16).astype(np.int32)
+    sure = np.asarray(confidence) >= SURE
+    for a, b in LANDMARK_BONES:
+        if sure[a] and sure[b]:
+            cv2.line(image, tuple(pts[a]), tuple(pts[b]), LANDMARK_BGR, 1, cv2.LINE_AA, shift=4)
+    r = int(round(radius * 16))
+    for p, filled in zip(pts, sure):
+        cv2.circle(image, tuple(p), r, LANDMARK_BGR, -1 if filled else 1, cv2.LINE_AA, shift=4)
+    return image

@@ -12,8 +12,9 @@ from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
+from mocap.lift.cues import Cues, blended, side_evidence, world_signs, world_yaws
 from mocap.lift.sides import known_sides, track_sides
-from mocap.lift.taylor import LENGTH, anatomical_joints, clip_lengths, exchange_legs, lift_pose, runs
+from mocap.lift.taylor import LENGTH, anatomical_joints, orientation_of_yaw, clip_lengths, exchange_legs, lift_pose, runs
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
                                legs_crossed, facing_evidence, rule_evidence, segment_vectors, yaws)
 
@@ -94,7 +95,7 @@ def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
                    annotations: Annotations, lengths: np.ndarray | None = None,
                    guessed: list[str | None] | None = None, away: np.ndarray | None = None,
-                   near: np.ndarray | None = None) -> Inputs:
+                   near: np.ndarray | None = None, cues: Cues | None = None) -> Inputs:
     """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
     (``guessed``: orientation.guess_orientations of the fits, computed if not given);
     the sides from it (profiles followed through time, joint overrides deciding, the
@@ -107,22 +108,29 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     (mocap.facing.facing_away), which weighs the guessed orientation's image-side
     rule even in a profile (orientation.rule_evidence), and ``near`` (F, 2): the near
     arm and leg (mocap.facing.near_limbs), which name the limbs of a profile where
-    nothing else does."""
+    nothing else does. ``cues``: a person model's landmarks (mocap.lift.cues), which
+    where they see somebody give the first guesses of the orientation and yaw, the
+    sides and the signs, and their share of the 2D joints."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if guessed is None:
         guessed = guess_orientations(joints_image, body_px, spread, fps, away)
+    world_yaw = np.full(n, np.nan) if cues is None else world_yaws(cues)
+    guessed = [g if np.isnan(y) else orientation_of_yaw(y) for g, y in zip(guessed, world_yaw)]
     said = annotations.orientations(n)
     orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
     overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
     rule = rule_evidence(orientation, spread, facing_evidence(joints_image, body_px, fps, away))
     rule = np.where([s is None for s in said], rule, 0.0)
-    names = track_sides(joints_image, known_sides(said, overrides, joints_image), facing_x, fps,
-                        looks_away(away, fps, n), near, rule)
+    known = known_sides(said, overrides, joints_image)
+    if cues is not None:
+        known = np.where(known >= 0, known, side_evidence(joints_image, cues, 0.5 * np.nanmedian(body_px)))
+    names = track_sides(joints_image, known, facing_x, fps, looks_away(away, fps, n), near, rule)
     swap = names[:, :2]
     ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
+    yaw = np.where(np.isfinite(world_yaw) & np.array([s is None for s in said]), world_yaw, yaw)
     values, since = annotations.held_signs(n)
     joints = exchange_legs(anatomical_joints(joints_image, swap), names[:, 2])
     if person.any():
@@ -135,6 +143,8 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
                                        placed[person])
         joints = exchange_legs(joints, crossed)
     joints = steadied_arms(joints, person, fps)
+    if cues is not None:
+        joints = blended(joints, cues)
     for i, points in overrides.items():
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
@@ -148,6 +158,9 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     fixed = _held_signs(joints, ppu, lengths, values, since, person)
     for r in runs(person):
         signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed[r], fps)
+    if cues is not None:
+        seen = world_signs(cues)
+        signs = np.where((fixed == 0) & (seen != 0), seen, signs)
     return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths, fixed)
 
 

@@ -21,6 +21,7 @@ from mocap.errors import MocapError
 from mocap.facing import facing_away, near_limbs
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
+from mocap.lift.cues import Cues
 from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.motion import Motion
 from mocap.lift.orientation import guess_orientations
@@ -69,6 +70,12 @@ class SilhouetteSession(Session):
         joints, body_px, _ = self._arrays
         return (None if self.silhouettes is None else
                 NearLimbs(self.silhouettes, joints, body_px, processing_scale(self.info)))
+
+    @cached_property
+    def cues(self) -> Cues | None:
+        """The person model's landmarks over the clip (mocap.lift.cues), None where
+        the fit looked through none."""
+        return Cues.of([f.landmarks for f in self.fits])
 
     @cached_property
     def _guessed(self) -> list[str | None]:
@@ -124,7 +131,8 @@ class SilhouetteSession(Session):
         if self._inputs is None:
             joints, body_px, spread = self._arrays
             self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
-                                          guessed=self._guessed, away=self._away, near=self._near)
+                                          guessed=self._guessed, away=self._away, near=self._near,
+                                          cues=self.cues)
         return self._inputs
 
     def held_signs(self) -> np.ndarray:

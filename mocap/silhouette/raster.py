@@ -18,7 +18,7 @@ from mocap.body import (BODY_HEIGHT, FOOT_LENGTH, KINEMATIC_MATRIX, LENGTH, SEGM
                         WIDTH, Pose2D, joints_of_basis, kinematic_basis, torso_width)
 from mocap.edges import EDGE_WEIGHT, Edges
 
-LANDMARK_WEIGHT = 0.2           # S that a confident landmark far from its joint takes away
+LANDMARK_WEIGHT = 0.6           # S that a confident landmark far from its joint takes away
 LANDMARK_SIGMA = 0.05           # of the body height: a landmark's distance that costs half of it
 _SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT

@@ -1,0 +1,110 @@
+"""A person model's landmarks (mocap.person) as the lift's first guesses (section 3.4's
+inputs): which image-side limb is which anatomical one, the facing yaw, each
+segment's foreshortening sign, and the 2D joints themselves. The user's
+annotations still override every one of them (mocap.lift.inputs).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mocap.body import JOINT_INDEX, LIMB_JOINTS, SEGMENT_JOINTS
+from mocap.lift.taylor import TOWARD, AWAY, yaw_of
+from mocap.smoothest import two_state_path
+
+SURE = 0.5              # a landmark confidence from which it counts
+SWITCH = 2.0            # limb lengths of evidence that renaming a limb pair between frames costs
+SIDE_MARGIN = 0.05      # limb lengths: evidence below this per frame says nothing
+DEPTH_SAYS = 0.2        # |dz| / length of a world segment from which its sign is taken
+BLEND = 0.7             # the landmarks' share of a sure 2D joint (the fit's: the rest)
+_J = JOINT_INDEX
+_LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
+
+
+@dataclass(frozen=True)
+class Cues:
+    """A clip's landmarks (F frames): ``joints2d`` (F, 16, 2) video pixels, anatomical
+    sides, NaN where the model saw nobody; ``confidence`` (F, 16); ``world`` (F, 16, 3)
+    metres, pelvis-centred, contract axes."""
+
+    joints2d: np.ndarray
+    confidence: np.ndarray
+    world: np.ndarray
+
+    @classmethod
+    def of(cls, landmarks: list) -> "Cues | None":
+        """The cues of per-frame ``mocap.person.Landmarks`` (None where nobody);
+        None when no frame has any."""
+        if all(m is None for m in landmarks):
+            return None
+        n = len(landmarks)
+        joints, conf, world = np.full((n, 16, 2), np.nan), np.zeros((n, 16)), np.full((n, 16, 3), np.nan)
+        for i, m in enumerate(landmarks):
+            if m is not None:
+                joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
+        return cls(joints, conf, world)
+
+    @property
+    def seen(self) -> np.ndarray:
+        """(F,) bool: frames where the model saw somebody."""
+        return np.isfinite(self.joints2d).all(axis=(1, 2))
+
+
+def side_evidence(joints_image: np.ndarray, cues: Cues, limb_px: float) -> np.ndarray:
+    """(F, 2) int8 for mocap.lift.sides.track_sides' ``known``: for arms and legs, 1
+    where the fit's image-left limb is the landmarks' right one, 0 where it is their
+    left one, -1 where they do not tell. Each frame weighs how much nearer (in limb
+    lengths, confidence-weighted) the fit's elbows and wrists (knees and ankles) lie
+    to the landmarks named one way than the other; a two-state path over the frames
+    (SWITCH per renaming) keeps the naming from flickering where a single frame's
+    landmarks swap sides."""
+    out = np.full((len(joints_image), 2), -1, np.int8)
+    seen = cues.seen & np.isfinite(joints_image).all(axis=(1, 2))
+    if not seen.any():
+        return out
+    for pair, names in _LIMBS.items():
+        margin = np.zeros(len(joints_image))
+        for left, right in names:
+            fit_l, fit_r = joints_image[:, _J[left]], joints_image[:, _J[right]]
+            mp_l, mp_r = cues.joints2d[:, _J[left]], cues.joints2d[:, _J[right]]
+            w = np.minimum(cues.confidence[:, _J[left]], cues.confidence[:, _J[right]])
+            keep = _dist(fit_l, mp_l) + _dist(fit_r, mp_r)
+            swap = _dist(fit_l, mp_r) + _dist(fit_r, mp_l)
+            margin += np.where(seen, w * (keep - swap) / limb_px, 0.0)
+        costs = np.column_stack([np.maximum(margin, 0.0), np.maximum(-margin, 0.0)])
+        path = two_state_path(costs, np.full(len(costs) - 1, SWITCH))
+        out[:, pair] = np.where(seen & (np.abs(margin) >= SIDE_MARGIN), path, -1)
+    return out
+
+
+def _dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.linalg.norm(a - b, axis=-1)
+
+
+def world_yaws(cues: Cues) -> np.ndarray:
+    """(F,) degrees: the facing yaw of each frame's world landmarks (taylor.yaw_of),
+    NaN where the model saw nobody."""
+    return np.array([yaw_of(w) if ok else np.nan for w, ok in zip(cues.world, cues.seen)])
+
+
+def world_signs(cues: Cues) -> np.ndarray:
+    """(F, 10) int: each segment's foreshortening sign in the world landmarks (+1
+    toward, -1 away) where its depth is at least DEPTH_SAYS of its length and both
+    its landmarks are SURE; 0 where they do not tell."""
+    ends = cues.world[:, SEGMENT_JOINTS]
+    vec = ends[:, :, 1] - ends[:, :, 0]
+    fraction = np.abs(vec[..., 2]) / np.maximum(np.linalg.norm(vec, axis=-1), 1e-9)
+    sure = cues.confidence[:, SEGMENT_JOINTS].min(axis=-1) >= SURE
+    says = sure & (np.nan_to_num(fraction) >= DEPTH_SAYS)
+    return np.where(says, np.where(vec[..., 2] >= 0, TOWARD, AWAY), 0)
+
+
+def blended(joints: np.ndarray, cues: Cues) -> np.ndarray:
+    """(F, 16, 2) anatomical joints with each SURE landmark's BLEND share in: the fit
+    answers where the landmarks are unsure or absent, the landmarks (a learned 2D,
+    closer to the true joints than a cylinder's ends) carry the rest."""
+    w = np.where(cues.confidence >= SURE, BLEND * cues.confidence, 0.0)[..., None]
+    mixed = (1.0 - w) * joints + w * np.nan_to_num(cues.joints2d)
+    return np.where(np.isfinite(cues.joints2d) & np.isfinite(joints), mixed, joints)
