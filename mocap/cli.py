@@ -30,10 +30,7 @@ def _add_fit(p) -> None:
     p.add_argument("--background", metavar="IMAGE|VIDEO",
                    help="a photo or short video of the empty scene, same camera (silhouette method; "
                         "default: the annotations' background, else estimated from the clip)")
-    p.add_argument("--person-model", choices=PERSON_MODELS, default=None,
-                   help="the learned person model the silhouette method also looks through (its "
-                        "mask and joints); none: background subtraction alone, the paper's "
-                        "classical path. Default: mediapipe where installed, else none")
+    _add_person_model(p)
     p.add_argument("--masks", metavar="DIR",
                    help="also write each frame's silhouette as DIR/NNNNNN.png (255 = performer) and "
                         "name the folder in the motion file")
@@ -43,6 +40,14 @@ def _add_fit(p) -> None:
     add_smooth(p, "keyframes kept (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(run=_run_fit)
+
+
+def _add_person_model(p, switch: str = "") -> None:
+    """--person-model, of `mocap fit` and `mocap serve` (``switch``: where else it is chosen)."""
+    p.add_argument("--person-model", choices=PERSON_MODELS, default=None,
+                   help="the learned person model the silhouette method also looks through (its "
+                        "mask and joints); none: background subtraction alone, the paper's "
+                        "classical path. Default: mediapipe where installed, else none" + switch)
 
 
 def _run_fit(args) -> None:
@@ -91,6 +96,7 @@ def _add_serve(p) -> None:
     p.add_argument("--port", type=_port, default=8080,
                    help="port to listen on (default 8080; an error if taken; 0: any free one)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
+    _add_person_model(p, "; the app's Stage tab switches it (Learned eyes)")
 
     def run(args) -> None:
         try:  # the app package, imported only here: mocap itself never needs viser
@@ -100,7 +106,7 @@ def _add_serve(p) -> None:
         from mocap.library import review_target
         target = review_target(args.video) if args.video else None
         video, notes = target or (args.video, None)
-        serve(video, args.port, args.host, progress=_progress, annotations=notes)
+        serve(video, args.port, args.host, progress=_progress, annotations=notes, person=args.person_model)
 
     p.set_defaults(run=run)
 

@@ -11,14 +11,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SEGMENT_JOINTS
-from mocap.lift.taylor import TOWARD, AWAY, yaw_of
+from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, yaw_of
 from mocap.smoothest import two_state_path
 
 SURE = 0.5              # a landmark confidence from which it counts
 SWITCH = 2.0            # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05      # limb lengths: evidence below this per frame says nothing
 DEPTH_SAYS = 0.2        # |dz| / length of a world segment from which its sign is taken
-BLEND = 0.7             # the landmarks' share of a sure 2D joint (the fit's: the rest)
+BLEND = 1.0             # the landmarks' share of a sure 2D joint (the fit's: the rest)
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
 
@@ -97,14 +97,25 @@ def world_signs(cues: Cues) -> np.ndarray:
     vec = ends[:, :, 1] - ends[:, :, 0]
     fraction = np.abs(vec[..., 2]) / np.maximum(np.linalg.norm(vec, axis=-1), 1e-9)
     sure = cues.confidence[:, SEGMENT_JOINTS].min(axis=-1) >= SURE
-    says = sure & (np.nan_to_num(fraction) >= DEPTH_SAYS)
+    says = np.isfinite(fraction)
     return np.where(says, np.where(vec[..., 2] >= 0, TOWARD, AWAY), 0)
+
+
+def world_depths(cues: Cues, lengths: np.ndarray) -> np.ndarray:
+    """(F, 10) each segment's |dZ| in the world landmarks, in model units of the
+    clip's body (``lengths`` (10,) model units: the world's segments are scaled by the
+    median ratio of those lengths to theirs); NaN where the model saw nobody."""
+    ends = cues.world[:, SEGMENT_JOINTS] / UNIT_M
+    vec = ends[:, :, 1] - ends[:, :, 0]
+    seen_lengths = np.nanmedian(np.linalg.norm(vec[cues.seen], axis=-1), axis=0)
+    ratio = float(np.nanmedian(lengths / np.maximum(seen_lengths, 1e-9)))
+    return np.abs(vec[..., 2]) * ratio
 
 
 def blended(joints: np.ndarray, cues: Cues) -> np.ndarray:
     """(F, 16, 2) anatomical joints with each SURE landmark's BLEND share in: the fit
     answers where the landmarks are unsure or absent, the landmarks (a learned 2D,
     closer to the true joints than a cylinder's ends) carry the rest."""
-    w = np.where(cues.confidence >= SURE, BLEND * cues.confidence, 0.0)[..., None]
+    w = BLEND * np.ones_like(cues.confidence)[..., None]
     mixed = (1.0 - w) * joints + w * np.nan_to_num(cues.joints2d)
     return np.where(np.isfinite(cues.joints2d) & np.isfinite(joints), mixed, joints)

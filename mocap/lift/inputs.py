@@ -12,7 +12,7 @@ from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
-from mocap.lift.cues import Cues, blended, side_evidence, world_signs, world_yaws
+from mocap.lift.cues import Cues, blended, side_evidence, world_depths, world_signs, world_yaws
 from mocap.lift.sides import known_sides, track_sides
 from mocap.lift.taylor import LENGTH, anatomical_joints, orientation_of_yaw, clip_lengths, exchange_legs, lift_pose, runs
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
@@ -42,11 +42,13 @@ class Inputs:
     signs: np.ndarray          # (F, 10) +1 toward, -1 away
     lengths: np.ndarray        # (10,) segment lengths in model units
     held: np.ndarray | None = None     # (F, 10) the user's signs where they hold, 0 elsewhere
+    depths: np.ndarray | None = None   # (F, 10) |dZ| a person model sees (cues.world_depths), NaN where none
 
     def lift(self, frame: int) -> np.ndarray:
         """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
         return lift_pose(self.joints2d[frame], self.px_per_unit[frame], self.yaw[frame],
-                         self.signs[frame], self.lengths)
+                         self.signs[frame], self.lengths,
+                         seen_depths=None if self.depths is None else self.depths[frame])
 
     @property
     def person(self) -> np.ndarray:
@@ -158,10 +160,12 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     fixed = _held_signs(joints, ppu, lengths, values, since, person)
     for r in runs(person):
         signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed[r], fps)
+    depths = None
     if cues is not None:
         seen = world_signs(cues)
         signs = np.where((fixed == 0) & (seen != 0), seen, signs)
-    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths, fixed)
+        depths = world_depths(cues, lengths)
+    return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths, fixed, depths)
 
 
 def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:

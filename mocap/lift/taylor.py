@@ -151,16 +151,21 @@ def image_to_model(joints2d: np.ndarray, px_per_unit: float) -> np.ndarray:
 
 
 def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: np.ndarray,
-              lengths: np.ndarray = LENGTH, spans: tuple[float, float] = SPANS) -> np.ndarray:
+              lengths: np.ndarray = LENGTH, spans: tuple[float, float] = SPANS,
+              seen_depths: np.ndarray | None = None) -> np.ndarray:
     """(16, 3) joints in metres (contract frame) from anatomical 2D joints (section 3.4).
 
     x and y come from the image (Eq. 4); depths are chained from the pelvis: the torso
     and head by Eq. 5, the hips and shoulders from the yaw (their model half-spans
     ``spans`` along the performer's lateral axis), then every limb segment by Eq. 5
-    from its proximal joint.
+    from its proximal joint. ``seen_depths`` (10,): each segment's |dZ| (model units)
+    as a person model sees it (mocap.lift.cues.world_depths), taken instead of Eq.
+    5's where finite, with the sign still ``signs``'.
     """
     xy = image_to_model(joints2d, px_per_unit)
     dz = relative_depths(joints2d, px_per_unit, signs, lengths)
+    if seen_depths is not None:
+        dz = np.where(np.isfinite(seen_depths), np.asarray(signs) * np.abs(seen_depths), dz)
     z = np.zeros(len(xy))
     z[_J["neck"]] = dz[_TORSO]
     z[_J["chest"]] = CHEST_FRACTION * dz[_TORSO]
