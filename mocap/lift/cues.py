@@ -1,6 +1,6 @@
 """A person model's landmarks (mocap.person) as the lift's first guesses (section 3.4's
 inputs): which image-side limb is which anatomical one, the facing yaw, each
-segment's foreshortening sign, and the 2D joints themselves. The user's
+segment's foreshortening sign and depth, and the 2D joints themselves. The user's
 annotations still override every one of them (mocap.lift.inputs).
 """
 
@@ -17,8 +17,8 @@ from mocap.smoothest import two_state_path
 SURE = 0.5              # a landmark confidence from which it counts
 SWITCH = 2.0            # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05      # limb lengths: evidence below this per frame says nothing
-DEPTH_SAYS = 0.2        # |dz| / length of a world segment from which its sign is taken
-BLEND = 1.0             # the landmarks' share of a sure 2D joint (the fit's: the rest)
+DISAGREE = 0.2          # of the body height: a frame whose landmarks lie this far from the fit's
+                        # joints (median) is one the person model got wrong
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
 
@@ -45,6 +45,20 @@ class Cues:
             if m is not None:
                 joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
         return cls(joints, conf, world)
+
+    def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
+        """These cues without the frames where the landmarks lie DISAGREE body heights
+        (median over the joints, limb pairs taken either way round) from the fit's
+        image-side joints ``joints_image`` (F, 16, 2): there the person model has lost
+        the body (a tracker drifting after a fast kick) and the silhouette fit answers."""
+        distances = unsided_distances(joints_image, self.joints2d)
+        off = np.full(len(distances), np.inf)
+        both = np.isfinite(distances).all(axis=1)
+        off[both] = np.median(distances[both], axis=1) / body_px[both]
+        wrong = ~(off <= DISAGREE)
+        return Cues(np.where(wrong[:, None, None], np.nan, self.joints2d),
+                    np.where(wrong[:, None], 0.0, self.confidence),
+                    np.where(wrong[:, None, None], np.nan, self.world))
 
     @property
     def seen(self) -> np.ndarray:
@@ -79,6 +93,19 @@ def side_evidence(joints_image: np.ndarray, cues: Cues, limb_px: float) -> np.nd
     return out
 
 
+def unsided_distances(joints_image: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
+    """(F, 16) each joint's distance (pixels) to its landmark, each limb pair's joints
+    named whichever way round puts them nearer (image sides against anatomical ones)."""
+    d = _dist(joints_image, landmarks)
+    for names in _LIMBS.values():
+        for left, right in names:
+            l, r = _J[left], _J[right]
+            crossed = (_dist(joints_image[:, l], landmarks[:, r]) + _dist(joints_image[:, r], landmarks[:, l])) / 2
+            better = crossed < (d[:, l] + d[:, r]) / 2
+            d[better, l] = d[better, r] = crossed[better]
+    return d
+
+
 def _dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.norm(a - b, axis=-1)
 
@@ -91,14 +118,10 @@ def world_yaws(cues: Cues) -> np.ndarray:
 
 def world_signs(cues: Cues) -> np.ndarray:
     """(F, 10) int: each segment's foreshortening sign in the world landmarks (+1
-    toward, -1 away) where its depth is at least DEPTH_SAYS of its length and both
-    its landmarks are SURE; 0 where they do not tell."""
+    toward, -1 away); 0 where the model saw nobody."""
     ends = cues.world[:, SEGMENT_JOINTS]
-    vec = ends[:, :, 1] - ends[:, :, 0]
-    fraction = np.abs(vec[..., 2]) / np.maximum(np.linalg.norm(vec, axis=-1), 1e-9)
-    sure = cues.confidence[:, SEGMENT_JOINTS].min(axis=-1) >= SURE
-    says = np.isfinite(fraction)
-    return np.where(says, np.where(vec[..., 2] >= 0, TOWARD, AWAY), 0)
+    dz = ends[:, :, 1, 2] - ends[:, :, 0, 2]
+    return np.where(np.isfinite(dz), np.where(dz >= 0, TOWARD, AWAY), 0)
 
 
 def world_depths(cues: Cues, lengths: np.ndarray) -> np.ndarray:
@@ -112,10 +135,9 @@ def world_depths(cues: Cues, lengths: np.ndarray) -> np.ndarray:
     return np.abs(vec[..., 2]) * ratio
 
 
-def blended(joints: np.ndarray, cues: Cues) -> np.ndarray:
-    """(F, 16, 2) anatomical joints with each SURE landmark's BLEND share in: the fit
-    answers where the landmarks are unsure or absent, the landmarks (a learned 2D,
-    closer to the true joints than a cylinder's ends) carry the rest."""
-    w = BLEND * np.ones_like(cues.confidence)[..., None]
-    mixed = (1.0 - w) * joints + w * np.nan_to_num(cues.joints2d)
-    return np.where(np.isfinite(cues.joints2d) & np.isfinite(joints), mixed, joints)
+def with_landmarks(joints: np.ndarray, cues: Cues) -> np.ndarray:
+    """(F, 16, 2) anatomical joints, the landmarks wherever the person model saw the
+    body (and agreed with the fit: ``Cues.agreeing``), the fit's joints elsewhere. The
+    fit drew its joints toward them already (its searches' landmark term); a learned
+    2D joint lies nearer the true joint than a cylinder's end does."""
+    return np.where(np.isfinite(cues.joints2d) & np.isfinite(joints), cues.joints2d, joints)

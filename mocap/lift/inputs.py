@@ -12,7 +12,7 @@ from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
 from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.track.calibration import default_camera
-from mocap.lift.cues import Cues, blended, side_evidence, world_depths, world_signs, world_yaws
+from mocap.lift.cues import Cues, side_evidence, world_depths, world_signs, world_yaws, with_landmarks
 from mocap.lift.sides import known_sides, track_sides
 from mocap.lift.taylor import LENGTH, anatomical_joints, orientation_of_yaw, clip_lengths, exchange_legs, lift_pose, runs
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
@@ -115,6 +115,8 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     sides and the signs, and their share of the 2D joints."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
+    if cues is not None:
+        cues = cues.agreeing(joints_image, body_px)
     if guessed is None:
         guessed = guess_orientations(joints_image, body_px, spread, fps, away)
     world_yaw = np.full(n, np.nan) if cues is None else world_yaws(cues)
@@ -146,7 +148,7 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
         joints = exchange_legs(joints, crossed)
     joints = steadied_arms(joints, person, fps)
     if cues is not None:
-        joints = blended(joints, cues)
+        joints = with_landmarks(joints, cues)
     for i, points in overrides.items():
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
