@@ -22,7 +22,7 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.person import DEFAULT_MODEL, NONE, PersonModel, available, install_hint, open_person_model
+from mocap.person import CHOICES, DEFAULT_MODEL, NONE, PersonModel, available, install_hint, open_person_model
 from mocap.review import Doubt
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
@@ -113,10 +113,12 @@ def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = No
 
 
 def person_model(name: str | None) -> str:
-    """The person model a run uses: ``name``, else the default one where it is
-    installed; without it a MocapWarning says how to get it, and the run takes the
-    paper's classical path ("none")."""
-    name = DEFAULT_MODEL if name is None else name
+    """The person model a run uses: ``name``, else the environment's MOCAP_PERSON_MODEL,
+    else the default one; where its package is not installed a MocapWarning says how
+    to get it, and the run takes the paper's classical path ("none")."""
+    name = name or os.environ.get("MOCAP_PERSON_MODEL") or DEFAULT_MODEL
+    if name not in CHOICES:
+        raise MocapError(f"unknown person model {name!r} (MOCAP_PERSON_MODEL): choose one of {', '.join(CHOICES)}")
     if name == NONE or available(name):
         return name
     warnings.warn(f"no person model, fitting by silhouettes alone: {install_hint(name)}", MocapWarning,

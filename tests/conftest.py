@@ -1,6 +1,15 @@
-"""Shared fixtures: rendered walks fitted once per test session."""
+"""Shared fixtures: rendered walks fitted once per test session.
+
+The suite runs the paper's classical path unless a test asks for the person model
+(``--person-model mediapipe``, tests/test_person*.py): the rendered clips' faceless
+bodies are not what a person model is for, and its own tests measure it on real
+motion capture."""
 
 from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MOCAP_PERSON_MODEL", "none")
 
 from dataclasses import dataclass
 from pathlib import Path
