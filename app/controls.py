@@ -14,6 +14,7 @@ from pathlib import Path
 from app.signs import build_signs
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, ORIENTATIONS
+from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
 from mocap.session import FORMATS
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
@@ -94,6 +95,8 @@ class Controls:
     stage: object
     use_stage: object
     stage_info: object
+    learned_eyes: object
+    show_landmarks: object
     foot_lock: object
 
 
@@ -134,6 +137,7 @@ def build_controls(gui, n_frames: int) -> Controls:
         review = gui.add_markdown("")
     with tabs.add_tab("Stage"):
         stage, use_stage, stage_info = _stage_tab(gui)
+        learned_eyes, show_landmarks = _eyes_controls(gui)
     # folders, not tabs: used once, at the end, or seldom; a sixth tab wraps the tabs
     with gui.add_folder("Export", expand_by_default=False):
         foot_lock = gui.add_checkbox("Foot lock", initial_value=False,
@@ -154,7 +158,7 @@ def build_controls(gui, n_frames: int) -> Controls:
                     orientation, orientation_note, segments, joint, clear_override, overrides,
                     edits, doubtful, review, play, downloads, commands, help_page, track_info,
                     mark, marks_from_fit, track, stage, use_stage, stage_info,
-                    foot_lock)
+                    learned_eyes, show_landmarks, foot_lock)
 
 
 def _tracking_tab(gui) -> tuple[object, object, object, object]:
@@ -180,6 +184,20 @@ def _stage_tab(gui) -> tuple[object, object, object]:
     use_stage = gui.add_button("Use as the empty stage", icon="photo-check",
                                hint="find the silhouettes again against it and refit")
     return stage, use_stage, gui.add_markdown("")
+
+
+def _eyes_controls(gui) -> tuple[object, object]:
+    """The Stage tab's learned eyes: the person model on or off (a refit, as a new
+    empty stage is), and whether the silhouette panel shows its joints."""
+    gui.add_markdown(EYES_HELP)
+    installed = available(DEFAULT_MODEL)
+    learned_eyes = gui.add_checkbox(
+        "Learned eyes (person model)", initial_value=False, disabled=True,
+        hint="find the silhouettes again with the person model (on) or by the difference from the "
+             "empty stage alone (off), and refit" if installed else install_hint(DEFAULT_MODEL))
+    show_landmarks = gui.add_checkbox("Show the person model's joints", initial_value=True,
+                                      hint="its joints as magenta dots on the silhouette panel")
+    return learned_eyes, show_landmarks
 
 
 # -- what the controls say about a frame ------------------------------------------------
@@ -213,6 +231,27 @@ STAGE_HELP = ("The silhouettes are the frame's difference from the empty stage. 
               "performer never leaves a spot, the stage there is only guessed: give frames of "
               "this video where the stage is empty (e.g. `0-40`), or a photo or short video of it "
               "filmed from the same place.")
+
+
+EYES_HELP = ("**Learned eyes**: a person model (MediaPipe Pose) looks at each frame too. Where "
+             "it sees the performer, its mask is the silhouette, edged by the difference from the "
+             "empty stage (teal on the silhouette panel: where only it saw the body, e.g. a part "
+             "that never moved), and its joints (magenta dots) guide the fit. Off: the difference "
+             "from the empty stage alone, the paper's classical path.")
+PERSON_MODEL_NAMES = {"mediapipe": "MediaPipe"}     # a person model's name as the page says it
+
+
+def eyes_text(state) -> str:
+    """What the silhouette method looks through, and on how many frames the person
+    model saw the performer so far."""
+    name = state.person_model
+    if name == NONE:
+        return "Eyes: silhouettes only (the difference from the empty stage)."
+    seen, done = state.eyes_seen()
+    text = f"Eyes: person model ({PERSON_MODEL_NAMES.get(name, name)}) + silhouettes"
+    if done:
+        text += f"; it saw the performer on {seen} of {done} frames"
+    return text + "."
 
 
 def stage_text(state) -> str:

@@ -12,6 +12,7 @@ from functools import cache
 from app.controls import DOWNLOADS, NO_JOINT, Controls
 from app.signs import sign_button
 from app.state import AppState, FrameView
+from mocap.person import DEFAULT_MODEL, available
 from mocap.session import FORMATS
 
 
@@ -19,6 +20,12 @@ from mocap.session import FORMATS
 def writable(label: str) -> bool:
     """Whether this installation writes a download button's format (FBX needs Blender)."""
     return FORMATS[DOWNLOADS[label]].available()
+
+
+@cache
+def person_model_installed() -> bool:
+    """Whether the default person model's package is installed (the learned eyes' switch)."""
+    return available(DEFAULT_MODEL)
 
 
 def control_states(c: Controls, state: AppState, view: FrameView) -> list[tuple[object, dict]]:
@@ -39,5 +46,7 @@ def control_states(c: Controls, state: AppState, view: FrameView) -> list[tuple[
         (c.mark, {"disabled": not state.unmarked(state.marking_frame())}),
         (c.marks_from_fit, {"disabled": not state.silhouette_fitted}),
         (c.track, {"disabled": state.tracking or bool(state.unmarked())}),
+        # switched as a new empty stage is set: once the fit is done, refitting
+        (c.learned_eyes, {"disabled": not state.ready.is_set() or not person_model_installed()}),
     ]
     return out

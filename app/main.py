@@ -19,8 +19,8 @@ import numpy as np
 import viser
 
 from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD_CHOICES, NO_JOINT,
-                          Controls, build_controls, frame_text, orientation_text, review_text,
-                          stage_text, tracking_text)
+                          Controls, build_controls, eyes_text, frame_text, orientation_text,
+                          review_text, stage_text, tracking_text)
 from app.enabling import control_states
 from app.player import Player
 from app.state import AppState, FrameView
@@ -29,6 +29,7 @@ from app.views import (FrameCache, SceneView, caption_image, silhouette_image, t
                        video_image)
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
+from mocap.person import DEFAULT_MODEL, NONE
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
 
@@ -110,6 +111,8 @@ class App:
         c.marks_from_fit.on_click(self._on(state.marks_from_fit))
         c.track.on_click(self._on(state.start_tracking))
         c.use_stage.on_click(self._on(lambda: state.set_background(c.stage.value)))
+        c.learned_eyes.on_update(self._from_client(lambda: self._learned_eyes(c.learned_eyes.value)))
+        c.show_landmarks.on_update(lambda _e: self.refresh())
         c.clear_override.on_click(self._on(self._clear_override))
         for label, button in c.downloads.items():
             button.on_click(lambda e, key=DOWNLOADS[label]: self._run(e.client, lambda: self._download(e, key)))
@@ -164,6 +167,14 @@ class App:
         self.controls.joint.value = missing[0] if missing else NO_JOINT
         self.refresh()
 
+    def _learned_eyes(self, on: bool) -> None:
+        """Fit with the person model (on) or without (off), unless the fit does already."""
+        try:
+            if on != (self.state.person_model != NONE):
+                self.state.set_person_model(DEFAULT_MODEL if on else NONE)
+        finally:
+            self.refresh()      # a refused switch shows the checkbox as the fit has it again
+
     def _clear_override(self) -> None:
         joint = self.controls.joint.value
         self.state.clear_overrides(self.state.frame, None if joint == NO_JOINT else joint)
@@ -206,8 +217,11 @@ class App:
         if self._changed("video", (view.index, sorted(marks.items()))):
             self.scene.show_video(video_image(self.frames.get(view.index), marks, self.state.scale))
         joints = None if view.joints2d is None else view.joints2d.tobytes()
+        # the silhouette's object: a refit (new stage, learned eyes) brings new ones
         if self._changed("silhouette", (view.index, view.method, view.silhouette_ready, joints,
-                                        view.sides_known, sorted(view.overrides.items()))):
+                                        view.sides_known, sorted(view.overrides.items()),
+                                        id(view.silhouette), self.state.person_model,
+                                        self.controls.show_landmarks.value)):
             self.scene.show_silhouette(self._silhouette_image(view))
         joint = self.controls.joint.value
         self.scene.caption("video", f"frame {view.index}"
@@ -230,7 +244,8 @@ class App:
         if view.silhouette is None:
             return caption_image(self.size, "nobody found on this frame")
         return silhouette_image(view.silhouette, view.joints2d, view.sides_known, view.overrides,
-                                self.state.scale, self.size)
+                                self.state.scale, self.size, self.controls.show_landmarks.value,
+                                self.state.person_model != NONE)
 
     def _show_pose(self, view: FrameView) -> None:
         if self._changed("pose", None if view.pose3d is None else view.pose3d.tobytes()):
@@ -270,6 +285,7 @@ class App:
         _set(c.method, value=next(k for k, v in METHOD_CHOICES.items() if v == view.method))
         _set(c.track_info, content=tracking_text(self.state))
         _set(c.stage_info, content=stage_text(self.state))
+        _set(c.learned_eyes, value=self.state.person_model != NONE)
 
     def _show_progress(self, view: FrameView) -> None:
         p, c = view.progress, self.controls
@@ -277,11 +293,12 @@ class App:
         _set(c.progress, value=100.0 * p.done / max(p.total, 1), visible=not p.ready,
              animated=p.error is None, color=None if p.error is None else "red")
         done = "tracked" if view.method == "track" else "fitted"
+        eyes = "" if view.method == "track" else f"  \n{eyes_text(self.state)}"
         if p.error is not None:
-            text = f"**Stopped:** {p.error}"
+            text = f"**Stopped:** {p.error}{eyes}"
         elif p.ready:
-            text = (f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`. "
-                    + next_step(bool(self.state.review_stops())))
+            text = (f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`.{eyes}"
+                    + ("  \n" if eyes else " ") + next_step(bool(self.state.review_stops())))
             if view.method != "track" and self.state.background_warning:
                 text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."
         elif view.method == "track" and not self.state.tracking:
@@ -291,7 +308,7 @@ class App:
                     "Tracking tab), then press Track.")
         else:
             work = "Tracking" if view.method == "track" else "Preprocessing"
-            text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%"
+            text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%{eyes}"
         _set(c.status, content=text)
 
 
@@ -309,11 +326,12 @@ def _set(handle, **props) -> None:
 
 
 def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: int = 8080,
-           annotations: str | Path | None = None) -> App:
+           annotations: str | Path | None = None, person: str | None = None) -> App:
     """The app on ``video`` (default: the bundled sample) on a new viser server, its
-    edits saved to ``annotations`` (default: beside the video); preprocessing starts
-    with ``app.state.start()``."""
-    state = AppState(video or SAMPLE, annotations)
+    edits saved to ``annotations`` (default: beside the video), the silhouette method
+    looking through the ``person`` model (AppState; None: the default where
+    installed); preprocessing starts with ``app.state.start()``."""
+    state = AppState(video or SAMPLE, annotations, person)
     check_port(host, port)
     server = viser.ViserServer(host=host, port=port, verbose=False)
     if port and server.get_port() != port:  # taken between the check and viser's bind
@@ -345,10 +363,10 @@ def check_port(host: str, port: int) -> None:
 
 def main(video: str | None = None, port: int = 8080, host: str = "127.0.0.1",
          progress: Callable[[int, int], None] | None = None,
-         annotations: str | Path | None = None) -> None:
+         annotations: str | Path | None = None, person: str | None = None) -> None:
     """Serve until interrupted: print the page's address, then preprocess with
     ``progress(done, total)`` reporting each step."""
-    app = create(video, host=host, port=port, annotations=annotations)
+    app = create(video, host=host, port=port, annotations=annotations, person=person)
     print(f"mocap: serving {app.state.info.path} at http://{host}:{app.server.get_port()}/",
           flush=True)
     app.state.start(progress)

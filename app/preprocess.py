@@ -2,7 +2,9 @@
 (``mocap.pipeline``, streamed together) from the start, and the tracking once frame
 0 is marked. Each frame's silhouette and fit are kept as they come (the pipeline's
 Progress carries them), so the page shows them at once; the page hears at each whole
-percent, and at once when the frame it shows gets its silhouette or fit."""
+percent, and at once when the frame it shows gets its silhouette or fit. The passes
+look through the state's person model (mocap.person; "none": the silhouettes alone);
+choosing another, like another empty stage, fits the clip again."""
 
 from __future__ import annotations
 
@@ -15,6 +17,8 @@ from dataclasses import replace
 from typing import Callable
 
 from mocap.errors import MocapError
+from mocap.person import CHOICES as PERSON_MODELS
+from mocap.person import NONE, available, install_hint
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
 from mocap.session import Annotations, check_tracking_marks, marks_of, remarks_of
 
@@ -75,6 +79,7 @@ class Preprocessing:
             self._fail(f"preprocessing failed: {exc!r}")
         finally:
             self.ready.set()
+            self._changed()     # what waits for it (the learned eyes' switch) is offered again
 
     def _run_passes(self, progress: Callable[[int, int], None]) -> None:
         report = Throttle(self._step, 2 * self.n_frames)
@@ -92,8 +97,10 @@ class Preprocessing:
             if not report(p.done, stage) and shown:
                 self._changed()     # the frame on the page has its silhouette or fit now
 
-        session = open_session(self.info, self._annotations, method="silhouette", progress=step,
-                               background=self._annotations.background_source(self.path))
+        with self._lock:
+            notes, person = self._annotations, self._person
+        session = open_session(self.info, notes, method="silhouette", progress=step,
+                               background=notes.background_source(self.path), person=person)
         with self._lock:
             session.annotate(self._annotations)     # edits made while fitting
             self._fitted = session
@@ -118,12 +125,47 @@ class Preprocessing:
             if isinstance(source, str) and not os.path.isfile(source):
                 raise MocapError(f"{source}: no such photo or video of the empty stage")
             self._apply(notes)
-            n = self.n_frames
-            self._silhouettes, self._silhouettes_done, self._fits = [None] * n, 0, [None] * n
-            self._fitted, self._progress = None, Progress(0, 2 * n, "waiting")
-            self.ready.clear()
+            self._forget_fit()
         self._changed()
         self.start()
+
+    def set_person_model(self, name: str) -> None:
+        """Look through the person model ``name`` (mocap.person; "none": the
+        silhouettes alone, the paper's classical path): the silhouettes are found
+        again and refitted. Refused while fitting, when it is the one used already,
+        and when its package is not installed (the message says how to install it)."""
+        if name not in PERSON_MODELS:
+            raise MocapError(f"unknown person model {name!r}: choose one of {', '.join(PERSON_MODELS)}")
+        with self._lock:
+            if not self.ready.is_set():
+                raise MocapError("the fit is still running: switch the learned eyes when it is done")
+            if name == self._person:
+                used = "the silhouettes alone" if name == NONE else f"the person model {name!r}"
+                raise MocapError(f"the fit already looks through {used}: nothing to refit")
+            if not available(name):
+                raise MocapError(install_hint(name))
+            self._person = name
+            self._forget_fit()
+        self._changed()
+        self.start()
+
+    def _forget_fit(self) -> None:
+        """(Under the lock) drop the silhouettes and fits before the passes run again."""
+        n = self.n_frames
+        self._silhouettes, self._silhouettes_done, self._fits = [None] * n, 0, [None] * n
+        self._fitted, self._progress = None, Progress(0, 2 * n, "waiting")
+        self.ready.clear()
+
+    @property
+    def person_model(self) -> str:
+        """The person model the silhouette method looks through ("none": the silhouettes alone)."""
+        return self._person
+
+    def eyes_seen(self) -> tuple[int, int]:
+        """(frames where the person model saw somebody, frames whose silhouette is in)."""
+        with self._lock:
+            done = self._silhouettes_done
+            return sum(s is not None and s.landmarks is not None for s in self._silhouettes[:done]), done
 
     @property
     def background_warning(self) -> str | None:

@@ -12,7 +12,9 @@ The annotations' method chooses what the page shows and exports: the silhouette
 method's session, or the tracking method's, tracked in a background thread
 (``start_tracking``) from the 16 joints marked on frame 0, which are frame 0's joint
 overrides. Both sessions take every edit. The state reaches the methods only through
-their sessions (mocap.session) and the pipeline (mocap.pipeline).
+their sessions (mocap.session) and the pipeline (mocap.pipeline); the silhouette
+method looks through a person model (the pipeline's ``person_model``: by default the
+one installed), which the user can switch off and on (``set_person_model``).
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from app.edits import Edits, placed
 from app.history import History
 from app.preprocess import Preprocessing
 from mocap.errors import MocapError
-from mocap.pipeline import Progress
+from mocap.pipeline import Progress, person_model
 from mocap.session import (Annotations, Doubt, FrameFit, Session, Silhouette, SilhouetteSession,
                            TrackSession, open_video, processing_scale, remarks_of)
 
@@ -65,7 +67,11 @@ class FrameView:
 class AppState(Preprocessing, Edits):
     """A video, its preprocessing, its sessions and annotations, the current frame."""
 
-    def __init__(self, video: str | os.PathLike, annotations: str | os.PathLike | None = None):
+    def __init__(self, video: str | os.PathLike, annotations: str | os.PathLike | None = None,
+                 person: str | None = None):
+        """``person``: the person model the silhouette method looks through
+        (mocap.person's name, "none": the silhouettes alone; None: the default where
+        installed, else a MocapWarning and none)."""
         self.info = open_video(video)
         self.scale = processing_scale(self.info)
         self.path = Path(annotations) if annotations else saving.annotations_path(video)
@@ -76,6 +82,7 @@ class AppState(Preprocessing, Edits):
         self._silhouettes_done = 0
         self._fits: list[FrameFit | None] = [None] * n
         self._progress = Progress(0, 2 * n, "waiting")
+        self._person = person_model(person)
         self._fitted: SilhouetteSession | None = None    # the silhouette method's
         self._tracked: TrackSession | None = None    # the tracking method's, once tracked
         self._tracked_from: dict | None = None       # the marks it was tracked from

@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
+from mocap.overlay import LANDMARK_BGR, LEARNED_BGR, draw_landmarks
 from mocap.session import (FACING_MARKS, Silhouette, VideoInfo, draw_skeleton, facing_marks, iter_frames,
                            segment_colour, silhouette_view)
 
@@ -29,6 +30,7 @@ MARK_RGB = (40, 40, 48)             # the nose and the chest's mark (mocap.facin
 CONE = trimesh.creation.cone(radius=1.0, height=1.0, sections=16)   # base at z = 0, tip at z = 1
 MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
 UNSIDED_BGR = (90, 200, 90)         # the 2D model before left and right are known
+UNSEEN_BGR = (170, 170, 170)        # the legend's line where the person model saw nobody
 AMBIENT = 1.2                       # ambient light intensity beside the default lights
 UPRIGHT = (0.0, 1.0, 0.0, 0.0)      # half turn about x: viser images put row 0 at -y
 SIDE = tuple(Rotation.from_euler("y", 90, degrees=True).as_quat(scalar_first=True))
@@ -112,20 +114,56 @@ def video_image(frame_bgr: np.ndarray, marks: dict[str, tuple[float, float]], sc
 
 def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None, sides_known: bool,
                      overrides: dict[str, tuple[float, float]], scale: float,
-                     size: tuple[int, int]) -> np.ndarray:
+                     size: tuple[int, int], landmarks: bool = True, eyes: bool = False) -> np.ndarray:
     """The silhouette in grey with the fitted model over it (RGB, ``for_display``;
     ``size`` = width, height of the processed frame); limbs in one colour until the
-    sides are known."""
+    sides are known. Where a person model looked (``eyes``), the pixels only its mask
+    gave are teal, its joints magenta dots (with ``landmarks``), and a legend says so."""
     mask = np.zeros((size[1], size[0]), np.uint8)
+    learned = None
     if silhouette is not None:
         x0, y0, x1, y1 = silhouette.box
         mask[y0:y1, x0:x1] = silhouette.mask()
-    view, scale = for_display(silhouette_view(mask, None), scale)
+        only = silhouette.learned_mask()
+        if only is not None:
+            learned = np.zeros_like(mask)
+            learned[y0:y1, x0:x1] = only
+    view, scale = for_display(silhouette_view(mask, None, learned), scale)
+    factor = view.shape[0] / size[1]        # processing pixels to the image's
     if joints2d is not None:
         thickness = max(2, view.shape[0] // 240)
         draw_skeleton(view, joints2d * scale, thickness, None if sides_known else UNSIDED_BGR)
+    seen = silhouette is not None and silhouette.landmarks is not None
+    if landmarks and seen:
+        marks = silhouette.landmarks.scaled(factor)
+        draw_landmarks(view, marks.joints2d, marks.confidence, max(2.0, view.shape[0] / 160))
+    if joints2d is not None:
         mark_joints(view, overrides, scale)
+    if eyes and silhouette is not None:
+        if not seen:
+            legend(view, [("person model saw nobody here", UNSEEN_BGR, None)])
+        else:
+            legend(view, [("person model's mask only", LEARNED_BGR, "box")]
+                   + ([("person model's joints", LANDMARK_BGR, "dot")] if landmarks else []))
     return cv2.cvtColor(view, cv2.COLOR_BGR2RGB)
+
+
+def legend(image: np.ndarray, entries: list[tuple[str, tuple[int, int, int], str | None]]) -> np.ndarray:
+    """Lines of (text, BGR colour, swatch: "box", "dot" or None) at the image's top
+    left, each text in its colour outlined in black (drawn in place, returned)."""
+    font = image.shape[0] / 700
+    line = max(12, round(image.shape[0] / 28))
+    for k, (text, colour, swatch) in enumerate(entries):
+        y = line * (k + 1)
+        x = round(line * 0.4)
+        if swatch == "box":
+            cv2.rectangle(image, (x, y - line * 2 // 3), (x + line * 2 // 3, y), colour, -1)
+        elif swatch == "dot":
+            cv2.circle(image, (x + line // 3, y - line // 3), max(2, line // 5), colour, -1, cv2.LINE_AA)
+        x += line if swatch else 0
+        cv2.putText(image, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, font, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(image, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, font, colour, 1, cv2.LINE_AA)
+    return image
 
 
 def tracked_image(frame_bgr: np.ndarray, joints2d: np.ndarray,

@@ -13,7 +13,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 import pytest
-from app_helpers import app, hold_fitting, tiny_video  # noqa: F401
+from app_helpers import fresh_copy, hold_fitting, started_app, tiny_video  # noqa: F401
 
 from app.views import silhouette_image
 from mocap.errors import MocapError, MocapWarning
@@ -33,6 +33,16 @@ NEEDS_MEDIAPIPE = pytest.mark.skipif(not mediapipe_importable(),
                                             "(.venv/bin/pip install --no-deps mediapipe==0.10.14)")
 TEAL = LEARNED_BGR[::-1]            # the panel's image is RGB
 MAGENTA = LANDMARK_BGR[::-1]
+
+
+@pytest.fixture
+def app(tiny_video, tmp_path, monkeypatch):  # noqa: F811
+    """app_helpers' app as `mocap serve` opens it by default: with the person model
+    where it is installed (the suite's MOCAP_PERSON_MODEL=none unset)."""
+    monkeypatch.delenv("MOCAP_PERSON_MODEL", raising=False)
+    app = started_app(fresh_copy(tiny_video, tmp_path))
+    yield app
+    app.server.stop()
 
 
 def seen_frame(state) -> int:
@@ -161,6 +171,7 @@ def test_the_overlay_tints_and_dots():
 def test_the_app_fits_by_silhouettes_alone_without_the_person_model(tiny_video, tmp_path, monkeypatch):
     """Not installed: the app warns, fits by the silhouettes alone and refuses to switch."""
     from app.state import AppState
+    monkeypatch.delenv("MOCAP_PERSON_MODEL", raising=False)
     monkeypatch.setattr("mocap.pipeline.available", lambda name="mediapipe": name == "none")
     monkeypatch.setattr("app.preprocess.available", lambda name="mediapipe": name == "none")
     with warnings.catch_warnings(record=True) as caught:

@@ -10,10 +10,10 @@ import time
 import cv2
 import numpy as np
 import pytest
-from app_helpers import app, tiny_video  # noqa: F401
+from app_helpers import tiny_video  # noqa: F401
 from browser_helpers import (SKIP_WITHOUT_CHROMIUM, browser, chromium, fitted_camera,  # noqa: F401
                              open_page, panel_boxes, shot, wait_until)
-from test_app_person import NEEDS_MEDIAPIPE, seen_frame
+from test_app_person import NEEDS_MEDIAPIPE, app, seen_frame  # noqa: F401
 
 pytestmark = [SKIP_WITHOUT_CHROMIUM, NEEDS_MEDIAPIPE]
 sync_api = pytest.importorskip("playwright.sync_api")

@@ -52,9 +52,7 @@ class Model:
 
     def observe(self, frame: np.ndarray) -> PersonView | None:
         """Its view of one BGR frame (the next of the video), None if it sees nobody."""
-        rgb = np.ascontiguousarray(frame[:, :, ::-1])
-        with _quiet_native_logs():
-            result = self._pose.process(rgb)
+        result = self._pose.process(np.ascontiguousarray(frame[:, :, ::-1]))
         if result.pose_landmarks is None or result.segmentation_mask is None:
             return None
         h, w = frame.shape[:2]
@@ -89,9 +87,10 @@ def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, n
 
 @contextlib.contextmanager
 def _quiet_native_logs():
-    """Standard error closed for the duration: MediaPipe's C++ side prints its own
-    log lines there (TensorFlow Lite's delegate, absl's warnings), which would break
-    the command line's one-line messages."""
+    """Standard error closed while the model is built: MediaPipe's C++ side prints its
+    own log lines there (absl's warnings), which would break the command line's
+    one-line messages. Only around construction: the file descriptor is the whole
+    process's, and the app's other threads write there too."""
     try:
         saved = os.dup(2)
     except OSError:
