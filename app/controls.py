@@ -14,7 +14,7 @@ from pathlib import Path
 from app.signs import build_signs
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, ORIENTATIONS
-from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
+from mocap.session import DEFAULT_MODEL, NONE, available, install_hint
 from mocap.session import FORMATS
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"

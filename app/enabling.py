@@ -12,7 +12,7 @@ from functools import cache
 from app.controls import DOWNLOADS, NO_JOINT, Controls
 from app.signs import sign_button
 from app.state import AppState, FrameView
-from mocap.person import DEFAULT_MODEL, available
+from mocap.session import DEFAULT_MODEL, available
 from mocap.session import FORMATS
 
 

@@ -29,7 +29,7 @@ from app.views import (FrameCache, SceneView, caption_image, silhouette_image, t
                        video_image)
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
-from mocap.person import DEFAULT_MODEL, NONE
+from mocap.session import DEFAULT_MODEL, NONE
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
 

@@ -17,8 +17,8 @@ from dataclasses import replace
 from typing import Callable
 
 from mocap.errors import MocapError
-from mocap.person import CHOICES as PERSON_MODELS
-from mocap.person import NONE, available, install_hint
+from mocap.session import PERSON_MODELS
+from mocap.session import NONE, available, install_hint
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
 from mocap.session import Annotations, check_tracking_marks, marks_of, remarks_of
 

@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
-from mocap.overlay import LANDMARK_BGR, LEARNED_BGR, draw_landmarks
+from mocap.session import LANDMARK_BGR, LEARNED_BGR, draw_landmarks
 from mocap.session import (FACING_MARKS, Silhouette, VideoInfo, draw_skeleton, facing_marks, iter_frames,
                            segment_colour, silhouette_view)
 
