@@ -196,10 +196,21 @@ NECK_PER_SHOULDER = LENGTH[0] / (LENGTH[0] - SHOULDER_DROP)
 def reported_joints(joints: np.ndarray, px_per_unit: float) -> np.ndarray:
     """(16, 2) a fitted model's joints as the fit reports them: the pelvis and hips
     moved HIP_BELOW_THIGH_TOPS units from the neck's side, along the trunk's axis."""
+    return _hips_moved(joints, HIP_BELOW_THIGH_TOPS * px_per_unit)
+
+
+def model_joints(reported: np.ndarray, px_per_unit: float) -> np.ndarray:
+    """(16, 2) the model's joints of joints as the fit reports them (the inverse of
+    ``reported_joints``): the pelvis and hips moved back up the trunk's axis."""
+    return _hips_moved(reported, -HIP_BELOW_THIGH_TOPS * px_per_unit)
+
+
+def _hips_moved(joints: np.ndarray, pixels: float) -> np.ndarray:
+    """(16, 2) joints with the pelvis and hips moved ``pixels`` away from the neck."""
     out = np.array(joints, float)
     pelvis, neck = out[JOINT_INDEX["pelvis"]], out[JOINT_INDEX["neck"]]
     down = (pelvis - neck) / max(float(np.linalg.norm(pelvis - neck)), 1e-9)
-    out[[JOINT_INDEX[j] for j in ("pelvis", "hip_l", "hip_r")]] += HIP_BELOW_THIGH_TOPS * px_per_unit * down
+    out[[JOINT_INDEX[j] for j in ("pelvis", "hip_l", "hip_r")]] += pixels * down
     return out
 
 

@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 
 from mocap.body import JOINT_INDEX, SEGMENT_JOINTS, SEGMENTS, SEGMENT_NAMES
+from mocap.person import SURE
 
 # BGR per segment kind: torso/head white, the performer's left limbs orange, right ones blue
 _COLOURS = {"torso": (240, 240, 240), "head": (240, 240, 240)}
@@ -16,7 +17,6 @@ _LEFT, _RIGHT = (40, 160, 255), (255, 140, 40)
 SILHOUETTE_GREY = 110
 LEARNED_BGR = (150, 140, 30)        # teal: silhouette pixels only the person model's mask gave
 LANDMARK_BGR = (230, 70, 230)       # magenta: the person model's joints
-SURE = 0.5                          # a landmark this confident is a filled dot, else a ring
 # the segments' bones, and the shoulders and hips joined to the neck and the pelvis
 LANDMARK_BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in (
     *SEGMENTS.values(), ("neck", "shoulder_l"), ("neck", "shoulder_r"), ("pelvis", "hip_l"),

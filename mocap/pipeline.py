@@ -22,7 +22,7 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.person import CHOICES, DEFAULT_MODEL, NONE, PersonModel, available, install_hint, open_person_model
+from mocap.person import DEFAULT_MODEL, NONE, PersonModel, available, check_name, install_hint, open_person_model
 from mocap.review import Doubt
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.silhouette.background import Background
@@ -104,21 +104,18 @@ def _passes(info: VideoInfo, report: Report, background: Background | None, mode
     return stream.silhouettes, fits
 
 
-def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = None,
-              person: str = NONE) -> tuple[VideoInfo, list[FrameFit]]:
-    """Silhouettes and 2D fits for every frame of a video (a path or an opened one),
-    with the ``person`` model named (mocap.person)."""
+def fit_video(video: str | os.PathLike | VideoInfo,
+              progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:
+    """Silhouettes and 2D fits for every frame of a video (a path or an opened one)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
-    return info, silhouette_passes(info, progress, person=person)[1]
+    return info, silhouette_passes(info, progress)[1]
 
 
 def person_model(name: str | None) -> str:
     """The person model a run uses: ``name``, else the environment's MOCAP_PERSON_MODEL,
     else the default one; where its package is not installed a MocapWarning says how
     to get it, and the run takes the paper's classical path ("none")."""
-    name = name or os.environ.get("MOCAP_PERSON_MODEL") or DEFAULT_MODEL
-    if name not in CHOICES:
-        raise MocapError(f"unknown person model {name!r} (MOCAP_PERSON_MODEL): choose one of {', '.join(CHOICES)}")
+    name = check_name(name or os.environ.get("MOCAP_PERSON_MODEL") or DEFAULT_MODEL, " (MOCAP_PERSON_MODEL)")
     if name == NONE or available(name):
         return name
     warnings.warn(f"no person model, fitting by silhouettes alone: {install_hint(name)}", MocapWarning,

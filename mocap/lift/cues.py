@@ -14,7 +14,6 @@ from mocap.body import JOINT_INDEX, LIMB_JOINTS, SEGMENT_JOINTS
 from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, yaw_of
 from mocap.smoothest import two_state_path
 
-SURE = 0.5              # a landmark confidence from which it counts
 SWITCH = 2.0            # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05      # limb lengths: evidence below this per frame says nothing
 DISAGREE = 0.2          # of the body height: a frame whose landmarks lie this far from the fit's
@@ -81,11 +80,8 @@ def side_evidence(joints_image: np.ndarray, cues: Cues, limb_px: float) -> np.nd
     for pair, names in _LIMBS.items():
         margin = np.zeros(len(joints_image))
         for left, right in names:
-            fit_l, fit_r = joints_image[:, _J[left]], joints_image[:, _J[right]]
-            mp_l, mp_r = cues.joints2d[:, _J[left]], cues.joints2d[:, _J[right]]
             w = np.minimum(cues.confidence[:, _J[left]], cues.confidence[:, _J[right]])
-            keep = _dist(fit_l, mp_l) + _dist(fit_r, mp_r)
-            swap = _dist(fit_l, mp_r) + _dist(fit_r, mp_l)
+            keep, swap = _namings(joints_image, cues.joints2d, left, right)
             margin += np.where(seen, w * (keep - swap) / limb_px, 0.0)
         costs = np.column_stack([np.maximum(margin, 0.0), np.maximum(-margin, 0.0)])
         path = two_state_path(costs, np.full(len(costs) - 1, SWITCH))
@@ -99,11 +95,18 @@ def unsided_distances(joints_image: np.ndarray, landmarks: np.ndarray) -> np.nda
     d = _dist(joints_image, landmarks)
     for names in _LIMBS.values():
         for left, right in names:
-            l, r = _J[left], _J[right]
-            crossed = (_dist(joints_image[:, l], landmarks[:, r]) + _dist(joints_image[:, r], landmarks[:, l])) / 2
-            better = crossed < (d[:, l] + d[:, r]) / 2
-            d[better, l] = d[better, r] = crossed[better]
+            kept, crossed = _namings(joints_image, landmarks, left, right)
+            better = crossed < kept
+            d[better, _J[left]] = d[better, _J[right]] = crossed[better] / 2
     return d
+
+
+def _namings(joints: np.ndarray, landmarks: np.ndarray, left: str, right: str) -> tuple[np.ndarray, np.ndarray]:
+    """(F,) twice: a limb pair's two joints' distances to their landmarks summed, the
+    landmarks named as they are, and exchanged."""
+    l, r = _J[left], _J[right]
+    return (_dist(joints[:, l], landmarks[:, l]) + _dist(joints[:, r], landmarks[:, r]),
+            _dist(joints[:, l], landmarks[:, r]) + _dist(joints[:, r], landmarks[:, l]))
 
 
 def _dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -165,7 +165,7 @@ def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: n
     xy = image_to_model(joints2d, px_per_unit)
     dz = relative_depths(joints2d, px_per_unit, signs, lengths)
     if seen_depths is not None:
-        dz = np.where(np.isfinite(seen_depths), np.asarray(signs) * np.abs(seen_depths), dz)
+        dz = np.where(np.isfinite(seen_depths), np.asarray(signs) * seen_depths, dz)
     z = np.zeros(len(xy))
     z[_J["neck"]] = dz[_TORSO]
     z[_J["chest"]] = CHEST_FRACTION * dz[_TORSO]

@@ -18,6 +18,7 @@ from mocap.errors import MocapError
 
 DEFAULT_MODEL = "mediapipe"
 NONE = "none"                   # the paper's classical path: no person model
+SURE = 0.5                      # a landmark confidence from which it is taken as seen
 
 
 @dataclass(frozen=True)
@@ -72,13 +73,19 @@ MODELS = {"mediapipe": Entry("mocap.person.mediapipe_pose", "mediapipe",
 CHOICES = (*MODELS, NONE)
 
 
+def check_name(name: str, where: str = "") -> str:
+    """``name`` if it names a person model or "none", else a MocapError in one line
+    (``where``: where the name was given)."""
+    if name not in CHOICES:
+        raise MocapError(f"unknown person model {name!r}{where}: choose one of {', '.join(CHOICES)}")
+    return name
+
+
 def open_person_model(name: str = DEFAULT_MODEL) -> PersonModel | None:
     """A fresh person model by name, None for ``"none"``; a MocapError in one line
     when the name is unknown or its package is not installed."""
-    if name == NONE:
+    if check_name(name) == NONE:
         return None
-    if name not in MODELS:
-        raise MocapError(f"unknown person model {name!r}: choose one of {', '.join(CHOICES)}")
     if not available(name):
         raise MocapError(install_hint(name))
     import importlib

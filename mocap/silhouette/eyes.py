@@ -13,13 +13,12 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from mocap.body import HIP_BELOW_THIGH_TOPS, JOINT_INDEX, SEGMENT_INDEX, SEGMENTS, Pose2D
-from mocap.person import Landmarks
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENTS, Pose2D, model_joints
+from mocap.person import SURE, Landmarks
 
 PERSON_LEVEL = 0.5          # a person-mask probability from which a pixel is the performer
 EDGE_BAND = 0.01            # of the person mask's height: the band outside it where background
                             # subtraction may add pixels (its edges follow the frame's)
-SURE = 0.5                  # a landmark confidence from which it guides a search's centre
 APART = 0.04                # of the body height: shoulders or hips this far apart in x
                             # tell the image-left limb from the image-right one
 _J = JOINT_INDEX
@@ -69,11 +68,7 @@ def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px
         return None
     points = (landmarks.joints2d + 0.5 - origin) / step - 0.5
     points, weight = image_sided(points, landmarks.confidence, prev, px_per_unit)
-    down = points[_J["pelvis"]] - points[_J["neck"]]
-    down /= max(float(np.linalg.norm(down)), 1e-9)
-    for name in ("pelvis", "hip_l", "hip_r"):
-        points[_J[name]] -= HIP_BELOW_THIGH_TOPS * px_per_unit * down
-    return Targets(points, weight)
+    return Targets(model_joints(points, px_per_unit), weight)
 
 
 def image_sided(points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_per_unit: float
@@ -87,7 +82,7 @@ def image_sided(points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_
         left = [_J[f"{j}_l"] for j in joints]
         right = [_J[f"{j}_r"] for j in joints]
         dx = points[left[0], 0] - points[right[0], 0]
-        if abs(dx) >= APART * 175.0 * px_per_unit:
+        if abs(dx) >= APART * BODY_HEIGHT * px_per_unit:
             swap = dx > 0
         elif prev is not None:
             swap = _angle_cost(points, prev, limb, swapped=True) < _angle_cost(points, prev, limb, swapped=False)

@@ -74,8 +74,13 @@ def write_silhouettes(folder: str | os.PathLike, info: VideoInfo, silhouettes: l
         if sil is not None:
             x0, y0, x1, y1 = sil.box
             mask[y0:y1, x0:x1] = sil.mask() * 255
-        out.add(i, mask if mask.shape[::-1] == size else cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST))
+        out.add(i, video_sized(mask, size))
     return out.finish()
+
+
+def video_sized(mask: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """A mask at processing size brought to the video's ``size`` (width, height)."""
+    return mask if mask.shape[::-1] == size else cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST)
 
 
 def written_masks(info: VideoInfo, background: Background) -> Iterator[np.ndarray]:
@@ -89,4 +94,4 @@ def written_masks(info: VideoInfo, background: Background) -> Iterator[np.ndarra
         fit, cover = silhouette_and_cover(frame, background)
         found = cover if holds_person(cover) else fit
         mask = np.where(found > 0, 255, 0).astype(np.uint8) if holds_person(fit) else np.zeros_like(fit)
-        yield mask if mask.shape[::-1] == size else cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST)
+        yield video_sized(mask, size)
