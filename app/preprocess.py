@@ -17,8 +17,7 @@ from dataclasses import replace
 from typing import Callable
 
 from mocap.errors import MocapError
-from mocap.session import PERSON_MODELS
-from mocap.session import NONE, available, install_hint
+from mocap.session import NONE, available, check_name, install_hint
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
 from mocap.session import Annotations, check_tracking_marks, marks_of, remarks_of
 
@@ -134,8 +133,7 @@ class Preprocessing:
         silhouettes alone, the paper's classical path): the silhouettes are found
         again and refitted. Refused while fitting, when it is the one used already,
         and when its package is not installed (the message says how to install it)."""
-        if name not in PERSON_MODELS:
-            raise MocapError(f"unknown person model {name!r}: choose one of {', '.join(PERSON_MODELS)}")
+        check_name(name)
         with self._lock:
             if not self.ready.is_set():
                 raise MocapError("the fit is still running: switch the learned eyes when it is done")

@@ -13,8 +13,7 @@ from mocap.io.annotations import Annotations, load_annotations, save_annotations
 from mocap.io.export.formats import FORMATS
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale, read_frame
 from mocap.overlay import LANDMARK_BGR, LEARNED_BGR, draw_landmarks, draw_skeleton, segment_colour, silhouette_view
-from mocap.person import CHOICES as PERSON_MODELS
-from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
+from mocap.person import DEFAULT_MODEL, NONE, available, check_name, install_hint
 from mocap.review import Doubt
 from mocap.session.base import Session
 from mocap.session.silhouette import SilhouetteSession
@@ -23,8 +22,8 @@ from mocap.session.tracking import (MARKS_NEEDED, TrackSession, check_tracking_m
 from mocap.silhouette.passes import FrameFit, Silhouette
 
 __all__ = ["DEFAULT_MODEL", "FACING_MARKS", "FORMATS", "LANDMARK_BGR", "LEARNED_BGR", "MARKS_NEEDED", "NONE",
-           "PERSON_MODELS", "Annotations", "Doubt", "FrameFit", "Session", "Silhouette", "SilhouetteSession",
-           "TrackSession", "VideoInfo", "available", "check_tracking_marks", "draw_landmarks", "draw_skeleton",
+           "Annotations", "Doubt", "FrameFit", "Session", "Silhouette", "SilhouetteSession",
+           "TrackSession", "VideoInfo", "available", "check_name", "check_tracking_marks", "draw_landmarks", "draw_skeleton",
            "facing_marks", "install_hint", "iter_frames", "load_annotations", "marks_of", "open_video",
            "processing_scale", "read_frame", "save_annotations", "segment_colour", "silhouette_view",
            "remarks_of", "tracked_video"]
