@@ -61,6 +61,7 @@ def wait_refit(app) -> None:
 @NEEDS_MEDIAPIPE
 def test_the_switch_refits_with_and_without_the_person_model(app, monkeypatch):
     state, c = app.state, app.controls
+    wait_refit(app)     # the page's last refresh after the fit runs on the fit's thread
     # by default: the person model, where it is installed
     assert state.person_model == state._fitted.person_model == "mediapipe"
     assert any(s is not None and s.landmarks is not None for s in state._silhouettes)
