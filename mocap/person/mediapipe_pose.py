@@ -46,13 +46,20 @@ class Model:
                 from mediapipe.python.solutions import pose
                 self._pose = pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=True,
                                        enable_segmentation=True, smooth_segmentation=True)
+            self._first = True
         except ImportError as error:     # installed, but a package it needs is not
             raise MocapError(f"mediapipe does not load ({error}): {MODELS['mediapipe'].install} "
                              "and the packages mocap lists, or --person-model none") from None
 
     def observe(self, frame: np.ndarray) -> PersonView | None:
         """Its view of one BGR frame (the next of the video), None if it sees nobody."""
-        result = self._pose.process(np.ascontiguousarray(frame[:, :, ::-1]))
+        rgb = np.ascontiguousarray(frame[:, :, ::-1])
+        if self._first:                 # its first inference logs how it set itself up
+            with _quiet_native_logs():
+                result = self._pose.process(rgb)
+            self._first = False
+        else:
+            result = self._pose.process(rgb)
         if result.pose_landmarks is None or result.segmentation_mask is None:
             return None
         h, w = frame.shape[:2]
@@ -87,10 +94,11 @@ def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, n
 
 @contextlib.contextmanager
 def _quiet_native_logs():
-    """Standard error closed while the model is built: MediaPipe's C++ side prints its
-    own log lines there (absl's warnings), which would break the command line's
-    one-line messages. Only around construction: the file descriptor is the whole
-    process's, and the app's other threads write there too."""
+    """Standard error closed while the model is built and runs its first frame:
+    MediaPipe's C++ side prints its set-up log lines there (TensorFlow Lite's delegate,
+    absl's warnings), which would break the command line's one-line messages. Not for
+    longer: the file descriptor is the whole process's, and the app's other threads
+    write there too."""
     try:
         saved = os.dup(2)
     except OSError:
