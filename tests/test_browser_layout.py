@@ -51,9 +51,10 @@ def test_panels_visible_apart_and_of_one_size(chromium, shaped_app, window):  # 
         video = boxes["video"]                      # no joint chosen to place: refused
         page.mouse.click((video[0] + video[2]) / 2, (video[1] + video[3]) / 2)
         notice = page.locator(".mantine-Notification-root")
-        notice.wait_for()
+        notice.wait_for(state="visible")
+        shown = box_of(notice)
         for name, box in boxes.items():
-            assert not overlap(box_of(notice), box), f"the notification covers {name}"
+            assert not overlap(shown, box), f"the notification covers {name}"
         shot(page, f"layout_{shape}_{window[0]}x{window[1]}")
     finally:
         context.close()
