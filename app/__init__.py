@@ -1,3 +1,2 @@
-"""The browser app of `mocap serve`: review a fitted video frame by frame, correct it
-by clicking, export the animation. Built on viser; imports ``mocap``, never the
-other way round (``mocap.cli`` imports this package lazily, inside ``serve``)."""
+"""The browser app of `mocap serve` (viser): review a fitted video, correct it by clicking, export.
+Imports ``mocap``, never the other way round (``mocap.cli`` imports it lazily, inside ``serve``)."""

@@ -1,8 +1,5 @@
-"""The page's controls: built by one function that returns a dataclass of handles.
-
-Built on ``server.gui``, so every tab shares them (one truth). Hotkeys are viser
-commands; ``HOTKEYS`` lists them once for the commands and the help text.
-"""
+"""The page's controls: ``build_controls`` returns a dataclass of handles on ``server.gui``, shared
+by every tab; ``HOTKEYS`` lists the viser commands once for the commands and the help text."""
 
 from __future__ import annotations
 
@@ -14,8 +11,8 @@ from pathlib import Path
 from app.signs import build_signs
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, ORIENTATIONS
-from mocap.session import DEFAULT_MODEL, NONE, available, install_hint
-from mocap.session import FORMATS
+from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
+from mocap.io.export.formats import FORMATS
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
 NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing"
@@ -101,8 +98,7 @@ class Controls:
 
 
 def build_controls(gui, n_frames: int) -> Controls:
-    """Lay out the control panel for a video of ``n_frames`` frames: the frame and
-    the undo history always in view, the rest on tabs."""
+    """Lay out the control panel: the frame and the undo history always in view, the rest on tabs."""
     gui.configure_theme(control_width="large", show_share_button=False)
     gui.main_panel.dock_right()
     progress = gui.add_progress_bar(0.0, animated=True)
@@ -175,8 +171,7 @@ def _tracking_tab(gui) -> tuple[object, object, object, object]:
 
 
 def _stage_tab(gui) -> tuple[object, object, object]:
-    """The Stage tab's controls: the empty stage's source, the button that uses it,
-    and what it says."""
+    """The Stage tab's controls: the empty stage's source, the button that uses it, what it says."""
     gui.add_markdown(STAGE_HELP)
     stage = gui.add_text("Empty stage", initial_value="",
                          hint="frames A-B of this video, or a photo or video file of the empty "
@@ -187,8 +182,7 @@ def _stage_tab(gui) -> tuple[object, object, object]:
 
 
 def _eyes_controls(gui) -> tuple[object, object]:
-    """The Stage tab's learned eyes: the person model on or off (a refit, as a new
-    empty stage is), and whether the silhouette panel shows its joints."""
+    """The learned eyes: the person model on or off (a refit) and whether its joints are shown."""
     gui.add_markdown(EYES_HELP)
     installed = available(DEFAULT_MODEL)
     learned_eyes = gui.add_checkbox(
@@ -242,8 +236,7 @@ PERSON_MODEL_NAMES = {"mediapipe": "MediaPipe"}     # a person model's name as t
 
 
 def eyes_text(state) -> str:
-    """What the silhouette method looks through, and on how many frames the person
-    model saw the performer so far."""
+    """What the silhouette method looks through, and on how many frames the person model saw somebody."""
     name = state.person_model
     if name == NONE:
         return "Eyes: silhouettes only (the difference from the empty stage)."

@@ -9,14 +9,13 @@ from typing import Callable
 from app import saving
 from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.errors import MocapError
-from mocap.session import Annotations
+from mocap.io.annotations import Annotations
 
 Change = Callable[[Annotations], Annotations]
 
 
 def toggled_keyframe(notes: Annotations, frame: int, n_frames: int) -> Annotations:
-    """The annotations with ``frame`` marked as a keyframe or unmarked; all frames
-    marked is written as no list (the contract's default)."""
+    """``notes`` with ``frame``'s keyframe mark toggled; all frames marked is written as no list."""
     keys = set(notes.keyframe_indices(n_frames)) ^ {frame}
     if not keys:
         raise MocapError("the last keyframe cannot be unmarked: the animation needs one")
@@ -32,8 +31,7 @@ class Edits:
     """AppState's edits (a mixin: the state's lock, annotations, sessions, history)."""
 
     def edit(self, frame: int, change: Change) -> bool:
-        """Apply ``change`` to the annotations on behalf of ``frame``: saved, applied,
-        undoable, shown. False when it changes nothing."""
+        """Apply ``change`` on behalf of ``frame``: saved, applied, undoable, shown; False if a no-op."""
         with self._lock:
             before = self._annotations
             after = change(before)
@@ -106,8 +104,7 @@ class Edits:
         return self.edit(self._frame, lambda n: n.with_method(method))
 
     def marks_from_fit(self) -> bool:
-        """Place all 16 marks on frame 0 where the silhouette method's fit has them
-        (SilhouetteSession.tracking_marks): a start for the user to correct."""
+        """Place all 16 marks on frame 0 where the silhouette fit has them (SilhouetteSession.tracking_marks)."""
         with self._lock:
             if self._fitted is None:
                 raise MocapError("frame 0 has no silhouette fit to take the marks from yet")
@@ -125,15 +122,13 @@ class Edits:
         return self._fitted is not None
 
     def unmarked(self, frame: int = 0) -> list[str]:
-        """The joints not yet marked on ``frame`` (frame 0's: the tracking's marks),
-        in JOINTS order."""
+        """The joints not yet marked on ``frame`` (frame 0's: the tracking's marks), in JOINTS order."""
         there = placed(self._annotations, frame)
         return [j for j in JOINTS if j not in there]
 
     def marking_frame(self) -> int:
-        """The frame the tracking's joints are marked on: frame 0 until all 16 are
-        marked there, then the current frame (the body marked again where the
-        tracking lost it, which seeds the tracking anew there)."""
+        """The frame the tracking's joints are marked on: 0 until all 16 are marked there, then the
+        current frame (a re-mark where the tracking lost the body seeds it anew)."""
         return self._frame if not self.unmarked(0) else 0
 
     def toggle_keyframe(self, frame: int) -> bool:

@@ -1,9 +1,5 @@
-"""Which controls can act on the frame shown: those that cannot are disabled (and
-enabled again when they can), so that a control never offers what it would refuse.
-
-Button groups (frame steps, undo/redo) cannot be disabled in viser; what they refuse
-is said in the tab's notification.
-"""
+"""Which controls can act on the frame shown; the others are disabled. Button groups cannot be
+disabled in viser: the tab's notification says what they refuse."""
 
 from __future__ import annotations
 
@@ -12,8 +8,8 @@ from functools import cache
 from app.controls import DOWNLOADS, NO_JOINT, Controls
 from app.signs import sign_button
 from app.state import AppState, FrameView
-from mocap.session import DEFAULT_MODEL, available
-from mocap.session import FORMATS
+from mocap.person import DEFAULT_MODEL, available
+from mocap.io.export.formats import FORMATS
 
 
 @cache

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from mocap.session import Annotations
+from mocap.io.annotations import Annotations
 
 Step = tuple[Annotations, Annotations, int]
 
@@ -21,8 +21,7 @@ class History:
         self.redo.clear()
 
     def peek(self, back: bool) -> tuple[Annotations, int] | None:
-        """What undoing (``back``) or redoing the latest edit would apply, and its
-        frame; None when there is nothing to take back or do again."""
+        """(annotations, frame) that undoing (``back``) or redoing would apply; None if nothing to."""
         source = self.undo if back else self.redo
         if not source:
             return None

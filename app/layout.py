@@ -1,13 +1,6 @@
-"""Where the four panels sit in the scene, and where each tab's camera looks from.
-
-The panels (video frame, silhouette and fit, 3D from the camera, 3D from the side)
-all have the video's aspect ratio and one size. They lie in the plane z = 0 of a
-y-up scene on a grid of 2 x 2, one row of 4 or one column of 4: whichever shows
-them largest in a usual window's 3D canvas (the window less the control panel
-docked at its right). Each tab's camera then looks at them straight from +z, as
-close as its own canvas allows, with a band at the canvas's top left free for
-notifications, so that nothing is drawn under them or under the control panel.
-"""
+"""Where the four panels sit in the y-up scene's plane z = 0 (a 2 x 2, 4 x 1 or 1 x 4 grid, whichever
+shows them largest) and where each tab's camera looks from: +z, as close as its canvas allows, with
+a top band left free for notifications."""
 
 from __future__ import annotations
 
@@ -22,8 +15,7 @@ GAP = 0.3                   # between panels, and above each row: room for its c
 CAMERA_FOV = math.radians(30.0)
 # (columns, rows), in the order the panels fill them: video, silhouette, front, side
 ARRANGEMENTS = ((2, 2), (4, 1), (1, 4))
-# width / height of the 3D canvas less the notification band: 892 x 630 px in a
-# 1280x720 window, 1532 x 990 in a 1920x1080 one
+# width / height of a usual window's 3D canvas less the notification band
 USUAL_CANVAS = 1.45
 USUAL_CANVAS_PX = (892, 720)    # a new tab's camera before its canvas's size is known
 NOTICE_PX = 110             # the canvas's top band where a notification (3 lines) appears
@@ -47,8 +39,7 @@ class Layout:
 
     @classmethod
     def for_video(cls, width_px: int, height_px: int, canvas: float = USUAL_CANVAS) -> "Layout":
-        """The arrangement that shows panels of the video's aspect largest on a canvas
-        of aspect ``canvas`` (width / height)."""
+        """The grid that shows panels of the video's aspect largest on a canvas of aspect ``canvas``."""
         w = PANEL_HEIGHT * width_px / height_px
 
         def panel_size(grid: tuple[int, int]) -> float:
@@ -67,8 +58,7 @@ class Layout:
 
     @property
     def caption_height(self) -> float:
-        """Caption text height (scene units): as large as the gap allows, small enough
-        for CAPTION_CHARS characters to fit a panel's width."""
+        """Caption text height (scene units): at most GAP / 3, with CAPTION_CHARS fitting a panel's width."""
         return min(GAP / 3, self.width / (0.6 * CAPTION_CHARS))
 
     def camera(self, image_width: int, image_height: int, fov: float = CAMERA_FOV
@@ -84,8 +74,7 @@ class Layout:
         return (0.0, y, distance), (0.0, y, 0.0)
 
     def video_pixel(self, origin, direction, size: tuple[int, int]) -> tuple[float, float] | None:
-        """Where a click ray meets the video panel, in pixels of an image of ``size``
-        (width, height); None when it misses."""
+        """Where a click ray meets the video panel, in pixels of an image of ``size`` (w, h); None if not."""
         o, d = np.asarray(origin, float), np.asarray(direction, float)
         if abs(d[2]) < 1e-9:
             return None
@@ -98,8 +87,7 @@ class Layout:
 
 
 def _extent(width: float, columns: int, rows: int) -> tuple[float, float]:
-    """Width and height of a grid of panels ``width`` x PANEL_HEIGHT, a caption band
-    of GAP above each row."""
+    """(width, height) of a grid of ``width`` x PANEL_HEIGHT panels, a GAP caption band above each row."""
     return columns * width + (columns - 1) * GAP, rows * (PANEL_HEIGHT + GAP)
 
 
@@ -114,9 +102,8 @@ def place_cameras(server, layout: Layout) -> None:
 
 
 def _fit_camera_of(client, layout: Layout) -> None:
-    """Fit the tab's camera to its canvas when the canvas's size changes, and on every
-    camera update of the tab's first SETTLE_S (a new page's start-up may put back a
-    pose it had before the first fit)."""
+    """Fit the tab's camera to its canvas on resize, and on every update in its first SETTLE_S (a new
+    page's start-up may put back an earlier pose)."""
     fitted: list[tuple[int, int]] = []
     settling_until = time.monotonic() + SETTLE_S
 

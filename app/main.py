@@ -1,9 +1,5 @@
-"""`mocap serve`: the browser app on one video.
-
-``App`` wires the controls (``app.controls``) and the scene (``app.views``) to one
-``AppState``: a callback only turns an event into a call on the state; every change
-of the state redraws what it changed (``App.refresh``), for every tab at once.
-"""
+"""`mocap serve`: ``App`` wires the controls (``app.controls``) and scene (``app.views``) to one
+``AppState``; callbacks only call the state, and every change redraws what it changed (``refresh``)."""
 
 from __future__ import annotations
 
@@ -29,7 +25,7 @@ from app.views import (FrameCache, SceneView, caption_image, silhouette_image, t
                        video_image)
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
-from mocap.session import DEFAULT_MODEL, NONE
+from mocap.person import DEFAULT_MODEL, NONE
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
 
@@ -67,8 +63,7 @@ class App:
                 self._notify(client, str(exc))
 
     def _notify(self, client, text: str) -> None:
-        """Say ``text`` in the tab's one notification: a new one replaces the last, so
-        that they never stack down out of the band kept free for them (app.layout)."""
+        """Say ``text`` in the tab's one notification, replacing the last so none stack out of their band."""
         with self._render_lock:
             last = self._notices.pop(client.client_id, None)
             if last is not None:
@@ -152,8 +147,7 @@ class App:
         self._run(event.client, place)
 
     def _start_marking(self) -> None:
-        """Go to the frame the joints are marked on (AppState.marking_frame: frame 0,
-        then the current one) and ask for the first joint not marked there."""
+        """Go to the marking frame (AppState.marking_frame) and ask for its first unmarked joint."""
         self._marking = self.state.marking_frame()
         if not self.state.unmarked(self._marking):
             raise MocapError(f"all 16 joints are marked on frame {self._marking}; to move one, choose "
@@ -327,10 +321,8 @@ def _set(handle, **props) -> None:
 
 def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: int = 8080,
            annotations: str | Path | None = None, person: str | None = None) -> App:
-    """The app on ``video`` (default: the bundled sample) on a new viser server, its
-    edits saved to ``annotations`` (default: beside the video), the silhouette method
-    looking through the ``person`` model (AppState; None: the default where
-    installed); preprocessing starts with ``app.state.start()``."""
+    """The app on ``video`` (default: the sample) on a new viser server, edits saved to ``annotations``
+    (default: beside the video), ``person`` as AppState takes it; start with ``app.state.start()``."""
     state = AppState(video or SAMPLE, annotations, person)
     check_port(host, port)
     server = viser.ViserServer(host=host, port=port, verbose=False)
@@ -346,10 +338,8 @@ def _taken(host: str, port: int) -> str:
 
 
 def check_port(host: str, port: int) -> None:
-    """Refuse an address the server cannot have. viser would move on to the next free
-    port by itself, and a user who named one (or opens the default address) would be
-    looking at another program's page; a host that is no address of this machine would
-    make viser try a thousand ports."""
+    """Refuse an address the server cannot have: viser would move to another port (the user's address
+    showing another program's page) or, for a host not of this machine, try a thousand ports."""
     try:
         family, kind, proto, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
         with socket.socket(family, kind, proto) as probe:

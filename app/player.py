@@ -1,14 +1,6 @@
-"""Play: the whole page (video frame, silhouette and fit, frame slider, 3D bodies)
-runs through the video at its frame rate.
-
-The player only moves the state's current frame (``AppState.go_to``), so every tab
-shows the same frame as it would when stepped by hand, and the 3D bodies show the
-animation (keyframes lifted, the frames between interpolated: what the exports
-hold). It is paced by the wall clock: each tick shows the frame the clock is at and
-skips any it is late for, so a slow machine or a slow link drops frames rather than
-falling behind. Moving the frame while playing plays on from there; playing stops
-at the last frame (Play there starts again from the first).
-"""
+"""Play: moves the state's current frame at the video's frame rate (``AppState.go_to``), so every tab
+shows what stepping would. Paced by the wall clock (a late tick skips frames); moving the frame plays
+on from there; playing stops at the last frame (Play there restarts from the first)."""
 
 from __future__ import annotations
 
@@ -22,8 +14,7 @@ from app.state import AppState
 
 
 class Player:
-    """Plays ``state`` at the video's frame rate in a thread; ``refresh(force)`` redraws
-    the page when playing starts or stops."""
+    """Plays ``state`` in a thread; ``refresh(force)`` redraws the page when playing starts or stops."""
 
     def __init__(self, state: AppState, refresh: Callable[[bool], None]):
         self.state, self._refresh = state, refresh

@@ -1,10 +1,6 @@
-"""The app's background work: the silhouette method's two passes over the video
-(``mocap.pipeline``, streamed together) from the start, and the tracking once frame
-0 is marked. Each frame's silhouette and fit are kept as they come (the pipeline's
-Progress carries them), so the page shows them at once; the page hears at each whole
-percent, and at once when the frame it shows gets its silhouette or fit. The passes
-look through the state's person model (mocap.person; "none": the silhouettes alone);
-choosing another, like another empty stage, fits the clip again."""
+"""The app's background work: the silhouette passes (``mocap.pipeline``, streamed together) from the
+start, the tracking once frame 0 is marked. Each frame's silhouette and fit is shown as it comes; a
+new person model (mocap.person) or empty stage fits the clip again."""
 
 from __future__ import annotations
 
@@ -17,9 +13,10 @@ from dataclasses import replace
 from typing import Callable
 
 from mocap.errors import MocapError
-from mocap.session import NONE, available, check_name, install_hint
+from mocap.person import NONE, available, check_name, install_hint
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
-from mocap.session import Annotations, check_tracking_marks, marks_of, remarks_of
+from mocap.io.annotations import Annotations
+from mocap.session import check_tracking_marks, marks_of, remarks_of
 
 
 class Throttle:
@@ -39,9 +36,8 @@ class Throttle:
 
 
 def stage_of(text: str, n_frames: int) -> str | tuple[int, int] | None:
-    """The empty stage a user typed: "A-B" (frames A to B of the video), a file name
-    (a photo or video of it, beside the annotation file), or nothing (None: the
-    background is estimated from the clip)."""
+    """The empty stage typed: (A, B) for frames "A-B", a file name (beside the annotation file), or
+    None for nothing (estimated from the clip)."""
     text = text.strip()
     frames = re.fullmatch(r"(\d+)\s*(?:-|\.\.)\s*(\d+)", text)
     if not frames:
@@ -107,10 +103,8 @@ class Preprocessing:
         self._changed()
 
     def set_background(self, text: str) -> None:
-        """Use the empty stage the user names (``stage_of``): saved in the annotations,
-        then the silhouettes are found again and refitted. Refused while fitting, and
-        when it is the stage already used (the refit would take the page's fits away
-        and bring the same ones back; a file of the same name may have changed)."""
+        """Use the empty stage the user names (``stage_of``), saved in the annotations, and refit.
+        Refused while fitting, and for frames or estimate already in use (a file may have changed)."""
         background = stage_of(text, self.n_frames)
         with self._lock:
             if not self.ready.is_set():
@@ -129,10 +123,8 @@ class Preprocessing:
         self.start()
 
     def set_person_model(self, name: str) -> None:
-        """Look through the person model ``name`` (mocap.person; "none": the
-        silhouettes alone, the paper's classical path): the silhouettes are found
-        again and refitted. Refused while fitting, when it is the one used already,
-        and when its package is not installed (the message says how to install it)."""
+        """Refit looking through the person model ``name`` ("none": silhouettes alone, the paper's path).
+        Refused while fitting, for the one in use, and when not installed (saying how to install)."""
         check_name(name)
         with self._lock:
             if not self.ready.is_set():
@@ -182,9 +174,8 @@ class Preprocessing:
         self._changed()
 
     def start_tracking(self) -> threading.Thread:
-        """Track from frame 0's marks in a daemon thread. Refused at once (a
-        MocapError naming the joint) while a mark is missing or outside the frame, or
-        when the shoulders, chest and hips fit no view of a trunk."""
+        """Track from frame 0's marks in a daemon thread; a MocapError naming the joint at once if a mark
+        is missing or outside the frame, or the trunk fits no view."""
         with self._lock:
             if self._tracking:
                 raise MocapError("already tracking; wait for it to finish")

@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 
 from mocap.errors import MocapError
-from mocap.session import Annotations, load_annotations, save_annotations
+from mocap.io.annotations import Annotations, load_annotations, save_annotations
 
 
 def annotations_path(video: str | os.PathLike) -> Path:

@@ -1,13 +1,6 @@
-"""The Body tab's foreshortening signs, grouped by limb: the torso and the head, then the
-performer's left arm, right arm, left leg and right leg (mocap.body's limbs), a button
-per segment; a click flips the segment's sign, as a click on it in 3D does.
-
-Each button says its state with an icon and a word (circle-dot, "toward": the segment's
-far end points at the camera, as an arrow's tip seen head-on; circle-x, "away": its
-tail) and where the state comes from (set here, held from frame K, guessed). Its colour
-only repeats the icon, in a pair that colour-blind eyes tell apart (purple and yellow,
-apart from the orange and blue the views give the left and right limbs).
-"""
+"""The Body tab's foreshortening sign buttons, grouped by limb; a click flips the sign, as in 3D. Each
+shows its state by icon and word (circle-dot "toward": the far end points at the camera; circle-x
+"away") and its source; the colour repeats the icon in a colour-blind-safe pair."""
 
 from __future__ import annotations
 
@@ -43,8 +36,7 @@ def build_signs(gui) -> dict:
 
 
 def sign_button(segment: str, view: FrameView) -> dict:
-    """Label, icon, colour and state of a segment's button on a frame: disabled without
-    a 3D pose (not lifted yet, or nobody found)."""
+    """Label, icon, colour and state of a segment's button on a frame: disabled without a 3D pose."""
     if view.signs is None:
         return {"label": f"{segment_label(segment)}: –", "icon": "circle-dashed", "color": None,
                 "disabled": True}

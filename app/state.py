@@ -1,21 +1,8 @@
 """The app's one truth: a video, its sessions, the user's annotations, their undo history.
 
-Every browser tab and every callback thread goes through one ``AppState``; a
-re-entrant lock guards it, so concurrent clicks apply one after the other. An edit
-is saved atomically to the annotation file beside the video *before* it is applied
-and shown (``app.edits``, ``app.saving``), so a page never shows an edit that a crash
-could lose. Preprocessing runs in a background thread (``app.preprocess``); each
-frame's silhouette and fit can be looked at as soon as it exists, the 3D lifting once
-every frame is fitted.
-
-The annotations' method chooses what the page shows and exports: the silhouette
-method's session, or the tracking method's, tracked in a background thread
-(``start_tracking``) from the 16 joints marked on frame 0, which are frame 0's joint
-overrides. Both sessions take every edit. The state reaches the methods only through
-their sessions (mocap.session) and the pipeline (mocap.pipeline); the silhouette
-method looks through a person model (the pipeline's ``person_model``: by default the
-one installed), which the user can switch off and on (``set_person_model``).
-"""
+One ``AppState`` serves every tab and callback thread behind a re-entrant lock; an edit is saved
+beside the video before it is shown (``app.edits``, ``app.saving``); fitting and tracking run in
+``app.preprocess``. The methods are reached only through mocap.session and mocap.pipeline."""
 
 from __future__ import annotations
 
@@ -33,8 +20,11 @@ from app.history import History
 from app.preprocess import Preprocessing
 from mocap.errors import MocapError
 from mocap.pipeline import Progress, person_model
-from mocap.session import (Annotations, Doubt, FrameFit, Session, Silhouette, SilhouetteSession,
-                           TrackSession, open_video, processing_scale, remarks_of)
+from mocap.io.annotations import Annotations
+from mocap.io.video import open_video, processing_scale
+from mocap.session import Session, SilhouetteSession, TrackSession, remarks_of
+from mocap.session.review import Doubt
+from mocap.session import FrameFit, Silhouette
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,9 +59,8 @@ class AppState(Preprocessing, Edits):
 
     def __init__(self, video: str | os.PathLike, annotations: str | os.PathLike | None = None,
                  person: str | None = None):
-        """``person``: the person model the silhouette method looks through
-        (mocap.person's name, "none": the silhouettes alone; None: the default where
-        installed, else a MocapWarning and none)."""
+        """``person``: the silhouette method's person model (mocap.person's name; "none": silhouettes
+        alone; None: the default where installed, else a MocapWarning and none)."""
         self.info = open_video(video)
         self.scale = processing_scale(self.info)
         self.path = Path(annotations) if annotations else saving.annotations_path(video)
@@ -123,8 +112,7 @@ class AppState(Preprocessing, Edits):
         return self._tracked if self.method == "track" else self._fitted
 
     def far_arm(self) -> str | None:
-        """The tracking's far arm, "l" or "r" (TrackSession.far_arm); None with the
-        silhouette method, before the tracking, or for a body facing the camera."""
+        """The tracking's far arm, "l" or "r" (TrackSession.far_arm); None if there is none to give."""
         with self._lock:
             return self._tracked.far_arm() if self.method == "track" and self._tracked else None
 
@@ -135,8 +123,7 @@ class AppState(Preprocessing, Edits):
 
     @property
     def marks_changed(self) -> bool:
-        """Whether frame 0's marks, or the frames the body is marked again on
-        (remarks_of), differ from those the tracking used."""
+        """Whether frame 0's marks or the re-marks (remarks_of) differ from those the tracking used."""
         with self._lock:
             marks = (placed(self._annotations, 0), remarks_of(self._annotations))
             return self._tracked is not None and marks != self._tracked_from
@@ -190,15 +177,13 @@ class AppState(Preprocessing, Edits):
             return [] if self._session is None else self._session.review_stops()
 
     def animation(self) -> tuple[np.ndarray, float]:
-        """The animation of the current annotations (keyframes lifted, others
-        interpolated): (F, 16, 3) pelvis-centred joints and the frame rate."""
+        """The current animation: (F, 16, 3) pelvis-centred joints and the frame rate."""
         with self._lock:
             motion = self._require_session().motion()
         return motion.joints3d, motion.fps
 
     def export(self, key: str, foot_lock: bool = False) -> tuple[str, bytes]:
-        """(file name, content) of the animation in a format of mocap.session.FORMATS,
-        planted feet kept in place with ``foot_lock``."""
+        """(file name, content) in a format of mocap.session.FORMATS; ``foot_lock`` keeps planted feet."""
         with self._lock:
             return self._require_session().export(key, foot_lock)
 
@@ -230,8 +215,7 @@ class AppState(Preprocessing, Edits):
         return min(later, key=lambda k: abs(k - frame)) if later else None
 
     def next_doubtful(self) -> int | None:
-        """The next frame down the review queue: its first at first, then the one after
-        the frame this last returned (by its place in the queue as ranked now); None
+        """The review stop after the one last returned (by its rank now), the first at first; None
         when the queue is empty."""
         with self._lock:
             frames = [d.frame for d in self.review_stops()]
@@ -243,8 +227,7 @@ class AppState(Preprocessing, Edits):
 
 
 def lifted_view(base: FrameView, session: Session) -> FrameView:
-    """A frame's view with what its session's 3D says: the anatomical 2D joints, the
-    pose, the signs and where each comes from, the orientation, the doubts."""
+    """``base`` with its session's 3D: anatomical 2D joints, pose, signs and sources, orientation, doubts."""
     i, inputs = base.index, session.inputs
     doubt = next((d.reasons for d in session.review_queue() if d.frame == i), ())
     orientation, said = session.orientation_shown(i)

@@ -1,11 +1,5 @@
-"""What the scene shows of a frame: the video frame, the silhouette with the fitted
-model over it, and the lifted 3D cylinder body seen from the camera and from the side.
-
-Four panels of one size in the plane z = 0 of a y-up scene, looked at from +z, where
-``app.layout`` puts them for the video's aspect ratio. Images are drawn with OpenCV (numpy in, numpy out);
-``SceneView`` only moves viser handles, so an update costs a few messages;
-``FrameCache`` keeps recently shown video frames decoded.
-"""
+"""What the scene shows of a frame in the panels ``app.layout`` places: the video frame, the silhouette
+with the fitted model, and the 3D cylinder body from the camera and the side (OpenCV, viser handles)."""
 
 from __future__ import annotations
 
@@ -20,13 +14,15 @@ from scipy.spatial.transform import Rotation
 
 from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
-from mocap.session import LANDMARK_BGR, LEARNED_BGR, draw_landmarks
-from mocap.session import (FACING_MARKS, Silhouette, VideoInfo, draw_skeleton, facing_marks, iter_frames,
-                           segment_colour, silhouette_view)
+from mocap.image.draw import (LANDMARK_BGR, LEARNED_BGR, draw_landmarks, draw_skeleton, segment_colour,
+                              silhouette_view)
+from mocap.io.export.marks import FACING_MARKS, facing_marks
+from mocap.io.video import VideoInfo, iter_frames
+from mocap.session import Silhouette
 
 DISPLAY_HEIGHT = 480        # px: smaller frames are shown enlarged to this height
 CENTRE_RGB = (150, 150, 160)        # torso and head in 3D (the scene is white)
-MARK_RGB = (40, 40, 48)             # the nose and the chest's mark (mocap.facing)
+MARK_RGB = (40, 40, 48)             # the nose and the chest's mark (mocap.silhouette.facing)
 CONE = trimesh.creation.cone(radius=1.0, height=1.0, sections=16)   # base at z = 0, tip at z = 1
 MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
 UNSIDED_BGR = (90, 200, 90)         # the 2D model before left and right are known
@@ -66,10 +62,8 @@ def segment_rgb(segment: str) -> tuple[int, int, int]:
 
 
 def display_factor(height: int) -> float:
-    """How much an image ``height`` pixels tall is enlarged for display: to
-    DISPLAY_HEIGHT if it is less tall, so that rings, names and skeleton lines stay
-    thin against the body (on a 144-pixel frame, the 16 marks' rings and names
-    covered it)."""
+    """How much an image ``height`` px tall is enlarged for display (up to DISPLAY_HEIGHT), so that
+    rings, names and skeleton lines stay thin against the body."""
     return max(1.0, DISPLAY_HEIGHT / height)
 
 
@@ -83,8 +77,7 @@ def for_display(image: np.ndarray, scale: float) -> tuple[np.ndarray, float]:
 
 
 def caption_image(size: tuple[int, int], text: str) -> np.ndarray:
-    """A grey RGB image of ``size`` (width, height), enlarged by ``display_factor``,
-    that says ``text``."""
+    """A grey RGB image of ``size`` (width, height), enlarged by ``display_factor``, saying ``text``."""
     factor = display_factor(size[1])
     size = (round(size[0] * factor), round(size[1] * factor))
     image = np.full((size[1], size[0], 3), 60, np.uint8)
@@ -115,10 +108,9 @@ def video_image(frame_bgr: np.ndarray, marks: dict[str, tuple[float, float]], sc
 def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None, sides_known: bool,
                      overrides: dict[str, tuple[float, float]], scale: float,
                      size: tuple[int, int], landmarks: bool = True, eyes: bool = False) -> np.ndarray:
-    """The silhouette in grey with the fitted model over it (RGB, ``for_display``;
-    ``size`` = width, height of the processed frame); limbs in one colour until the
-    sides are known. Where a person model looked (``eyes``), the pixels only its mask
-    gave are teal, its joints magenta dots (with ``landmarks``), and a legend says so."""
+    """The silhouette in grey with the fitted model over it (RGB, ``for_display``; ``size``: processed
+    (w, h)); limbs in one colour until sides are known. With ``eyes``, the person model's mask-only
+    pixels teal, its joints magenta dots (``landmarks``), and a legend."""
     mask = np.zeros((size[1], size[0]), np.uint8)
     learned = None
     if silhouette is not None:
@@ -168,17 +160,15 @@ def legend(image: np.ndarray, entries: list[tuple[str, tuple[int, int, int], str
 
 def tracked_image(frame_bgr: np.ndarray, joints2d: np.ndarray,
                   overrides: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
-    """The video frame dimmed with the tracked joints (anatomical sides) over it (RGB,
-    ``for_display``)."""
+    """The video frame dimmed, the tracked joints (anatomical sides) over it (RGB, ``for_display``)."""
     view, scale = for_display((frame_bgr * 0.55).astype(np.uint8), scale)
     draw_skeleton(view, joints2d * scale, max(2, view.shape[0] // 240))
     return cv2.cvtColor(mark_joints(view, overrides, scale), cv2.COLOR_BGR2RGB)
 
 
 class FrameCache:
-    """Decoded video frames at the processing scale; the most recent few are kept. The
-    frame after the last one read is decoded on from there (playing, stepping) rather
-    than sought, which costs a seek and the decoding from the keyframe before it."""
+    """Recent decoded video frames at the processing scale; the frame after the last read is decoded
+    on rather than sought (a seek decodes from the keyframe before it)."""
 
     def __init__(self, info: VideoInfo, scale: float, size: int = 48):
         self.info, self.scale, self.size = info, scale, size
@@ -210,7 +200,7 @@ class SceneView:
                  on_image_click: Callable[[object], None], on_segment_click: Callable[[str, object], None]):
         self.layout, self.size = layout, image_size
         scene.set_up_direction("+y")
-        # plain lights: the default image-based lighting costs seconds in software WebGL
+        # plain lights: the default image-based lighting is slow in software WebGL
         scene.configure_environment_map(None)
         scene.configure_default_lights(cast_shadow=False)
         scene.add_light_ambient("/ambient", intensity=AMBIENT)

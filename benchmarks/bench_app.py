@@ -49,7 +49,7 @@ from mocap.body import JOINTS, SEGMENT_NAMES
 from mocap.io.video import open_video
 from mocap.lift.taylor import depth_fractions
 from mocap.synth import render_clip
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 
 class Receiver:

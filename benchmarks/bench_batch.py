@@ -33,7 +33,7 @@ from pathlib import Path
 import cv2
 
 from mocap.batch import Tally, batch, dask_client, plan, run_batch
-from mocap.batchtask import DEFAULT_EXPORTS
+from mocap.batch.task import DEFAULT_EXPORTS
 
 CLIPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "clips"
 

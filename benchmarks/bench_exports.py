@@ -22,7 +22,7 @@ import numpy as np
 
 from mocap.cli import main as mocap
 from mocap.lift.contacts import foot_contacts
-from mocap.truth import load_truth
+from mocap.synth.truth import load_truth
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 # camera yaw from the performer's right side: 45 = walks toward the camera at 45 degrees

@@ -2,7 +2,7 @@
 every side, the performer's head drawn with hair (`mocap synth --hair`).
 
 A silhouette and its 2D joints are the same seen from the front or from behind with
-the depths mirrored; the head's look (mocap.facing.facing_away) tells them apart.
+the depths mirrored; the head's look (mocap.silhouette.facing.facing_away) tells them apart.
 Each BVH of ../shared/data/bvh below is rendered (640x480, 25 fps, 3 s, orthographic)
 from seven camera yaws (90 front, 45 and 135 three-quarter front, 0 profile, -45 and
 -135 three-quarter back, -90 back), fitted with the empty scene as the clean plate
@@ -11,7 +11,7 @@ clip it prints the frames truly turned away (|yaw| > 90), the frames named forwa
 backward and in profile, and of those named forward or backward the share named
 the right way; then the mean 2D error in % of the body height as the limbs are
 named and what the naming adds to it (as named less side-matched:
-mocap.metrics.side_matched_errors); last the same over all clips (the naming's share
+mocap.synth.metrics.side_matched_errors); last the same over all clips (the naming's share
 summed).
 
     python benchmarks/bench_facing.py [--hairless]

@@ -28,7 +28,7 @@ cv2.setNumThreads(1)
 from mocap.body import JOINTS  # noqa: E402
 from mocap.silhouette.fit2d import FIT_SCALE, fit_frame  # noqa: E402
 from mocap.silhouette.torso import torso_spread  # noqa: E402
-from mocap.metrics import side_matched_errors  # noqa: E402
+from mocap.synth.metrics import side_matched_errors  # noqa: E402
 from mocap.pipeline import silhouette_passes  # noqa: E402
 from mocap.silhouette.passes import body_heights, normalise, normalised_grey  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402

@@ -1,7 +1,7 @@
 """The 2D fit alone (pass two, chained frame to frame as the pipeline chains it) on the
 development clips' silhouettes: each clip's fit's own 2D error, in % of the true body
 height with each arm pair and leg pair matched to the truth's sides
-(``mocap.metrics.side_matched_errors``), in seconds a clip where bench_clips.py takes
+(``mocap.synth.metrics.side_matched_errors``), in seconds a clip where bench_clips.py takes
 minutes (no silhouette pass, no lift, no scorer).
 
 The silhouettes are each clip's true masks, or with --masks DIR those a
@@ -33,7 +33,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 from bench_clips import CLIPS, clip_names, mask_silhouettes  # noqa: E402
 
 from mocap.body import JOINT_INDEX  # noqa: E402
-from mocap.metrics import side_matched_errors  # noqa: E402
+from mocap.synth.metrics import side_matched_errors  # noqa: E402
 from mocap.silhouette.passes import iter_fits  # noqa: E402
 
 ARMS = [JOINT_INDEX[f"{j}_{s}"] for j in ("elbow", "wrist") for s in "lr"]

@@ -38,7 +38,7 @@ from mocap.io.annotations import Annotations, annotations_for_poses
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_NAMES
 from mocap.lift.taylor import (clip_lengths, depth_fractions, facing_yaw, image_to_model, lift_pose,
                         orientation_of_yaw, signs_of, yaw_of, UNIT_M)
-from mocap.metrics import pa_mpjpe
+from mocap.synth.metrics import pa_mpjpe
 from mocap.lift.orientation import NEGLIGIBLE, guess_signs
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session

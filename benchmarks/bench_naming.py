@@ -4,7 +4,7 @@ Each development clip is fitted on its true masks as they are, dilated and erode
 one pixel (bench_clips.true_mask_session), and named with no user input
 (mocap.lift.sides). Per clip and fit it prints the mean 2D error in % of the body
 height as named and what the naming adds to it (as named less side-matched:
-mocap.metrics.side_matched_errors), and the frames whose naming differs from the
+mocap.synth.metrics.side_matched_errors), and the frames whose naming differs from the
 fit on the masks as they are, where the two namings lie over 10% of the body height
 apart; last the naming's share summed over the clips. A naming that rests on its
 evidence adds little on every fit and hardly changes from one fit to the next.
@@ -22,7 +22,7 @@ import numpy as np
 
 from bench_clips import CLIPS, clip_names, true_mask_session
 from mocap.body import JOINT_INDEX, LIMB_JOINTS
-from mocap.metrics import side_matched_errors
+from mocap.synth.metrics import side_matched_errors
 
 GROWS = (0, 1, -1)           # pixels the true masks are dilated by (eroded where negative)
 CLEAR = 0.1                  # of the body height between the two namings of a frame's legs: it matters
@@ -40,7 +40,7 @@ def named_right_leg(joints: np.ndarray, truth: np.ndarray, height: float) -> tup
 def naming_errors(joints: np.ndarray, true2d: np.ndarray, height: float) -> tuple[float, float]:
     """The mean 2D error of named joints (F, 16, 2; NaN where nobody was found)
     against the truth's in % of the body height, and what the naming adds to it (as
-    named less side-matched: mocap.metrics.side_matched_errors)."""
+    named less side-matched: mocap.synth.metrics.side_matched_errors)."""
     ok = np.isfinite(joints).all(axis=(1, 2))
     named = float(np.linalg.norm(joints - true2d, axis=-1)[ok].mean()) * 100 / height
     return named, named - float(side_matched_errors(joints[ok], true2d[ok]).mean()) * 100 / height

@@ -15,7 +15,7 @@ orientation's side (the user's annotation); it assumes the default focal length
 - PA-MPJPE: mm after Procrustes alignment, from the tracked 2D; "exact 2D": the same
   reconstruction from the true 2D joints (what tracking errors cost, separated);
 - facing: the mean error (degrees) of the body's facing yaw about the vertical
-  (mocap.metrics.facing_error), which PA-MPJPE's alignment forgives but an animation
+  (mocap.synth.metrics.facing_error), which PA-MPJPE's alignment forgives but an animation
   shows, from the tracked and from the exact 2D;
 - CPU ms/frame and frames/s: tracking alone (frames already decoded), one thread,
   CPU time; "total" is track_video end to end (decoding, tracking, 3D);
@@ -55,7 +55,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from helpers import DOG_WALKER, dog_walker_marks  # noqa: E402
 from mocap.body import JOINT_INDEX  # noqa: E402
 from mocap.track.marks import check_marks, shoulders_as_hips  # noqa: E402
-from mocap.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
+from mocap.synth.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
                            side_matched_errors)
 from mocap.track.calibration import default_camera  # noqa: E402
 from mocap.track.perspective import to_contract  # noqa: E402

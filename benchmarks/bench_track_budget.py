@@ -43,17 +43,17 @@ from pathlib import Path
 import numpy as np
 
 from bench_track import DATA, FOCAL, bench_main, orientation_of
-from mocap.review import covering, review_queue
+from mocap.session.review import covering, review_queue
 from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_INDEX, WIDTH
-from mocap.metrics import pa_mpjpe
+from mocap.synth.metrics import pa_mpjpe
 from mocap.track.calibration import default_camera
 from mocap.track.perspective import to_contract
 from mocap.synth import render_motion
 from mocap.track.tracking import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
                          track_video, turn_of)
 from mocap.session import TrackSession
-from mocap.truth import Truth
+from mocap.synth.truth import Truth
 
 LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
                for side in "lr" for kind, a, b in (("arm", "elbow", "wrist"), ("leg", "knee", "ankle"))}

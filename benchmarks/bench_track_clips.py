@@ -42,7 +42,7 @@ from score import score  # noqa: E402
 from mocap.body import JOINTS  # noqa: E402
 from mocap.io.annotations import load_annotations  # noqa: E402
 from mocap.io.video import open_video  # noqa: E402
-from mocap.metrics import procrustes_aligned  # noqa: E402
+from mocap.synth.metrics import procrustes_aligned  # noqa: E402
 from mocap.session.tracking import TrackSession  # noqa: E402
 from mocap.track.calibration import default_camera  # noqa: E402
 from mocap.track.tracking import TrackResult  # noqa: E402

@@ -4,7 +4,7 @@ Reads the outputs that ``bench_clips.py --keep DIR`` leaves (DIR/<clip>/auto.jso
 oracle.out.json with --oracle, beside the clip's truth.json) and, per clip, splits the
 2D error (% of the true body height, as ../shared/bench/score.py measures it) into
 the fit's own error, with each arm pair and leg pair matched to the truth's sides
-(``mocap.metrics.side_matched_errors``: the fit names limbs by image side, the lift
+(``mocap.synth.metrics.side_matched_errors``: the fit names limbs by image side, the lift
 names them), and what the naming adds (left/right swaps). It lists the frames with the
 largest side-matched error and their worst joints, and the share of the clip's mean
 that its worst tenth of the frames carries. With --draw OUT it writes each listed frame
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap.body import JOINTS
-from mocap.metrics import side_matched_errors
+from mocap.synth.metrics import side_matched_errors
 
 CLIPS = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "clips"
 TAIL_SHARE = 0.1                 # the worst tenth of the frames: the mean's tail
@@ -76,7 +76,7 @@ def draw_frame(clip: Path, truth: dict, motion: dict, index: int) -> np.ndarray:
     outline, the truth's joints and the output's."""
     import cv2
 
-    from mocap.overlay import draw_skeleton
+    from mocap.image.draw import draw_skeleton
     video = cv2.VideoCapture(str(clip / "video.mp4"))
     video.set(cv2.CAP_PROP_POS_FRAMES, index)
     ok, image = video.read()

@@ -22,12 +22,10 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.person import DEFAULT_MODEL, NONE, PersonModel, available, check_name, install_hint, open_person_model
-from mocap.review import Doubt
+from mocap.person import DEFAULT_MODEL, NONE, available, check_name, install_hint, open_person_model
+from mocap.session.review import Doubt
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
-from mocap.silhouette.background import Background
-from mocap.silhouette.passes import FitStream, FrameFit, Silhouette, iter_silhouettes
-from mocap.silhouette.plate import clip_background
+from mocap.silhouette import Background, FrameFit, Silhouette, clip_background, fit_clip
 from mocap.track.tracking import TrackResult
 
 SILHOUETTES = "finding the performer's silhouette"
@@ -65,43 +63,21 @@ def _quiet(_: Progress) -> None:
 
 def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None,
                       person: str = NONE) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    """The silhouette method's two passes over a video, streamed together
-    (``FitStream``): each frame's silhouette (against ``background``, else the
-    clip's, mocap.silhouette.plate), seen also by the ``person`` model named
-    (mocap.person; "none": background subtraction alone), and each frame's 2D fit as
-    soon as the silhouettes it needs are in, each reported as it comes (``done``
-    counts both)."""
+    """The silhouette method over a video (mocap.silhouette.fit_clip), seen also by the
+    ``person`` model named (mocap.person; "none": background subtraction alone), each
+    silhouette and fit reported as it comes (``done`` counts both)."""
+    report, total, done = progress or _quiet, 2 * info.frame_count, [0]
+
+    def shown(product: Silhouette | FrameFit | None, frame: int, final: bool) -> None:
+        done[0] += final
+        stage = FITTING if isinstance(product, FrameFit) else SILHOUETTES
+        report(Progress(done[0], total, stage, frame=frame, product=product, final=final))
     model = open_person_model(person)
     try:
-        return _passes(info, progress or _quiet, background, model)
+        return fit_clip(info, background, model, shown)
     finally:
         if model is not None:
             model.close()
-
-
-def _passes(info: VideoInfo, report: Report, background: Background | None, model: PersonModel | None
-            ) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    n, scale = info.frame_count, processing_scale(info)
-    stream, fits = FitStream(scale, info.fps), []
-
-    def fitted(batch: list[FrameFit]) -> None:
-        for fit in batch:
-            fits.append(fit)
-            report(Progress(len(stream.silhouettes) + len(fits), 2 * n, FITTING, frame=fit.index,
-                            product=fit))
-    for i, sil in enumerate(iter_silhouettes(info, scale, background, model)):
-        batch = stream.push(sil)
-        report(Progress(i + 1 + len(fits), 2 * n, SILHOUETTES, frame=i, product=sil))
-        fitted(batch)
-        for fit in stream.provisional:
-            report(Progress(i + 1 + len(fits), 2 * n, FITTING, frame=fit.index, product=fit,
-                            final=False))
-    if all(s is None for s in stream.silhouettes):
-        frames = "its only frame" if n == 1 else f"any of its {n} frames"
-        raise MocapError(f"{info.path}: no person found in {frames} (one who never moves shows only "
-                         "against a photo of the empty scene: --background, or the app's Stage tab)")
-    fitted(stream.finish())
-    return stream.silhouettes, fits
 
 
 def fit_video(video: str | os.PathLike | VideoInfo,
@@ -123,7 +99,7 @@ def person_model(name: str | None) -> str:
     return NONE
 
 
-def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
+def tracked(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
     """The tracking method's pass: the marks on frame 0 of ``notes`` (marks_of), and
     on every frame they mark the whole body again, followed through the video
     (mocap.session.tracking.tracked_video)."""
@@ -131,7 +107,7 @@ def track(info: VideoInfo, notes: Annotations, progress: Report | None = None) -
     return tracked_video(info, notes, lambda done, total: report(Progress(done, total, TRACKING)))
 
 
-def tracks(method: str | None, notes: Annotations) -> bool:
+def takes_tracking(method: str | None, notes: Annotations) -> bool:
     """Whether a run takes the tracking method: ``method`` if given, else the
     annotations' (the silhouette method when they name none)."""
     return (method or notes.method) == "track"
@@ -148,8 +124,8 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
     person model the silhouette method also looks through (``person_model``)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
-    if tracks(method, notes):
-        return TrackSession(info, track(info, notes, progress), notes, smooth)
+    if takes_tracking(method, notes):
+        return TrackSession(info, tracked(info, notes, progress), notes, smooth)
     scene = clip_background(info, processing_scale(info), background)
     silhouettes, fits = silhouette_passes(info, progress, scene, person)
     return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene, person=person)
@@ -158,7 +134,7 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
 @dataclass(frozen=True)
 class Written:
     """What `mocap fit` wrote, and the frames the app's review would show (every
-    doubtful one, most doubtful first: mocap.review) of the clip's ``n_frames``."""
+    doubtful one, most doubtful first: mocap.session.review) of the clip's ``n_frames``."""
 
     paths: list[Path]
     doubtful: list[Doubt]
@@ -187,11 +163,11 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports
     check_writable(*paths.values())
     if masks is not None:
-        if tracks(method, notes):
+        if takes_tracking(method, notes):
             raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
         check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
-    person = NONE if tracks(method, notes) else person_model(person)
+    person = NONE if takes_tracking(method, notes) else person_model(person)
     session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress,
                            person=person)
     if session.background_warning:

@@ -18,7 +18,7 @@ import pytest
 from helpers import render_walk
 
 from mocap.cli import main
-from mocap.truth import Truth
+from mocap.synth.truth import Truth
 
 
 @dataclass(frozen=True)

@@ -18,8 +18,8 @@ import numpy as np
 from mocap import synth
 from mocap.io.video import write_video
 from mocap.synth import RenderOptions
-from mocap.truth import Truth
-from mocap.walk import walk_cycle
+from mocap.synth.truth import Truth
+from mocap.synth.walk import walk_cycle
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DOG_WALKER = SHARED_DATA / "video" / "dog_walker.avi"
@@ -105,7 +105,7 @@ def write_empty_scene(path: str | Path, n: int = 20) -> None:
 
 
 def dog_walker_marks() -> dict[str, dict[str, list[float]]]:
-    """frame -> joint -> (x, y): the hand marks of dog_walker (mocap.metrics.labelled_errors)."""
+    """frame -> joint -> (x, y): the hand marks of dog_walker (mocap.synth.metrics.labelled_errors)."""
     return json.loads(DOG_WALKER_LABELS.read_text())["frames"]
 
 

@@ -15,7 +15,7 @@ from mocap.io.annotations import (Annotations, annotations_for_poses, annotation
 from mocap.body import SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.lift.orientation import held_user_signs
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CONTRACT_EXAMPLE = {
     "format": "mocap-annotations", "version": 1, "keyframes": [0, 5, 10],

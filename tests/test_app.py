@@ -16,8 +16,8 @@ from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, hold_fitt
 from helpers import render_walk, write_empty_scene
 
 from mocap.silhouette.passes import iter_fits, iter_silhouettes
-from mocap import review
-from mocap.review import Doubt, broken_limits, covering, likely_swaps, review_queue
+from mocap.session import review
+from mocap.session.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.controls import REVIEW_LINES, review_text
 from app.edits import toggled_keyframe
 from app.saving import annotations_path

@@ -17,7 +17,7 @@ from app_helpers import fresh_copy, hold_fitting, started_app, tiny_video  # noq
 
 from app.views import silhouette_image
 from mocap.errors import MocapError, MocapWarning
-from mocap.overlay import LANDMARK_BGR, LANDMARK_BONES, LEARNED_BGR, draw_landmarks, silhouette_view
+from mocap.image.draw import LANDMARK_BGR, LANDMARK_BONES, LEARNED_BGR, draw_landmarks, silhouette_view
 
 
 def mediapipe_importable() -> bool:

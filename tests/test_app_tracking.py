@@ -17,7 +17,7 @@ from app.state import AppState
 from mocap.io.annotations import load_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
-from mocap.metrics import labelled_body_height, labelled_errors
+from mocap.synth.metrics import labelled_body_height, labelled_errors
 from mocap.track.marks import shoulders_as_hips
 
 

@@ -24,11 +24,11 @@ import pytest
 from helpers import frame_joints, render_walk, text_mp4
 
 from mocap.batch import Tally, find_videos, library_names
-from mocap.batchtask import Outcome
+from mocap.batch.task import Outcome
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
-from mocap.library import ANNOTATIONS, FAILED, RECORD, is_finished, read_record, review_target
+from mocap.batch.library import ANNOTATIONS, FAILED, RECORD, is_finished, read_record, review_target
 
 pytest.importorskip("dask.distributed")
 GOOD = ("walk_a", "walk_b", "walk_c")
@@ -252,6 +252,7 @@ def test_bad_input_is_one_line(args, message, videos, tmp_path, capsys):
     assert err.startswith("mocap: error: ") and message in err and err.count("\n") == 1
 
 
+@pytest.mark.browser
 def test_index_page_opens_in_chromium_and_its_links_resolve(library):
     sync_api = pytest.importorskip("playwright.sync_api")
     from browser_helpers import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS

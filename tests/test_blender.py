@@ -22,6 +22,8 @@ MM = 0.001
 SAMPLES = (0, TINY_FRAMES // 2, TINY_FRAMES - 1)
 _BONE_OF = [BONES[b] for b in JOINT_BONES]
 
+pytestmark = pytest.mark.blender
+
 
 @pytest.fixture(scope="module")
 def written(tiny_video, tmp_path_factory):

@@ -28,7 +28,7 @@ from app.signs import segment_label, sign_button
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 
-pytestmark = SKIP_WITHOUT_CHROMIUM
+pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 sync_api = pytest.importorskip("playwright.sync_api")
 
 

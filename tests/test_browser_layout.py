@@ -14,7 +14,7 @@ from browser_helpers import (SKIP_WITHOUT_CHROMIUM, box_of, chromium, fitted_cam
 
 from app.layout import CAPTION_CHARS
 
-pytestmark = SKIP_WITHOUT_CHROMIUM
+pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 WINDOWS = ((1280, 720), (1920, 1080))
 
 

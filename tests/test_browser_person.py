@@ -15,7 +15,7 @@ from browser_helpers import (SKIP_WITHOUT_CHROMIUM, browser, chromium, fitted_ca
                              open_page, panel_boxes, shot, wait_until)
 from test_app_person import NEEDS_MEDIAPIPE, app, seen_frame  # noqa: F401
 
-pytestmark = [SKIP_WITHOUT_CHROMIUM, NEEDS_MEDIAPIPE]
+pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM, NEEDS_MEDIAPIPE]
 sync_api = pytest.importorskip("playwright.sync_api")
 
 

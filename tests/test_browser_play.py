@@ -19,7 +19,7 @@ from helpers import render_walk
 
 from app.views import video_image
 
-pytestmark = SKIP_WITHOUT_CHROMIUM
+pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 FPS, FRAMES = 10.0, 30          # a 3 s clip: frames 100 ms apart, screenshots in between
 WINDOW = {"width": 1280, "height": 720}
 # frames the canvas may show behind the slider read just before the screenshot: a

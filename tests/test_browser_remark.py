@@ -17,7 +17,7 @@ from test_browser import mark_by_clicking, to_tracking
 
 from mocap.body import JOINTS
 
-pytestmark = SKIP_WITHOUT_CHROMIUM
+pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 sync_api = pytest.importorskip("playwright.sync_api")
 
 GONE = slice(10, 24)          # frames the performer is out of the picture

@@ -22,11 +22,11 @@ from helpers import render_walk_with_exit
 
 from app.signs import SIGN_LOOK, segment_label, sign_groups
 from mocap.body import SEGMENT_INDEX, SEGMENT_NAMES
-from mocap.facing import FACING_MARKS
+from mocap.io.export.marks import FACING_MARKS
 from mocap.io.annotations import load_annotations
-from mocap.session import FORMATS
+from mocap.io.export.formats import FORMATS
 
-pytestmark = SKIP_WITHOUT_CHROMIUM
+pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 sync_api = pytest.importorskip("playwright.sync_api")
 FRAME = 6
 NOSE = list(FACING_MARKS).index("nose")

@@ -18,10 +18,10 @@ from helpers import run_cli as run
 
 from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
-from mocap.metrics import side_matched_errors
+from mocap.synth.metrics import side_matched_errors
 from mocap.io.video import write_video
 from mocap.synth import render_clip
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 from mocap.io.video import iter_frames
 
 
@@ -137,13 +137,13 @@ def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
     imported = set(done.stdout.split())
     assert "mocap.pipeline" in imported
     assert not imported & {"trimesh", "pygltflib", "scipy.interpolate", "tqdm", "mocap.synth",
-                           "mocap.contact", "mocap.batch"}
+                           "mocap.batch.sheet", "mocap.batch"}
 
 
 def test_fit_names_the_frames_the_review_would_show(tmp_path, capsys, monkeypatch):
     """After what it wrote, `mocap fit` says how many frames are doubtful (the app's
     review queue, most doubtful first) and names the first ones."""
-    from mocap import review
+    from mocap.session import review
     video = tmp_path / "walk.avi"
     render_walk(video, seconds=0.6)
     monkeypatch.setattr(review, "LOW_SCORE", 1.1)         # every fit doubtful, ranked by S

@@ -1,11 +1,11 @@
-"""Edges inside the silhouette (mocap.edges) and the arm searches that follow them."""
+"""Edges inside the silhouette (mocap.image.edges) and the arm searches that follow them."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS, WIDTH
-from mocap.edges import Edges
+from mocap.image.edges import Edges
 from mocap.silhouette.raster import Canvas, segment_quads, sweep_scorer
 
 BAR = 6.0      # px: the width of the bar drawn over the trunk

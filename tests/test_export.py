@@ -16,13 +16,13 @@ from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
 from mocap.cli import main
 from mocap.errors import MocapError
-from mocap.facing import FACING_MARKS, facing_marks
+from mocap.io.export.marks import FACING_MARKS, facing_marks
 from mocap.io.export.formats import FORMATS, Clip, write_format
 from mocap.io.export.glb import SIDES
 from mocap.lift.motion import build_motion
 from mocap.lift.skeleton import BONES, JOINT_BONES
 from mocap.synth import resample_indices
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 FPS = 30.0

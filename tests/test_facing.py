@@ -1,4 +1,4 @@
-"""Which way the body faces (mocap.facing): a nose and a chest mark in front of the 3D
+"""Which way the body faces (mocap.silhouette.facing): a nose and a chest mark in front of the 3D
 body, hair on the back of the rendered head, and the head's look in the video."""
 
 from __future__ import annotations
@@ -9,12 +9,13 @@ from helpers import SHARED_DATA
 
 from mocap import body
 from mocap.body import JOINT_INDEX
-from mocap.facing import FACING_MARKS, arm_over_head, facing_away, facing_marks, near_limbs
+from mocap.io.export.marks import FACING_MARKS, facing_marks
+from mocap.silhouette.facing import arm_over_head, facing_away, near_limbs
 from mocap.lift import taylor as lift
 from mocap.pipeline import open_session
 from mocap.silhouette.passes import fit_arrays
 from mocap.synth import RenderOptions, render_clip, render_motion
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 

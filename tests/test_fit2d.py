@@ -18,7 +18,7 @@ from mocap.silhouette.search import coarse_to_fine
 from mocap.silhouette.torso import head_top_row
 from mocap.silhouette.legchain import LegChain
 from mocap.silhouette.legs import ends_in_foot, raised_leg
-from mocap.metrics import side_matched_errors
+from mocap.synth.metrics import side_matched_errors
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
 from mocap.silhouette.torso import torso_spread
 from mocap.pipeline import silhouette_passes

@@ -82,6 +82,7 @@ def test_help_explains_the_topics_with_a_picture():
     assert "data:image/svg+xml;base64," in help_markdown()
 
 
+@pytest.mark.browser
 @pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is not installed")
 def test_help_folder_and_playback_download_in_chromium(app, tmp_path):
     sync_api = pytest.importorskip("playwright.sync_api")

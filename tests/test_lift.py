@@ -13,8 +13,8 @@ from mocap import synth
 from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.io.bvh import contract_joints, read_bvh
-from mocap.metrics import facing_error, pa_mpjpe
-from mocap.walk import walk_cycle
+from mocap.synth.metrics import facing_error, pa_mpjpe
+from mocap.synth.walk import walk_cycle
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mocap.body import JOINT_INDEX, JOINTS
-from mocap.metrics import labelled_body_height, labelled_errors
+from mocap.synth.metrics import labelled_body_height, labelled_errors
 
 
 def standing(x: float) -> np.ndarray:

@@ -12,7 +12,7 @@ from mocap.errors import MocapError
 from mocap.lift.motion import build_motion
 from mocap.lift.skeleton import BONES, JOINT_BONES, PARENTS, forward_kinematics, rest_positions
 from mocap.synth import resample_indices
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 FPS = 30.0

@@ -22,7 +22,7 @@ from mocap.lift.taylor import runs
 from mocap.lift.orientation import (GROWTH, NEGLIGIBLE, PROFILE_SPREAD, facing_evidence, guess_orientations, guess_signs,
                                    held_user_signs, legs_crossed, merge_short_runs)
 from mocap.smoothest import smoothest_states
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 
@@ -259,7 +259,7 @@ def test_the_heads_look_names_the_limbs_of_a_profile_where_nothing_else_does():
 
 def test_the_near_arm_names_the_limbs_of_a_profile_where_nothing_else_does():
     """A profile walk with nothing known: the naming is the one whose arms agree with
-    the near arm (mocap.facing.near_arm; facing image right the near arm is the
+    the near arm (mocap.silhouette.facing.near_arm; facing image right the near arm is the
     performer's right). Told the image-left arm is the near one where it is the right
     one, every limb is named right; told the other, every limb the other way."""
     truth, image_side, swapped = profile_walk_by_image_side()

@@ -1,9 +1,9 @@
-"""mocap.percentile gives numpy's percentiles bit for bit."""
+"""mocap.image.percentile gives numpy's percentiles bit for bit."""
 
 import numpy as np
 import pytest
 
-from mocap.percentile import nanpercentile, percentile, row_medians
+from mocap.image.percentile import nanpercentile, percentile, row_medians
 
 QS = (0, 10, 12.5, 25, 33.3, 50, 75, 90, 95, 100)
 

@@ -23,10 +23,10 @@ from mocap.body import JOINT_INDEX
 from mocap.cli import main
 from mocap.errors import MocapError
 from mocap.io.export.motion_json import read_motion
-from mocap.metrics import side_matched_errors
+from mocap.synth.metrics import side_matched_errors
 from mocap.person import CHOICES, DEFAULT_MODEL, NONE, PersonView, available, open_person_model
 from mocap.synth import RenderOptions
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"
 NOT_INSTALLED = ("the person model 'mediapipe' needs mediapipe, not installed here: "

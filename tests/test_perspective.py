@@ -12,10 +12,10 @@ from mocap.track import calibration as C, keydepths as K, perspective as P
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.track.marks import shoulders_as_hips, turned_apart
-from mocap.metrics import pa_mpjpe
+from mocap.synth.metrics import pa_mpjpe
 from mocap.track.rays import choose_limb, ray_roots
 from mocap.synth import RenderOptions, plan_scene, scene_truth
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CAMERA = C.Pinhole(800.0, 320.0, 240.0)
 

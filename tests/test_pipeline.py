@@ -12,7 +12,7 @@ from helpers import DOG_WALKER, dog_walker_marks, frame_joints, render_walk_with
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
-from mocap.metrics import labelled_body_height, labelled_errors, side_matched_errors
+from mocap.synth.metrics import labelled_body_height, labelled_errors, side_matched_errors
 
 MAX_MEDIAN_ERROR = 0.035  # of the body height
 

@@ -15,14 +15,14 @@ from helpers import DEV_CLIPS
 from mocap import synth
 from mocap.cli import main as mocap_main
 from mocap.errors import MocapError
-from mocap.review import GUESSED
+from mocap.session.review import GUESSED
 from mocap.io.video import iter_frames, open_video, write_video
 from mocap.silhouette.background import estimate_background, extract_silhouette, noise_floor
 from mocap.silhouette.masks import held_warning, silhouette_confidence
 from mocap.silhouette.passes import Silhouette
 from mocap.silhouette.plate import clean_plate, clip_background, performer_free
 from mocap.synth import RenderOptions
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 OPTIONS = RenderOptions(size=(320, 240), fps=15.0, seed=3, view="three-quarter")
 

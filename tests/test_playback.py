@@ -12,11 +12,11 @@ import pytest
 from helpers import page_data
 
 from mocap.cli import main as cli
-from mocap.facing import facing_marks
+from mocap.io.export.marks import facing_marks
 from mocap.io.export.html import DATA_SLOT, TEMPLATE, motion_html
 from mocap.io.export.motion_json import write_motion
 from mocap.lift.motion import build_motion
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 N_FRAMES, FPS = 100, 25.0
 GONE = 50                                   # a frame without a pose
@@ -75,6 +75,7 @@ def test_page_of_a_fitted_motion_file_follows_its_root(fitted_walk, tmp_path):
     assert np.ptp(pelvis_x) > 0.5, "a walk across the frame travels over half a metre"
 
 
+@pytest.mark.browser
 def test_page_plays_from_disk_in_chromium(page_file):
     sync_api = pytest.importorskip("playwright.sync_api")
     with sync_api.sync_playwright() as p:

@@ -15,7 +15,7 @@ from mocap.lift.motion import build_motion
 from mocap.lift.skeleton import PARENTS, forward_kinematics
 from mocap.pipeline import open_session
 from mocap.synth import RenderOptions, render_motion
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 SIZE = (320, 240)

@@ -16,7 +16,7 @@ from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
 from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
 from mocap.smoothest import DEPTH_SMOOTH_S
-from mocap.metrics import pa_mpjpe
+from mocap.synth.metrics import pa_mpjpe
 from mocap.lift.orientation import NEGLIGIBLE
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from mocap import body, synth
-from mocap.truth import load_truth
-from mocap.walk import walk_cycle
+from mocap.synth.truth import load_truth
+from mocap.synth.walk import walk_cycle
 from mocap.cli import main
 from mocap.errors import MocapError
 

@@ -18,7 +18,7 @@ from mocap.track.headmotion import adapt_threshold, head_displacement, two_peak_
 from mocap.track.marks import check_marks
 from mocap.track.tracking import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
                          spread_corrections, track_video)
-from mocap.edges import Edges
+from mocap.image.edges import Edges
 from mocap.track.calibration import FACING_CAMERA, KEY, Calibration, Pinhole
 from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
                                around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
@@ -26,7 +26,7 @@ from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_CO
                                settled_knee, twin_overlap)
 from mocap.track.tracker import FAR_UPPER_SCALES, FAR_UPPER_WEIGHT
 from mocap.track.parts import PARTS, beside, far_arm, far_forearm, mirrored_model, own_colour, told_apart
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 
 @pytest.fixture(scope="module")

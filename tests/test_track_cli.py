@@ -18,10 +18,10 @@ from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.orientation import NEGLIGIBLE
 from mocap.track.tracking import guessed_turn, track_video
-from mocap.pipeline import track
+from mocap import pipeline
 from mocap.session import TrackSession
 from mocap.io.video import open_video
-from mocap.walk import walk_cycle
+from mocap.synth.walk import walk_cycle
 
 IN_PLANE = 0.1      # |dZ| / length: a segment this flat shows no sign
 
@@ -73,7 +73,7 @@ def session(clip):
     notes = Annotations().with_method("track").with_orientation(0, "forward_right")
     for j, xy in zip(JOINTS, truth.joints2d[0]):
         notes = notes.with_joint(0, j, tuple(xy))
-    return TrackSession(info, track(info, notes), notes), truth
+    return TrackSession(info, pipeline.tracked(info, notes), notes), truth
 
 
 def test_the_annotations_method_chooses_tracking(clip, tmp_path):

@@ -1,15 +1,6 @@
-"""Foot contacts: when a foot is planted on the floor, and pinning it there.
-
-A foot is planted while its ankle is near the floor and hardly moves: both read from
-the ankle's track in the world (metres, x right and y up across the camera's image
-plane, z toward it), smoothed, and held for a short while at least (a step's contact
-lasts far longer than a frame). The floor is the lower ankle's level around each
-frame (a running low percentile: a reconstructed floor drifts as the depth's scale
-does). The speed is the ankle's across the image plane: a single joint's depth is
-the reconstruction's least certain coordinate, and a planted foot stands still in the
-image of a fixed camera. ``foot_lock`` keeps a planted ankle where it is for its whole contact
-(the leg reaching it by two-bone inverse kinematics), so that exports do not slide.
-"""
+"""Foot contacts and pinning: a foot is planted while its smoothed ankle is near the floor (a running
+low percentile of the lower ankle: a reconstructed floor drifts) and hardly moves across the image
+plane (depth is least certain); ``foot_lock`` holds it there by two-bone IK so exports do not slide."""
 
 from __future__ import annotations
 
@@ -20,10 +11,8 @@ from mocap.body import JOINT_INDEX
 
 FEET = ("ankle_l", "ankle_r")
 _ANKLES = [JOINT_INDEX[a] for a in FEET]
-# thresholds for a 1.75 m body: a planted foot's ankle stays within a few cm of the
-# floor level (heel to toe roll lifts it) and creeps, where a swinging one travels at
-# one to three times the walking speed (chosen on rendered CMU walks: contacts of the
-# fitted motion against the same rule on the truth, benchmarks/bench_exports.py)
+# thresholds for a 1.75 m body: a planted foot's ankle stays near the floor level (heel
+# to toe roll lifts it) and creeps; a swinging one travels at one to three times walking speed
 CONTACT_HEIGHT_M = 0.15
 CONTACT_SPEED_M_S = 1.0
 SMOOTH_S = 0.08          # Gaussian sigma of the ankle track before differencing
@@ -34,8 +23,7 @@ BLEND_S = 0.1            # a pin fades in and out over this much time around its
 
 
 def foot_contacts(world: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 2) bool: the left and right foot planted on each frame of world joints
-    (F, 16, 3; metres, y up)."""
+    """(F, 2) bool: left and right foot planted on each frame of world joints (F, 16, 3; metres, y up)."""
     ankles = gaussian_filter1d(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6), axis=0,
                                mode="nearest")
     floor = percentile_filter(ankles[..., 1].min(axis=1), FLOOR_PERCENTILE,
@@ -54,8 +42,8 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
 
 
 def pinned_targets(ankle: np.ndarray, planted: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 3) where an ankle (F, 3) should be: on each contact its mean position there,
-    the shift fading linearly to nothing within BLEND_S around it."""
+    """(F, 3) where an ankle (F, 3) should be: each contact's mean position, the shift fading
+    linearly within BLEND_S around it."""
     shift = np.zeros_like(ankle)
     weight = np.zeros(len(ankle))
     blend = max(1, int(round(BLEND_S * fps)))
@@ -72,9 +60,8 @@ def pinned_targets(ankle: np.ndarray, planted: np.ndarray, fps: float) -> np.nda
 
 def two_bone_ik(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """(knee, ankle) (F, 3) of a leg whose ankle reaches ``target`` (as near as its
-    length allows) with the thigh and shin lengths kept, the knee in the plane of the
-    hip, the target and the old knee (law of cosines)."""
+    """(knee, ankle) (F, 3) of a leg reaching ``target`` as near as it can, thigh and shin lengths
+    kept, the knee in the plane of hip, target and old knee (law of cosines)."""
     thigh = np.linalg.norm(knee - hip, axis=-1, keepdims=True)
     shin = np.linalg.norm(ankle - knee, axis=-1, keepdims=True)
     reach = target - hip
@@ -89,8 +76,7 @@ def two_bone_ik(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np
 
 
 def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
-    """World joints (F, 16, 3) with each planted ankle kept where it is through its
-    contact (``pinned_targets``), the knee and ankle moved by ``two_bone_ik``."""
+    """World joints (F, 16, 3) with each planted ankle held through its contact (``two_bone_ik``)."""
     out = world.copy()
     for side, planted in zip("lr", contacts.T):
         hip, knee, ankle = (JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle"))

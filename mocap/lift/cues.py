@@ -1,8 +1,5 @@
-"""A person model's landmarks (mocap.person) as the lift's first guesses (section 3.4's
-inputs): which image-side limb is which anatomical one, the facing yaw, each
-segment's foreshortening sign and depth, and the 2D joints themselves. The user's
-annotations still override every one of them (mocap.lift.inputs).
-"""
+"""A person model's landmarks (mocap.person) as the lift's first guesses (section 3.4's inputs):
+sides, yaw, signs, depths and 2D joints; the user's annotations still override them."""
 
 from __future__ import annotations
 
@@ -24,9 +21,8 @@ _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0,
 
 @dataclass(frozen=True)
 class Cues:
-    """A clip's landmarks (F frames): ``joints2d`` (F, 16, 2) video pixels, anatomical
-    sides, NaN where the model saw nobody; ``confidence`` (F, 16); ``world`` (F, 16, 3)
-    metres, pelvis-centred, contract axes."""
+    """A clip's landmarks: ``joints2d`` (F, 16, 2) pixels, anatomical sides, NaN where nobody was seen;
+    ``confidence`` (F, 16); ``world`` (F, 16, 3) metres, pelvis-centred, contract axes."""
 
     joints2d: np.ndarray
     confidence: np.ndarray
@@ -34,8 +30,7 @@ class Cues:
 
     @classmethod
     def of(cls, landmarks: list) -> "Cues | None":
-        """The cues of per-frame ``mocap.person.Landmarks`` (None where nobody);
-        None when no frame has any."""
+        """The cues of per-frame ``mocap.person.Landmarks`` (None: nobody); None when none has any."""
         if all(m is None for m in landmarks):
             return None
         n = len(landmarks)
@@ -46,10 +41,8 @@ class Cues:
         return cls(joints, conf, world)
 
     def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
-        """These cues without the frames where the landmarks lie DISAGREE body heights
-        (median over the joints, limb pairs taken either way round) from the fit's
-        image-side joints ``joints_image`` (F, 16, 2): there the person model has lost
-        the body (a tracker drifting after a fast kick) and the silhouette fit answers."""
+        """These cues less frames whose landmarks lie DISAGREE body heights (median, pairs either way)
+        from the fit's ``joints_image`` (F, 16, 2): there the model lost the body and the fit answers."""
         distances = unsided_distances(joints_image, self.joints2d)
         off = np.full(len(distances), np.inf)
         both = np.isfinite(distances).all(axis=1)
@@ -66,13 +59,9 @@ class Cues:
 
 
 def side_evidence(joints_image: np.ndarray, cues: Cues, limb_px: float) -> np.ndarray:
-    """(F, 2) int8 for mocap.lift.sides.track_sides' ``known``: for arms and legs, 1
-    where the fit's image-left limb is the landmarks' right one, 0 where it is their
-    left one, -1 where they do not tell. Each frame weighs how much nearer (in limb
-    lengths, confidence-weighted) the fit's elbows and wrists (knees and ankles) lie
-    to the landmarks named one way than the other; a two-state path over the frames
-    (SWITCH per renaming) keeps the naming from flickering where a single frame's
-    landmarks swap sides."""
+    """(F, 2) int8 ``known`` for sides.track_sides: 1 where the fit's image-left arm/leg is the
+    landmarks' right, 0 left, -1 unknown; confidence-weighted distances in ``limb_px``, a two-state path
+    (SWITCH per renaming) against single-frame swaps."""
     out = np.full((len(joints_image), 2), -1, np.int8)
     seen = cues.seen & np.isfinite(joints_image).all(axis=(1, 2))
     if not seen.any():
@@ -90,8 +79,7 @@ def side_evidence(joints_image: np.ndarray, cues: Cues, limb_px: float) -> np.nd
 
 
 def unsided_distances(joints_image: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
-    """(F, 16) each joint's distance (pixels) to its landmark, each limb pair's joints
-    named whichever way round puts them nearer (image sides against anatomical ones)."""
+    """(F, 16) each joint's distance (pixels) to its landmark, limb pairs named whichever way is nearer."""
     d = _dist(joints_image, landmarks)
     for names in _LIMBS.values():
         for left, right in names:
@@ -102,8 +90,7 @@ def unsided_distances(joints_image: np.ndarray, landmarks: np.ndarray) -> np.nda
 
 
 def _namings(joints: np.ndarray, landmarks: np.ndarray, left: str, right: str) -> tuple[np.ndarray, np.ndarray]:
-    """(F,) twice: a limb pair's two joints' distances to their landmarks summed, the
-    landmarks named as they are, and exchanged."""
+    """(F,) twice: a limb pair's summed joint-landmark distances, landmarks as named and exchanged."""
     l, r = _J[left], _J[right]
     return (_dist(joints[:, l], landmarks[:, l]) + _dist(joints[:, r], landmarks[:, r]),
             _dist(joints[:, l], landmarks[:, r]) + _dist(joints[:, r], landmarks[:, l]))
@@ -114,23 +101,20 @@ def _dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def world_yaws(cues: Cues) -> np.ndarray:
-    """(F,) degrees: the facing yaw of each frame's world landmarks (taylor.yaw_of),
-    NaN where the model saw nobody."""
+    """(F,) degrees: each frame's world landmarks' facing yaw (taylor.yaw_of), NaN where nobody."""
     return np.array([yaw_of(w) if ok else np.nan for w, ok in zip(cues.world, cues.seen)])
 
 
 def world_signs(cues: Cues) -> np.ndarray:
-    """(F, 10) int: each segment's foreshortening sign in the world landmarks (+1
-    toward, -1 away); 0 where the model saw nobody."""
+    """(F, 10) int: each segment's sign in the world landmarks (+1 toward, -1 away, 0 nobody)."""
     ends = cues.world[:, SEGMENT_JOINTS]
     dz = ends[:, :, 1, 2] - ends[:, :, 0, 2]
     return np.where(np.isfinite(dz), np.where(dz >= 0, TOWARD, AWAY), 0)
 
 
 def world_depths(cues: Cues, lengths: np.ndarray) -> np.ndarray:
-    """(F, 10) each segment's |dZ| in the world landmarks, in model units of the
-    clip's body (``lengths`` (10,) model units: the world's segments are scaled by the
-    median ratio of those lengths to theirs); NaN where the model saw nobody."""
+    """(F, 10) |dZ| per segment in the world landmarks, in model units of the clip's ``lengths`` (10,)
+    (scaled by the median length ratio); NaN where nobody."""
     ends = cues.world[:, SEGMENT_JOINTS] / UNIT_M
     vec = ends[:, :, 1] - ends[:, :, 0]
     seen_lengths = np.nanmedian(np.linalg.norm(vec[cues.seen], axis=-1), axis=0)
@@ -139,8 +123,6 @@ def world_depths(cues: Cues, lengths: np.ndarray) -> np.ndarray:
 
 
 def with_landmarks(joints: np.ndarray, cues: Cues) -> np.ndarray:
-    """(F, 16, 2) anatomical joints, the landmarks wherever the person model saw the
-    body (and agreed with the fit: ``Cues.agreeing``), the fit's joints elsewhere. The
-    fit drew its joints toward them already (its searches' landmark term); a learned
-    2D joint lies nearer the true joint than a cylinder's end does."""
+    """(F, 16, 2) anatomical joints: the landmarks where the model saw the body (a learned joint lies
+    nearer the truth than a cylinder's end), the fit's elsewhere."""
     return np.where(np.isfinite(cues.joints2d) & np.isfinite(joints), cues.joints2d, joints)

@@ -18,11 +18,9 @@ from mocap.lift.taylor import LENGTH, anatomical_joints, orientation_of_yaw, cli
 from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
                                legs_crossed, facing_evidence, rule_evidence, segment_vectors, yaws)
 
-# Segment lengths for Eq. 5 from the fitted clip: the median projected length. The
-# fit's projected lengths (Algorithm 6) scatter by +-15% frame to frame, so a high
-# percentile would measure that scatter; clean 2D joints use lift.clip_lengths' 90th.
-# The torso and head stand upright most of the time, where Eq. 5 turns a length
-# measured 5% long into a lean of 18 degrees: theirs is the 25th percentile.
+# Segment lengths for Eq. 5 from the fitted clip: the median projected length (a high
+# percentile would measure the fit's scatter); the torso and head, mostly upright, where
+# Eq. 5 turns a length read long into a lean: the 25th percentile.
 FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0, 50.0)
 # The fit's arms slip on single frames (an arm in front of the trunk fits anywhere
 # inside it); the lifting reads their elbows and wrists through a running median.
@@ -65,11 +63,8 @@ class Inputs:
         return out
 
     def smooth_depths(self, lifted: np.ndarray, fps: float) -> np.ndarray:
-        """The frames' lifts (F, 16, 3) with each joint's depth smoothed over time by a
-        Gaussian of DEPTH_SMOOTH_S within each stretch of frames with a person. Eq. 5
-        turns the fit's frame-to-frame scatter of segment lengths into depth jitter (a
-        segment measured 5% short of its length gets 18 degrees of depth), while real
-        depths change smoothly."""
+        """Lifts (F, 16, 3) with each joint's depth Gaussian-smoothed over DEPTH_SMOOTH_S within each
+        person stretch: Eq. 5 turns the fit's length scatter into depth jitter; real depths are smooth."""
         out = lifted.copy()
         for r in runs(self.person):
             out[r, :, 2] = gaussian_filter1d(lifted[r, :, 2], DEPTH_SMOOTH_S * fps, axis=0,
@@ -77,9 +72,8 @@ class Inputs:
         return out
 
     def changed_frames(self, before: "Inputs") -> np.ndarray:
-        """(F,) bool: the frames whose lift (Eq. 4-5) differs from ``before``'s: their
-        2D joints, scale, yaw or signs changed; every frame with a person when the
-        segment lengths (the clip's) or the frames with a person changed."""
+        """(F,) bool: frames whose lift differs from ``before``'s (2D joints, scale, yaw or signs);
+        every person frame when the lengths or the person frames changed."""
         person = self.person
         if not np.array_equal(person, before.person) or not np.array_equal(self.lengths, before.lengths):
             return person
@@ -98,21 +92,11 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
                    annotations: Annotations, lengths: np.ndarray | None = None,
                    guessed: list[str | None] | None = None, away: np.ndarray | None = None,
                    near: np.ndarray | None = None, cues: Cues | None = None) -> Inputs:
-    """Per-frame lifting inputs: the user's orientation (sticky) over the guessed one
-    (``guessed``: orientation.guess_orientations of the fits, computed if not given);
-    the sides from it (profiles followed through time, joint overrides deciding, the
-    knees and ankles put where the fit's legs lie where it drew the thighs crossed:
-    sides.track_sides, the user's leg signs telling where the legs cross:
-    orientation.legs_crossed); the
-    arms steadied (``steadied_arms``); the overrides put in; segment lengths from the
-    clip (lift.clip_lengths); the signs guessed with the user's held signs as
-    constraints (orientation.held_user_signs). ``away`` (F,): the heads' look
-    (mocap.facing.facing_away), which weighs the guessed orientation's image-side
-    rule even in a profile (orientation.rule_evidence), and ``near`` (F, 2): the near
-    arm and leg (mocap.facing.near_limbs), which name the limbs of a profile where
-    nothing else does. ``cues``: a person model's landmarks (mocap.lift.cues), which
-    where they see somebody give the first guesses of the orientation and yaw, the
-    sides and the signs, and their share of the 2D joints."""
+    """Per-frame lifting inputs: the user's sticky orientation over ``guessed`` (None: guessed here);
+    sides (sides.track_sides, orientation.legs_crossed); arms steadied; overrides put in; ``lengths``
+    (None: the clip's); signs guessed under the user's held ones. ``away`` (F,): the heads' look
+    (mocap.facing.facing_away); ``near`` (F, 2): mocap.facing.near_limbs; ``cues``: a person model's
+    landmarks, first guesses of orientation, yaw, sides, signs and 2D joints where they see somebody."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if cues is not None:
@@ -171,9 +155,8 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
 
 
 def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 16, 2) with each elbow and wrist a running median over ARM_MEDIAN_S within
-    each stretch of frames with a person (anatomical sides: in a profile the fit's
-    image sides change as the arms pass the trunk's axis)."""
+    """(F, 16, 2) with elbows and wrists a running median over ARM_MEDIAN_S within each person stretch
+    (anatomical sides: in a profile the image sides change as arms pass the trunk)."""
     out = joints.copy()
     width = 2 * int(round(ARM_MEDIAN_S * fps / 2)) + 1
     arms = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["arm"][1:] for s in SIDES]
@@ -194,13 +177,9 @@ def _held_signs(joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values
 
 def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int],
                focal_px: float | None = None) -> np.ndarray:
-    """(F, 3) the pelvis in metres in the camera's frame (x right, y up, z toward the
-    camera; NaN where nobody is) under the silhouette method's scaled orthographic
-    projection: the body's image scale (``px_per_unit``, from its height in the image)
-    is focal / depth, so depth = focal * metres-per-unit / px_per_unit and a performer
-    who walks away gets smaller and farther. The focal length (pixels) is the assumed
-    camera's (``default_camera``: the frame's width) unless given; it scales the
-    depth, not its changes' shape."""
+    """(F, 3) pelvis in metres, camera frame (x right, y up, z toward it; NaN: nobody), by scaled
+    orthography: depth = focal * metres-per-unit / ``px_per_unit``; ``size`` (width, height) pixels;
+    ``focal_px`` default ``default_camera``'s (the frame width): it scales the depth, not its shape."""
     focal = default_camera(*size, focal_px).focal
     per_m = px_per_unit * BODY_HEIGHT / BODY_HEIGHT_M
     pelvis = joints2d[:, JOINT_INDEX["pelvis"]]

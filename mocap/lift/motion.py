@@ -1,17 +1,7 @@
-"""Keyframe poses -> an animation of every frame: joint rotations, slerp, smoothing.
-
-The skeleton is data (``mocap.lift.skeleton``: the bone names and hierarchy that
-animation tools expect, a T-pose rest): every bone has a fixed offset from its parent
-(one symmetric body per clip) and a rotation per frame relative to its parent. A
-frame bone (Hips, Spine, Spine1) gets a full orientation from two body directions; a
-limb bone (and the neck) gets the smallest rotation ("swing") that turns its rest
-direction onto its bone. Slerp between two swings about the same rest direction is
-again a swing, so interpolated limbs never pick up a twist.
-
-The root trajectory is the pelvis in the camera's frame (CONTRACT.md's ``root``); the
-exports' world (``Motion.world_joints``) is that frame moved so that the floor is at
-y = 0 and the first frame's pelvis stands above the origin (``Motion.origin``).
-"""
+"""Keyframe poses -> an animation of every frame: joint rotations, slerp, smoothing. Bones
+(``mocap.lift.skeleton``) have fixed offsets and per-frame local rotations; limb bones and the neck
+take the smallest swing from rest, so slerped limbs never twist. The root is the pelvis in the
+camera's frame; the exports' world puts the floor at y = 0 below frame 0's pelvis."""
 
 from __future__ import annotations
 
@@ -34,16 +24,10 @@ FLOOR_PERCENTILE = 5.0
 
 @dataclass(frozen=True, eq=False)
 class Motion:
-    """An animation of the contract body, every frame.
-
-    ``joints3d`` (F, 16, 3) metres, contract frame, origin at the pelvis;
-    ``root`` (F, 3) position of the pelvis (the camera's frame where the method knows
-    it); ``keyframes`` (F,) which frames were given; ``rotations`` (F, len(BONES), 4)
-    each bone's rotation relative to its parent as quaternions (x, y, z, w),
-    sign-continuous in time; ``offsets`` (len(BONES), 3) each bone's fixed offset
-    from its parent in the parent's frame; ``origin`` (3,) the exports' world origin
-    in the root's frame (on the floor, below the first frame's pelvis).
-    """
+    """An animation of the contract body (F frames, B = len(BONES)): ``joints3d`` (F, 16, 3) metres,
+    pelvis origin; ``root`` (F, 3) the pelvis (camera frame where known); ``keyframes`` (F,) bool;
+    ``rotations`` (F, B, 4) local quaternions x y z w, sign-continuous; ``offsets`` (B, 3) in the
+    parent's frame; ``origin`` (3,) the exports' world origin (floor, below frame 0's pelvis)."""
 
     fps: float
     joints3d: np.ndarray
@@ -89,8 +73,7 @@ class Motion:
         return self.with_joints(world - self.world_root[:, None, :])
 
     def with_joints(self, joints3d: np.ndarray) -> "Motion":
-        """This motion posed as other pelvis-relative joints (F, 16, 3) on every frame
-        (same body, root, origin and keyframes)."""
+        """This motion posed as pelvis-relative joints (F, 16, 3) (same body, root, origin, keyframes)."""
         rotations, _ = pose_rotations(joints3d, self.offsets)
         rotations = _continuous(rotations)
         positions = forward_kinematics(self.offsets, rotations)
@@ -100,15 +83,9 @@ class Motion:
 
 def build_motion(joints3d_keyframes: dict[int, np.ndarray], n_frames: int, fps: float,
                  root: np.ndarray | None = None, smooth: float = 0.0) -> Motion:
-    """A Motion of ``n_frames`` frames from the 3D joints (16, 3) of some keyframes.
-
-    Bone offsets are the median over the keyframes, left and right the same (one
-    symmetric body: ``skeleton.clip_offsets``); every frame's rotations are slerped between the nearest keyframes and held
-    before the first and after the last. ``root`` (n_frames, 3) is the pelvis track,
-    NaN rows filled linearly; without it the keyframes' own pelvis positions are
-    interpolated. ``smooth`` > 0 is a Gaussian sigma in frames applied to rotations
-    and root, corrected so that keyframes stay exactly as given.
-    """
+    """A Motion of ``n_frames`` from keyframes' joints {frame: (16, 3)}: symmetric median offsets,
+    rotations slerped between keyframes (held outside); ``root`` (n_frames, 3) pelvis track, NaN rows
+    filled (None: keyframe pelvises); ``smooth`` > 0 a Gaussian sigma (frames), keyframes kept exact."""
     keys, joints = _check_keyframes(joints3d_keyframes, n_frames, fps, smooth)
     pelvis = joints[:, JOINT_INDEX["pelvis"]]
     offsets = clip_offsets(pose_rotations(joints - pelvis[:, None])[1])
@@ -151,8 +128,7 @@ def _slerp_frames(keys: np.ndarray, local: np.ndarray, n_frames: int) -> np.ndar
 
 
 def _continuous(quats: np.ndarray) -> np.ndarray:
-    """Flip quaternion signs so that consecutive frames lie in one hemisphere
-    (needed for smoothing them as vectors and for linear glTF playback)."""
+    """Flip quaternion signs so consecutive frames share a hemisphere (smoothing, glTF playback)."""
     flips = np.sign(np.sum(quats[1:] * quats[:-1], axis=-1))
     flips[flips == 0] = 1
     sign = np.concatenate([np.ones((1, quats.shape[1])), np.cumprod(flips, axis=0)])
@@ -160,8 +136,7 @@ def _continuous(quats: np.ndarray) -> np.ndarray:
 
 
 def _lerp_frames(keys: np.ndarray, values: np.ndarray, n_frames: int) -> np.ndarray:
-    """(n_frames, ...) values given at sorted frames ``keys``, linearly
-    interpolated between them and held outside."""
+    """(n_frames, ...) ``values`` at sorted frames ``keys``, linearly interpolated, held outside."""
     if len(keys) == 1:
         return np.repeat(values, n_frames, axis=0)
     t = np.arange(n_frames)
@@ -173,8 +148,7 @@ def _lerp_frames(keys: np.ndarray, values: np.ndarray, n_frames: int) -> np.ndar
 
 def _root_track(keys: np.ndarray, pelvis: np.ndarray, root: np.ndarray | None,
                 n_frames: int) -> np.ndarray:
-    """(n_frames, 3) pelvis trajectory: ``root`` with NaN rows filled, or the keyframe
-    pelvis positions interpolated."""
+    """(n_frames, 3) pelvis track: ``root`` with NaN rows filled, or keyframe pelvises interpolated."""
     if root is None:
         return _lerp_frames(keys, pelvis, n_frames)
     root = np.asarray(root, dtype=float)
@@ -185,10 +159,9 @@ def _root_track(keys: np.ndarray, pelvis: np.ndarray, root: np.ndarray | None,
 
 
 def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndarray:
-    """Gaussian smoothing along time (axis 0) plus the difference at the keyframes
-    interpolated by a natural cubic spline (held outside), so that keyframes keep
-    their exact values and no corner comes back at them."""
-    from scipy.interpolate import CubicSpline   # here: only --smooth needs it, and it takes 0.13 s to import
+    """Gaussian smoothing along axis 0 plus the keyframes' residual through a natural cubic spline,
+    so keyframes keep their exact values."""
+    from scipy.interpolate import CubicSpline   # here: only --smooth needs it
     smooth = gaussian_filter1d(track, sigma, axis=0, mode="nearest")
     residual = track[keys] - smooth[keys]
     if len(keys) == 1:
@@ -198,9 +171,8 @@ def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndar
 
 
 def stage_origin(world: np.ndarray) -> np.ndarray:
-    """(3,) the exports' origin for joints (F, 16, 3) in the root's frame: below the
-    first frame's pelvis on the floor (FLOOR_PERCENTILE of the lower ankle's height
-    less the ankle's height above the sole), so that exports stand on y = 0."""
+    """(3,) the exports' origin for joints (F, 16, 3) in the root's frame: on the floor (FLOOR_PERCENTILE
+    of the lower ankle less ANKLE_HEIGHT) below the first frame's pelvis."""
     ankles = world[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]], 1].min(axis=1)
     floor = np.percentile(ankles, FLOOR_PERCENTILE) - ANKLE_HEIGHT * UNIT_M
     pelvis = world[0, JOINT_INDEX["pelvis"]]

@@ -1,31 +1,9 @@
-"""A first guess where the user said nothing (beyond the paper, which asks the user for
-the orientation and every foreshortening direction): orientation, which image-side
-limb is which in a profile, and every segment's sign.
+"""First guesses where the user said nothing (beyond the paper, which asks): orientation and signs.
 
-Which image-side limb is which is decided in ``mocap.lift.sides`` (``track_sides``) from the
-orientation; where the legs cross in a turned view, the user's signs on them revise it
-(``legs_crossed``).
-Three cues, each a short function:
-
-- **walking direction** (pelvis track) and **knee bends** (knees point the way the
-  performer faces) say whether the performer faces image left or right; a growing
-  body (walking toward a perspective camera) says forward, a shrinking one backward,
-  otherwise the head's look (below), else forward. Forward and backward cannot be told
-  apart from a silhouette or its 2D joints under orthographic projection: mirroring every depth
-  and swapping left and right gives the same image (the Necker ambiguity; knees,
-  elbows, feet and the walking direction only say which image side is faced). The
-  head's look can (mocap.facing.facing_away: mostly hair seen from behind, mostly
-  face from the front); where it says nothing the user says it once.
-- **joint limits**: knees bend backward, elbows forward, thighs and upper arms do not
-  cross the body's midline or swing far backward, the torso does not lean far back.
-- **temporal coherence**: a sign can only change where its segment passes through
-  the image plane, so the chosen depths move smoothly; the signs are chosen by a
-  Viterbi search minimising the depths' acceleration (second order, so that a depth
-  passing through zero keeps going rather than bouncing back).
-
-User entries enter as hard constraints on their frames, so one correction carries
-through the whole stretch where the segment stays out of the image plane.
-"""
+Facing side: walking direction and knee bends. Forward or backward (a silhouette cannot tell: the
+Necker ambiguity): body growth, else the head's look (mocap.facing.facing_away), else forward. Signs:
+joint limits and the smoothest depths (second-order Viterbi), so a sign changes only where its
+segment passes the image plane; user entries are hard constraints. ``legs_crossed``: see there."""
 
 from __future__ import annotations
 
@@ -44,7 +22,7 @@ RULE_SPREAD = (0.25, 0.65)  # torso spread over which a profile's image-side rul
 PROFILE_RULE = 0.1         # the image-side rule's weight in a profile, at most (rule_evidence)
 WALK_SPEED = 0.15          # body heights per second: slower pelvis tracks say nothing
 GROWTH = 0.05              # relative body-size change per second that says toward/away
-AWAY_SAYS = 0.25           # pooled head evidence (mocap.facing.facing_away) that says away
+AWAY_SAYS = 0.25           # pooled head evidence (mocap.silhouette.facing.facing_away) that says away
 CUE_WINDOW_S = 1.0         # half-window over which direction cues are pooled, seconds
 MIN_RUN_S = 0.5            # orientation runs shorter than this join their neighbours
 LIMIT_WEIGHT = 30.0        # model units of acceleration per unit of joint-limit violation
@@ -57,8 +35,6 @@ KEEP_RULE = 0.1            # per frame: overruling the image-side rule without a
 _LEG_SEGMENTS = [SEGMENT_INDEX[s] for side in SIDES for s in limb("leg", side).segments]
 _SIGN_PAIRS = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
 
-
-# -- second-order Viterbi -------------------------------------------------------------
 
 # -- orientation ----------------------------------------------------------------------
 
@@ -73,8 +49,7 @@ def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> n
 
 
 def pooled(values: np.ndarray, fps: float, pool=np.nanmean) -> np.ndarray:
-    """Each frame's value pooled (``pool``: averaged) over the finite values within
-    CUE_WINDOW_S."""
+    """Each frame's ``pool`` (mean) of the finite ``values`` within CUE_WINDOW_S."""
     half = max(1, int(round(CUE_WINDOW_S * fps)))
     out = np.full(len(values), np.nan)
     for i in np.flatnonzero(np.isfinite(values)):
@@ -83,9 +58,7 @@ def pooled(values: np.ndarray, fps: float, pool=np.nanmean) -> np.ndarray:
 
 
 def looks_away(away: np.ndarray | None, fps: float, n: int) -> np.ndarray:
-    """(F,) bool: where the heads' look (``away``: mocap.facing.facing_away, pooled
-    over CUE_WINDOW_S) says facing away, as ``guess_orientations`` reads it; none
-    without it."""
+    """(F,) bool: where the heads' look (``away``, pooled) says facing away; all False without it."""
     if away is None:
         return np.zeros(n, bool)
     return np.nan_to_num(pooled(np.asarray(away, float), fps), nan=0.0) > AWAY_SAYS
@@ -93,11 +66,8 @@ def looks_away(away: np.ndarray | None, fps: float, n: int) -> np.ndarray:
 
 def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.ndarray,
                        fps: float, away: np.ndarray | None = None) -> list[str | None]:
-    """Each frame's orientation (None where nobody is): facing side from the walking
-    direction and knee bends, profile when the torso's spread is below
-    PROFILE_SPREAD, backward when the body shrinks (walks away) or, where it does not
-    grow, when the head's look says so (``facing_evidence`` below -1/2), and runs
-    shorter than MIN_RUN_S merged into their neighbours."""
+    """Each frame's orientation (None: nobody): side from walking and knees, profile below PROFILE_SPREAD,
+    backward where ``facing_evidence`` < -1/2; runs shorter than MIN_RUN_S merged into neighbours."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
     side = np.full(len(ok), np.nan)
     for r in runs(ok):
@@ -115,14 +85,9 @@ def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.nda
 
 def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
                     away: np.ndarray | None = None) -> np.ndarray:
-    """(F,) in [-1, 1]: how much the performer is turned toward the camera (> 0)
-    rather than away (< 0), were the torso not in profile: +-1 where the body grows
-    or shrinks steadily by more than GROWTH per second (walks toward or away: the
-    median growth over CUE_WINDOW_S, so a size that jumps on a few frames, as the
-    body heights do where a crouch or a jump enters their window, says nothing),
-    else the head's look (``away`` (F,): mocap.facing.facing_away, pooled over
-    CUE_WINDOW_S) in units of twice AWAY_SAYS, its sign turned; 0 where neither says
-    anything."""
+    """(F,) in [-1, 1]: turned toward (> 0) or away (< 0): +-1 where the median growth over CUE_WINDOW_S
+    exceeds GROWTH per second (a crouch or jump says nothing), else the pooled head look ``away`` over
+    twice AWAY_SAYS, negated; 0 where neither says."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
     out = np.zeros(len(ok))
     for r in runs(ok):
@@ -135,13 +100,9 @@ def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
 
 
 def rule_evidence(orientations: list[str | None], spread: np.ndarray, facing: np.ndarray) -> np.ndarray:
-    """(F,) how much the image-side rule (``image_left_is_right``) says the image-left
-    limbs are the right ones (> 0) or the left ones (< 0), for mocap.lift.sides: +-1
-    where the orientation names a turned view; in a profile, where the spread is too
-    low to name one but may be a turned view's read low (raised arms, a crouch, a
-    wide silhouette), the way ``facing`` (F,): ``facing_evidence``) says the
-    performer is turned, times PROFILE_RULE and the spread's ramp over the width of
-    RULE_SPREAD from a true profile's read (``profile_read``); 0 where nobody is."""
+    """(F,) evidence that the image-left limbs are the right ones (> 0), for sides.track_sides: +-1 in
+    a turned view; in a profile ``facing`` (F,) x PROFILE_RULE x the spread's ramp over RULE_SPREAD's
+    width above ``profile_read`` (a turned view may read low); 0 where nobody is."""
     low, high = RULE_SPREAD
     ramp = np.clip((np.nan_to_num(spread, nan=0.0) - profile_read(spread)) / (high - low), 0.0, 1.0)
     out = PROFILE_RULE * ramp * facing
@@ -152,21 +113,16 @@ def rule_evidence(orientations: list[str | None], spread: np.ndarray, facing: np
 
 
 def profile_read(spread: np.ndarray) -> float:
-    """The torso spread (F,) a true profile reads on this clip: RULE_SPREAD[0], or the
-    clip's narrowest read where it is lower. A slim performer's torso reads narrow at
-    every turn (on the development clips a three-quarter view's 0.3 where the truth's
-    |cos yaw| is 0.7, and the clip's profile 0.07): the model's torso is broader than
-    their waist, so a read above their own profile's says they are turned even where
-    it is a profile's of the model's build."""
+    """The torso spread a true profile reads on this clip (``spread`` (F,)): RULE_SPREAD[0], or the
+    clip's lowest read if lower (a slim performer reads narrow at every turn)."""
     seen = np.asarray(spread, float)
     seen = seen[np.isfinite(seen)]
     return min(RULE_SPREAD[0], float(seen.min())) if len(seen) else RULE_SPREAD[0]
 
 
 def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]:
-    """Runs of one name shorter than ``shortest`` frames take the preceding run's name
-    (where none precedes, the following run's that is not short itself, else the
-    following one's), so the user sees few changes."""
+    """Runs shorter than ``shortest`` frames take the preceding run's name (else the next long run's,
+    else the next one's), so the user sees few changes."""
     out = list(names)
     bounds = [i for i in range(1, len(out) + 1) if i == len(out) or out[i] != out[i - 1]]
     pieces = list(zip([0] + bounds[:-1], bounds))
@@ -207,15 +163,9 @@ def segment_vectors(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.n
 def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
                 lengths: np.ndarray = LENGTH, fixed: np.ndarray | None = None,
                 fps: float = 30.0) -> np.ndarray:
-    """(F, 10) +1 toward / -1 away for anatomical 2D joints (F, 16, 2), NaN-free frames.
-
-    Each limb's (upper, lower) signs, the torso's and the head's are chosen over the
-    clip by ``smoothest_states``: per frame, joint-limit penalties (``limb_penalty``, a
-    backward or sideways lean for torso and head) and, for the legs, torso and head,
-    disagreement with ``sagittal_depth``; between frames, the acceleration of the depths (Eq. 5's
-    |dZ|, a running median over DEPTH_FILTER_S against the 2D fit's noise).
-    ``fixed`` (F, 10) holds the user's signs (+1/-1) where given, 0 elsewhere.
-    """
+    """(F, 10) +1 toward / -1 away for anatomical NaN-free 2D joints (F, 16, 2), per torso, head and limb
+    by ``smoothest_states``: joint limits and (legs, torso, head) ``sagittal_depth`` per frame, the
+    acceleration of |dZ| (median over DEPTH_FILTER_S) between; ``fixed`` (F, 10) user signs, 0: none."""
     fixed = np.zeros((len(joints2d), 10), int) if fixed is None else fixed
     vec, depth = segment_vectors(joints2d, px_per_unit, lengths)
     width = 2 * int(round(DEPTH_FILTER_S * fps / 2)) + 1
@@ -258,12 +208,8 @@ def _limb_signs(vec: np.ndarray, depth: np.ndarray, sagittal: np.ndarray, fixed:
 
 
 def sagittal_depth(dx: np.ndarray, yaw: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """(F, 10) each segment's depth as a fraction of its length if it lay in the
-    performer's sagittal plane (walking and running limbs nearly do): a segment that
-    points the way the performer faces comes toward the camera when they are turned
-    toward it, so dZ = dx / tan(yaw). Image x is what the 2D fit gets best; Eq. 5's
-    lengths are far noisier. Near frontal (|sin yaw| < 1/3) the divisor is held at
-    1/3: there dx is mostly sideways motion and says little."""
+    """(F, 10) depth / length were each segment in the sagittal plane (as in gait): dZ = dx / tan(yaw)
+    from image x, the fit's best; |sin yaw| held >= 1/3, as near frontal dx is mostly sideways."""
     rad = np.radians(yaw)
     sin = np.where(np.sin(rad) < 0, -1.0, 1.0) * np.maximum(np.abs(np.sin(rad)), 1 / 3)
     return np.clip(dx * (np.cos(rad) / sin)[:, None] / lengths, -1.0, 1.0)
@@ -275,9 +221,8 @@ def yaws(orientations: list[str | None], spread: np.ndarray) -> np.ndarray:
 
 
 def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarray) -> np.ndarray:
-    """(F, 10) the user's signs where they hold, 0 elsewhere: an entry holds from its
-    frame until a later entry or until its segment next passes through the image plane
-    (``negligible`` (F, 10)), where the sign may change and the first guess resumes."""
+    """(F, 10) the user's signs where they hold, else 0: from the entry's frame until a later entry
+    or the segment next passes the image plane (``negligible`` (F, 10))."""
     passes = np.cumsum(negligible, axis=0)
     frames = np.arange(len(values))[:, None]
     at_entry = np.take_along_axis(passes, np.clip(since, 0, len(values) - 1), axis=0)
@@ -289,22 +234,10 @@ def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarra
 
 def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
                  px_per_unit: np.ndarray, lengths: np.ndarray, pinned: np.ndarray) -> np.ndarray:
-    """(F,) bool: frames of anatomical 2D joints (F, 16, 2), named by the orientation's
-    image-side rule (``sides.track_sides``), whose knees and ankles belong to the other
-    hip, by the user's foreshortening directions on the thighs and shins.
-
-    Turned toward or away from the camera, the legs cross in the image as they
-    swing, and a silhouette cannot show which is in front (the 2D fit names legs by
-    image side). But a leg swings in its sagittal plane, so the side its segment
-    points to in the image says whether it comes toward the camera
-    (``sagittal_depth``): a user's "toward" on the right thigh names the leg whose
-    thigh points forward. Each frame costs the disagreement of the held user signs
-    (``user_signs`` (F, 10), 0 where none) with either naming; exchanging the legs
-    between frames costs SWITCH_WEIGHT times how far apart they are (they can only be
-    confused where they pass each other); crossing without a sign for it costs
-    KEEP_RULE, and ``pinned`` frames (a leg joint the user placed) do not cross.
-    Without user signs nothing crosses.
-    """
+    """(F,) bool: frames of anatomical 2D joints (F, 16, 2) whose knees and ankles belong to the other
+    hip, by the user's held signs (``user_signs`` (F, 10)) against each leg's ``sagittal_depth``: a
+    two-state path, exchanging costing SWITCH_WEIGHT per leg length apart, crossing KEEP_RULE a frame;
+    ``pinned`` (F,) frames never cross; without user signs nothing crosses."""
     crossed = np.ones(len(joints), bool)
     costs = np.stack([_leg_sign_cost(joints, user_signs, yaw, px_per_unit, lengths),
                       _leg_sign_cost(exchange_legs(joints, crossed), user_signs, yaw, px_per_unit, lengths)],
@@ -322,8 +255,7 @@ def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
 
 def _leg_sign_cost(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
                    px_per_unit: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """(F,) how far the legs' sagittal depths point against the user's signs (0 near
-    frontal, where a leg's image x is mostly sideways motion)."""
+    """(F,) how far the legs' sagittal depths point against the user's signs (0 near frontal)."""
     vec, _ = segment_vectors(joints, px_per_unit, lengths)
     sagittal = sagittal_depth(vec[..., 0], yaw, lengths)[:, _LEG_SEGMENTS]
     turned = np.abs(np.sin(np.radians(yaw))) >= SAGITTAL_SHOWS

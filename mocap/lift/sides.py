@@ -1,19 +1,7 @@
-"""Which image-side limb of the 2D fit is which anatomical one, frame by frame
-(section 3.4: "From the orientation, we also determine the left leg (arm) and the
-right leg (arm)"; the 2D fit names limbs by image side, section 3.3).
-
-Turned toward or away from the camera the orientation's image-side rule says it
-(``mocap.lift.taylor.image_left_is_right``); in a profile it cannot, and the legs are
-followed through time across the moments where they pass each other
-(``bridge_parity``). The naming is one choice over each run of frames (``naming_path``,
-a two-state Viterbi search): every frame's evidence weighs against renaming the legs
-where they are followed surely, so a weak cue or a stretch of a few frames does not
-flip the naming, while one the evidence contradicts over a long stretch gives way
-where the following is least sure. The rule names limbs by where they lie in the
-image, and the fit, which orders the hips by image side, may draw a leg stepped
-across the other with the thighs crossed: there the knees and ankles are named
-apart from the hips (``_leg_order``).
-"""
+"""Which image-side limb of the 2D fit is which anatomical one, per frame (section 3.4: "From the
+orientation, we also determine the left leg (arm) and the right leg (arm)"). Turned views follow
+``taylor.image_left_is_right``; in a profile the legs are followed through their crossings
+(``bridge_parity``) and named by a two-state Viterbi search (``naming_path``)."""
 
 from __future__ import annotations
 
@@ -34,7 +22,7 @@ CROSSING_S = 0.15    # s with the legs close together that a constant pace carri
 # The costs of a naming, in the units of bridge_parity's certainty (limb lengths of
 # joint distance between the two ways of following the legs, a crossing's 1-2):
 LINK_FLOOR = 0.5         # renaming the legs where nothing follows them (close together throughout)
-NEAR_WEIGHT = (0.1, 3.0)  # per unit of the near arm's and the near leg's evidence (mocap.facing.near_limbs)
+NEAR_WEIGHT = (0.1, 3.0)  # per unit of the near arm's and the near leg's evidence (mocap.silhouette.facing.near_limbs)
 CONVENTION_COST = 1e-3   # per frame against the forward (or, looking away, backward) convention
 KNOWN_COST = 1e6         # per frame against what the user said
 _J = JOINT_INDEX
@@ -46,29 +34,13 @@ _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
                 away: np.ndarray | None = None, near: np.ndarray | None = None,
                 rule: np.ndarray | None = None) -> np.ndarray:
-    """(F, 3) bool: for arms and legs (with their hips), whether the image-left limb
-    is the right one, and whether the knees and ankles belong to the other hip.
-
-    Per run of frames with a person, the legs' naming minimises each frame's cost of
-    it (``_naming_costs``) plus, wherever it departs from the legs as followed through
-    time (``bridge_parity``), how sure the following is there (``naming_path``). The
-    evidence: ``known`` (F, 2) 1 (swap), 0 (keep), -1 (unknown), held as given (the
-    user's orientation and joint overrides); ``rule`` (F,) the guessed orientation's
-    image-side rule, > 0 swap, +-1 in a turned view and weaker in a profile
-    (mocap.lift.orientation.rule_evidence); and where nothing says anything, the
-    forward-facing convention (swap), or the backward one (keep) where the head's look
-    says the performer faces away (``away`` (F,) bool). A run in profile throughout,
-    facing one image side (``facing_x`` (F,) +1: image right), then takes that naming
-    or its opposite on every frame, whichever agrees better with the near limbs too
-    (``near`` (F, 2): mocap.facing.near_limbs, > 0 where the image-left arm's, leg's
-    outline shows across the body; facing image right the near ones are the
-    performer's right ones; ``_nearer_naming``). The image-side rule names the hips;
-    the knees and ankles are named the same way with the rule read on where the fit's
-    legs lie (``_leg_order``), and where the two namings differ the fit drew the
-    thighs crossed. The arms take the hips' naming in a turned view and are named
-    from it in a profile (``_arm_sides``). ``fps`` sets the windows of a step and a
-    crossing.
-    """
+    """(F, 3) bool: the image-left arm, the image-left leg (hips) is the right one; the knees and
+    ankles belong to the other hip. Per run with a person the legs' naming minimises ``_naming_costs``
+    plus each departure's certainty from the followed legs (``bridge_parity``, ``naming_path``).
+    ``known`` (F, 2) arms, legs: 1 swap, 0 keep, -1 unknown (the user's, held); ``rule`` (F,) > 0 swap
+    (orientation.rule_evidence); ``away`` (F,) bool: looking away, so keep by default, not swap;
+    ``facing_x`` (F,) +1 image right; ``near`` (F, 2) (mocap.facing.near_limbs) names a run in profile
+    throughout (``_nearer_naming``); arms by ``_arm_sides`` in a profile; ``fps`` sets the windows."""
     n = len(known)
     out = np.zeros((n, 3), bool)
     away = np.zeros(n, bool) if away is None else away
@@ -100,26 +72,17 @@ def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, f
 
 
 def _leg_order(legs: np.ndarray, leg_px: float, crossing: int) -> np.ndarray:
-    """(F,) in [-1, 1]: 1 where the fit's image-left leg (``legs`` (F, 2, 2, 2): knee
-    and ankle of the image-left and image-right leg) lies on the image left, down to
-    -1 where its knee and ankle lie SEPARATED leg lengths on the image right of the
-    other's, held over ``crossing`` frames either side (the median: legs that pass
-    each other are reversed for less). The image-side rule names the legs by where
-    they lie in the image, and the fit, which orders the hips by image side, draws
-    the thighs crossed where one leg steps across the other (the silhouette does not
-    show which thigh is which): there the rule names its image-right leg the
-    image-left one."""
+    """(F,) in [-1, 1]: 1 where the fit's image-left leg (``legs`` (F, 2, 2, 2): knee, ankle per side)
+    lies image-left, down to -1 at SEPARATED leg lengths right of the other (median over ``crossing``
+    frames either side): the fit orders hips by image side, so a leg stepped across crosses the thighs."""
     across = (legs[:, 1, :, 0] - legs[:, 0, :, 0]).mean(-1) / (SEPARATED * leg_px)
     held = median_filter(across, 2 * crossing + 1, mode="nearest")
     return np.where(held < 0, np.clip(held, -1.0, 0.0), 1.0)
 
 
 def _naming_costs(known: np.ndarray, rule: np.ndarray, arms_kept: np.ndarray, away: np.ndarray) -> np.ndarray:
-    """(F, 2) each frame's cost of the legs' naming keep (0) and swap (1): against
-    ``known`` (F, 2, as ``track_sides``) KNOWN_COST (on the legs, or on the arms, which
-    the legs' naming names through ``arms_kept`` (F,): the arms' naming were the legs
-    kept), against ``rule`` (F,) its size, and against the convention (``away`` (F,))
-    CONVENTION_COST."""
+    """(F, 2) each frame's cost of the legs' keep/swap: KNOWN_COST against ``known`` (legs, or arms
+    via ``arms_kept`` (F,)), |rule| against ``rule``, CONVENTION_COST against the convention (``away``)."""
     arm_swap = arms_kept[:, None] ^ _STATES
     costs = (np.abs(rule)[:, None] * (_STATES != (rule > 0)[:, None])
              + CONVENTION_COST * (_STATES == away[:, None]))
@@ -128,28 +91,23 @@ def _naming_costs(known: np.ndarray, rule: np.ndarray, arms_kept: np.ndarray, aw
 
 
 def _near_costs(near: np.ndarray, arms_kept: np.ndarray) -> np.ndarray:
-    """(F, 2) each frame's cost of the legs' naming keep and swap against the near
-    limbs (``near`` (F, 2) arms, legs: > 0 where the image-left one is the right one),
-    NEAR_WEIGHT times their sizes; the arms' naming per the legs' through ``arms_kept``."""
+    """(F, 2) cost of the legs' keep/swap against ``near`` (F, 2) arms, legs (> 0: image-left is
+    right), NEAR_WEIGHT times their sizes; the arms named through ``arms_kept``."""
     arm_swap = arms_kept[:, None] ^ _STATES
     return (NEAR_WEIGHT[0] * np.abs(near[:, [0]]) * (arm_swap != (near[:, [0]] > 0))
             + NEAR_WEIGHT[1] * np.abs(near[:, [1]]) * (_STATES != (near[:, [1]] > 0)))
 
 
 def _nearer_naming(swap: np.ndarray, costs: np.ndarray) -> np.ndarray:
-    """``swap`` (F,) bool or its opposite on every frame, whichever ``costs`` (F, 2)
-    sums lower: the near limbs tell which leg is near from how their outlines
-    correlate with the naming over a whole profile, not frame by frame (one frame's
-    outlines say little: a limb's own shading, the far one showing past the near)."""
+    """``swap`` (F,) or its opposite on every frame, whichever ``costs`` (F, 2) sum lower: the near
+    limbs decide over a whole profile, as one frame's outlines say little."""
     frames = np.arange(len(swap))
     return ~swap if costs[frames, (~swap).astype(int)].sum() < costs[frames, swap.astype(int)].sum() else swap
 
 
 def naming_path(costs: np.ndarray, parity: np.ndarray, links: np.ndarray) -> np.ndarray:
-    """(F,) bool: the legs' naming (swap) minimising the frames' ``costs`` (F, 2) plus,
-    wherever it departs from the legs as followed (``parity`` (F,) 0/1, relative to
-    the first frames), that link's certainty (``links`` (F - 1,)): a two-state Viterbi
-    search over which anatomical leg the followed first one is."""
+    """(F,) bool legs' naming minimising ``costs`` (F, 2) plus ``links`` (F - 1,) where it departs from
+    the followed ``parity`` (F,) 0/1: a two-state Viterbi over which leg the first followed one is."""
     flip = parity.astype(bool)
     anchored = np.where(flip[:, None], costs[:, ::-1], costs)
     return two_state_path(anchored, links).astype(bool) ^ flip
@@ -157,8 +115,7 @@ def naming_path(costs: np.ndarray, parity: np.ndarray, links: np.ndarray) -> np.
 
 def _arm_sides(legs: np.ndarray, arms: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray,
                leg_px: float, half: int) -> np.ndarray:
-    """(F,) bool: whether the image-left arm is the right one in a profile, from the
-    legs' sides (``_stepping``, ``_counter_phase``)."""
+    """(F,) bool: whether the image-left arm is the right one in a profile, from the legs' sides."""
     stepping = _stepping(legs, legs_swap, facing_x, leg_px, half)
     return np.where(stepping, _counter_phase(legs, legs_swap, arms, facing_x), legs_swap)
 
@@ -176,16 +133,10 @@ def _limb_px(joints2d: np.ndarray, root: str, tip: str) -> float:
 
 
 def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """(F,) 0/1: whether each frame's two limbs are swapped relative to the first
-    stretch where they are apart, and (F - 1,) how sure each link between
-    consecutive frames is. ``pair`` (F, 2, 3, 2): each limb's root, middle and distal
-    joint. While apart, each frame's limbs follow the nearer ones of the frame
-    before, as sure as the other pairing is farther (in limb lengths); across each
-    stretch where they are close together the swap is decided by ``_crosses``, as
-    sure as its margin, shrunk in proportion where the stretch lasts longer than
-    ``crossing`` frames (a constant pace carries a limb through a crossing, not
-    through a turn on the spot); close frames take the parity of the nearer side;
-    before the first and after the last stretch apart nothing is sure."""
+    """(F,) 0/1: each frame's limbs swapped relative to the first stretch apart, and (F - 1,) each
+    link's certainty; ``pair`` (F, 2, 3, 2) each limb's root, middle, distal joint. Apart, limbs follow
+    the nearer ones of the frame before; across a close stretch ``_crosses`` decides, less sure where it
+    outlasts ``crossing`` frames; nothing is sure outside the stretches apart."""
     n = len(pair)
     apart = np.linalg.norm(pair[:, 0, 2] - pair[:, 1, 2], axis=-1) / limb_px > SEPARATED
     pieces = [p for p in runs(apart) if p.stop - p.start >= MIN_APART]
@@ -215,19 +166,9 @@ def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[
 
 
 def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, limb_px: float) -> float:
-    """How much more the limbs of ``after``'s first frame, as labelled, look to be in
-    the other order than ``before``'s limbs put in one order by ``parity`` so far
-    (> 0: they crossed), as sure as the less sure of the two ways they are followed
-    across; 0 where the two disagree.
-
-    Each limb is followed across the stretch between at constant velocity from
-    either side (crossing limbs continue, turning limbs come back): its middle and
-    distal joints and its two segments' image angles. The angles carry a limb that
-    swings past the other, even one that speeds up (a kick), where its joints come
-    close to the other's and a fit that loses one segment there misplaces them.
-    Either way alone may mislead: a kicking foot that lands is carried on past the
-    ground, and a shin the fit draws folded back on one side is carried back folded;
-    each way is a witness of its own, so the crossing is no surer than the weaker."""
+    """How much more ``after``'s first frame has its limbs in the other order than ``before``'s (ordered
+    by ``parity``; > 0: crossed): the weaker of the forward and backward constant-pace predictions of
+    joints and segment angles (``_ahead``), 0 where they disagree."""
     ordered = pair.copy()
     ordered[parity == 1] = pair[parity == 1, ::-1]
     t0, t1 = before.stop - 1, after.start
@@ -239,30 +180,25 @@ def _crosses(pair: np.ndarray, before: slice, after: slice, parity: np.ndarray, 
 
 
 def _limb_features(limbs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(2, 2, 2) middle and distal joints and (2, 2) segment angles (radians) of
-    two limbs (2, 3, 2) given by their root, middle and distal joints."""
+    """(2, 2, 2) middle and distal joints and (2, 2) segment angles (radians) of limbs (2, 3, 2)."""
     d = np.diff(limbs, axis=1)
     return limbs[:, 1:], np.arctan2(d[..., 0], d[..., 1])
 
 
 def _ahead(earlier: np.ndarray, last: np.ndarray, span: int, frames: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two limbs' joints and angles (``_limb_features``) ``frames`` on from ``last``
-    at their pace since ``earlier``, ``span`` frames before it (either way in time)."""
+    """``_limb_features`` ``frames`` on from ``last`` at the pace since ``earlier`` (``span`` frames away)."""
     (p0, q0), (p1, q1) = _limb_features(earlier), _limb_features(last)
     pace = frames / max(1, span)
     return p1 + (p1 - p0) * pace, q1 + _wrapped(q1 - q0) * pace
 
 
 def _order_margin(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
-    """How much nearer two limbs (2, 3, 2) in the other order lie to a prediction
-    (``_ahead``) than in their own (``_mismatch``; > 0: the other order)."""
+    """How much nearer limbs (2, 3, 2) lie to ``predicted`` in the other order than in theirs (> 0)."""
     return _mismatch(predicted, limbs, limb_px) - _mismatch(predicted, limbs[::-1], limb_px)
 
 
 def _mismatch(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
-    """How far two limbs (2, 3, 2) lie from a prediction (``_ahead``): their middle
-    and distal joints' distances in limb lengths, plus ANGLE_WEIGHT times their
-    segments' turns in radians."""
+    """How far limbs (2, 3, 2) lie from ``predicted``: joints in limb lengths + ANGLE_WEIGHT x turns (rad)."""
     joints, angles = _limb_features(limbs)
     return float(np.linalg.norm(predicted[0] - joints, axis=-1).sum() / limb_px
                  + ANGLE_WEIGHT * np.abs(_wrapped(predicted[1] - angles)).sum())
@@ -281,11 +217,8 @@ def _same_order(flat: np.ndarray, t: int, u: int) -> bool:
 
 def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg_px: float,
               half: int) -> np.ndarray:
-    """(F,) bool: frames of a gait, where within ``half`` frames either side the right
-    leg is clearly ahead (SEPARATED leg lengths) at one time and the left at another.
-    There the arms swing opposite to the legs (``_counter_phase``); elsewhere (standing,
-    bending, kicking, jumping, even with the feet apart) each arm hangs from the
-    shoulder above its own side's hip, so the arms take the legs' names."""
+    """(F,) bool gait frames: within ``half`` frames either side each leg is clearly ahead at some time;
+    there arms swing opposite the legs (``_counter_phase``), elsewhere they take the legs' names."""
     lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
     clear = np.abs(lead) > SEPARATED * leg_px
     right_ahead = legs_swap == (lead < 0)
@@ -296,8 +229,7 @@ def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg
 
 def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray,
                    facing_x: np.ndarray) -> np.ndarray:
-    """Arm swaps in a profile from the legs: the arm in front is on the other side
-    than the leg in front (gait); where the legs are level the last decision holds."""
+    """(F,) bool arm swaps in a profile: front arm opposite the front leg; level legs hold the last."""
     lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
     arm_lead = (arms[:, 1, :, 0].mean(-1) - arms[:, 0, :, 0].mean(-1)) * facing_x
     out = np.ones(len(legs), bool)
@@ -313,9 +245,8 @@ def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray,
 
 def known_sides(orientations: list[str | None], overrides: dict[int, dict[str, tuple[float, float]]],
                 joints2d: np.ndarray) -> np.ndarray:
-    """(F, 2) int8 for ``track_sides``: the orientation's image-side rule (forward:
-    swap, backward: keep, profile: unknown), and where the user placed an elbow, wrist,
-    knee or ankle, the assignment that puts that side's limb nearer to it."""
+    """(F, 2) int8 ``known`` for ``track_sides``: the orientation's rule (forward 1, backward 0, profile
+    -1) and, where the user placed an elbow, wrist, knee or ankle, the naming that puts it nearer."""
     known = np.full((len(orientations), 2), -1, np.int8)
     for i, name in enumerate(orientations):
         rule = None if name is None else image_left_is_right(name)

@@ -1,22 +1,8 @@
-"""The exported skeleton: the bone names and hierarchy animation tools expect (Mixamo's
-and most BVH libraries': Hips, Spine, Spine1, Neck, Head, LeftShoulder/LeftArm/
-LeftForeArm/LeftHand, LeftUpLeg/LeftLeg/LeftFoot/LeftToeBase and the right side's),
-its T-pose rest and the bone rotations that pose it as the contract body.
-
-The rest pose (every rotation identity) stands facing +z, y up, the performer's left
-at +x, arms straight out sideways (T-pose). Each bone has a fixed offset from its
-parent in the parent's frame (metres), one set per clip, left = right mirrored.
-Bones named ``*_End`` are the End Sites (head top, finger tips, toe tips): leaves that
-never rotate.
-
-Where the contract's 16 joints are: pelvis = Hips, chest = Spine1, neck = Neck,
-head_top = Head_End, shoulder/elbow/wrist = Arm/ForeArm/Hand, hip/knee/ankle =
-UpLeg/Leg/Foot. The other joints are placed from them: Spine a little up the torso
-axis (on the Hips' y axis), Head on the neck->head_top line, both clavicles
-(LeftShoulder, RightShoulder) at the shoulders' midpoint, and hands, feet and toes
-(which the video does not show) by the proportions below, hands continuing the
-forearms and feet level, pointing where the hips face.
-"""
+"""The exported skeleton: bone names and hierarchy animation tools expect (Mixamo's, most BVH
+libraries': Hips, Spine, Spine1, Neck, Head, Left/Right Shoulder, Arm, ForeArm, Hand, UpLeg, Leg,
+Foot, ToeBase), its T-pose rest (facing +z, y up, left at +x, arms out) and the rotations posing it
+as the contract body. Offsets: metres in the parent's frame, one symmetric set per clip; ``*_End``
+bones are End Sites that never rotate; bones the video does not show are placed by proportion."""
 
 from __future__ import annotations
 
@@ -93,8 +79,8 @@ def rest_direction(bone: str) -> np.ndarray:
 
 
 def landmarks(joints: np.ndarray) -> dict[str, np.ndarray]:
-    """Every bone's place (K, 3) and the contract joints' from pelvis-relative contract
-    joints (K, 16, 3); hands, feet and toes are absent (the proportions place them)."""
+    """Every bone's place (K, 3) and the contract joints' from pelvis-relative contract joints
+    (K, 16, 3); hands, feet and toes absent (the proportions place them)."""
     at = {j: joints[:, i] for i, j in enumerate(JOINTS)}
     at |= {bone: at[j] for j, bone in _CONTRACT.items()}
     at["Spine"] = at["pelvis"] + SPINE_AT * (at["chest"] - at["pelvis"])
@@ -110,9 +96,8 @@ def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
 
 
 def _frame(exact: np.ndarray, lean: np.ndarray, axis: int) -> Rotation:
-    """Rotations whose column ``axis`` (0 = x, 1 = y) points along ``exact`` (K, 3) and
-    whose other x/y column lies in the plane of ``exact`` and ``lean``; degenerate
-    directions fall back to the rest pose's axes."""
+    """Rotations whose column ``axis`` (0 x, 1 y) points along ``exact`` (K, 3), the other x/y column in
+    the plane of ``exact`` and ``lean``; degenerate directions fall back to the rest axes."""
     eye = np.eye(3)
     other = 1 - axis
     a = _unit(exact, eye[axis])
@@ -157,14 +142,9 @@ def global_rotation(bone: str, at: dict[str, np.ndarray], parent: Rotation,
 
 def pose_rotations(joints: np.ndarray, offsets: np.ndarray | None = None
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Local rotations (K, len(BONES), 4, quaternions x y z w) that pose the skeleton as
-    the pelvis-relative contract joints (K, 16, 3), and each bone's vector to its
-    parent in the parent's frame (K, len(BONES), 3; NaN for proportion-placed bones).
-
-    With ``offsets`` each bone turns from where the body's fixed bones put it (forward
-    kinematics down the chain) toward its joint, so that the pose comes back exactly
-    where its bones have the body's lengths and as near as they allow elsewhere;
-    without, from the landmarks themselves (to measure the bones)."""
+    """Local rotations (K, len(BONES), 4; x y z w) posing the skeleton as pelvis-relative contract
+    joints (K, 16, 3), and each bone's vector in its parent's frame (K, len(BONES), 3; NaN for bones
+    placed by proportion). With ``offsets`` each bone turns from where the fixed bones put it."""
     at = landmarks(joints)
     glob: list[Rotation] = []
     local = np.empty((len(joints), len(BONES), 4))
@@ -183,11 +163,8 @@ def pose_rotations(joints: np.ndarray, offsets: np.ndarray | None = None
 
 
 def clip_offsets(vectors: np.ndarray) -> np.ndarray:
-    """(len(BONES), 3) the clip's one set of bone offsets from the bones' vectors to
-    their parents over its keyframes (K, len(BONES), 3): a bone that continues its
-    parent's rest direction gets the median length along it, the others the median
-    vector; then left and right are made mirror images (their mean), so that one
-    body, symmetric, plays the whole clip. Hands, feet and toes by the proportions."""
+    """(len(BONES), 3) one symmetric set of offsets from keyframe vectors (K, len(BONES), 3): median
+    length along the parent's rest direction where a bone continues it, else the median vector."""
     offsets = np.zeros((len(BONES), 3))
     for b, name in enumerate(BONES):
         p = PARENTS[b]
@@ -203,8 +180,7 @@ def clip_offsets(vectors: np.ndarray) -> np.ndarray:
 
 
 def symmetric(offsets: np.ndarray) -> np.ndarray:
-    """Offsets with every Left bone the mirror image (x negated) of its Right twin
-    and the middle bones on the midplane (x = 0), each pair's mean."""
+    """Offsets with each Left bone the mirror (x negated) of its Right twin, their mean; middle x = 0."""
     out = offsets.copy()
     mirror = np.array([-1.0, 1.0, 1.0])
     for b, name in enumerate(BONES):
@@ -218,8 +194,8 @@ def symmetric(offsets: np.ndarray) -> np.ndarray:
 
 
 def forward_kinematics(offsets: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """(F, len(BONES), 3) bone positions relative to the Hips from the offsets
-    (len(BONES), 3) and local rotations (F, len(BONES), 4)."""
+    """(F, len(BONES), 3) positions relative to the Hips from offsets (len(BONES), 3) and
+    local rotations (F, len(BONES), 4)."""
     glob: list[Rotation] = []
     pos = np.zeros((len(rotations), len(BONES), 3))
     for b in range(len(BONES)):

@@ -1,26 +1,9 @@
-"""2D joints and the user's inputs -> a 3D pose: scaled orthographic lifting
-(section 3.4, Eq. 4-5, after Taylor).
+"""Scaled orthographic lifting of 2D joints to a 3D pose (section 3.4, Eq. 4-5, after Taylor).
 
-Under scaled orthographic projection (Eq. 4) a joint's image position gives its x
-and y up to the scale s; the body's height in the image gives s. A segment of model
-length l whose ends are (u1, v1) and (u2, v2) apart in the image then has the
-relative depth of Eq. 5,
-
-    dZ = +-sqrt(l^2 - ((u1 - u2)^2 + (v1 - v2)^2) / s^2),
-
-whose sign is the user's foreshortening direction (``toward``: the distal joint is
-nearer the camera, larger z). Depths are chained from the pelvis outward.
-
-The body's orientation (one of six) and the torso's horizontal foreshortening
-(``spread``, the seen fraction of the shoulder/hip span) give how far the performer
-is turned about the vertical axis (the yaw), which places the hips and shoulders in
-depth, and which image-side limb is which anatomical one (``image_left_is_right``;
-followed through time by ``mocap.lift.sides``).
-
-Coordinates (CONTRACT.md): 2D in video pixels (x right, y down); 3D in metres, origin
-at the pelvis, x to the image right, y up, z toward the camera, body height 1.75 m.
-Inside this module lengths are model units of a 175-unit body (body.LENGTH).
-"""
+Eq. 4 gives x, y up to the scale s (the body's image height); Eq. 5 gives each segment's depth
+dZ = +-sqrt(l^2 - ((u1 - u2)^2 + (v1 - v2)^2) / s^2), signed by the foreshortening (``toward``: distal
+joint nearer the camera), chained from the pelvis; the yaw places hips and shoulders. Model units of a
+175-unit body inside (body.LENGTH); 3D out in metres (CONTRACT.md: pelvis origin, y up, z to camera)."""
 
 from __future__ import annotations
 
@@ -45,14 +28,8 @@ _LIMB_SEGMENTS = [SEGMENT_INDEX[s] for s in SEGMENT_NAMES if s not in ("torso", 
 # -- orientation ----------------------------------------------------------------------
 
 def facing_yaw(orientation: str, spread: float) -> float:
-    """The performer's facing direction in degrees about the vertical (section 3.4):
-    0 faces the camera, +90 faces image right, -90 image left, 180 away.
-
-    ``spread`` = |cos(yaw)| is the torso's horizontal foreshortening; the
-    orientation says which of the four yaws with that spread it is. A profile is
-    taken as exactly +-90 (its spread cannot say whether the performer is turned a
-    little toward the camera or a little away).
-    """
+    """Facing yaw in degrees (section 3.4): 0 faces the camera, +90 image right, -90 image left, 180 away.
+    ``spread`` = |cos yaw| (the torso's horizontal foreshortening); a profile is exactly +-90."""
     if orientation not in ORIENTATIONS:
         raise ValueError(f"unknown orientation {orientation!r}")
     side = -1.0 if orientation.endswith("left") else 1.0
@@ -63,8 +40,7 @@ def facing_yaw(orientation: str, spread: float) -> float:
 
 
 def orientation_of_yaw(yaw_deg: float) -> str:
-    """The one of the six orientations that names a yaw (see ``facing_yaw``):
-    profiles within PROFILE_HALF_SECTOR of +-90 degrees, forward or backward beyond."""
+    """The orientation naming a yaw: a profile within PROFILE_HALF_SECTOR of +-90, else forward/backward."""
     yaw = (float(yaw_deg) + 180.0) % 360.0 - 180.0
     side = "left" if yaw < 0 else "right"
     if abs(abs(yaw) - 90.0) <= PROFILE_HALF_SECTOR:
@@ -73,24 +49,14 @@ def orientation_of_yaw(yaw_deg: float) -> str:
 
 
 def lateral_axis(yaw_deg: float) -> np.ndarray:
-    """The performer's left (unit, camera frame) when facing ``yaw_deg``:
-    up x facing, with facing = (sin yaw, 0, cos yaw)."""
+    """The performer's left (unit, camera frame) facing ``yaw_deg``: up x (sin yaw, 0, cos yaw)."""
     yaw = np.radians(yaw_deg)
     return np.array([np.cos(yaw), 0.0, -np.sin(yaw)])
 
 
 def image_left_is_right(orientation: str) -> bool | None:
-    """Whether the image-left limbs of the 2D fit are the performer's right ones.
-
-    Facing the camera (forward_*) the performer's right is on the image left;
-    turned away (backward_*) their left is. In a profile both shoulders and both
-    hips fall on one image point, so image sides say nothing: the limb nearer the
-    camera is the right one when facing image right (their left when facing
-    image left), which the image cannot show either (a silhouette looks the same
-    with the depths mirrored and the sides swapped). Profiles therefore return
-    None: the sides are followed through time from a frame where they are known
-    (``mocap.lift.sides.track_sides``).
-    """
+    """Whether the fit's image-left limbs are the performer's right: True facing the camera, False
+    turned away, None in a profile (the image cannot tell; ``mocap.lift.sides`` follows them in time)."""
     if orientation.startswith("forward"):
         return True
     if orientation.startswith("backward"):
@@ -107,20 +73,18 @@ def runs(mask: np.ndarray) -> list[slice]:
 
 
 def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
-    """(F, 16, 2) image-side joints with each frame's arms and legs swapped as told."""
+    """(F, 16, 2) image-side joints with arms and legs swapped on the frames ``swap`` (F, 2) marks."""
     out = _exchanged(joints_image, swap[:, 0], LIMB_JOINTS["arm"])
     return _exchanged(out, swap[:, 1], LIMB_JOINTS["leg"])
 
 
 def exchange_legs(joints2d: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """(F, 16, 2) with the knees and ankles of the ``rows`` (F,) bool frames exchanged
-    between the hips: legs crossed in the image, the hips where they were."""
+    """(F, 16, 2) with knees and ankles exchanged between the hips on ``rows`` (F,) bool."""
     return _exchanged(joints2d, rows, LIMB_JOINTS["leg"][1:])
 
 
 def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """(F, 16, 2) with the left and right joints ``names`` exchanged on the ``rows`` (F,)
-    bool frames."""
+    """(F, 16, 2) with the left and right joints ``names`` exchanged on ``rows`` (F,) bool."""
     left, right = [_J[f"{n}_l"] for n in names], [_J[f"{n}_r"] for n in names]
     out = joints2d.copy()
     out[np.ix_(rows, left)], out[np.ix_(rows, right)] = joints2d[np.ix_(rows, right)], joints2d[np.ix_(rows, left)]
@@ -131,12 +95,8 @@ def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -
 
 def relative_depths(joints2d: np.ndarray, px_per_unit, signs: np.ndarray,
                     lengths: np.ndarray = LENGTH) -> np.ndarray:
-    """(..., 10) dZ of every segment in model units, distal minus proximal (Eq. 5),
-    for joints (..., 16, 2) at px_per_unit (scalar or (...,)).
-
-    A segment drawn longer than its model length lies in the image plane (dZ = 0).
-    ``signs`` are +1 (toward the camera) or -1 (away); 0 counts as toward.
-    """
+    """(..., 10) dZ per segment (Eq. 5), model units, distal minus proximal, of joints (..., 16, 2) at
+    ``px_per_unit`` (scalar or (...,)); ``signs`` +1 toward, -1 away (0: toward); 0 where seen over-long."""
     ends = np.asarray(joints2d, float)[..., SEGMENT_JOINTS, :]          # (..., 10, 2, 2)
     seen = (np.linalg.norm(ends[..., 1, :] - ends[..., 0, :], axis=-1)
             / np.asarray(px_per_unit, float)[..., None])
@@ -153,15 +113,9 @@ def image_to_model(joints2d: np.ndarray, px_per_unit: float) -> np.ndarray:
 def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: np.ndarray,
               lengths: np.ndarray = LENGTH, spans: tuple[float, float] = SPANS,
               seen_depths: np.ndarray | None = None) -> np.ndarray:
-    """(16, 3) joints in metres (contract frame) from anatomical 2D joints (section 3.4).
-
-    x and y come from the image (Eq. 4); depths are chained from the pelvis: the torso
-    and head by Eq. 5, the hips and shoulders from the yaw (their model half-spans
-    ``spans`` along the performer's lateral axis), then every limb segment by Eq. 5
-    from its proximal joint. ``seen_depths`` (10,): each segment's |dZ| (model units)
-    as a person model sees it (mocap.lift.cues.world_depths), taken instead of Eq.
-    5's where finite, with the sign still ``signs``'.
-    """
+    """(16, 3) metres (contract frame) from anatomical 2D joints (16, 2): x, y by Eq. 4; z from the
+    pelvis: torso and head by Eq. 5, hips and shoulders at ``spans`` along the yaw's lateral axis, then
+    each limb segment by Eq. 5. ``seen_depths`` (10,) |dZ| (model units) replace Eq. 5's where finite."""
     xy = image_to_model(joints2d, px_per_unit)
     dz = relative_depths(joints2d, px_per_unit, signs, lengths)
     if seen_depths is not None:
@@ -184,23 +138,20 @@ def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: n
 # -- reading a 3D pose back (ground truth, tests, annotations from a pose) -----------
 
 def yaw_of(joints3d: np.ndarray) -> float:
-    """The facing yaw (degrees) of a 3D pose in the contract frame, from its hips'
-    and shoulders' right-to-left direction (the inverse of ``lateral_axis``)."""
+    """Facing yaw (degrees) of a 3D pose (16, 3) from its left direction (inverse of ``lateral_axis``)."""
     j = np.asarray(joints3d, float)
     left = left_direction(j)
     return float(np.degrees(np.arctan2(-left[2], left[0])))
 
 
 def signs_of(joints3d: np.ndarray) -> np.ndarray:
-    """(..., 10) foreshortening of each segment of 3D poses (..., 16, 3): +1 toward,
-    -1 away."""
+    """(..., 10) each segment's foreshortening (+1 toward, -1 away) in 3D poses (..., 16, 3)."""
     ends = np.asarray(joints3d, float)[..., SEGMENT_JOINTS, :]
     return np.where(ends[..., 1, 2] >= ends[..., 0, 2], TOWARD, AWAY)
 
 
 def depth_fractions(joints3d: np.ndarray) -> np.ndarray:
-    """(..., 10) |dZ| / length of each segment of 3D poses (..., 16, 3) (0 in the
-    image plane)."""
+    """(..., 10) |dZ| / length per segment of 3D poses (..., 16, 3); 0 in the image plane."""
     ends = np.asarray(joints3d, float)[..., SEGMENT_JOINTS, :]
     vec = ends[..., 1, :] - ends[..., 0, :]
     return np.abs(vec[..., 2]) / np.maximum(np.linalg.norm(vec, axis=-1), 1e-12)
@@ -210,15 +161,9 @@ def depth_fractions(joints3d: np.ndarray) -> np.ndarray:
 
 def clip_lengths(joints2d: np.ndarray, px_per_unit: np.ndarray, q=90.0,
                  pool: bool = False) -> np.ndarray:
-    """(10,) segment lengths (model units) as seen over a clip: the q-th percentile
-    (one for all, or one per segment) of each segment's projected length, both sides
-    of a pair pooled with ``pool``.
-
-    Beyond the paper: real bodies differ from Table 1 (forearms of motion-capture
-    skeletons are ~25% shorter), and Eq. 5 with a too long l invents depth. A segment
-    passes through the image plane in most motions, where its projection is its
-    length. Falls back to the model's length where nothing is seen.
-    """
+    """(10,) segment lengths (model units) seen over a clip: the ``q``-th percentile (scalar or (10,))
+    of each projected length, pairs pooled with ``pool``; the model's where nothing is seen. Beyond the
+    paper: real bodies differ from Table 1, and most segments pass the image plane at full length."""
     j = np.asarray(joints2d, float)
     ends = j[:, SEGMENT_JOINTS]                                             # (F, 10, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) / np.asarray(px_per_unit, float)[:, None]

@@ -1,11 +1,7 @@
-"""The session: one video, the user's annotations and the 3D they give, whichever the
-method. The command line and the app both work through it (``mocap.pipeline`` opens
-one); ``mocap.session.silhouette`` and ``mocap.session.tracking`` are the two methods'.
+"""The session: one video, the user's annotations and the 3D they give, whichever the method.
 
-A method's session says what its 2D joints and 3D are (``inputs``, ``pose3d``,
-``root``); everything after that is shared: the keyframes, the motion (section 3.4's
-interpolation, ``mocap.lift.motion``) and the motion file's frames (CONTRACT.md).
-"""
+Each method's session supplies ``inputs``, ``pose3d`` and ``root``; the keyframes, the motion (section
+3.4's interpolation, ``mocap.lift.motion``) and the motion file's frames (CONTRACT.md) are shared here."""
 
 from __future__ import annotations
 
@@ -24,15 +20,11 @@ from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs, root_track
 from mocap.lift.motion import Motion, build_motion
 from mocap.lift.taylor import depth_fractions
-from mocap.review import Doubt, covering, review_queue
+from mocap.session.review import Doubt, covering, review_queue
 
 
 class Session(ABC):
-    """A video's per-frame results and the user's annotations; the 3D on demand.
-
-    ``annotate`` replaces the annotations (already checked; see mocap.io.annotations);
-    what they change is computed again when next needed.
-    """
+    """A video's per-frame results and the user's annotations (checked: mocap.io.annotations); the 3D on demand."""
 
     method: str                     # "silhouette" or "track", as the annotations name it
     score_name: str                 # what ``scores`` are, for the page
@@ -69,18 +61,15 @@ class Session(ABC):
     @property
     @abstractmethod
     def inputs(self) -> Inputs:
-        """The 2D joints (anatomical sides, overrides in), orientation, signs and
-        lengths of the current annotations."""
+        """The 2D joints (anatomical sides, overrides in), orientation, signs and lengths."""
 
     @abstractmethod
     def pose3d(self, frame: int) -> np.ndarray | None:
-        """(16, 3) joints of a frame (metres, contract frame, pelvis-centred), None
-        without a person."""
+        """(16, 3) joints of a frame (metres, contract frame, pelvis-centred); None without a person."""
 
     def root(self) -> np.ndarray:
-        """(F, 3) the pelvis in metres in the camera's frame (CONTRACT.md's ``root``),
-        NaN where nobody is: here its depth from the body's image scale
-        (lift.inputs.root_track)."""
+        """(F, 3) pelvis in metres, camera frame (CONTRACT.md's ``root``), NaN without a person;
+        here its depth comes from the body's image scale (lift.inputs.root_track)."""
         inputs = self.inputs
         return root_track(inputs.joints2d, inputs.px_per_unit, (self.info.width, self.info.height))
 
@@ -89,8 +78,7 @@ class Session(ABC):
         return np.repeat(np.nan_to_num(self.scores)[:, None], len(JOINT_INDEX), axis=1)
 
     def confidence(self) -> np.ndarray:
-        """(F, 16) each joint's confidence in [0, 1] (CONTRACT.md): the method's
-        ``joint_scores``, 1 for a joint the user placed."""
+        """(F, 16) joint confidence in [0, 1] (CONTRACT.md): ``joint_scores``, 1 where the user placed it."""
         conf = np.clip(self.joint_scores(), 0.0, 1.0)
         for i, points in self._annotations.overrides().items():
             if i < self.n_frames:
@@ -99,9 +87,7 @@ class Session(ABC):
 
     @property
     def lost(self) -> np.ndarray:
-        """(F,) bool: frames where the method lost the performer it followed and
-        gives no answer (the motion file says ``lost``; no method but the tracking
-        loses anyone)."""
+        """(F,) bool: frames where the method lost the performer (motion file's ``lost``); none here."""
         return np.zeros(self.n_frames, bool)
 
     def far_arm(self) -> str | None:
@@ -116,15 +102,13 @@ class Session(ABC):
         until its segment next passes through the image plane: held_user_signs), 0 elsewhere."""
 
     def sign_sources(self, frame: int) -> tuple[str, ...]:
-        """Where each segment's sign on ``frame`` comes from: the user's entry while
-        it holds ("set here", "held from frame K"), else "guessed"."""
+        """Where each segment's sign on ``frame`` comes from: "set here", "held from frame K" or "guessed"."""
         held = self.held_signs()[frame]
         since = self._annotations.held_signs(self.n_frames)[1][frame]
         return tuple(source_note(int(s), frame) if h else "guessed" for h, s in zip(held, since))
 
     def orientation_shown(self, frame: int) -> tuple[str | None, str]:
-        """The orientation a frame is lifted with and where it comes from: the user's
-        held entry, else the first guess."""
+        """(orientation, its source) of ``frame``: the user's held entry, else the first guess."""
         entry = entry_frame(self._annotations, frame, lambda n: n.orientation)
         return self.inputs.orientation[frame], source_note(entry, frame)
 
@@ -134,20 +118,18 @@ class Session(ABC):
         return () if pose is None else tuple(float(d) for d in depth_fractions(pose))
 
     def carried(self, frame: int) -> dict[str, int]:
-        """joint -> the frame of a joint override that moves it on ``frame`` from
-        another frame (the tracking method's pins reach around them)."""
+        """joint -> frame of an override on another frame that moves it on ``frame`` (tracking's pins)."""
         return {}
 
     def review_queue(self) -> list[Doubt]:
-        """Doubtful frames, most doubtful first, and why (mocap.review)."""
+        """Doubtful frames, most doubtful first, and why (mocap.session.review)."""
         if self._queue is None:
             self._queue = review_queue(self)
         return self._queue
 
     def review_stops(self) -> list[Doubt]:
-        """The frames a review visits, most doubtful first: the queue; where the
-        method's edits reach around a frame (``review_spacing``), one frame in every
-        stretch they cover (review.covering)."""
+        """The frames a review visits, most doubtful first; where edits reach around a frame
+        (``review_spacing``), one frame per stretch they cover (review.covering)."""
         if not self.review_spacing:
             return self.review_queue()
         return covering(self.review_queue(), self.n_frames, self.review_spacing)
@@ -176,9 +158,8 @@ class Session(ABC):
         return None
 
     def motion_frames(self, motion: Motion) -> list[dict]:
-        """Motion-file entries (CONTRACT.md). A frame without a person stays
-        ``person: false``; it gets interpolated joints3d when it lies between keyframes.
-        A frame where the performer was lost says ``lost: true`` and gives no joints."""
+        """Motion-file entries (CONTRACT.md): a frame without a person stays ``person: false``, with
+        interpolated joints3d between keyframes; a lost frame says ``lost: true`` and has no joints."""
         keys = np.flatnonzero(motion.keyframes)
         person, scores, inputs, lost = self.person, self.scores, self.inputs, self.lost
         contacts, confidence = motion.contacts, self.confidence()
@@ -202,8 +183,7 @@ class Session(ABC):
         return frames
 
     def clip(self, foot_lock: bool = False) -> Clip:
-        """The motion and its motion-file frames, what every export format is made of;
-        ``foot_lock``: planted feet kept in place (Motion.foot_locked)."""
+        """The motion and its motion-file frames (every export's source); ``foot_lock``: Motion.foot_locked."""
         motion, info = self.motion(), self.info
         motion = motion.foot_locked() if foot_lock else motion
         video = {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
@@ -221,8 +201,7 @@ def entry_frame(notes: Annotations, frame: int, has: Callable[[FrameNote], objec
 
 
 def source_note(entry: int | None, frame: int) -> str:
-    """Where a sticky value of ``frame`` comes from (the frame of its entry, -1 or
-    None: no entry), for the page."""
+    """Where a sticky value of ``frame`` comes from, for the page (``entry`` -1 or None: no entry)."""
     if entry is None or entry < 0:
         return "guessed"
     return "set here" if entry == frame else f"held from frame {entry}"

@@ -1,12 +1,7 @@
-"""The silhouette method's session: a video's per-frame 2D fits (section 3.3,
-``mocap.silhouette.passes``) and the user's annotations.
-
-It resolves the lifting inputs (orientation, sides, overrides, signs: the user's
-over the first guess of ``mocap.lift.orientation``), lifts the keyframes (section
-3.4) and interpolates the other frames (``mocap.lift.motion``). An edit of the
-annotations re-resolves the inputs and re-lifts only the frames whose inputs it
-changed (``SilhouetteSession.lifted``).
-"""
+"""The silhouette method's session: per-frame 2D fits (section 3.3, ``mocap.silhouette.passes``)
+and the user's annotations, resolved into lifting inputs (the user's over the first guess of
+``mocap.lift.orientation``); keyframes lifted (section 3.4), the rest interpolated. An edit
+re-lifts only the frames whose inputs it changed (``SilhouetteSession.lifted``)."""
 
 from __future__ import annotations
 
@@ -18,7 +13,7 @@ import numpy as np
 
 from mocap.body import JOINTS
 from mocap.errors import MocapError
-from mocap.facing import facing_away, near_limbs
+from mocap.silhouette.facing import facing_away, near_limbs
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
 from mocap.lift.cues import Cues
@@ -57,24 +52,21 @@ class SilhouetteSession(Session):
 
     @cached_property
     def _away(self) -> np.ndarray | None:
-        """(F,) the heads' look, how much it says facing away (mocap.facing.facing_away),
-        None without the silhouettes (once per session)."""
+        """(F,) how much the head's look says facing away (silhouette.facing.facing_away); None without silhouettes."""
         joints = self._arrays[0]
         return (None if self.silhouettes is None else
                 facing_away(self.silhouettes, joints, processing_scale(self.info)))
 
     @cached_property
     def _near(self) -> "NearLimbs | None":
-        """Which of the fit's arms and legs shows its outline across the body
-        (mocap.facing.near_limbs), None without the silhouettes (once per session)."""
+        """Limbs whose outline shows across the body (mocap.silhouette.facing.near_limbs); None without silhouettes."""
         joints, body_px, _ = self._arrays
         return (None if self.silhouettes is None else
                 NearLimbs(self.silhouettes, joints, body_px, processing_scale(self.info)))
 
     @cached_property
     def cues(self) -> Cues | None:
-        """The person model's landmarks over the clip (mocap.lift.cues), None where
-        the fit looked through none."""
+        """The person model's landmarks over the clip (mocap.lift.cues); None if the fit used none."""
         return Cues.of([f.landmarks for f in self.fits])
 
     @cached_property
@@ -85,8 +77,7 @@ class SilhouetteSession(Session):
 
     @cached_property
     def silhouette_confidence(self) -> np.ndarray | None:
-        """(F,) each frame's silhouette confidence (mocap.silhouette.masks), None
-        when the session was made without its silhouettes and background."""
+        """(F,) silhouette confidence (mocap.silhouette.masks); None without silhouettes and background."""
         if self.silhouettes is None or self.background is None:
             return None
         return silhouette_confidence(self.silhouettes, self.background)
@@ -98,9 +89,8 @@ class SilhouetteSession(Session):
         return None if confidence is None else held_warning(confidence)
 
     def write_masks(self, folder: str | os.PathLike) -> Path:
-        """The silhouettes as mask files: the fit's own where a person model looked
-        (masks.write_silhouettes), else masks.write_masks' (a pass over the video
-        against the fit's background); the folder."""
+        """Write the silhouettes as mask files and return the folder: the fit's own where a person model
+        looked (masks.write_silhouettes), else masks.write_masks against the fit's background."""
         if self.person_model != NONE and self.silhouettes is not None:
             return write_silhouettes(folder, self.info, self.silhouettes)
         if self.background is None:
@@ -139,27 +129,21 @@ class SilhouetteSession(Session):
         return self.inputs.held
 
     def tracking_marks(self) -> dict[str, tuple[float, float]]:
-        """Frame 0's 16 joints as the tracking method's marks, to the tenth of a pixel
-        (sides resolved, overrides kept, the shoulders in the hips' order:
-        mocap.track.marks.shoulders_as_hips): a start for the user to correct."""
+        """Frame 0's 16 joints as tracking marks to 0.1 px (sides resolved, overrides kept, shoulders in
+        the hips' order: mocap.track.marks.shoulders_as_hips): a start for the user to correct."""
         if not self.person[0]:
             raise MocapError("frame 0 has no silhouette fit to take the marks from")
         joints = shoulders_as_hips(self.inputs.joints2d[0])
         return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
 
     def pose3d(self, frame: int) -> np.ndarray | None:
-        """(16, 3) lifted joints of a frame (metres, contract frame), None without a
-        person (``lifted``)."""
+        """(16, 3) lifted joints of a frame (metres, contract frame); None without a person."""
         return self.lifted()[frame] if self.fits[frame].joints2d is not None else None
 
     def lifted(self) -> np.ndarray:
-        """(F, 16, 3) every frame with a person lifted (Inputs.lift_frames), the depths
-        smoothed over time (Inputs.smooth_depths), NaN elsewhere. After an edit only the
-        frames whose lifting inputs it changed are lifted again (Inputs.changed_frames:
-        a sign click, the frames whose signs it changed, its own and those the sign
-        guess re-solves around it; every frame where the 2D joints' sides or the
-        segment lengths change); the depths are then smoothed again over time (a
-        convolution, not a lift), so the result equals a full re-lift."""
+        """(F, 16, 3) every frame with a person lifted (Inputs.lift_frames), depths smoothed over time
+        (Inputs.smooth_depths), NaN elsewhere. After an edit only Inputs.changed_frames are lifted
+        again; the smoothing is a convolution redone on all, so the result equals a full re-lift."""
         inputs = self.inputs
         if self._lifted is None:
             lifts = inputs.lift_frames(inputs.person)
@@ -173,10 +157,8 @@ class SilhouetteSession(Session):
 
 
 class NearLimbs:
-    """mocap.facing.near_limbs of a clip's fits, worked out for a run of frames when
-    it is read (``near[frames]``, a slice: (len, 2)) and kept. The sides read it only
-    in a run seen in profile (mocap.lift.sides.track_sides), and a frame's inner edges
-    cost half a millisecond."""
+    """mocap.silhouette.facing.near_limbs of a clip, computed per run when read (``near[frames]``, a slice:
+    (len, 2)) and kept: only runs seen in profile need it (mocap.lift.sides.track_sides)."""
 
     def __init__(self, silhouettes: list[Silhouette | None], joints2d: np.ndarray,
                  body_px: np.ndarray, scale: float):

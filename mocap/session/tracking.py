@@ -1,20 +1,7 @@
-"""The tracking method's session: the counterpart of the silhouette method's
-(mocap.session.silhouette) for a video whose joints the user marked on frame 0
-(mocap.track.tracking).
-
-The 2D joints are tracked once; everything the user says afterwards reshapes the 3D
-without tracking again: joint overrides replace tracked joints on their frame,
-the held orientation tells which way the body is turned (the calibration's two
-mirror fits on frame 0, the key triangle's two mirror images on later frames), and
-held foreshortening directions fix the depth choices of the
-trunk and the limbs (mocap.track.perspective.place_joints) while they hold. The key
-joints' depths (Eq. 10-11, the slow part) are kept until the 2D joints change, so a
-foreshortening toggle only re-chooses depths.
-
-The same motion file, exports and review as the silhouette method follow from the
-Session protocol (mocap.session.base): ``inputs`` holds the tracked joints and what
-the 3D shows (orientation and signs read back from it).
-"""
+"""The tracking method's session (mocap.track.tracking): frame 0's 16 marks are tracked once; later
+annotations reshape the 3D without tracking again (overrides replace tracked joints; held orientation
+and foreshortening pick the trunk's mirror fit and the depth choices: perspective.place_joints). The
+key joints' depths (Eq. 10-11, the slow part) are kept until the 2D joints change."""
 
 from __future__ import annotations
 
@@ -57,16 +44,14 @@ def remarks_of(notes: Annotations) -> dict[int, dict[str, tuple[float, float]]]:
 
 
 def tracked_video(info: VideoInfo, notes: Annotations, progress=None, focal_px: float | None = None) -> TrackResult:
-    """The video tracked from the marks of ``notes`` (marks_of; frame 0's orientation)
-    and from every frame they mark the body again on (remarks_of)."""
+    """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of."""
     return track_video(info, marks_of(notes), progress, focal_px=focal_px,
                        orientation=notes.orientations(1)[0], remarks=remarks_of(notes))
 
 
 def check_tracking_marks(info: VideoInfo, notes: Annotations) -> None:
-    """Refuse at once (a MocapError naming the joint) the marks of ``notes`` that the
-    tracking cannot start from: a mark missing or outside the frame, or shoulders,
-    chest and hips that fit no view of a trunk (the calibration fails)."""
+    """Raise a MocapError naming the joint if tracking cannot start from the marks of ``notes``: a mark
+    missing or outside the frame, or a trunk that fits no view (the calibration fails)."""
     checked = check_marks(marks_of(notes), info.width, info.height)
     calibrate(checked, default_camera(info.width, info.height), turn_of(notes.orientations(1)[0]))
 
@@ -79,8 +64,7 @@ class TrackSession(Session):
 
     @property
     def review_spacing(self) -> int:
-        """A pin carries SPREAD_S to either side (spread_corrections), so the review
-        lists one frame of a doubtful stretch that long: the worst."""
+        """A pin's reach to either side (spread_corrections): the review lists one frame per stretch."""
         return spread_frames(self.info.fps)
 
     def __init__(self, info: VideoInfo, tracked: TrackResult,
@@ -111,22 +95,13 @@ class TrackSession(Session):
         return self.tracked.confidence.astype(float)
 
     def annotate(self, annotations: Annotations) -> None:
-        """Take new annotations (marks on frame 0 or the body marked again on another
-        frame change the tracking itself: a new session, tracked_video)."""
+        """Take new annotations; new marks (frame 0 or a re-mark) need a new session (tracked_video)."""
         super().annotate(annotations)
         self._resolution = None
 
     def far_arm(self) -> str | None:
-        """"l" or "r": the arm farther from the camera on frame 0 (mocap.track.parts.far_arm
-        of frame 0's key triangle as the reconstruction finds it: calibrated on the
-        marks, turned as frame 0's orientation says or else as the knees tell), None
-        for a body facing the camera or away.
-
-        The tracker loses that arm most (benchmarks/bench_track_budget.py: its elbow
-        and wrist cost 7.7 of the 10.7 mm that the limbs' gross failures cost); a user
-        who pins it alone at the review's stops mends about half of what pinning every
-        joint mends, with a third of the pins (64.8 -> 58.7 mm, against 53.5; from the
-        held-out views, --yaws 60 120: 76.2 -> 70.6, against 62.9)."""
+        """"l" or "r": the arm farther from the camera in frame 0's reconstructed key triangle
+        (mocap.track.parts.far_arm), None facing the camera or away; the tracker loses it most."""
         self._resolved()
         return far_arm(self._placed[3][0, :, 2])
 
@@ -147,37 +122,31 @@ class TrackSession(Session):
         return self._resolved()[0].held
 
     def carried(self, frame: int) -> dict[str, int]:
-        """joint -> the frame of the nearest pin that moves it on ``frame``
-        (mocap.track.tracking.carried_pins)."""
+        """joint -> frame of the nearest pin that moves it on ``frame`` (track.tracking.carried_pins)."""
         return carried_pins(self._annotations.overrides(), frame, self.info.fps)
 
     def orientation_shown(self, frame: int) -> tuple[str | None, str]:
-        """The 3D shows its own facing, turned to the side of the user's held entry;
-        on the entry's own frame the page shows the entry."""
+        """The 3D's own facing, turned to the side of the user's held entry; on its own frame, the entry."""
         note = self._annotations.frames.get(frame)
         if note is not None and note.orientation is not None:
             return note.orientation, "set here"
         return self.inputs.orientation[frame], "seen in the tracked 3D"
 
     def _resolved(self) -> tuple[Inputs, np.ndarray, np.ndarray]:
-        """The shown inputs, the 3D joints (F, 16, 3, contract frame) and the root
-        (F, 3) of the current annotations."""
+        """(shown inputs, (F, 16, 3) contract-frame joints, (F, 3) root) of the current annotations."""
         if self._resolution is None:
             joints = self._joints2d()
             self._resolution = self._shown(joints, *self._reconstructed(joints))
         return self._resolution
 
     def _joints2d(self) -> np.ndarray:
-        """The tracked joints with the user's overrides put in, each carried to the
-        frames around it (mocap.track.tracking.spread_corrections)."""
+        """Tracked joints with the user's overrides put in and carried around them (spread_corrections)."""
         return spread_corrections(self.tracked.joints2d, self._annotations.overrides(),
                                   self.info.fps)
 
     def _reconstructed(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(F, 16, 3) pinhole-frame joints: each frame's trunk turned to the side of
-        its held orientation (frame 0's, where none is said, the knees'), the depth
-        choices kept to the held foreshortening while it holds; and (F, 10) the
-        user's signs where they hold."""
+        """((F, 16, 3) pinhole-frame joints, (F, 10) user signs where held): each trunk turned to its
+        held orientation (frame 0's default: the knees'), depth choices kept to held foreshortening."""
         notes = self._annotations
         steady = steady_joints(joints, self.info.fps)
         turns = [turn_of(o) for o in notes.orientations(len(joints))]
@@ -189,18 +158,16 @@ class TrackSession(Session):
 
     def _placed_joints(self, steady: np.ndarray, key: np.ndarray,
                        fixed: np.ndarray | None = None) -> np.ndarray:
-        """(F, 16, 3) pinhole-frame joints placed from the key joints (place_joints, the
-        bones measured where the body was not lost), their depths smoothed along their
-        rays (steady_depths)."""
+        """(F, 16, 3) pinhole-frame joints placed from the key joints (place_joints, bones measured where
+        the body was not lost), depths smoothed along their rays (steady_depths)."""
         return steady_depths(place_joints(steady, key, self.camera, fixed=fixed, seen=~self.lost),
                              self.info.fps)
 
     @staticmethod
     def _shown(joints: np.ndarray, camera: np.ndarray,
                held: np.ndarray) -> tuple[Inputs, np.ndarray, np.ndarray]:
-        """What the page and the motion file show: the 2D joints, and the orientation,
-        signs and segment lengths read back from the 3D; the 3D pelvis-centred in the
-        contract's frame, and the pelvis in the camera's (its root)."""
+        """(inputs with orientation, signs and lengths read back from the 3D; joints pelvis-centred in
+        the contract frame; the pelvis in the camera frame, the root)."""
         joints3d = to_contract(camera)
         root = camera[:, JOINT_INDEX["pelvis"]] * np.array([1.0, -1.0, -1.0])
         n = len(joints)
@@ -212,10 +179,8 @@ class TrackSession(Session):
         return inputs, joints3d, root
 
     def _free_placement(self, steady: np.ndarray, turns: list) -> tuple[np.ndarray, np.ndarray]:
-        """The key joints of every frame (Eq. 6-11, on the side the limbs take:
-        perspective.sided_key) and every joint placed without the user's signs
-        (contract frame): kept while the 2D joints and the turns stay the
-        same; after a joint override only the frames it moved are solved again."""
+        """(key joints (Eq. 6-11, sided: perspective.sided_key), joints placed without user signs), kept
+        while the 2D joints and turns stay; after an override only the frames it moved are re-solved."""
         last = self._placed
         if last is None or last[1] != turns or not np.array_equal(last[0], steady):
             before = (last[0], last[2]) if last is not None and last[1] == turns else None
@@ -226,8 +191,7 @@ class TrackSession(Session):
 
 
 def body_px(joints2d: np.ndarray) -> float:
-    """The body's standing height in pixels over a clip: a high percentile of the
-    head-top-to-ankles distance (SCALE_PERCENTILE, as the silhouettes' heights)."""
+    """Standing height in pixels over a clip: the SCALE_PERCENTILE of head-top-to-ankles distances."""
     ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
     heights = np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
     return float(np.percentile(heights, SCALE_PERCENTILE))

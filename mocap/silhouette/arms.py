@@ -1,13 +1,9 @@
-"""The arms of the 2D fit (section 3.3): first guesses by contour analysis with elbow
-detection (Algorithms 2-4), refined by Algorithm 1 (upper arm with the lower arm
-attached, then the lower arm) and Algorithm 6. Beyond the paper: each arm explains
-only its own image side; guesses whose elbow bends backward (the knees tell which
-way the performer faces) are dropped; the model's lower arm reaches on into a hand
-(raster.HAND_LENGTH), so the wrist is not put at the silhouette's end; with the
-frame's grey levels the edges inside the silhouette along an arm's sides add to S
-(mocap.edges), so that an arm in front of the trunk, which the silhouette cannot
-place, is found where it shows.
-"""
+"""The arms of the 2D fit (section 3.3): first guesses by contour analysis with elbow detection
+(Algorithms 2-4), refined by Algorithm 1 (upper arm with the lower attached, then the lower arm)
+and Algorithm 6. Beyond the paper: each arm explains only its own image side; guesses bending the
+elbow backward (the knees tell the facing) are dropped; the lower arm reaches on into a hand
+(raster.HAND_LENGTH); with grey levels the inner edges along an arm add to S (mocap.image.edges),
+which places an arm in front of the trunk, where the silhouette cannot."""
 
 from __future__ import annotations
 
@@ -45,8 +41,8 @@ def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[fl
 
 
 def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) -> list[tuple[float, float]]:
-    """Angles of a two-segment limb from start whose tip reaches end (both elbow
-    bends); a straight limb pointing at end when it is out of reach."""
+    """(upper, lower) angles of a two-segment limb from ``start`` whose tip reaches ``end``, for both
+    elbow bends; the straight limb pointing at ``end`` when it is out of reach."""
     d = end - start
     dist = float(np.hypot(*d))
     toward = image_angle(d)
@@ -62,15 +58,10 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 
 
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, crossing: bool = False):
-    """First guesses (G, 4) for one arm's (upper, lower) angles and foreshortening ratios:
-    contour analysis (Algorithms 2-4) of the arm curve on its image side (``crossing``:
-    on either side), the arm reaching the curve's farthest point bent either way or
-    straight and foreshortened, hanging down, the previous frame's arm as it was and,
-    where the frame's edges can tell arms inside the silhouette apart, a grid of arms
-    all around the shoulder (ARM_GRID, last); each new guess at GUESS_RATIOS of the
-    model's lengths (an arm turned toward the camera is shorter in the image, and one
-    hanging in front of the trunk scores alike at any length), the grid's at the
-    first (``best_arm_guess`` shortens the best of them)."""
+    """First guesses (G, 4) of one arm's (upper, lower) angles and ratios: contour analysis (Algorithms
+    2-4) of its image side's arm curve (``crossing``: either side), the arm reaching the curve's tip
+    bent either way or straight and foreshortened, hanging down, ``prev``'s arm, and with edges the
+    ARM_GRID last; new guesses at each GUESS_RATIOS (a turned arm is shorter), the grid's at the first."""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
     angles, guesses = [(270.0, 270.0)], []
     if prev is not None:
@@ -93,9 +84,8 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[float, float],
                    reach: tuple[float, float]):
-    """An arm curve's (upper, lower) angle guesses (Algorithms 3-4, and the arm of
-    ``reach`` lengths reaching its farthest point bent either way), and the straight
-    arm pointing there foreshortened to reach it: ((upper, lower), (ratio, ratio))."""
+    """An arm curve's (upper, lower) angle guesses (Algorithms 3-4, and the ``reach``-long arm bent
+    either way to its farthest point), and the straight arm foreshortened to it: ((u, l), (r, r))."""
     tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
     toward = image_angle(tip - shoulder)
     ratio = min(float(np.hypot(*(tip - shoulder))) / sum(reach), 1.0)
@@ -103,11 +93,9 @@ def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[floa
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
-    """Pixels on one image side ('l' or 'r') of the torso's axis: an arm explains only
-    silhouette on its own side (section 3.3 names limbs by image side), so one arm
-    cannot take the other's pixels. Above the head either arm may take them: hands
-    raised overhead come together there, and the axis's line beyond the head (off by
-    the fitted torso's lean) says nothing of which shoulder a hand belongs to."""
+    """Pixels (H, W bool) on one image side ('l'/'r') of the torso's axis, where that arm may explain
+    silhouette (section 3.3 names limbs by image side); above the head either arm may (raised hands
+    meet there, and the axis's line there says nothing of which shoulder a hand belongs to)."""
     joints = forward_kinematics_2d(pose)
     pelvis, neck = joints[JOINT_INDEX["pelvis"]], joints[JOINT_INDEX["neck"]]
     ys, xs = np.arange(shape[0])[:, None], np.arange(shape[1])[None, :]
@@ -117,17 +105,11 @@ def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
 
 
 def fit_arms(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, facing: int = 0) -> Pose2D:
-    """Both arms, each committed to the canvas once fitted: the image-left one first,
-    each on its image side (``fit_arm``). Near profile (torso spread below
-    CROSS_SPREAD) both shoulders lie on the torso's axis, which parts the arms only
-    when one is in front of the body and one behind it, while arms held in front (a
-    guard, a forearm across the chest, a hand raised to the face) lie on one side of
-    it: there the arm on the side the performer faces (``facing``, from the knees)
-    comes first, on its side, and the other may take whatever silhouette the first
-    left anywhere (facing unknown, the image-left arm first); where it then explains
-    less than half a hand's area of silhouette beyond the fitted parts (placed by the
-    frame's inner edges alone, which the head's own features also show), it is
-    fitted again on its side."""
+    """Both arms, each on its image side (``fit_arm``) and committed once fitted, image-left first.
+    Near profile (spread below CROSS_SPREAD) arms held in front lie on one side of the torso's axis:
+    the arm on the ``facing`` side (from the knees) comes first and the other may take the silhouette
+    left anywhere, unless it then explains under half a hand's area beyond the fitted parts (edges
+    alone placed it), when it is fitted again on its side."""
     profile = pose.spread < CROSS_SPREAD
     order = ("r", "l") if profile and facing > 0 else SIDES
     for side in order:
@@ -153,10 +135,9 @@ def own_pixels(canvas: Canvas, pose: Pose2D, side: str) -> int:
 
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
             facing: int = 0, crossing: bool = False) -> Pose2D:
-    """One arm, on its image side (``crossing``: anywhere): the best-scoring first
-    guess (among those whose elbow bends the way the performer faces, ``facing`` +1
-    image right, -1 left, 0 unknown), refined by Algorithm 1 (upper arm with the lower
-    arm attached, then the lower arm) and Algorithm 6."""
+    """One arm on its image side (``crossing``: anywhere): the best first guess whose elbow bends the
+    way the performer faces (``facing``: +1 image right, -1 left, 0 unknown), refined by Algorithm 1
+    (upper arm with the lower attached, then the lower arm) and Algorithm 6."""
     keep = None if crossing else image_side(canvas.sil.shape, pose, side)
     own = canvas.fork(keep=keep, by_edges=True)
     pose = best_arm_guess(own, pose, side, prev, facing, crossing)
@@ -168,11 +149,9 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
                    facing: int = 0, crossing: bool = False) -> Pose2D:
-    """The arm_candidates guess with the highest S, among those that do not bend the
-    elbow backward (``elbow_bends_back``) where that can be told. The grid's arms
-    are narrowed as Algorithm 1 narrows a search: all at full length first, then
-    the GRID_SHORTENED best of them at the other GUESS_RATIOS, on the partial
-    silhouette that the first round outlines."""
+    """The ``arm_candidates`` guess with the highest S, among those not bending the elbow backward
+    (``elbow_bends_back``); the grid's arms narrowed as Algorithm 1 narrows: all at full length, then
+    the GRID_SHORTENED best at the other GUESS_RATIOS on the partial silhouette the first outlines."""
     guesses = arm_candidates(canvas, pose, side, prev, crossing)
     backward = elbow_bends_back(guesses[:, 0], guesses[:, 1], pose.spread, facing)
     grid = np.arange(len(guesses)) >= len(guesses) - (len(_GRID_GUESSES) if canvas.by_edges else 0)
@@ -190,9 +169,8 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 
 def _scored_guesses(canvas: Canvas, pose: Pose2D, side: str, guesses: np.ndarray, score=None):
-    """(angles, ratios, S with the edges' support, scorer) of one arm's guesses (G, 4)
-    posed; ``score``: the scorer of an earlier round (``sweep_scorer``), else the
-    guesses outline the partial silhouette themselves."""
+    """(angles, ratios, S plus edge support, scorer) of one arm's guesses (G, 4); ``score``: an
+    earlier round's scorer (``sweep_scorer``), else the guesses outline the partial silhouette."""
     both = Knob("angle", ARM[side])
     pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
     angle[:, both.indices[1]] = guesses[:, 1]
@@ -203,23 +181,18 @@ def _scored_guesses(canvas: Canvas, pose: Pose2D, side: str, guesses: np.ndarray
 
 
 def facing_of_knees(pose: Pose2D) -> int:
-    """+1 if the knees of a 2D pose bend toward image right (knees bend forward, so
-    the performer faces that way), -1 toward image left, 0 if both legs are straight
-    (less than KNEE_FACING of body height from their hip-ankle lines)."""
+    """+1 if the knees of a 2D pose bend toward image right (the performer faces it), -1 toward
+    left, 0 if both legs are straight (bend under KNEE_FACING of the body height)."""
     joints = forward_kinematics_2d(pose)[None]
     bend = sum(float(knee_bend(joints, side)[0]) for side in SIDES) / (BODY_HEIGHT * pose.scale)
     return 0 if abs(bend) < KNEE_FACING else int(np.sign(bend))
 
 
 def elbow_bends_back(upper: np.ndarray, lower: np.ndarray, spread: float, facing: int) -> np.ndarray:
-    """Whether arms whose upper and lower arm point at ``upper`` and ``lower`` degrees
-    (counter-clockwise, y up) bend the elbow backward by more than ELBOW_BACK: elbows
-    flex toward the front, which the image shows when the body is seen near profile
-    (torso spread below ELBOW_SHOWS_SPREAD) and the facing side is known. Not for an
-    arm held up (the elbow above the shoulder and the hand above the elbow): raised
-    sideways, it turns its bend any way in the image, and arms held up draw the
-    shoulders in over a narrowed torso, whose width then reads a profile that is not
-    there (a back view with both hands up)."""
+    """Whether arms at ``upper`` and ``lower`` degrees (counter-clockwise, y up) bend the elbow back
+    by over ELBOW_BACK, told only near profile (spread under ELBOW_SHOWS_SPREAD) with ``facing`` known.
+    Not for an arm held up (elbow over shoulder, hand over elbow): raised sideways it bends any way in
+    the image, and raised arms narrow the torso into a false profile."""
     upper, lower = np.asarray(upper, float), np.asarray(lower, float)
     if not facing or spread >= ELBOW_SHOWS_SPREAD:
         return np.zeros(np.shape(upper), bool)

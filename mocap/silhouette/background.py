@@ -1,23 +1,9 @@
 """Background estimation and silhouette extraction (paper, section 3.2), made robust.
 
-The paper takes the background as the regions that do not change over a few frames
-(Collins et al.) and the silhouette as the pixels whose difference from it exceeds a
-threshold, and notes that shadows and noise defeat it. Here:
-
-- the background is a per-pixel temporal median of frames sampled over the clip, each
-  first brought to a common exposure (the performer moves, so each pixel shows the
-  background in most samples);
-- each frame is brought to the background's exposure before differencing, so that an
-  auto-exposure jump does not turn the whole frame into foreground;
-- the threshold follows the noise of each pixel, measured over the samples;
-- soft shadows (the background darkened by a roughly uniform ratio, same chromaticity)
-  are removed;
-- the mask is cleaned and reduced to the one person-sized region, or to nothing when
-  nobody is there (callers mark such frames "no person").
-
-Frames are processed at whatever size they come in (see `video.processing_scale`);
-masks are in the pixels of those frames.
-"""
+The background is the per-pixel temporal median of samples brought to one exposure; each frame
+is brought to its exposure, differenced against a per-pixel noise threshold, cleared of soft
+shadows and reduced to the one person-sized region (empty when nobody is there). Masks are in
+the pixels of the frames given (see `video.processing_scale`)."""
 
 from __future__ import annotations
 
@@ -30,7 +16,7 @@ import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, sample_frames
-from mocap.percentile import percentile, row_medians
+from mocap.image.percentile import percentile, row_medians
 
 MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
@@ -44,11 +30,10 @@ SHADOW_NCC = 0.5      # correlation with the background's texture that a shadow 
 
 @dataclass(frozen=True)
 class Background:
-    """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel difference `threshold`
-    (HxW uint8 grey levels) and the clip's global noise `sigma` (grey levels);
-    `held` (HxW bool, or None) marks the pixels the performer never left in the
-    samples, where `image` is a guess, and `stood` (HxW bool, or None) those where
-    the clip's median showed the performer (mocap.silhouette.plate)."""
+    """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel `threshold` (HxW uint8 grey
+    levels) and the clip's noise `sigma` (grey levels); `held` (HxW bool or None): pixels the
+    performer never left in the samples, where `image` is a guess; `stood` (HxW bool or None):
+    where the clip's median showed the performer (mocap.silhouette.plate)."""
 
     image: np.ndarray
     threshold: np.ndarray
@@ -70,15 +55,10 @@ class Background:
 def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
                         scale: float = 1.0, k: float = K_SIGMA,
                         min_threshold: float = MIN_THRESHOLD) -> Background:
-    """Temporal median of exposure-normalised frames (section 3.2: the regions that
-    do not change), with a per-pixel threshold of `k` robust noise sigmas.
-
-    `source` is a video (`n_samples` frames spread over it are read at `scale`) or
-    the frames themselves (all are used). Each frame is first brought to the exposure
-    of the plain median, so that a frame exposed differently does not pull the median.
-    The threshold never drops below `min_threshold` grey levels, which keeps
-    compression artefacts of a very clean clip out of the silhouette.
-    """
+    """Per-pixel temporal median (section 3.2) of frames first brought to one exposure.
+    `source`: a video (`n_samples` frames read at `scale`) or the frames (all used). The threshold
+    is `k` robust noise sigmas per pixel, at least `min_threshold` grey levels (which keeps a clean
+    clip's compression artefacts out)."""
     if isinstance(source, VideoInfo):
         frames = [f for _, f in sample_frames(source, n_samples, scale)]
     else:
@@ -100,13 +80,9 @@ def noise_floor(sigma: float) -> int:
 
 
 def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float]:
-    """Per-pixel noise level of the largest channel difference, and the global one.
-
-    The global level is the median deviation of all pixels of all frames from the
-    background. The per-pixel one (needs >= 5 frames) is taken from the lower quartile
-    over time, right even where the performer or their shadow covers a pixel in most
-    samples, then spread to the neighbours (texture edges) and floored at the global.
-    """
+    """Per-pixel noise sigma (HxW float32) of the largest channel difference, and the global one.
+    The per-pixel one (>= 5 frames) comes from the lower quartile over time, right even where the
+    performer covers a pixel in most samples; dilated over texture edges, floored at the global."""
     deviation = np.stack([_largest_channel(cv2.absdiff(f, background)) for f in stack])
     sigma = MAD_TO_SIGMA * median_level(deviation)
     noise = np.full(background.shape[:2], sigma, np.float32)
@@ -118,8 +94,8 @@ def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float
 
 
 def median_level(values: np.ndarray | list[np.ndarray]) -> float:
-    """The median of a stack of uint8 images, counted rather than sorted (numpy's
-    median's mean of the two middle values for an even count)."""
+    """The median of a stack of uint8 images, from histogram counts (numpy's convention: the
+    mean of the two middle values for an even count)."""
     counts = sum(cv2.calcHist([image], [0], None, [256], [0, 256]).ravel().astype(np.int64) for image in values)
     cumulative = np.cumsum(counts)
     n = cumulative[-1]
@@ -127,8 +103,7 @@ def median_level(values: np.ndarray | list[np.ndarray]) -> float:
 
 
 def _quantile(stack: np.ndarray, q: float, rows: int = 32) -> np.ndarray:
-    """Per-pixel q-quantile over time of a uint8 stack (float32; numpy's linear
-    interpolation between ranks), in strips of `rows` rows (they stay in the cache)."""
+    """Per-pixel q-quantile over time of a uint8 stack (float32, numpy's interpolation), in row strips."""
     position = q * (len(stack) - 1)
     low = int(position)
     high = min(low + 1, len(stack) - 1)
@@ -141,9 +116,8 @@ def _quantile(stack: np.ndarray, q: float, rows: int = 32) -> np.ndarray:
 
 
 def _sorted(stack: np.ndarray) -> list[np.ndarray]:
-    """The values of a uint8 stack sorted over its first axis, pixel by pixel: Batcher's
-    odd-even merge sort as a network of cv2.min/cv2.max over whole images (padded
-    with 255 to a power of two), 15x faster than numpy's partition of each pixel."""
+    """A uint8 stack sorted over its first axis, pixel by pixel: Batcher's odd-even merge sort
+    as a network of cv2.min/cv2.max over whole images (padded with 255 to a power of two)."""
     size = 1 << (len(stack) - 1).bit_length()
     ranked = [np.ascontiguousarray(f) for f in stack] + [np.full(stack.shape[1:], 255, np.uint8)] * (size - len(stack))
     for a, b in _merge_sort_pairs(size):
@@ -179,12 +153,9 @@ def _largest_channel(image: np.ndarray) -> np.ndarray:
 
 
 def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Per-channel gains that bring `frame` to the exposure of `reference`.
-
-    The median ratio over a regular grid of well-exposed pixels, then again over the
-    three quarters of them that agree best with that first gain (the performer and
-    shadows drop out): a global exposure change, robust to whatever moved.
-    """
+    """Per-channel gains (3,) that bring `frame` to the exposure of `reference`: the median
+    ratio over a grid of well-exposed pixels, again over the three quarters agreeing best with it
+    (the performer and shadows drop out)."""
     grid = _gain_grid(frame.shape[:2])
     f = _channel_rows(frame[grid].reshape(-1, 3))
     r = _channel_rows(reference[grid].reshape(-1, 3))
@@ -207,20 +178,15 @@ def _gain_grid(shape: tuple[int, ...]) -> tuple[slice, slice]:
 def extract_silhouette(frame: np.ndarray, background: Background,
                        shadow_ratio: tuple[float, float] = SHADOW_RATIO,
                        shadow_chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """The performer's silhouette in `frame` (HxW uint8, 0 or 255), empty if nobody.
-
-    Section 3.2's thresholded difference from the background, after exposure
-    compensation, with soft shadows removed, cleaned by morphology and reduced to the
-    person-sized region.
-    """
+    """The performer's silhouette in `frame` (HxW uint8 0/255, empty if nobody): section 3.2's
+    thresholded difference after exposure compensation, soft shadows removed, cleaned (``clean_mask``)."""
     frame = at_exposure(frame, background)
     mask = foreground(frame, background)
     return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma), stood=background.stood)
 
 
 def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
-    """`frame` brought to the background's exposure (``exposure_gain``), checked
-    against its shape."""
+    """`frame` brought to the background's exposure (``exposure_gain``); ValueError if it does not match."""
     if frame.shape != background.image.shape or frame.dtype != np.uint8:
         raise ValueError(f"frame {frame.shape} {frame.dtype} does not match the "
                          f"background {background.image.shape} uint8")
@@ -228,25 +194,22 @@ def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
 
 
 def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
-    """Pixels (255) whose largest channel difference exceeds the pixel's threshold:
-    those where any channel's does, whose 0/255 comparisons make a nonzero grey
-    level (each channel weighs at least 29 of 255 in it)."""
+    """Pixels (0/255) where any channel's difference exceeds the pixel's threshold (the 0/255
+    channel comparisons give a nonzero grey level: each channel weighs at least 29/255 in it)."""
     over = cv2.compare(cv2.absdiff(frame, background.image), background.channel_threshold, cv2.CMP_GT)
     return cv2.compare(cv2.cvtColor(over, cv2.COLOR_BGR2GRAY), 0, cv2.CMP_GT)
 
 
 def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
                    ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """`mask` without its soft-shadow areas (the paper's noted failure, section 3.2):
-    ``without_shadows`` of the ``shadow_candidates``."""
+    """`mask` without its soft shadows (section 3.2's noted failure): ``without_shadows`` of ``shadow_candidates``."""
     return without_shadows(mask, frame, background, shadow_candidates(mask, frame, background, ratio, chroma))
 
 
 def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Background,
                       ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """The pixels of `mask` (0/255) that look like a shadow one by one: the background
-    darkened by one factor in `ratio` for all channels (same chromaticity, within
-    `chroma` of the brightest background channel)."""
+    """Pixels of `mask` (0/255) that each look like shadow: the background darkened by one factor
+    in `ratio` in all channels, the colour kept within `chroma` of its brightest channel."""
     candidates = np.zeros_like(mask)
     box = mask_box(mask, 0)                     # the work only where `mask` has pixels
     if box is None:
@@ -267,10 +230,8 @@ def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Backgroun
 
 def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
                     candidates: np.ndarray) -> np.ndarray:
-    """`mask` without the solid areas of shadow `candidates` (``shadow_candidates``)
-    that keep the background's texture (``_textured_alike``: grey clothes over a
-    patterned floor are as dark, but flat). Thin runs of candidates inside the
-    person (dark hair on a grey wall) survive the opening and stay."""
+    """`mask` without the solid areas of shadow `candidates` that keep the background's texture
+    (``_textured_alike``); thin runs of candidates inside the person (dark hair) survive the opening."""
     box = shadow_box(candidates)
     if box is None:
         return mask
@@ -284,10 +245,8 @@ def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
 
 
 def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] | None:
-    """The box that ``without_shadows`` looks in (and `margin` pixels more): around
-    the shadow `candidates`' solid areas (the opening keeps nothing outside them, so
-    the texture test's few blurs run only there), within the texture vote's reach;
-    None when there are none."""
+    """The box ``without_shadows`` works in (`margin` pixels more): around the candidates' solid areas
+    (the opening keeps nothing else), within the texture vote's reach; None if there are none."""
     disk = _disk(candidates.shape)
     near = mask_box(candidates, disk.shape[0])  # the opening keeps nothing outside the candidates' box
     if near is None:
@@ -301,9 +260,8 @@ def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] |
 
 
 def mask_box(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
-    """The box of a mask's nonzero pixels and ``margin`` more all round (within the
-    image), None when it has none: the local operations on a mask (morphology,
-    contours) give the same there as on the whole image, at the box's cost."""
+    """The box (slices) of a mask's nonzero pixels and `margin` more within the image, None if empty:
+    local mask operations give the same there as on the whole image."""
     x, y, w, h = cv2.boundingRect(mask)
     if not w:
         return None
@@ -312,18 +270,11 @@ def mask_box(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
 
 def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray,
                     sigma: float, frame_shape: tuple[int, ...]) -> np.ndarray:
-    """The shadow ``candidates`` (0/255) that keep the background's texture.
-
-    A shadow scales the texture, so over 5x5 pixels the frame correlates with the
-    background (normalised cross-correlation over SHADOW_NCC) with at least half the
-    contrast the darkening leaves; cloth over a pattern hides it (flat cloth's noise
-    may correlate, but has not the contrast). Only where the background's darkened
-    contrast stands clear of the noise (K_SIGMA levels) does the test tell, and most
-    of a patterned floor is flat between its lines, so the candidates vote: a
-    candidate is shadow when most of the telling candidates within _vote_size keep
-    the texture (where none tells, most of those of its connected piece), as a cast
-    shadow does throughout and grey trousers over bricks do not.
-    """
+    """The shadow `candidates` (0/255) that keep the background's texture.
+    A shadow scales texture: over 5x5 pixels the frame correlates with the background (NCC over
+    SHADOW_NCC) with at least half the contrast the darkening leaves; cloth over a pattern does not.
+    The test tells only where that contrast clears the noise (K_SIGMA sigmas), so the candidates
+    vote within _vote_size (where none tells, over their connected piece)."""
     frame, bg = grey.astype(np.float32), grey_bg.astype(np.float32)
     frame_mean, frame_spread = _local_spread(frame)
     bg_mean, bg_spread = _local_spread(bg)
@@ -356,14 +307,10 @@ def _local_spread(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001,
                min_piece: float = 0.02, stood: np.ndarray | None = None) -> np.ndarray:
-    """Open (speckle), close (small gaps), keep the person, fill its small holes.
-
-    The person is the largest region (none if under `min_area` of the frame) plus
-    regions of at least `min_piece` of its area near it, such as a leg cut off by a
-    thin gap, but not those lying mostly where the clip's median showed the performer
-    (`stood`, ``Background.stood``: see ``_apart_where_stood``); its holes under
-    `max_hole` of its area are filled.
-    """
+    """Open (speckle), close (gaps), keep the person, fill its holes under `max_hole` of its area.
+    The person is the largest region (none if under `min_area` of the frame) plus nearby regions of
+    at least `min_piece` of it (a leg cut off by a gap), less those lying mostly where `stood`
+    (``Background.stood``, see ``_apart_where_stood``)."""
     out, disk = np.zeros_like(mask), _disk(mask.shape)
     box = mask_box(mask, 2 * disk.shape[0] + 2)  # beyond the closing's reach, and a ring of zeros
     if box is None:
@@ -375,7 +322,7 @@ def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001
 
 def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: float,
              min_piece: float, stood: np.ndarray | None = None) -> np.ndarray:
-    """``clean_mask`` on a box of the mask that holds all of it (``min_area`` in pixels)."""
+    """``clean_mask`` on a box holding all of the mask (``min_area`` in pixels)."""
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, disk)
     contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
@@ -401,8 +348,8 @@ def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: floa
 
 
 def _person_regions(contours, parents, areas, min_area: float, min_piece: float) -> list[int]:
-    """Indices of the outer contours that make the person: the largest region and the
-    large regions whose bounding boxes come within a tenth of its height of it."""
+    """Indices of the outer contours that make the person: the largest region and the large
+    regions whose bounding boxes come within a tenth of its height of it."""
     outer = np.flatnonzero(parents < 0)
     main = outer[np.argmax(areas[outer])]
     if areas[main] < min_area:
@@ -420,11 +367,8 @@ def _person_regions(contours, parents, areas, min_area: float, min_piece: float)
 
 
 def _apart_where_stood(contour: np.ndarray, stood: np.ndarray) -> bool:
-    """Whether a region apart from the person's largest one lies mostly (more than
-    half its pixels) where the clip's median showed the performer (``stood``): the
-    parts of a performer who stands there join their body, as the median showed
-    them; a region apart there is the scene, uncovered when they left (a jump), that
-    differs from the background's guess of it (the median's still feet)."""
+    """Whether a region apart from the person's largest lies mostly where `stood`: a performer
+    standing there joins their body, so such a region is scene uncovered when they left (a jump)."""
     inside = np.zeros(stood.shape, np.uint8)
     cv2.drawContours(inside, [contour], -1, 1, cv2.FILLED)
     area = cv2.countNonZero(inside)

@@ -1,22 +1,11 @@
 """The silhouette's pixels where the body and the scene blend.
 
-An outline pixel of a thresholded difference is partly body and partly scene (the
-lens, the renderer's antialiasing and the codec blur the edge over a pixel or two),
-and it differs from the scene by more than the threshold well before the body
-covers half of it: thresholded silhouettes run about a pixel wider than the body
-all round, and the cleaning's closing bridges the scene seen through slits a few
-pixels wide (between the legs). Read as a blend (the matting equation of Porter and
-Duff, "Compositing digital images", SIGGRAPH 1984: I = alpha F + (1 - alpha) B),
-such a pixel's alpha is its difference from the scene projected on the body
-colour's, the body colour taken from the body's pixels beside it; the silhouette
-keeps the pixels the body covers at least half of.
-
-That silhouette, the *cover*, is what the silhouettes are written out as (mask
-files that a user composites with). The 2D fit keeps the plain thresholded
-silhouette (``background.extract_silhouette``): its limb widths and scores were
-made on that, and on the development clips the cover changed which sides it named
-(2D error 5.45 -> 6.21% with a clean plate).
-"""
+An outline pixel is partly body, partly scene (lens, antialiasing and codec blur the edge), so
+thresholded silhouettes run about a pixel wide all round and the closing bridges slits of scene.
+Read as a blend (Porter and Duff, SIGGRAPH 1984: I = alpha F + (1 - alpha) B, F the body colour
+beside it), a pixel is kept where the body covers at least half of it. That *cover* is what the
+silhouettes are written out as (mask files); the 2D fit keeps the plain thresholded silhouette
+(``background.extract_silhouette``), on which its limb widths and scores were made."""
 
 from __future__ import annotations
 
@@ -34,10 +23,9 @@ _REACH = 2              # pixels: the widest window's (5x5) reach around a pixel
 
 
 def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.ndarray, np.ndarray]:
-    """The 2D fit's silhouette of ``frame`` (``background.extract_silhouette``) and
-    its cover (0/255 each): the shadows told by their hue over 5x5 pixels as well
-    (``keeps_hue``: dark cloth of the scene's hue is not one), cleaned, without the
-    pixels the body covers less than MIN_ALPHA of (``trim_blends``)."""
+    """The 2D fit's silhouette of ``frame`` (``background.extract_silhouette``) and its cover
+    (0/255 each): shadows also told by hue (``keeps_hue``), cleaned, less the pixels the body covers
+    under MIN_ALPHA of (``trim_blends``)."""
     frame = at_exposure(frame, background)
     differs = foreground(frame, background)
     candidates = shadow_candidates(differs, frame, background)
@@ -53,14 +41,10 @@ def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.
 
 def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,
               angle: float = SHADOW_ANGLE) -> np.ndarray:
-    """The shadow ``candidates`` (0/255, ``background.shadow_candidates``) that keep
-    the background's hue over 5x5 neighbourhoods: the mean residual of the
-    candidates around from their darkened background within ``angle`` (radians) of
-    their mean colour. A shadow darkens all channels alike, so what is left averages
-    down to the noise; dark cloth of the background's hue is a few degrees off,
-    which one pixel's noise hides and 25 pixels' mean shows (dark blue trousers
-    against a blue dusk sky). Where the background is a guess (``held``: inpainted)
-    its hue is not known that well, and every candidate stays."""
+    """The shadow ``candidates`` (0/255) that keep the background's hue over 5x5 pixels: their mean
+    residual from the darkened background within ``angle`` radians of their mean colour. A shadow
+    darkens all channels alike; dark cloth of the scene's hue is a few degrees off, which 25 pixels'
+    mean shows. Where the background is a guess (``held``) every candidate stays."""
     box = shadow_box(candidates, margin=2)      # the rest stays, whatever its hue
     if box is None:
         return candidates
@@ -83,16 +67,10 @@ def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,
 
 def trim_blends(person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scene: np.ndarray,
                 threshold: np.ndarray) -> np.ndarray:
-    """``person`` (0/255, the cleaned silhouette) without the pixels the body covers
-    less than MIN_ALPHA of: first those the cleaning added (not in ``differs``, the
-    pixels that differ from the scene), measured against the differing pixels within
-    two; then those of the outline, against the pixels one step further in.
-
-    ``frame`` and ``scene`` are BGR at one exposure, ``threshold`` the difference
-    (grey levels) that tells the body from the scene's noise. A pixel stays where no
-    body pixel is near to measure it against (a part two pixels thin or less) or
-    where that colour is within CLEAR thresholds of the scene's (a blend of two
-    alike colours cannot be read)."""
+    """``person`` (0/255, cleaned) without pixels the body covers under MIN_ALPHA of: those the
+    cleaning added (not in ``differs``) against differing pixels within two, then the outline against
+    pixels a step further in. ``frame``, ``scene``: BGR at one exposure; ``threshold``: grey levels. A
+    pixel stays with no body pixel near, or where body and scene are within CLEAR thresholds."""
     x, y, w, h = cv2.boundingRect(person)
     if not w:
         return person
@@ -112,9 +90,8 @@ def trim_blends(person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scen
 
 def _drop(mask: np.ndarray, index: np.ndarray, body: np.ndarray, window: int, frame: np.ndarray,
           scene: np.ndarray, threshold: np.ndarray) -> np.ndarray:
-    """``mask`` without the pixels of ``index`` (flat, at least ``window`` // 2 from
-    the edges) that are less than MIN_ALPHA of the mean colour of the ``body``
-    pixels (0/255) in the window around each; ``frame`` and ``scene`` float32."""
+    """``mask`` without the pixels of flat ``index`` (``window`` // 2 from the edges) under MIN_ALPHA
+    of the mean ``body`` (0/255) colour in the window around each; ``frame``, ``scene`` float32."""
     if not len(index):
         return mask
     count, total = _window_sums(body > 0, frame, index, window)
@@ -131,9 +108,8 @@ def _drop(mask: np.ndarray, index: np.ndarray, body: np.ndarray, window: int, fr
 
 def _window_sums(chosen: np.ndarray, image: np.ndarray, index: np.ndarray,
                  window: int) -> tuple[np.ndarray, np.ndarray]:
-    """How many ``chosen`` pixels (bool) each window around the pixels of ``index``
-    (flat, at least ``window`` // 2 from the edges) holds, and the sum of their
-    ``image`` colours: gathered pixel by pixel (a few thousand pixels, not the box)."""
+    """How many ``chosen`` (bool) pixels each window around the flat ``index`` pixels holds (``window``
+    // 2 from the edges), and the sum of their ``image`` colours, gathered pixel by pixel."""
     r, width = window // 2, chosen.shape[1]
     around = index[:, None] + (np.arange(-r, r + 1)[:, None] * width + np.arange(-r, r + 1)).ravel()
     weight = chosen.reshape(-1)[around]

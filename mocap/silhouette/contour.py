@@ -1,10 +1,7 @@
-"""Contour analysis of the silhouette (section 3.3.2, Algorithms 2-5).
-
-Limb curves are read off horizontal scan lines: for the lower legs, the runs of
-silhouette pixels below the knees; for the arms, the runs of silhouette pixels that
-the torso, head and legs do not explain. Angles use the body module's convention
-(degrees, y up), taken along the curve from its first point to its last.
-"""
+"""Contour analysis of the silhouette (section 3.3.2, Algorithms 2-5). Limb curves are read off
+horizontal scan lines: for the lower legs the runs below the knees, for the arms the runs that
+torso, head and legs do not explain. Angles: the body module's (degrees, y up), along the curve
+from its first point to its last."""
 
 from __future__ import annotations
 
@@ -17,9 +14,7 @@ MIN_CORNER_ANGLE = 10.0        # Algorithm 4, degrees
 
 
 def row_runs(band: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every horizontal run of nonzero pixels: (row, start, end) arrays, end exclusive.
-    Each row padded with a zero either side, the changes along the rows laid end to
-    end alternate between a run's start and its end."""
+    """Every horizontal run of nonzero pixels: (row, start, end) arrays, end exclusive."""
     width = band.shape[1] + 2
     padded = np.zeros((band.shape[0], width), bool)
     padded[:, 1:-1] = band > 0
@@ -80,9 +75,8 @@ def find_elbow_corner(points: np.ndarray) -> int:
 
 
 def lower_leg_band(sil: np.ndarray, joints: np.ndarray, scale: float) -> tuple[int, int]:
-    """The rows (first, end) that Algorithm 2 reads the lower legs on: from just below
-    the knees of legs standing straight under the pelvis (the feet on the
-    silhouette's bottom) to just above the feet."""
+    """The rows (first, end) Algorithm 2 reads the lower legs on: from just below the knees of
+    straight legs under the pelvis (feet at the silhouette's bottom) to just above the feet."""
     pelvis = joints[JOINT_INDEX["pelvis"]]
     ys = np.nonzero(sil.any(axis=1))[0]
     bottom = ys.max() if len(ys) else int(pelvis[1])
@@ -92,9 +86,8 @@ def lower_leg_band(sil: np.ndarray, joints: np.ndarray, scale: float) -> tuple[i
 
 
 def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
-    """GetLeft/RightLowerKneeCurve of Algorithm 2: per scan line of the lower legs'
-    band (``lower_leg_band``), the centre of the leftmost and rightmost leg; also each
-    line's run count (Algorithm 5)."""
+    """GetLeft/RightLowerKneeCurve of Algorithm 2: per scan line of ``lower_leg_band``, the centres
+    of the leftmost and rightmost leg ({'l', 'r'}: (N, 2) x, y), and each line's run count (Algorithm 5)."""
     pelvis = joints[JOINT_INDEX["pelvis"]]
     y0, y1 = lower_leg_band(sil, joints, scale)
     half = 45 * scale
@@ -117,9 +110,8 @@ def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
 
 
 def _leg_centres(s: np.ndarray, e: np.ndarray, leg_w: float, curves) -> dict[str, float]:
-    """Which legs one scan line shows, and where: the outer runs when there are two
-    or more; one wide run split at both ends; one narrow run belongs to the leg whose
-    curve it continues, or to both where the legs overlap."""
+    """Which legs one scan line shows, and where: the outer runs of two or more; one wide run split at
+    both ends; one narrow run to the leg whose curve it continues, or to both where they overlap."""
     if len(s) >= 2:
         return {"l": (s[0] + e[0]) / 2, "r": (s[-1] + e[-1]) / 2}
     if e[0] - s[0] > 1.6 * leg_w:
@@ -146,9 +138,9 @@ def lower_legs_cross(line_counts) -> bool:
 
 
 def arm_curve(canvas, joints: np.ndarray, side: str, scale: float, runs: str | None = None) -> np.ndarray:
-    """GetLeft/RightArmCurve of Algorithm 2: from the shoulder, the centres of the
-    outermost runs of silhouette not explained by torso, head or legs, on that image side
-    (``runs``: on that one, for an arm that crosses the torso's axis)."""
+    """GetLeft/RightArmCurve of Algorithm 2: (N, 2) points from the shoulder, the centres of the
+    outermost runs not explained by torso, head or legs on that image side (``runs``: on that side
+    instead, for an arm that crosses the torso's axis)."""
     shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
     neck, pelvis = joints[JOINT_INDEX["neck"]], joints[JOINT_INDEX["pelvis"]]
     reach = (LENGTH[SEGMENT_INDEX["upper_arm_l"]] + LENGTH[SEGMENT_INDEX["lower_arm_l"]]) * scale

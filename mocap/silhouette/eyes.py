@@ -1,10 +1,7 @@
-"""What a person model's eyes (mocap.person) give the silhouette method: the
-silhouette where background subtraction cannot see (``fused_mask``), and its
-landmarks as targets of the 2D fit's searches (``Targets``, ``fit_targets``), as
-SMPLify fits a body model to learned keypoints. Landmarks name anatomical sides;
-the fit names limbs by image side (section 3.3), so each frame's landmarks are
-named by image side here (``image_sided``).
-"""
+"""What a person model's eyes (mocap.person) give the silhouette method: the silhouette where
+background subtraction cannot see (``fused_mask``), and landmarks as targets of the 2D fit's
+searches (``fit_targets``), as SMPLify fits a body model to learned keypoints. Landmarks name
+anatomical sides, the fit image sides (section 3.3): ``image_sided`` renames them."""
 
 from __future__ import annotations
 
@@ -28,13 +25,10 @@ _LIMB_SEGMENTS = {"arm": ("upper_arm", "lower_arm"), "leg": ("upper_leg", "lower
 
 def fused_mask(classical: np.ndarray, person: np.ndarray, held: np.ndarray | None
                ) -> tuple[np.ndarray, np.ndarray] | None:
-    """The silhouette (uint8 0/255) from background subtraction's ``classical`` one
-    (0/255) and the person model's mask ``person`` (probabilities), and which of its
-    pixels only the person model gave (bool); None where the person mask is empty.
-    The person mask is the silhouette (background subtraction cannot see a body part
-    that never moves), grown by background subtraction's pixels in a thin band
-    around it (EDGE_BAND) where the scene behind was seen (not ``held``:
-    Background.held): there its edges follow the frame's pixels."""
+    """The silhouette (uint8 0/255) from ``classical`` (0/255) and the person model's probabilities
+    ``person``, and the pixels only the person model gave (bool); None where its mask is empty. The
+    person mask (it sees a body part that never moves) is grown by background subtraction's pixels
+    in an EDGE_BAND around it where the scene was seen (not ``held``), to follow the frame's edges."""
     inside = person >= PERSON_LEVEL
     rows = np.flatnonzero(inside.any(axis=1))
     if not len(rows):
@@ -51,10 +45,9 @@ def fused_mask(classical: np.ndarray, person: np.ndarray, held: np.ndarray | Non
 
 @dataclass(frozen=True)
 class Targets:
-    """Landmarks as the fit's searches read them: ``points`` (16, 2) in the fitted
-    silhouette's pixels, image-side names as the fit's, the model's pelvis and hips
-    (the fit reports them lower: body.reported_joints); ``weight`` (16,) their
-    confidences."""
+    """Landmarks as the fit's searches read them: ``points`` (16, 2) in the fitted silhouette's
+    pixels, named by image side, with the model's pelvis and hips (body.reported_joints puts them
+    lower); ``weight`` (16,) their confidences."""
 
     points: np.ndarray
     weight: np.ndarray
@@ -62,8 +55,8 @@ class Targets:
 
 def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px_per_unit: float,
                 prev: Pose2D | None) -> Targets | None:
-    """A frame's landmarks (processing pixels) in the pixels of its crop normalised
-    for the fit (origin and step: passes.normalise), image-sided (``image_sided``)."""
+    """A frame's landmarks (processing pixels) in the pixels of its crop normalised for the fit
+    (``origin``, ``step``: passes.normalise), image-sided; None without landmarks."""
     if landmarks is None:
         return None
     points = (landmarks.joints2d + 0.5 - origin) / step - 0.5
@@ -73,10 +66,9 @@ def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px
 
 def image_sided(points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_per_unit: float
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Landmarks (16, 2) and weights with each limb pair named by image side as the
-    fit names it: the limb whose shoulder (hip) lies image-left is '_l' where the two
-    lie APART; where they do not (a profile), the pairing whose segment angles are
-    nearer the previous fit's, so the fit's limbs keep following the same ones."""
+    """Landmarks (16, 2) and weights with each limb pair named by image side as the fit names it: the
+    image-left shoulder (hip) is '_l' where the two lie APART, else the pairing nearer ``prev``'s
+    segment angles, so the fit keeps following the same limbs."""
     points, weight = points.copy(), weight.copy()
     for limb, joints in _PAIRS.items():
         left = [_J[f"{j}_l"] for j in joints]
@@ -106,8 +98,7 @@ def _angle_cost(points: np.ndarray, prev: Pose2D, limb: str, swapped: bool) -> f
 
 
 def segment_angle(points: np.ndarray, segment: str) -> float:
-    """A segment's image angle (body.Pose2D's: degrees counter-clockwise, y up) between
-    its joints' points."""
+    """A segment's image angle (Pose2D's: degrees counter-clockwise, y up) between its joints' points."""
     a, b = (points[_J[j]] for j in SEGMENTS[segment])
     return float(np.degrees(np.arctan2(a[1] - b[1], b[0] - a[0])) % 360.0)
 

@@ -1,15 +1,9 @@
 """Choosing each frame's legs over time (beyond the paper, whose fit is per frame).
 
-Each frame's fit comes with a few leg hypotheses (``legs.leg_hypotheses``): the
-legs apart or stacked, their names exchanged. Where the two legs pass each other
-in profile, the similarity S (Eq. 3) tells these apart badly, and a fit that
-follows the previous frame alone keeps its first mistake. So the hypotheses are
-chosen over the frames by dynamic programming (Viterbi): the path of hypotheses
-that maximises the frames' S less SMOOTH_WEIGHT times how far the knees and ankles
-move between frames (each by its name, so a path keeps each leg's identity). The
-choice for a frame is made once LAG frames after it are in (fixed-lag smoothing),
-so fits stream out with that delay; a frame without a person ends the path.
-"""
+Where the legs pass each other in profile, S (Eq. 3) tells a frame's leg hypotheses
+(``legs.leg_hypotheses``) apart badly, so they are chosen by Viterbi: the path maximising the
+frames' S less SMOOTH_WEIGHT times the knees' and ankles' motion (each by name, keeping each
+leg's identity), decided LAG frames late (fixed-lag smoothing); a frame without a person ends it."""
 
 from __future__ import annotations
 
@@ -32,8 +26,8 @@ def leg_offsets(fit: Fit2D) -> np.ndarray:
 
 
 def motion_cost(before: list[Fit2D], after: list[Fit2D]) -> np.ndarray:
-    """(len(before), len(after)): SMOOTH_WEIGHT times the mean distance the knees
-    and ankles move from each hypothesis to each next one."""
+    """(len(before), len(after)): SMOOTH_WEIGHT times the mean distance (body heights) the knees and
+    ankles move from each hypothesis to each next one."""
     a = np.stack([leg_offsets(f) for f in before])[:, None]
     b = np.stack([leg_offsets(f) for f in after])[None]
     return SMOOTH_WEIGHT * np.linalg.norm(a - b, axis=-1).mean(-1)
@@ -47,9 +41,9 @@ class _Frame:
 
 
 class LegChain:
-    """Fixed-lag Viterbi over the frames' leg hypotheses. ``push`` a frame's item
-    (anything the caller needs back) with its fit, or None where nobody is; it
-    returns the (item, chosen fit) pairs now decided, in frame order."""
+    """Fixed-lag Viterbi over the frames' leg hypotheses: ``push`` a frame's item (anything the
+    caller needs back) with its fit, None where nobody is, to get the (item, chosen fit) pairs now
+    decided, in frame order."""
 
     def __init__(self, lag: int):
         self.lag = lag

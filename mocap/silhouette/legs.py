@@ -1,13 +1,8 @@
-"""The legs of the 2D fit (section 3.3, Fig. 3b-c): lower-leg angles by contour
-analysis (Algorithm 2) with the knee-crossing test (Algorithm 5), upper legs by
-Algorithm 1 with the lower legs attached, ratios by Algorithm 6. Beyond the paper:
-both ways of joining lower to upper legs are scored so that a wrong crossing verdict
-is undone, thighs crossing in the image are given back their own knees unless the
-crossing explains clearly more, a raised knee's lower leg (which Algorithm 2's rows
-below the knees do not show) is searched over every bend of the knee, and the legs
-come as a few hypotheses scored together (``leg_hypotheses``), among which
-``mocap.silhouette.legchain`` chooses over time.
-"""
+"""The legs of the 2D fit (section 3.3, Fig. 3b-c): lower-leg angles by contour analysis
+(Algorithm 2) with the knee-crossing test (Algorithm 5), upper legs by Algorithm 1 with the lower
+legs attached, ratios by Algorithm 6. Beyond the paper: both lower-to-upper pairings are scored,
+crossed thighs get their own knees back, a raised knee's lower leg is searched over every bend,
+and the legs come as scored hypotheses (``leg_hypotheses``) among which ``legchain`` chooses."""
 
 from __future__ import annotations
 
@@ -42,16 +37,11 @@ DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this clos
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised: float) -> Pose2D:
-    """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5),
-    upper legs by Algorithm 1 with the lower legs attached (Fig. 3b-c), each lower
-    leg refined by Algorithm 1, then ratios (Algorithm 6). Beyond the paper: a knee
-    raised above the rows that Algorithm 2 reads while they show one lower leg (a
-    kick, a knee lift: ``raised_knee_row``) on a thigh like the other (``raised_leg``)
-    had its lower leg's angle from the other leg's curve, so that lower leg is
-    searched over every bend of its knee (``search_shin``), beside the other leg,
-    before it is refined. ``reading``: the
-    lower legs' curves and run counts (``contour.lower_leg_curves``), ``raised``: the
-    row above which a knee is raised (``raised_knee_row``)."""
+    """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5), thighs by
+    Algorithm 1 with them attached (Fig. 3b-c), each lower leg refined by Algorithm 1, then ratios
+    (Algorithm 6). A knee raised above the row ``raised`` (``raised_knee_row``, ``raised_leg``) got
+    the other leg's curve, so its lower leg is searched over every bend (``search_shin``).
+    ``reading``: the curves and run counts of ``contour.lower_leg_curves``."""
     curves, runs = reading
     crossed = lower_legs_cross(runs)
     for side, other in (("l", "r"), ("r", "l")):
@@ -69,11 +59,9 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised:
 
 
 def raised_knee_row(sil: np.ndarray, joints: np.ndarray, scale: float, runs) -> float:
-    """The row above which a knee is raised clear of the rows that Algorithm 2 reads
-    (``contour.lower_leg_band``; RAISED_KNEE of a thigh's length above the first),
-    where those rows show one lower leg (fewer than ONE_LEG_SHARE of them two or
-    more): the raised leg's lower leg curve was then the other's. -inf where they
-    show two. ``joints``: the pose's, ``scale``: its pixels per model unit."""
+    """The image row above which a knee is raised: RAISED_KNEE of a thigh above the rows Algorithm 2
+    reads (``contour.lower_leg_band``) where fewer than ONE_LEG_SHARE of them show two runs (the
+    raised leg's curve was the other's); -inf where they show two. ``scale``: pixels per unit."""
     if not len(runs) or np.mean(np.asarray(runs) >= 2) >= ONE_LEG_SHARE:
         return -np.inf
     top = lower_leg_band(sil, joints, scale)[0]
@@ -81,10 +69,8 @@ def raised_knee_row(sil: np.ndarray, joints: np.ndarray, scale: float, runs) -> 
 
 
 def raised_leg(pose: Pose2D, side: str, row: float) -> bool:
-    """Whether one side's knee lies above an image row (``raised_knee_row``) on a
-    thigh about as long in the image as the other (at least THIGH_MATCH of it): a
-    "knee" raised on a short thigh is a hand hanging by the legs, as in a squat,
-    reached from the hip."""
+    """Whether one side's knee lies above image ``row`` on a thigh at least THIGH_MATCH as long in the
+    image as the other (a "knee" on a short thigh is a hand hanging by the legs, as in a squat)."""
     up, other = SEGMENT_INDEX[LEG[side][0]], SEGMENT_INDEX[LEG[other_side(side)][0]]
     return bool(row > -np.inf and pose.ratio[up] >= THIGH_MATCH * pose.ratio[other]
                 and forward_kinematics_2d(pose)[JOINT_INDEX[f"knee_{side}"], 1] < row)
@@ -96,11 +82,9 @@ def other_side(side: str) -> str:
 
 
 def search_shin(canvas: Canvas, pose: Pose2D, side: str) -> Pose2D:
-    """One lower leg by Algorithm 1 over every bend of its knee (up to KNEE_REACH
-    either way of its thigh's line in the image) that points no higher than a thigh
-    may (THIGH_RANGE: an upright performer), from where it is; kept where it ends
-    the silhouette as a raised lower leg does (``ends_in_foot``), else the pose as
-    it was."""
+    """One lower leg by Algorithm 1 over every bend of its knee (KNEE_REACH either way of its thigh,
+    no higher than THIGH_RANGE); kept where it ends the silhouette as a raised lower leg does
+    (``ends_in_foot``), else the pose as it was."""
     t, at = (pose.angle[SEGMENT_INDEX[s]] for s in LEG[side])
     lo, hi = max(t - KNEE_REACH, THIGH_RANGE[0]), min(t + KNEE_REACH, THIGH_RANGE[1])
     at = 270.0 + (at - 270.0 + 180.0) % 360.0 - 180.0
@@ -109,11 +93,9 @@ def search_shin(canvas: Canvas, pose: Pose2D, side: str) -> Pose2D:
 
 
 def ends_in_foot(sil: np.ndarray, pose: Pose2D, side: str) -> bool:
-    """Whether one side's lower leg ends where the silhouette does, as a raised one
-    does: its ankle inside, and the silhouette past it along the lower leg no longer
-    than FOOT_REACH feet (FOOT_LENGTH, which the model draws past the ankle). A lower
-    leg that runs on into the silhouette was hung from a hand or laid along the
-    other leg."""
+    """Whether one side's lower leg ends where the silhouette does: its ankle inside, and silhouette
+    past it no longer than FOOT_REACH feet (FOOT_LENGTH). One that runs on into the silhouette was
+    hung from a hand or laid along the other leg."""
     j = forward_kinematics_2d(pose)
     knee, ankle = j[JOINT_INDEX[f"knee_{side}"]], j[JOINT_INDEX[f"ankle_{side}"]]
     step = (ankle - knee) / max(np.hypot(*(ankle - knee)), 1e-6)
@@ -125,22 +107,17 @@ def ends_in_foot(sil: np.ndarray, pose: Pose2D, side: str) -> bool:
 
 
 def search_thigh(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
-    """One upper leg by Algorithm 1 with its lower leg attached (Fig. 3b-c), near the
-    previous frame's when there is one."""
+    """One upper leg by Algorithm 1 with its lower leg attached (Fig. 3b-c), near ``prev``'s if given."""
     thigh = LEG[side][0]
     return search_angle(canvas, pose, (thigh,), LEG[side],
                         *around(prev, thigh, *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
 
 
 def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Pose2D]:
-    """Beyond the paper: distinct leg fits, best first by S of both legs together.
-
-    ``fit_legs`` searches the two legs one at a time, so both can take the same leg
-    of the silhouette (in profile, where the legs pass each other, the other leg is
-    left unexplained). So each leg is also fitted again beside the other
-    (``refit_leg_beside``); near profile, each fit also enters with its legs'
-    names exchanged, since there the two legs look alike and only their motion over
-    time tells which is which (``mocap.silhouette.legchain`` chooses)."""
+    """Beyond the paper: distinct leg fits, best first by S of both legs together. The legs are
+    searched one at a time, so both can take the same leg of the silhouette: each is also refitted
+    beside the other (``refit_leg_beside``); near profile each fit also enters with the legs' names
+    exchanged, since only their motion over time tells them apart (``legchain``)."""
     joints = forward_kinematics_2d(pose)
     reading = lower_leg_curves(canvas.sil, joints, pose.scale)
     raised = raised_knee_row(canvas.sil, joints, pose.scale, reading[1])
@@ -154,12 +131,9 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
 
 
 def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, raised: float) -> Pose2D:
-    """One leg's angles fitted again with the other leg taken as fitted, so that it
-    explains what the other leaves unexplained: the thigh by Algorithm 1 from the
-    previous frame's lower leg angle, then the lower leg (near where it was, or over
-    every bend of a knee above the row ``raised``: ``search_shin``). Its lengths
-    stay: where the other leg explains everything, Algorithm 6 beside it would shrink
-    this one."""
+    """One leg refitted with the other taken as fitted, to explain what the other leaves: the thigh
+    by Algorithm 1 from ``prev``'s lower-leg angle, then the lower leg (``search_shin`` above the row
+    ``raised``). Lengths stay: beside the other leg Algorithm 6 would shrink this one."""
     beside = canvas.fork(pose_quads(pose, LEG[other_side(side)]))
     lower = LEG[side][1]
     pose = Knob("angle", (lower,)).apply(pose, (prev or pose).angle[SEGMENT_INDEX[lower]])
@@ -196,13 +170,10 @@ def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) 
 
 
 def _uncrossed_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
-    """Beyond the paper: two thighs searched one at a time can cross in the image,
-    each hip reaching for the other's knee, where the legs overlap and either way
-    explains the same silhouette. Then the knees are given back to their own hips,
-    each lower leg staying under its knee, unless the crossed pair explains clearly
-    more (CROSSED_GAIN) or continues the previous frame's thighs clearly better
-    (CROSSED_TURN: a leg swinging past the other, as in a walk seen turned, crosses
-    for real)."""
+    """Beyond the paper: thighs crossing in the image (each hip reaching for the other's knee, where
+    either way explains the same silhouette) get their own knees back, lower legs staying under them,
+    unless crossed explains clearly more (CROSSED_GAIN) or continues ``prev``'s thighs clearly better
+    (CROSSED_TURN: a leg swinging past the other crosses for real)."""
     j = forward_kinematics_2d(pose)
     hips = [j[JOINT_INDEX["hip_l"]], j[JOINT_INDEX["hip_r"]]]
     knees = [j[JOINT_INDEX["knee_l"]], j[JOINT_INDEX["knee_r"]]]
@@ -242,8 +213,8 @@ def _exchange_legs(pose: Pose2D) -> Pose2D:
 
 
 def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
-    """Score both ways of joining the lower legs to the knees; keep the better
-    (a check on Algorithm 5's verdict, which scan lines alone can get wrong)."""
+    """The better by S of both ways of joining the lower legs to the knees (a check on Algorithm
+    5's scan-line verdict)."""
     swapped = _swap_segments(pose, [LOWER_LEGS])
     scores = leg_scores(canvas, [pose, swapped])
     return swapped if scores[1] > scores[0] else pose

@@ -1,9 +1,7 @@
-"""The silhouette method's two passes over a video, both streamed: silhouettes
-(section 3.2), kept as small bit-packed crops, then the 2D fit (section 3.3) on each
-crop normalised to the model's size. The body's height in pixels comes from the
-silhouettes' heights around each frame, so a performer who walks toward the camera
-keeps a right scale. ``mocap.pipeline`` runs them with progress.
-"""
+"""The silhouette method's two passes over a video, both streamed: silhouettes (section 3.2),
+kept as small bit-packed crops, then the 2D fit (section 3.3) on each crop normalised to the
+model's size, the body's height taken from the silhouettes around each frame (a performer
+walking toward the camera keeps a right scale). ``mocap.pipeline`` runs them."""
 
 from __future__ import annotations
 
@@ -15,7 +13,7 @@ import numpy as np
 
 from mocap.body import BODY_HEIGHT, JOINTS, reported_joints
 from mocap.io.video import VideoInfo, iter_frames
-from mocap.percentile import nanpercentile, percentile
+from mocap.image.percentile import nanpercentile, percentile
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.person import Landmarks, PersonModel
 from mocap.silhouette.eyes import centred_on, fit_targets, fused_mask
@@ -37,10 +35,9 @@ MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a sea
 
 @dataclass(frozen=True)
 class Silhouette:
-    """A frame's silhouette as its bounding box and the packed mask inside it, with
-    the frame's grey levels in the box (the inner edges' source, mocap.edges); where
-    a person model looked (mocap.person), its ``landmarks`` (processing pixels) and
-    which pixels its mask gave (``learned``, packed like ``bits``)."""
+    """A frame's silhouette: ``box`` and the packed mask ``bits`` in it, the frame's ``grey`` levels
+    in the box (mocap.image.edges); with a person model (mocap.person), its ``landmarks`` (processing
+    pixels) and the pixels its mask gave (``learned``, packed like ``bits``)."""
 
     box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
     bits: np.ndarray
@@ -75,16 +72,15 @@ class Silhouette:
 
 
 def holds_person(mask: np.ndarray) -> bool:
-    """Whether a silhouette mask (nonzero = inside) is somebody: at least
-    MIN_PERSON_FRACTION of the frame."""
+    """Whether a mask (nonzero = inside) is somebody: at least MIN_PERSON_FRACTION of the frame."""
     count = np.count_nonzero(mask)
     return count > 0 and count >= MIN_PERSON_FRACTION * mask.size
 
 
 @dataclass(frozen=True)
 class FrameFit:
-    """The fit of one frame: joints in original video pixels (image sides), or
-    nothing when no person was found."""
+    """The fit of one frame: joints (16, 2) in original video pixels (image sides), None when
+    no person was found."""
 
     index: int
     joints2d: np.ndarray | None
@@ -97,11 +93,9 @@ class FrameFit:
 
 def iter_silhouettes(info: VideoInfo, scale: float, background: Background | None = None,
                      person: PersonModel | None = None) -> Iterator[Silhouette | None]:
-    """Pass one (section 3.2): the background (``plate.clip_background`` unless
-    given), then every frame's silhouette in turn (``background.extract_silhouette``;
-    the cover written out as masks is made when they are written: masks.write_masks);
-    with a ``person`` model, fused with its mask and carrying its landmarks
-    (``eyes.fused_mask``) wherever it sees somebody."""
+    """Pass one (section 3.2): each frame's Silhouette, None where nobody is (the background is
+    ``plate.clip_background``'s unless given); with a ``person`` model, fused with its mask and
+    carrying its landmarks wherever it sees somebody (``eyes.fused_mask``)."""
     background = background or clip_background(info, scale)
     for _, frame in iter_frames(info, scale=scale):
         classical = extract_silhouette(frame, background)
@@ -114,10 +108,9 @@ def iter_silhouettes(info: VideoInfo, scale: float, background: Background | Non
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
-    """The standing body height in pixels around each frame (NaN where nobody is):
-    a high percentile of the silhouette heights within SCALE_WINDOW_S, each measured
-    from the head's top (``torso.head_top_row``: not from a hand raised above it) to
-    the feet, at the scale that the silhouettes' whole heights suggest."""
+    """The standing body height in pixels around each frame (NaN where nobody is): a high percentile
+    within SCALE_WINDOW_S of the heights from the head's top (``head_to_feet``, not a raised hand's)
+    to the feet, at the scale the whole heights suggest."""
     half = half_window(SCALE_WINDOW_S, fps)
     h = np.array([np.nan if s is None else s.height for s in silhouettes], float)
     rough = rolling_percentile(h, half, SCALE_PERCENTILE)
@@ -128,15 +121,14 @@ def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray
 
 
 def head_to_feet(sil: Silhouette, rough: float) -> float:
-    """A silhouette's height from the head's top (``torso.head_top_row``) to the feet,
-    given a rough body height in pixels (the percentile of whole heights)."""
+    """A silhouette's height from the head's top (``torso.head_top_row``) to the feet, given a
+    rough body height in pixels."""
     return sil.height - head_top_row(sil.mask(), rough * FIT_SCALE / FIT_BODY_PX)
 
 
 def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """The silhouette cropped with a margin and resized so that the standing body
-    (``body_px`` tall, feet included) is FIT_BODY_PX tall;
-    returns (mask, origin in processing pixels, pixels of processing per fit pixel)."""
+    """The silhouette cropped with a MARGIN and resized so that ``body_px`` becomes FIT_BODY_PX;
+    returns (mask, origin in processing pixels, processing pixels per fit pixel)."""
     pad = int(np.ceil(MARGIN * body_px))
     small = _fit_sized(sil.mask() * 255, pad, FIT_BODY_PX / body_px) > 127
     origin = np.array([sil.box[0] - pad, sil.box[1] - pad], float)
@@ -172,26 +164,18 @@ def window_percentile(values, i: int, half: int, q: float) -> float:
 
 
 def torso_reads(sil: Silhouette, height: float, small: np.ndarray | None = None) -> tuple[float, float, bool]:
-    """A frame's torso spread (``torso.torso_spread``) as the fit reads it, on the
-    silhouette normalised to ``height`` (FIT_BODY_PX tall), and as the lift reads it, on
-    the silhouette at the processing resolution, and whether the torso's width is
-    readable (``torso.torso_width_readable``). At the fit's size a profile torso is
-    about 12 pixels wide and each pixel moves the spread by 0.1-0.2, so the lift's
-    orientation guess reads it finer. ``small``: the normalised silhouette, where
-    the caller has it (``normalise``)."""
+    """A frame's torso spread (``torso.torso_spread``) as the fit reads it (normalised to ``height``),
+    as the lift reads it (processing resolution, finer), and whether the torso's width is readable;
+    ``small``: ``normalise``'s mask, where the caller has it."""
     small = normalise(sil, height)[0] if small is None else small
     return (torso_spread(small, FIT_SCALE), torso_spread(sil.mask(), height * FIT_SCALE / FIT_BODY_PX),
             torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
 
 
 def lift_spread(spreads, readable, i: int, half: int) -> float:
-    """A frame's torso spread (section 3.4, |cos yaw|) for the lift's orientation guess
-    and yaw, from the per-frame ones within +-half: a low percentile of those whose
-    width is readable (``torso.torso_width_readable``; arms swinging across the torso
-    still widen some), the median of all where none is (a long crouch or arms held
-    up: the per-frame widths err both ways then). The fit's own SPREAD_PERCENTILE of
-    all frames reads a back or three-quarter view with arms raised or a crouch as a
-    profile, and the orientation guess cannot tell front from back on a profile."""
+    """A frame's torso spread (section 3.4, |cos yaw|) for the lift: a low percentile of the
+    readable ones within +-half (arms across the torso widen some), the median of all where none
+    is; the fit's low percentile of all reads a back view with arms up or a crouch as a profile."""
     lo, hi = max(0, i - half), i + half + 1
     values = np.asarray(spreads[lo:hi], float)
     good = values[np.asarray(readable[lo:hi], bool) & np.isfinite(values)]
@@ -206,8 +190,7 @@ def half_window(seconds: float, fps: float) -> int:
 
 
 def iter_fits(silhouettes: list[Silhouette | None], scale: float, fps: float) -> Iterator[FrameFit]:
-    """Pass two (section 3.3) over a whole clip's silhouettes: every frame's 2D fit in
-    turn, as ``FitStream`` makes them."""
+    """Pass two (section 3.3) over a whole clip's silhouettes: each frame's fit (``FitStream``)."""
     stream = FitStream(scale, fps)
     for sil in silhouettes:
         yield from stream.push(sil)
@@ -215,9 +198,8 @@ def iter_fits(silhouettes: list[Silhouette | None], scale: float, fps: float) ->
 
 
 class Fitter:
-    """Pass two's frames in order: each search centred on the previous fit; each
-    frame's legs chosen among its hypotheses over time (``mocap.silhouette.legchain``),
-    so a fit comes out LAG_S later than its frame is fitted."""
+    """Pass two's frames in order, each search centred on the previous fit; the legs are chosen over
+    time (``legchain``), so a fit comes out LAG_S after its frame."""
 
     def __init__(self, scale: float, fps: float):
         self.scale, self.chain = scale, LegChain(half_window(LAG_S, fps))
@@ -225,10 +207,9 @@ class Fitter:
 
     def fit(self, index: int, sil: Silhouette | None, height: float, spread: float,
             lift_spread: float, normalised: tuple | None = None) -> list[FrameFit]:
-        """Fit a frame with the torso's ``spread``, ``lift_spread`` kept for the lift
-        (``normalised``: ``normalise(sil, height)``, where the caller has it);
-        returns the fits now decided (``latest``: this frame's fit with the legs of the
-        best path so far, until it is decided)."""
+        """Fit a frame with the torso's ``spread`` (``lift_spread`` kept for the lift; ``normalised``:
+        ``normalise(sil, height)`` if at hand); returns the fits now decided, and sets ``latest`` to
+        this frame's fit with the best path's legs until it is decided."""
         self.latest = None
         if sil is None:
             return list(_frame_fits(self.chain.push(index, None), self.scale))
@@ -251,15 +232,10 @@ class Fitter:
 
 
 class FitStream:
-    """Pass two alongside pass one: ``push`` each frame's silhouette in order as it
-    is found; each push returns the fits now decided, ``finish`` the rest. A frame
-    is fitted as soon as the silhouettes its windows need are in: its torso spread's
-    (SPREAD_WINDOW_S) frames' body heights' (SCALE_WINDOW_S) frames' rough heights'
-    (SCALE_WINDOW_S again, ``body_heights``); every window is the one
-    ``body_heights`` takes over the whole clip, and the torso spreads' (the fit's and
-    the lift's) percentiles of the per-frame spreads within SPREAD_WINDOW_S, so the fits equal
-    those made with every window over the whole clip (tested), the first ones coming
-    out while the rest of the video is still being read."""
+    """Pass two alongside pass one: ``push`` each silhouette in order to get the fits now decided,
+    ``finish`` for the rest. A frame is fitted once the silhouettes its chained windows need are in
+    (spread, body height, rough height), so the fits equal those with every window over the whole
+    clip, the first coming out while the video is still read."""
 
     def __init__(self, scale: float, fps: float):
         self.scale, self.fitter = scale, Fitter(scale, fps)
@@ -283,8 +259,7 @@ class FitStream:
 
     @property
     def provisional(self) -> list[FrameFit]:
-        """The frames the last push fitted whose legs are not chosen yet, each with
-        the legs of the best path so far (a viewer's first look; not the result)."""
+        """Fits of the last push whose legs are not chosen yet, with the best path's legs (a preview)."""
         return self._provisional
 
     def finish(self) -> list[FrameFit]:
@@ -322,8 +297,8 @@ class FitStream:
 
 
 def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
-    """FrameFits of (item, fit) pairs from ``LegChain``: the item is (index, crop
-    origin, crop step, lift spread, landmarks in video pixels) of a fitted frame, the index of one without a person."""
+    """FrameFits of ``LegChain``'s (item, fit) pairs; item: (index, crop origin, crop step, lift
+    spread, landmarks in video pixels), or just the index where fit is None."""
     for item, fit in decided:
         if fit is None:
             yield FrameFit(item, None, None)

@@ -1,44 +1,16 @@
 """A background that does not hold a performer who stays in place.
 
-The temporal median of ``background.estimate_background`` (section 3.2's "regions
-that do not change") shows the performer wherever they stand for more than half of
-the clip: there, the difference from it leaves only the moving slivers as the
-silhouette. This module finds those pixels and puts the empty scene back in them:
-
-1. foreground evidence on every sample: the difference from the median;
-2. the performer's region: pixels with evidence within a body part's radius on at
-   least half of the samples (the median's own breakdown point) -- the moving parts
-   surround whatever of the performer stands still -- closed to its convex hull;
-3. in that region, the median image is split into performer and scene by colour
-   (OpenCV's GrabCut: Rother et al., "GrabCut", SIGGRAPH 2004), the scene outside
-   the region being the background seed;
-4. a GrabCut piece is the performer only when most of its pixels have colours seen
-   more often in the evidence (the performer over the scene) than in the scene
-   itself, so a clip whose median is already empty keeps it; the pixels of such
-   colours connected to those pieces join them (legs that stand still below
-   jabbing arms lie outside the region the motion outlines); a steady piece of
-   them (most samples show the median there) whose border lies mostly outside them
-   is the scene taken in by its colour, not a still part of the performer, which
-   the moving parts border;
-5. each such pixel takes the scene that the samples uncover there, found from the
-   region's border inwards: the samples that show the scene at a neighbour and
-   agree with each other there, not with the median (``uncover.uncovered_scene``); else
-   the median of the samples that differ from the median image there and have the
-   scene's colours (the scene, uncovered, not another part of the performer
-   passing); or, where the performer never leaves it, the scene inpainted from
-   around (Telea's method) -- ``held``, the pixels the silhouettes there depend on
-   a guess; the peeling starts beyond the pixels around them where the median is
-   a mix of what passes (no steady view), which take the scene found there too;
-6. in the performer's region the difference threshold is the clip's noise floor:
-   the per-pixel noise measured against a median that held the performer is not
-   the scene's;
-7. the pixels where the median showed the performer (step 4's, ``stood``) go with
-   the background: a silhouette's piece apart from the body there is the scene the
-   performer uncovered by leaving (``background.clean_mask``).
-
-Or the user gives the empty scene (``clean_plate``): a photo, a video of it, or
-frames of the clip itself.
-"""
+The temporal median of ``background.estimate_background`` (section 3.2's "regions that do not
+change") shows the performer wherever they stand for over half the clip. ``performer_free`` puts
+the scene back there: (1) evidence: each sample's difference from the median; (2) the performer's
+region: evidence within a body part's radius on at least HALF the samples, closed to its convex
+hull; (3) GrabCut (Rother et al., SIGGRAPH 2004) splits the median there into performer and scene;
+(4) a piece is the performer when most of its colours are likelier in the evidence than in the
+scene, grown by such colours joined to it, less steady pieces bordered mostly by scene; (5) the
+scene the samples uncover there (``uncover.uncovered_scene``), else the median of scene-coloured
+samples, else Telea inpainting (``held``); (6) the threshold there is the clip's noise floor;
+(7) those pixels go with the background as ``stood`` (``background.clean_mask``).
+Or the user gives the empty scene (``clean_plate``): a photo, a video of it, or clip frames."""
 
 from __future__ import annotations
 
@@ -64,9 +36,8 @@ MIN_UNCOVERED = 3       # samples showing the scene before a pixel's scene is ta
 
 def clip_background(info: VideoInfo, scale: float,
                     source: str | os.PathLike | tuple[int, int] | None = None) -> Background:
-    """A clip's background: the user's empty scene (``clean_plate``) when given, else
-    the temporal median of BACKGROUND_FRAMES samples without the performer who stays
-    in place (``performer_free``)."""
+    """A clip's background: the user's empty scene (``clean_plate``) when `source` is given, else
+    the median of BACKGROUND_FRAMES samples without the performer who stays (``performer_free``)."""
     if source is not None:
         return clean_plate(source, info, scale)
     samples = [f for _, f in sample_frames(info, BACKGROUND_FRAMES, scale)]
@@ -74,7 +45,7 @@ def clip_background(info: VideoInfo, scale: float,
 
 
 def performer_free(background: Background, frames: list[np.ndarray]) -> Background:
-    """``background`` with the performer who stays in place taken out (module doc);
+    """``background`` with the performer who stays in place taken out (module doc, steps 1-7);
     ``frames`` are the samples it was estimated from."""
     frames = [cv2.transform(f, np.diag(exposure_gain(f, background.image))) for f in frames]
     masks = [_evidence(f, background) for f in frames]
@@ -111,8 +82,8 @@ def _radius(masks: list[np.ndarray]) -> int:
 
 
 def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
-    """The convex hull (0/1 uint8) of the pixels with evidence within ``radius`` on at
-    least HALF of the samples, or None when there are none (the performer moved on)."""
+    """The convex hull (0/1 uint8) of pixels with evidence within ``radius`` on at least HALF of the
+    samples; None when there are none (the performer moved on)."""
     disk = _disk(radius)
     count = np.zeros(masks[0].shape, np.float32)
     for mask in masks:
@@ -127,10 +98,8 @@ def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
 
 def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray],
                   masks: list[np.ndarray]) -> np.ndarray:
-    """Pixels (bool) where the median image shows the performer: GrabCut's foreground
-    within the region, kept by pieces whose colours are the performer's
-    (``_colour_odds``), and grown by the performer-coloured pixels joined to them
-    (steps 3-4)."""
+    """Pixels (bool) where the median image shows the performer (steps 3-4), and the colour odds:
+    GrabCut's pieces in the region kept by colour (``_colour_odds``), grown by joined colours."""
     disk = _disk(radius)
     around = dilated(region, disk)
     cut = np.full(region.shape, cv2.GC_BGD, np.uint8)
@@ -158,9 +127,8 @@ def _grabcut(image: np.ndarray, cut: np.ndarray) -> np.ndarray:
 
 
 def _colour_odds(performer: np.ndarray, scene: np.ndarray) -> np.ndarray:
-    """A COLOUR_BINS^3 table: how much more frequent each colour is among the
-    ``performer``'s pixels (N, 3) than among the ``scene``'s, each histogram with one
-    added to every bin (unseen colours stay possible)."""
+    """A COLOUR_BINS^3 table: how much likelier each colour is among ``performer`` pixels (N, 3)
+    than among ``scene``'s (both histograms start at one per bin: unseen colours stay possible)."""
     return _histogram(performer) / _histogram(scene)
 
 
@@ -192,9 +160,8 @@ def _majority_pieces(pieces: np.ndarray, like: np.ndarray) -> np.ndarray:
 
 
 def _joined(holds: np.ndarray, like: np.ndarray) -> np.ndarray:
-    """``holds`` and the performer-coloured pixels connected to it: what of the
-    performer stands still outside the region the motion outlines (legs under jabbing
-    arms)."""
+    """``holds`` and the performer-coloured (``like``) pixels connected to it: what stands still
+    outside the region the motion outlines (legs under jabbing arms)."""
     n, label = cv2.connectedComponents((holds | like).astype(np.uint8))
     joined = np.zeros(n, bool)
     joined[label[holds]] = True
@@ -203,10 +170,8 @@ def _joined(holds: np.ndarray, like: np.ndarray) -> np.ndarray:
 
 
 def _steady(image: np.ndarray, frames: list[np.ndarray], sigma: float) -> np.ndarray:
-    """Pixels (bool) where at least HALF of the ``frames`` show the median ``image``
-    within the clip's noise floor: a stable view there, the scene or a part of the
-    performer that stays still (where the performer moves over a pixel most of the
-    time, the median is a mix of what passes)."""
+    """Pixels (bool) where at least HALF of the ``frames`` show the median ``image`` within the noise
+    floor: a stable view (elsewhere the median is a mix of what passes)."""
     floor = noise_floor(sigma)
     agree = np.zeros(image.shape[:2], np.float32)
     for frame in frames:
@@ -215,11 +180,9 @@ def _steady(image: np.ndarray, frames: list[np.ndarray], sigma: float) -> np.nda
 
 
 def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
-    """``holds`` without its steady pieces (4-connected) of which most of the border
-    lies outside it: a still part of the performer is bordered by the parts that
-    move around it, which the held region takes in too (the median there is a mix
-    of them), while steady scene that the held region took in by its colour (a
-    pale object beside the legs) goes on into the scene outside."""
+    """``holds`` without its steady 4-connected pieces bordered mostly outside it: a still part of
+    the performer is bordered by moving parts, which the held region takes in too, while steady
+    scene taken in by its colour (a pale object beside the legs) goes on into the scene outside."""
     n, label = cv2.connectedComponents((holds & steady).astype(np.uint8), connectivity=4)
     if n < 2:
         return holds
@@ -233,25 +196,18 @@ def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
 
 
 def _mixed_around(holds: np.ndarray, steady: np.ndarray, radius: int) -> np.ndarray:
-    """The pixels within ``radius`` of ``holds`` that no steady view covers, joined to
-    it (bool; ``holds`` not included): where the performer passes over a pixel most of
-    the time, the median is a mix of the colours that pass, neither scene nor
-    performer, and the samples that show the scene there are not those within the
-    noise floor of it."""
+    """Pixels (bool, ``holds`` excluded) within ``radius`` of ``holds``, joined to it, that no steady
+    view covers: the median there mixes what passes, neither scene nor performer."""
     near = dilated(holds.astype(np.uint8), _disk(radius)) > 0
     return _joined(holds, near & ~steady) & ~holds
 
 
 def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np.ndarray, masks: np.ndarray,
              radius: int, odds: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
-    """Step 5: the median image with the scene put back where it ``holds`` the
-    performer or is a ``mixed`` one (``_mixed_around``; there it stays where nothing
-    uncovers the scene), and the pixels where the scene had to be inpainted (bool).
-    The scene is the one the samples uncover from the border inwards (``uncover.uncovered_scene``),
-    else the median of the samples that differ from the median image there and are
-    scene-coloured (colour ``odds`` under one: another part of the performer passing
-    is not the scene; ``_scene_coloured``) -- the scene seen through a gap between
-    the legs, which no path from the border reaches."""
+    """Step 5: the median image with the scene put back where it ``holds`` the performer or is
+    ``mixed`` (there only where uncovered), and the pixels that had to be inpainted (bool). The
+    scene: what the samples uncover from the border in (``uncover.uncovered_scene``), else the
+    scene-coloured samples' median (``_scene_coloured``: seen through a gap between the legs)."""
     scene, seen = uncovered_scene(image, holds | mixed, frames, floor)
     image = np.where((mixed & seen)[..., None], scene, image)
     seen &= holds
@@ -265,9 +221,8 @@ def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np
 
 def _scene_coloured(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
                     odds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``image`` with the median of the scene-coloured samples that differ from it
-    (``masks``) where it ``holds`` the performer and MIN_UNCOVERED of them do, and
-    where they do (bool)."""
+    """``image`` with the median of the scene-coloured samples differing from it (``masks``, odds
+    under one) where it ``holds`` the performer and MIN_UNCOVERED do, and where they do (bool)."""
     index = np.flatnonzero(holds)
     plate = image.copy()
     seen = np.zeros(holds.shape, bool)
@@ -288,9 +243,7 @@ def _disk(radius: int) -> np.ndarray:
 
 
 def dilated(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
-    """``cv2.dilate`` of a mask (0 outside it) by a centred ``kernel``, computed only
-    within the kernel's reach of the mask's box: the same image, at a fraction of
-    the cost of a large disk over the whole frame."""
+    """``cv2.dilate`` of a mask by a centred ``kernel``, computed only within reach of the mask's box."""
     x, y, w, h = cv2.boundingRect(mask)
     out = np.zeros_like(mask)
     if not w:
@@ -304,11 +257,9 @@ def dilated(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
 # -- the empty scene given by the user -----------------------------------------------
 
 def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, scale: float) -> Background:
-    """The background from the empty scene the user gives: a photo, a video of it
-    (the median of its frames), or frames (first, last) of the clip itself; brought
-    to the clip's processing size and (``scene_image``) to the clip's own image of
-    the scene. The threshold is the clip's noise floor, the noise measured as the
-    median difference of the clip's samples from that."""
+    """The background from the user's empty scene: a photo, a video of it (its median) or clip
+    frames (first, last), at the clip's processing size and tones (``scene_image``); threshold: the
+    clip's noise floor, the noise measured from the clip's samples' difference from it."""
     if isinstance(source, tuple):
         first, last = source
         if not 0 <= first <= last < info.frame_count:
@@ -329,13 +280,9 @@ def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, sc
 
 
 def scene_image(plate: np.ndarray, median: Background) -> np.ndarray:
-    """The clip's temporal ``median`` where it shows the scene, the ``plate`` (in the
-    clip's tones: ``match_tones``) where it holds the performer: where the two differ
-    by more than the clip's noise floor, a 3x3 opening against noise, grown by two
-    pixels for the blurred edges. The median has the camera, blur and encoding of the
-    frames, which a photo taken apart never has: on five of the eight development
-    clips the noise measured against their photo alone is 1.5 to 3 times that
-    against their median."""
+    """The clip's temporal ``median`` where it shows the scene, the ``plate`` (in the clip's tones,
+    ``match_tones``) where they differ by over the noise floor (opened 3x3, grown two pixels): the
+    median has the frames' camera, blur and encoding, which a separate photo lacks."""
     plate = match_tones(plate, median.image)
     differs = cv2.compare(cv2.absdiff(plate, median.image).max(axis=2), noise_floor(median.sigma), cv2.CMP_GT)
     holds = cv2.dilate(cv2.morphologyEx(differs, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8)), _disk(2)) > 0
@@ -345,13 +292,9 @@ def scene_image(plate: np.ndarray, median: Background) -> np.ndarray:
 
 
 def match_tones(plate: np.ndarray, scene: np.ndarray, rounds: int = 3) -> np.ndarray:
-    """``plate`` with each channel mapped onto the clip's tones (``scene``, the clip's
-    temporal median) by a gain and an offset: a photo or another video of the empty
-    scene is taken with another exposure and encoding than the clip, which no single
-    gain undoes (the development clips' photos are up to 12 grey levels off after
-    one). Least squares, refitted ``rounds`` times to the pixels within 2.5 robust
-    sigmas of the last fit, so that a performer who stays in place in ``scene``
-    does not pull it."""
+    """``plate`` with each channel mapped onto the tones of ``scene`` (the clip's median) by a gain
+    and an offset (another exposure and encoding, which one gain does not undo): least squares refitted
+    ``rounds`` times to pixels within 2.5 robust sigmas, so a performer in ``scene`` does not pull it."""
     out = []
     for p, s in zip(cv2.split(plate), cv2.split(scene)):
         p, s = p.ravel().astype(np.float32), s.ravel().astype(np.float32)
@@ -366,8 +309,8 @@ def match_tones(plate: np.ndarray, scene: np.ndarray, rounds: int = 3) -> np.nda
 
 
 def _plate_image(path: str, size: tuple[int, int]) -> np.ndarray:
-    """A photo of the empty scene, or the median of a video of it, checked against the
-    clip's frame size (the same shape, any resolution)."""
+    """A photo of the empty scene, or the median of a video of it; MocapError unless it has the
+    clip's frame shape (any resolution)."""
     if os.path.isdir(path):
         raise MocapError(f"{path}: is a folder, not a background image or video")
     if not os.path.isfile(path):

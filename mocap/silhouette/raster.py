@@ -1,10 +1,8 @@
 """Drawing the 2D model as a mask, and the similarity S of the paper (Eq. 1-3).
 
-Segments are drawn as filled rectangles as wide as their cylinder and as long as
-their projection, with OpenCV's sub-pixel polygon fill. The search algorithms score
-candidates against a :class:`Canvas` that keeps the silhouette and the part of the
-model already fitted, so each candidate costs one small polygon fill and two counts.
-"""
+Segments are filled rectangles as wide as their cylinder and as long as their projection
+(OpenCV's sub-pixel polygon fill). Searches score candidates on a :class:`Canvas` holding the
+silhouette and the part of the model already fitted."""
 
 from __future__ import annotations
 
@@ -16,7 +14,7 @@ import numpy as np
 
 from mocap.body import (BODY_HEIGHT, FOOT_LENGTH, KINEMATIC_MATRIX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES,
                         WIDTH, Pose2D, joints_of_basis, kinematic_basis, torso_width)
-from mocap.edges import EDGE_WEIGHT, Edges
+from mocap.image.edges import EDGE_WEIGHT, Edges
 
 LANDMARK_WEIGHT = 0.6           # S that a confident landmark far from its joint takes away
 LANDMARK_SIGMA = 0.05           # of the body height: a landmark's distance that costs half of it
@@ -27,11 +25,9 @@ _CORNER_END = np.array([0, 1, 1, 0])     # a rectangle's corners: at which end o
 _CORNER_SIDE = np.array([1.0, 1.0, -1.0, -1.0])   # and on which side of it
 _TORSO = SEGMENT_INDEX["torso"]
 _HAS_FOOT = np.isin(np.arange(len(SEGMENT_NAMES)), [SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]])
-# The hand (not in the paper's 10 cylinders nor the contract's joints): drawn as the
-# lower arm's continuation beyond the wrist, this long in model units at the lower
-# arm's foreshortening. Without it the fit puts the wrist at the silhouette's end, in
-# the hand. Rendered and real bodies show 9-15 units of hand past the wrist joint
-# (a hand is 19 units to the fingertips, less its curl).
+# The hand (not in the paper's 10 cylinders nor the contract's joints): the lower arm's
+# continuation past the wrist, this long in model units at its foreshortening; without it
+# the fit puts the wrist at the silhouette's end, in the hand.
 HAND_LENGTH = 13.0
 _HAND_REACH = np.zeros(len(SEGMENT_NAMES))       # of the lower arm's drawn length
 _HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = HAND_LENGTH / LENGTH[
@@ -47,8 +43,7 @@ def segment_quads(starts: np.ndarray, ends: np.ndarray, widths: np.ndarray) -> n
 
 
 def _rectangles(ends: np.ndarray, widths) -> np.ndarray:
-    """Corners (..., 4, 2) of rectangles of the given widths along segments whose two
-    ends are ``ends`` (..., 2, 2) (few array operations: this runs for every search)."""
+    """Corners (..., 4, 2) of rectangles of ``widths`` along segments whose ends are (..., 2, 2)."""
     d = ends[..., 1, :] - ends[..., 0, :]
     half = widths / (2 * np.maximum(np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]), 1e-9))
     h = d[..., ::-1] * (half[..., None] * _PERPENDICULAR)
@@ -57,11 +52,9 @@ def _rectangles(ends: np.ndarray, widths) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def _corner_weights(segments: tuple[int, ...], scale: float) -> np.ndarray:
-    """The weights (4k, _BASIS_ROWS) that give the corners of some segments' rectangles
-    (``posed_quads``) from ``_corner_basis``'s vectors: each corner is the segment's
-    proximal joint or its distal one (on into the hand, _HAND_REACH, and past the
-    ankle by the foot, at the distal corners), plus or minus half the segment's width
-    along its normal (the torso's normal comes scaled to its half width)."""
+    """Weights (4k, _BASIS_ROWS) giving the corners of some segments' rectangles from ``_corner_basis``:
+    each corner is the proximal or distal joint (on into the hand, and past the ankle by the foot),
+    plus or minus half the width along the normal (the torso's normal comes scaled to its half width)."""
     idx = np.array(segments, int)
     start, end = KINEMATIC_MATRIX[SEGMENT_JOINTS[idx, 0]], KINEMATIC_MATRIX[SEGMENT_JOINTS[idx, 1]]
     end = end + _HAND_REACH[idx, None] * (end - start)
@@ -77,9 +70,8 @@ def _corner_weights(segments: tuple[int, ...], scale: float) -> np.ndarray:
 
 def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
                   torso: bool) -> np.ndarray:
-    """``body.kinematic_basis``'s 12 vectors, then each segment's unit direction
-    (cos, -sin) and normal (sin, cos): (_BASIS_ROWS, B, 2); the torso's normal times its
-    seen half width where ``torso`` (it is drawn)."""
+    """``body.kinematic_basis``'s 12 vectors, then each segment's unit direction (cos, -sin) and
+    normal (sin, cos): (_BASIS_ROWS, B, 2); the torso's normal times its seen half width if ``torso``."""
     basis, cos, sin = kinematic_basis(pelvis, scale, angle, ratio, spread, rows=_BASIS_ROWS)
     basis[_DIRECTIONS:_NORMALS, :, 0] = basis[_NORMALS:, :, 1] = cos
     basis[_DIRECTIONS:_NORMALS, :, 1] = -sin
@@ -91,13 +83,10 @@ def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, sp
 
 def posed_quads(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
                 segments=None) -> tuple[np.ndarray, np.ndarray]:
-    """Rectangles (B, k, 4, 2) of the segments (indices) of B poses given as
-    ``body.forward_kinematics_2d_batch`` takes them, and their joints (B, 16, 2).
-    The torso is as wide as ``spread`` makes it look, each lower leg goes on past the
-    ankle by the foot (body.FOOT_LENGTH), which silhouettes show, and each lower arm
-    into the hand (HAND_LENGTH). Every corner is a fixed combination of a few vectors
-    of each pose (``_corner_weights``): one product poses them all (this poses
-    every candidate of every search)."""
+    """Rectangles (B, k, 4, 2) of the ``segments`` (indices) of B poses given as
+    ``body.forward_kinematics_2d_batch`` takes them, and their joints (B, 16, 2). The torso is as wide
+    as ``spread`` makes it look, lower legs go on past the ankle by the foot (body.FOOT_LENGTH) and
+    lower arms into the hand (HAND_LENGTH); all corners are one product (``_corner_weights``)."""
     segments = _ALL_SEGMENTS if segments is None else tuple(segments)
     basis = _corner_basis(pelvis, scale, angle, ratio, spread, _TORSO in segments)
     weights = _corner_weights(segments, scale)
@@ -131,11 +120,8 @@ def draw_model(pose: Pose2D, shape: tuple[int, int], segments=SEGMENT_NAMES) -> 
 
 
 def similarity_from_counts(sil_area, model_area, overlap) -> np.ndarray:
-    """S = exp(-p - n)(1 - p) of Eq. 3, with p and n of Eq. 1-2 from pixel counts.
-
-    p: silhouette pixels not covered by the model / union; n: model pixels outside
-    the silhouette / union. Works elementwise on arrays of candidates.
-    """
+    """S = exp(-p - n)(1 - p) of Eq. 3 from pixel counts, with p (silhouette not covered) and n
+    (model outside the silhouette) of Eq. 1-2 as shares of the union; elementwise on arrays."""
     sil_area = float(sil_area)
     union = np.maximum(sil_area + model_area - overlap, 1.0)
     p = (sil_area - overlap) / union
@@ -155,26 +141,18 @@ def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, i
     pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32, order="C")   # windows keep them >= 0
     planes = np.zeros((len(pts),) + shape, np.uint8)
     fill, line = cv2.fillConvexPoly, cv2.LINE_8
-    for k in range(pts.shape[1]):               # segment by segment: a fifth less loop overhead
+    for k in range(pts.shape[1]):               # segment by segment: less loop overhead
         for plane, quad in zip(planes, pts[:, k]):
             fill(plane, quad, 1, line, _SHIFT)  # one by one: fillPoly would make overlaps holes
     return planes
 
 
 def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None = None):
-    """Score a sweep of candidates (B, k, 4, 2) on the partial silhouette it outlines
-    (or the candidates ``outline`` of it do); returns (their S (B,) of Eq. 1-3, a
-    function scoring further candidates).
-
-    The partial silhouette is the silhouette inside the swept area that the canvas's
-    fitted part does not already explain. A candidate's pixels over the fitted part
-    count neither way: the silhouette cannot tell where an arm in front of the trunk
-    lies (the frame's edges can: ``Canvas.edge_scores``), and counting them as
-    silhouette it covers would make the longest arm over the trunk win. Candidates
-    are drawn into planes of one array and weighed in one integer product: a pixel
-    weighs 1 if free, plus 2**shift if in the partial silhouette, so one sum tells
-    both counts (a candidate covers fewer pixels than its window has, < 2**shift).
-    """
+    """Score candidates (B, k, 4, 2) on the partial silhouette they outline (or the ``outline`` ones
+    do): the silhouette in the swept area that the canvas's fitted part does not explain. Returns
+    (S (B,) of Eq. 1-3, a scorer of further candidates). Pixels over the fitted part count neither
+    way (else the longest arm over the trunk would win; the edges place it: ``Canvas.edge_scores``).
+    One integer product counts both: a pixel weighs 1 if free, plus 2**shift if in the target."""
     outline = slice(None) if outline is None else outline
     x0, y0, x1, y1 = bounding_window(sweep[outline], canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
@@ -184,8 +162,7 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None 
     free = canvas.free[y0:y1, x0:x1]
     target = np.bitwise_or.reduce(planes[outline], axis=0) & free & canvas.sil[y0:y1, x0:x1]
     sil_area = np.count_nonzero(target)
-    # integers, not floats: einsum of uint8 planes with uint32 weights costs half the
-    # CPU of float64 ones (and a BLAS product of many candidates several times more)
+    # integers, not floats: a uint8-by-uint32 einsum is cheaper than float64 ones or BLAS
     shift, dtype = (16, np.uint32) if free.size < 1 << 16 else (32, np.uint64)
     weights = (free | target.astype(dtype) << dtype(shift)).ravel()
     low = dtype((1 << shift) - 1)
@@ -198,7 +175,7 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None 
 
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
     """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
-    xs, ys = quads.reshape(-1, 2).T.copy()          # cv2's minimum and maximum: a third of numpy's cost
+    xs, ys = quads.reshape(-1, 2).T.copy()          # cv2's minimum and maximum: cheaper than numpy's
     (ax, bx, _, _), (ay, by, _, _) = cv2.minMaxLoc(xs), cv2.minMaxLoc(ys)
     h, w = shape
     x0, y0 = min(max(math.floor(ax - pad), 0), w), min(max(math.floor(ay - pad), 0), h)
@@ -206,15 +183,9 @@ def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0)
 
 
 class Canvas:
-    """A silhouette and the part of the model fitted so far.
-
-    A search scores candidates on the *partial silhouette* of its segments (the
-    paper's Algorithms 1 and 6): the silhouette pixels inside the area the
-    candidates can sweep that the fitted part does not already explain. Scoring
-    against the whole silhouette, or a box around the segment, would reward a part
-    for spilling outside the silhouette while other parts are still unexplained
-    (Eq. 1 divides by the union, so unexplained pixels elsewhere lower p).
-    """
+    """A silhouette and the part of the model fitted so far. Searches score on the *partial
+    silhouette* (Algorithms 1 and 6): scoring the whole silhouette would reward a part for spilling
+    outside it while other parts are unexplained (Eq. 1 divides by the union)."""
 
     def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None, targets=None):
         self.sil = (silhouette > 0).astype(np.uint8)
@@ -225,10 +196,8 @@ class Canvas:
         self.targets = targets                 # a person model's landmarks (mocap.silhouette.eyes.Targets)
 
     def fork(self, quads=(), keep: np.ndarray | None = None, by_edges: bool = False) -> "Canvas":
-        """A copy whose fitted part also holds quads, and whose silhouette is only
-        the pixels where keep is true (for a part that may explain only those);
-        ``by_edges``: the copy follows the frame's inner edges, where it has them
-        (``edge_scores``)."""
+        """A copy whose fitted part also holds ``quads`` and whose silhouette is only where ``keep``;
+        ``by_edges``: the copy follows the frame's inner edges where it has them (``edge_scores``)."""
         other = Canvas.__new__(Canvas)
         other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
         other.fixed, other.free = self.fixed.copy(), self.free
@@ -239,19 +208,17 @@ class Canvas:
         return other
 
     def edge_scores(self, joints: np.ndarray, segments: list[int], scale: float) -> np.ndarray:
-        """(B,) what the inner edges along the given segments of posed joints
-        (B, 16, 2) add to S: EDGE_WEIGHT times their support (mocap.edges), 0 on a
-        canvas that does not follow edges."""
+        """(B,) what the inner edges along the given segments of posed joints (B, 16, 2) add to S:
+        EDGE_WEIGHT times their support (mocap.image.edges); 0 on a canvas that does not follow edges."""
         if not self.by_edges:
             return np.zeros(len(joints))
         ends = joints[:, SEGMENT_JOINTS[segments]]
         return EDGE_WEIGHT * self.edges.support(ends[:, :, 0], ends[:, :, 1], WIDTH[segments] * scale)
 
     def landmark_scores(self, joints: np.ndarray, segments: list[int], scale: float) -> np.ndarray:
-        """(B,) what the person model's landmarks add to S for posed joints (B, 16, 2):
-        minus LANDMARK_WEIGHT times each joint of the given segments' confidence-weighted
-        robust distance to its landmark, d^2 / (d^2 + sigma^2) with sigma LANDMARK_SIGMA
-        of the body height (a wrong landmark costs at most its weight); 0 without them."""
+        """(B,) what the person model's landmarks add to S for posed joints (B, 16, 2): minus
+        LANDMARK_WEIGHT times each joint's confidence-weighted robust distance d^2 / (d^2 + sigma^2),
+        sigma LANDMARK_SIGMA of the body height; 0 without landmarks."""
         if self.targets is None:
             return np.zeros(len(joints))
         idx = np.unique(SEGMENT_JOINTS[segments])

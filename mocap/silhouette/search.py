@@ -1,7 +1,6 @@
-"""The narrowing search of the paper's Algorithms 1 and 6: turn one pose parameter
-(a segment's angle, a foreshortening ratio, the torso's position or spread) over a
-range to maximise S (Eq. 1-3) of the drawn segments on their partial silhouette.
-"""
+"""The narrowing search of the paper's Algorithms 1 and 6: turn one pose parameter (a segment's
+angle, a foreshortening ratio, the torso's position or spread) over a range to maximise S
+(Eq. 1-3) of the drawn segments on their partial silhouette."""
 
 from __future__ import annotations
 
@@ -43,10 +42,8 @@ class Knob:
         return Pose2D(pelvis=pelvis, scale=pose.scale, angle=angle, ratio=ratio, spread=spread)
 
     def batch(self, pose: Pose2D, values: np.ndarray):
-        """(pelvis, angle, ratio, spread) of the pose with each value set: angles and
-        ratios (B, 10); the pelvis (2,) and the spread (a float) as the pose has them
-        unless the knob turns them, then (B, 2) and (B,) (raster.posed_quads takes
-        either)."""
+        """(pelvis, angle, ratio, spread) of the pose with each value set: angles, ratios (B, 10); the
+        pelvis (2,) and spread (float) as the pose has them, (B, 2) and (B,) if the knob turns them."""
         n = len(values)
         pelvis, angle, ratio, spread = pose.pelvis, pose.angle[None].repeat(n, 0), pose.ratio[None].repeat(n, 0), pose.spread
         if self.field == "angle":
@@ -67,15 +64,10 @@ class Knob:
 
 def coarse_to_fine(score, n: int, opening: list[int], opening_scores: list[float], start: int,
                    interval: int) -> int:
-    """The shared narrowing search of Algorithms 1 and 6 over n ordered values.
-
-    The opening round (a division of the whole range, with the incumbent ``start``,
-    already scored) picks the best; ``start`` wins ties, so a flat score keeps it
-    (the paper starts from S = 0, which lets a flat score drift to the range's
-    start). The interval of two divisions around the best (``interval`` values
-    wide) is then divided at full resolution, which ends the narrowing. ``score``
-    maps a list of indices to their S.
-    """
+    """The shared narrowing of Algorithms 1 and 6 over n ordered values; returns the best index.
+    The opening round (``opening`` with the incumbent ``start``, already scored) picks the best,
+    ``start`` winning ties (the paper's S = 0 start lets a flat score drift); then the ``interval``
+    around it is scored at full resolution. ``score`` maps a list of indices to their S."""
     known = dict(zip(opening, opening_scores))
     best = max(opening, key=lambda i: (known[i], i == start))
     near = [i for i in range(max(best - interval // 2, 0), min(best + interval // 2, n - 1) + 1)
@@ -103,16 +95,10 @@ class Search:
 
 
 def search(pose: Pose2D, job: Search) -> Pose2D:
-    """Turn one knob of pose to maximise S of the drawn segments on their partial
-    silhouette: Algorithm 1's (and 6's) narrowing with two levels of division.
-
-    Every value of the grid is posed at once. The first level divides the range
-    every ``sweep_step``; those poses also outline the partial silhouette (the
-    region the range reaches). The second divides the two divisions around the
-    best at full resolution. A grid of at most ONE_ROUND values is scored whole in
-    the first round, which costs less than a second round; the narrowing chooses
-    from those scores as it would from the second round's.
-    """
+    """Turn one knob of ``pose`` to maximise S of the drawn segments on their partial silhouette:
+    Algorithm 1's (and 6's) narrowing with two levels of division, every value posed at once. The
+    first level (every ``sweep_step``) also outlines the partial silhouette; the second divides the
+    two divisions around the best at full resolution; grids up to ONE_ROUND values are scored whole."""
     n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
     step = (job.hi - job.lo) / (n - 1)
     values = job.lo + step * np.arange(n)

@@ -1,7 +1,6 @@
-"""The torso and head of the 2D fit (section 3.3, Fig. 3a): where the body stands,
-how far it is turned (the torso's horizontal foreshortening, section 3.4), the torso
-and head angles by Algorithm 1 and their lengthwise ratios by Algorithm 6.
-"""
+"""The torso and head of the 2D fit (section 3.3, Fig. 3a): where the body stands, how far it
+is turned (the torso's horizontal foreshortening, section 3.4), the torso and head angles by
+Algorithm 1 and their lengthwise ratios by Algorithm 6."""
 
 from __future__ import annotations
 
@@ -10,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from mocap.body import BODY_HEIGHT, FOOT_LENGTH, LENGTH, SEGMENT_INDEX, Pose2D, spread_for_width
-from mocap.percentile import percentile
+from mocap.image.percentile import percentile
 from mocap.silhouette.contour import row_runs
 from mocap.silhouette.raster import Canvas
 from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, search,
@@ -19,18 +18,18 @@ from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, sea
 TORSO_HEAD = ("torso", "head")
 WAIST_RANGE = (45.0, 135.0)      # Table 1
 # A crouching body's trunk (bent over, or leaning over folded legs) may lean further
-# than Table 1's waist, down to this far above level (a deep squat's, 20-30 degrees).
+# than Table 1's waist, down to this far above level (as in a deep squat).
 CROUCH_RANGE = (15.0, 165.0)
 # Of the height a crouching body lacks, the share the trunk takes up by leaning: the
 # legs fold the rest (under an upright trunk the pelvis would be at the feet).
 CROUCH_TRUNK_SHARE = 0.5
-# Below this share of the standing height a body is crouching: a walk's or a run's
-# longest strides (legs 30 degrees apart) hold the hips up to 8% of it lower.
+# Below this share of the standing height a body is crouching (a walk's or a run's
+# longest strides lower the hips less).
 CROUCH_SPAN = 0.9
 NECK_RANGE = (45.0, 135.0)       # Table 1
 SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
-# A head (15-20 units wide, round from any side) is 14 units wide about 3 units under
-# its crown; a raised forearm or hand is 8-10 units wide.
+# A head (round from any side) is this wide (model units) this far under its crown;
+# a raised forearm or hand is narrower.
 HEAD_ROW_WIDTH = 14.0
 HEAD_ROW_DEPTH = 3.0
 UPRIGHT_SPAN = (0.94, 1.05)      # silhouette height / standing height of an upright body
@@ -38,9 +37,8 @@ RAISED_PX = 1                    # fit pixels of silhouette over the head: none 
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
-    """Torso location from Table 1 ratios: the head at the silhouette's top (the
-    head's, ``head_top_row``, not a raised hand's), the pelvis head+torso lengths
-    below, x at the horizontal middle of the silhouette there."""
+    """Torso location from Table 1 ratios: the head at the silhouette's top (``head_top_row``), the
+    pelvis head+torso lengths below, x at the silhouette's horizontal middle there."""
     rows = np.flatnonzero(silhouette.any(axis=1))
     top, bottom = head_top_row(silhouette, scale), int(rows[-1])
     head = LENGTH[SEGMENT_INDEX["head"]] * scale
@@ -51,9 +49,8 @@ def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
 
 
 def head_top_row(silhouette: np.ndarray, scale: float) -> int:
-    """The silhouette's top row, or where an arm is raised above the head, the row
-    above the first one as wide as a head HEAD_ROW_WIDTH units down from its crown
-    (a forearm is about half as wide)."""
+    """The silhouette's top row or, where an arm is raised above the head, HEAD_ROW_DEPTH above the
+    first row as wide as a head (HEAD_ROW_WIDTH; a forearm is about half as wide)."""
     rows, starts, ends = row_runs(silhouette)
     if len(rows) == 0:
         return 0
@@ -65,9 +62,8 @@ def head_top_row(silhouette: np.ndarray, scale: float) -> int:
 
 def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
                    spread: float | None = None) -> Pose2D:
-    """Torso angle by Algorithm 1 with the head drawn along it (Fig. 3a), the torso's
-    horizontal position and foreshortening (unless ``spread`` is given), the head
-    angle, then both lengthwise ratios (Algorithm 6)."""
+    """Torso angle by Algorithm 1 with the head along it (Fig. 3a), horizontal position and
+    foreshortening (unless ``spread`` is given), head angle, then both ratios (Algorithm 6)."""
     pose = place_torso(canvas, pose, prev)
     pose = fit_spread(canvas, pose) if spread is None else replace(pose, spread=spread)
     lo, hi, c = around(prev, "head", *NECK_RANGE, pose.angle[SEGMENT_INDEX["torso"]])
@@ -77,11 +73,9 @@ def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
 
 
 def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
-    """The torso's angle (Algorithm 1, head drawn along it), the pelvis under the head
-    at that lean, and the horizontal position. Beyond the paper, a crouching body's
-    torso is turned over CROUCH_RANGE about its pelvis where ``crouch_pelvis`` puts
-    it: turned about a pelvis under the upright trunk, at the feet, an upright trunk
-    through the folded legs explains as much silhouette as a leaning one."""
+    """The torso's angle (Algorithm 1, head along it), the pelvis under the head at that lean, and the
+    horizontal position. A crouching body's torso turns over CROUCH_RANGE about ``crouch_pelvis``
+    (about a pelvis at the feet, an upright trunk explains as much as a leaning one)."""
     pelvis = crouch_pelvis(canvas.sil, pose)
     crouching = pelvis is not None
     lo, hi, c = around(prev, "torso", *(CROUCH_RANGE if crouching else WAIST_RANGE), 90.0)
@@ -91,12 +85,9 @@ def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
 
 
 def crouch_pelvis(silhouette: np.ndarray, pose: Pose2D) -> np.ndarray | None:
-    """The pelvis of a crouching body, None for an upright one. A body is crouching
-    when its silhouette from the head's top (``head_top_row``) to the feet is shorter
-    than CROUCH_SPAN of the standing height. Its pelvis lies as far under the head's
-    top as the upright trunk reaches (Table 1) less CROUCH_TRUNK_SHARE of the height
-    it lacks (taken in as the body comes another 1 - CROUCH_SPAN lower, so that a body
-    just short enough is placed as an upright one), in the silhouette's middle on that row."""
+    """The pelvis of a crouching body (from the head's top, shorter than CROUCH_SPAN of the standing
+    height), None if upright: the upright trunk's reach under the head's top less up to
+    CROUCH_TRUNK_SHARE of the height it lacks (phased in), in the silhouette's middle on that row."""
     bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
     top, standing = head_top_row(silhouette, pose.scale), standing_px(pose.scale)
     short, allowed = standing - (bottom - top), (1.0 - CROUCH_SPAN) * standing
@@ -119,9 +110,8 @@ def trunk_reach(scale: float) -> float:
 
 
 def under_the_head(silhouette: np.ndarray, pose: Pose2D) -> Pose2D:
-    """The pelvis as far under the head's top as the leaning torso and head reach
-    down (Table 1's lengths at the torso's angle): a body bending over or crouching
-    has its pelvis higher under its head than when upright."""
+    """The pelvis as far under the head's top as the leaning torso and head reach down (Table 1's
+    lengths at the torso's angle): a bending body's pelvis is higher under its head."""
     lean = np.sin(np.radians(pose.angle[SEGMENT_INDEX["torso"]]))
     bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
     y = min(head_top_row(silhouette, pose.scale) + trunk_reach(pose.scale) * lean, bottom)
@@ -129,12 +119,9 @@ def under_the_head(silhouette: np.ndarray, pose: Pose2D) -> Pose2D:
 
 
 def torso_spread(silhouette: np.ndarray, scale: float) -> float:
-    """The torso's horizontal foreshortening on one frame (section 3.4), from its
-    seen width: the narrowest quarter of the silhouette's widths across the torso's
-    middle rows, less the pixel by which edges and the difference threshold widen a
-    silhouette, converted by ``body.spread_for_width``. Arms in front of or behind the
-    torso widen some rows and some frames, so callers also take a low percentile
-    over neighbouring frames (the body turns slowly, arms swing)."""
+    """The torso's horizontal foreshortening on one frame (section 3.4) from its seen width: the
+    narrowest quarter of the widths across the torso's middle rows, less SILHOUETTE_BLEED_PX, through
+    ``body.spread_for_width``. Arms widen some rows and frames, so callers take a low percentile."""
     if not silhouette.any():
         return 1.0
     top = head_top_row(silhouette, scale)
@@ -150,10 +137,9 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
 
 
 def torso_width_readable(silhouette: np.ndarray, scale: float, body_px: float) -> bool:
-    """Whether a frame's torso width (``torso_spread``) can be trusted: the body is
-    upright (the silhouette UPRIGHT_SPAN of the standing height ``body_px``: crouching or
-    bending puts the torso band on the legs or the bent back) and nothing is raised
-    above the head (arms held up draw the shoulders in over a narrowed torso)."""
+    """Whether a frame's torso width can be trusted: the body upright (height UPRIGHT_SPAN of
+    ``body_px``; a crouch puts the torso band on the legs) and nothing raised above the head (arms
+    held up draw the shoulders in)."""
     rows = np.flatnonzero(silhouette.any(axis=1))
     if len(rows) == 0:
         return False
@@ -163,15 +149,14 @@ def torso_width_readable(silhouette: np.ndarray, scale: float, body_px: float) -
 
 
 def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
-    """The torso's horizontal position by the same search (the paper takes the
-    silhouette's middle, which arms and a swinging leg pull off the torso)."""
+    """The torso's horizontal position by the same search (the paper's silhouette middle is pulled off
+    by arms and a swinging leg)."""
     r = reach * pose.scale
     return search(pose, Search(canvas, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0))
 
 
 def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
-    """The torso's horizontal foreshortening (section 3.4): how much of the shoulder
-    and hip span is seen, 0 in profile .. 1 frontal, from the torso's seen width,
-    by Algorithm 6's search."""
+    """The torso's horizontal foreshortening (section 3.4: the seen share of the shoulder and hip span,
+    0 profile .. 1 frontal) by Algorithm 6's search."""
     return search(pose, Search(canvas, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05,
                                RATIO_SWEEP_STEP))

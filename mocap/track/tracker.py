@@ -1,48 +1,6 @@
-"""Tracking the marked body from one frame to the next, head to feet: the tracking
-paper's feature tracking (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000,
-section "Feature tracking").
-
-Each of the 10 body parts is a morph block (mocap.track.blocks) from one of its joints to the
-other, as wide as its cylinder (body.WIDTH; the torso as wide as the marked shoulders
-show it turned) at the marked skeleton's scale. Its colours on frame 0 are its colour
-model; beyond the paper, an arm's sub-pixels weigh as much as they tell the arm from what
-lies beside it there (mocap.track.parts.told_apart). Every later frame is tracked head to feet:
-
-1. the head (calvaria to neck): its calvaria predicted by image difference
-   (mocap.track.headmotion, Eq. 1-5 of the head part) or by constant velocity, whichever
-   start the block match scores higher (a moving background breaks the image
-   difference's premise of a still background), then the morph-block search of
-   position, angle and scale along the search path (Fig. 6), from the other start
-   too where that match is poor (``_track_head``);
-2. the trunk hanging from the neck (angle and length); the chest keeps its marked
-   place in the trunk's frame; shoulders and hips move with the trunk;
-3. each limb from its root, carried by the trunk: beyond the paper, found afresh on
-   every frame as the best pair of directions of its parts all around the root
-   (``around_root``), then its lower part's position, angle and length searched
-   from there, with the upper part from the root to the lower part's start. The
-   paper starts every part where constant velocity predicts it; a limb, which
-   swings back and forth, is badly predicted that way and once lost (to clutter,
-   to its twin) is not found again. The lower part is kept off the places where
-   it cannot be (``limb_penalty``: its own upper part, the head for an arm, its twin
-   limb's lower part, ``_part_twins``) and near where it was on the last frame;
-   a limb's blocks pay for sides the frame shows no edge along (``outline_cost``),
-   and its lower block for a pose a human limb cannot take in 3D (``arm_limits_cost``,
-   ``leg_limits_cost``, measured from the key triangle followed in 3D as the
-   reconstruction does, ``TrunkDepth``);
-   a leg's knee is then settled where its thigh and shin blocks match best together
-   (``settled_knee``). The far arm's forearm matches either its own colours or its
-   twin's mirrored (``far_forearm``): marked behind the trunk, its own are the shirt's;
-   its upper arm's match weighs less around the root (``_upper_trust``);
-4. every colour model updated by linear weighting with its new block when the match
-   is as good as the part's usual one; beyond the paper, the update keeps ANCHOR of
-   the marked frame's colours, so that a model cannot drift onto clutter.
-
-The similarity S of each part's match is its reliability on that frame.
-
-The parts, their blocks' search and their colour models are mocap.track.parts; a
-limb's search around its root and the penalties of its blocks mocap.track.limbs; here
-the frame loop that carries them from frame to frame.
-"""
+"""Frame-to-frame tracking of the marked body, head to feet (Pan, Zhuang and Liu 2000, section "Feature tracking"):
+each of the 10 parts a morph block (mocap.track.parts) matched against its frame-0 colour model, the head started
+by image difference (Eq. 1-5), each limb found around its root (mocap.track.limbs)."""
 
 from __future__ import annotations
 
@@ -51,7 +9,7 @@ from collections import deque
 import numpy as np
 
 from mocap.body import JOINT_INDEX
-from mocap.edges import Edges
+from mocap.image.edges import Edges
 from mocap.track import blocks
 from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
 from mocap.track.calibration import Pinhole, default_camera
@@ -79,12 +37,8 @@ FAR_UPPER_SCALES = (1.0, 0.9)   # of its usual length: the far arm's upper arm's
 
 
 class BodyTracker:
-    """The state carried from frame to frame: every part's block and its change over
-    the last frame (constant-velocity prediction), the colour models and the
-    similarities of the last HISTORY frames, the head's adaptive threshold p, the
-    last frame and the trunk in 3D (``TrunkDepth``, seen by ``camera``, default the
-    frame's (mocap.track.calibration.default_camera), and turned to ``turn``), and
-    every part's confidence on the last frame (mocap.track.loss, at ``fps``)."""
+    """State carried between frames: blocks (10, 5) and velocities, colour models, recent S, the head's threshold p,
+    the trunk in 3D (``TrunkDepth``; ``camera`` default the frame's) and the parts' confidence at ``fps``."""
 
     def __init__(self, frame0: np.ndarray, marks: np.ndarray, camera: Pinhole | None = None,
                  turn: str | None = None, fps: float = 25.0):
@@ -135,23 +89,9 @@ class BodyTracker:
         return skeleton(new, self.chest), s
 
     def _judged_lost(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, refound: bool) -> bool:
-        """Whether the body is lost on a frame tracked to ``new`` with similarities
-        ``s`` (``refound``: re-acquisition found it there): not where its head and
-        trunk stand out of the frame (``_held``); else, once lost, until
-        re-acquisition finds it (the tracker's own match drifts on clutter that now
-        and then matches as well as the body).
-
-        Beyond the paper: a match judged against the part's usual S alone is lost
-        for good where what lies behind the body changes (a pale board passes behind
-        the head: its S halves and stays there, and the usual S of the frames before
-        never comes back); a frame where the head and the trunk still stand out is
-        judged by the other checks of mocap.track.loss alone (``self.held``: it
-        teaches neither the usual S nor the colour models, which would follow a
-        tracker gone off the body). benchmarks/bench_track.py's cmu_01_01_jumps
-        (yaw 45) was lost from frame 10 to its end (289 of 299 frames, PA-MPJPE 120.5
-        mm), now on 48 (68.2 mm). Where the usual S restarted from a held frame's,
-        bench_track_clips.py's laugh_arms_up and salsa_spin answered frames whose
-        trunk was 10-37% of the body's height off."""
+        """Whether the body is lost on a frame tracked to ``new`` (``refound``: re-acquired): once lost, until
+        re-acquired; held (``_held``) head and trunk are judged without the usual S, which a changed background
+        lowers for good."""
         lost = self.lost and not refound or bool(body_lost(self.confidence, self.lost))
         self.held = lost and self._held(frame, new)
         if not self.held:
@@ -160,18 +100,13 @@ class BodyTracker:
         return bool(body_lost(self.confidence))
 
     def _held(self, frame: np.ndarray, new: np.ndarray) -> bool:
-        """Whether the head and the trunk of ``new`` both match at least DISTINCT
-        times better where they lie than anywhere else in the frame
-        (mocap.track.reacquire.distinctness)."""
+        """Whether head and trunk of ``new`` each match DISTINCT times better where they lie than anywhere else."""
         return all(distinctness(frame, self._model(k), self.grids[k], new[k]) >= DISTINCT
                    for k in (HEAD, TORSO))
 
     def _reacquire(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> bool:
-        """Whether the head and trunk of a frame where the body was lost are found
-        again (mocap.track.reacquire), from the head tracked on it (``new``, the
-        image difference's), the last good pose's and the best places of the head's
-        colours over the whole frame. If so, they go into ``new`` and ``s``, and the
-        limbs start from the last good pose carried by the trunk found."""
+        """Whether a lost body's head and trunk are found again (into ``new``, ``s``; limbs carried from the good
+        pose)."""
         starts = np.concatenate([new[[HEAD]], self.good[[HEAD]],
                                  scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])])
         found = reacquired(frame, starts, self.good, self._usual(), self._head_search,
@@ -197,17 +132,13 @@ class BodyTracker:
 
     def _confidence(self, new: np.ndarray, s: np.ndarray, shape: tuple,
                     usual: np.ndarray | None = None) -> np.ndarray:
-        """(10,) the parts' confidence on a frame (mocap.track.loss.part_confidence)
-        against their ``usual`` S (default ``_usual``); a part's calibrated length
-        follows the head's zoom."""
+        """(10,) part confidences (loss.part_confidence) against ``usual`` S (default ``_usual``)."""
         expected = self.longest / MAX_STRETCH * new[HEAD, N] / self.head_width
         usual = self._usual() if usual is None else usual
         return part_confidence(new, self.blocks, s, usual, expected, shape, self.fps)
 
     def _bounded(self, new: np.ndarray, shape: tuple) -> np.ndarray:
-        """The blocks kept sane where the match ran off (a body too small or lost):
-        starts inside the frame, widths and lengths within ZOOM_RANGE of the marked
-        ones, the last frame's block where a value is not finite."""
+        """Blocks kept sane: starts in the frame, sizes within ZOOM_RANGE, non-finite values from the last frame."""
         new = np.where(np.isfinite(new), new, self.blocks)
         new[:, X] = np.clip(new[:, X], 0, shape[1] - 1)
         new[:, Y] = np.clip(new[:, Y], 0, shape[0] - 1)
@@ -216,8 +147,7 @@ class BodyTracker:
         return new
 
     def _predicted(self) -> np.ndarray:
-        """Every block changed as over the last frame; widths follow the head's zoom
-        (the whole body nears or recedes), which stays within ZOOM_RANGE of the marks."""
+        """Every block moved as over the last frame (constant velocity); widths follow the head's zoom."""
         predicted = self.blocks + self.velocity
         predicted[:, M] = np.maximum(predicted[:, M], 2.0)
         predicted[HEAD, M] = np.clip(predicted[HEAD, M], *self.head_lengths)
@@ -226,8 +156,7 @@ class BodyTracker:
 
     def _search(self, image: np.ndarray, k: int, start: np.ndarray, zoom: float,
                 penalty: blocks.Penalty | None = None):
-        """Part k's block and S searched from ``start`` (search_part), the body at
-        ``zoom`` (``_zoom``)."""
+        """Part k's block and S searched from ``start`` (parts.search_part), the body at ``zoom``."""
         return search_part(image, self._model(k), self.grids[k], start, PARTS[k],
                            self.longest[k] * zoom, penalty)
 
@@ -236,20 +165,8 @@ class BodyTracker:
         return float(head[N] / self.head_width)
 
     def _track_head(self, frame: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, float]:
-        """The head block, searched from the better of the image difference's and
-        constant velocity's calvaria, and where its match is worse than HEAD_RETRY of
-        the head's usual S, from the other one too, the better match kept; then p
-        adapts to the displacement found.
-
-        Beyond the paper: over a moving background the image difference's start can
-        lie far off, on a place that matches the head as badly as the right start
-        does, and the search around it ends on clutter (a repeated frame, which stops
-        constant velocity, then a step of 5 px: the head 26 px off, S 0.03 against
-        0.14 at its place). With the head the whole body is lost: bench_track's
-        motions seen 10 degrees from profile (render yaws 10 and 170) lost it on 123
-        frames of both walk01 clips; searched again, on none (PA-MPJPE 97.4 -> 76.9
-        mm; bench_track's own views 64.8 -> 64.7, its held-out ones 76.2 -> 77.2, where
-        walk01 120's legs are lost on another path)."""
+        """The head block searched from the better-matching of the image difference's and constant velocity's
+        calvaria, from the other too where S < HEAD_RETRY of usual; then p adapts."""
         head = self.blocks[HEAD]
         moved = head_displacement(self.frame, frame, head[:2], block_end(head), self.p)
         starts = np.stack([np.r_[head[:2] + moved.vector, predicted[2:]], predicted])
@@ -264,15 +181,8 @@ class BodyTracker:
 
     def _track_torso(self, frame: np.ndarray, predicted: np.ndarray,
                      head: np.ndarray) -> tuple[np.ndarray, float]:
-        """The trunk's block searched from the predicted one and from it at the
-        trunk's usual length at the zoom of ``head``, the better match kept.
-
-        Beyond the paper: a trunk of one colour matches about as well at many lengths
-        (the bottom of the block slides up the shirt), and an arm swinging across it
-        makes a shorter block match as well for a few frames; a search that changes
-        the length by a tenth a frame then shrinks the trunk to half its length and
-        stays in that local optimum when the arm has passed (track_walk: the pelvis
-        35 px up a 86 px trunk, the legs hanging from there)."""
+        """The trunk block searched from the prediction and from it at its usual length, the better kept: a trunk of
+        one colour matches at many lengths and would shrink."""
         usual = predicted.copy()
         usual[M] = self.lengths[TORSO] * self._zoom(head)
         return max((self._search(frame, TORSO, start, self._zoom(head)) for start in (predicted, usual)),
@@ -283,10 +193,7 @@ class BodyTracker:
         return from_block(to_block(self.blocks[k, :2], self.blocks[TORSO]), new[TORSO])
 
     def _limb_costs(self, new: np.ndarray, edges: Edges) -> dict:
-        """Each limb's (upper, lower) block penalties on a frame whose trunk is placed:
-        the frame's ``edges`` along both (outline_cost: OUTLINE_COST for an arm,
-        LEG_OUTLINE_COST for a leg), the lower block also the joint limits
-        (``arm_limits_cost``, ``leg_limits_cost``) in the key triangle's 3D (``TrunkDepth``)."""
+        """Each limb's (upper, lower) block penalties: missing edges; for the lower block joint limits in 3D too."""
         key = self.trunk.follow(np.array([*(self._root(k, new) for k in ARMS),
                                           from_block(self.chest, new[TORSO])]))
         arm, leg = outline_cost(edges), outline_cost(edges, LEG_OUTLINE_COST)
@@ -298,11 +205,7 @@ class BodyTracker:
 
     def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
                     avoid: tuple) -> None:
-        """A limb (parts k, k + 1) from its root carried by the trunk's motion: the
-        best pair of directions all around the root (``around_root``), then the
-        lower part searched from there (``_hang``), kept off its upper part and the
-        blocks to ``avoid`` and near its last place (limb_penalty); its blocks also
-        charged the frame's ``limb_costs``."""
+        """Limb k from its root: best directions ``around_root``, then ``_hang``, kept off ``avoid``."""
         root = self._root(k, new)
         parts = [(self._model(i), self.grids[i], new[i, N],
                   self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
@@ -313,31 +216,20 @@ class BodyTracker:
         self._hang(image, new, s, k, root, lower, penalty)
 
     def _upper_trust(self, k: int) -> tuple[float, tuple[float, ...]]:
-        """Beyond the paper: the weight of limb k's upper block's 1/S around its root
-        (``around_root``) and the lengths tried there, of its usual one. The far
-        arm's upper arm (of ``far_forearm``), marked on or behind the trunk in the
-        shaded shirt's colours, matches the trunk better than its own place
-        (track_salsa's raised left sleeve, lit 1.6 times brighter: 28-36 grey levels
-        there, 7-9 on the trunk): it weighs FAR_UPPER_WEIGHT, so that its forearm's
-        skin decides, and, often turned toward or away from the camera, is also tried
-        shorter (FAR_UPPER_SCALES), or the forearm hung from its end misses. A far arm
-        hidden behind the trunk then strays more (the README gives the measures)."""
+        """Beyond the paper: limb k's upper-block 1/S weight and lengths tried around its root; the far arm's upper
+        arm, marked in the shirt's colours, weighs less and is tried shorter."""
         if k + 1 == self.far_forearm:
             return FAR_UPPER_WEIGHT, FAR_UPPER_SCALES
         return 1.0, (1.0,)
 
     def _avoided(self, k: int, new: np.ndarray) -> tuple:
-        """The (cost, block) pairs limb k's lower part keeps off: the head for an arm
-        (a forearm's skin matches the face and neck)."""
+        """The (cost, block) pairs limb k's lower part keeps off: the head for an arm (skin matches the face)."""
         return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
 
     def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
                     twins: tuple[int, int]) -> None:
-        """Beyond the paper: twin limbs (both arms, both legs) look alike, and a limb
-        that lost its own place follows its twin's. Where their lower blocks lie on
-        one another (TWIN_OVERLAP), each twin in turn is tracked again keeping off
-        the other's lower block (TWIN_COST); the placement of least joint cost (both
-        limbs' 1/S and TWIN_COST times their overlap) stays."""
+        """Beyond the paper: twin limbs whose lower blocks overlap (TWIN_OVERLAP) are tracked again each off the
+        other's; the placement of least 1/S plus overlap cost stays."""
         a, b = twins
         if twin_overlap(new[a + 1], new[b + 1]) < TWIN_OVERLAP:
             return
@@ -353,9 +245,7 @@ class BodyTracker:
 
     def _hang(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
               root: np.ndarray, lower: np.ndarray, penalty: blocks.Penalty) -> None:
-        """Limb k from its ``root`` and the lower part searched from ``lower`` (its
-        candidates charged ``penalty``), a leg's knee settled (``settled_knee``): the
-        upper part then runs from the root to where the lower part begins."""
+        """Limb k's lower part searched from ``lower``, a leg's knee settled, the upper part from ``root`` to it."""
         new[k + 1], s[k + 1] = self._search(image, k + 1, lower, self._zoom(new[HEAD]), penalty)
         if k not in ARMS:
             new[k + 1], s[k + 1] = settled_knee(
@@ -365,9 +255,7 @@ class BodyTracker:
         s[k] = blocks.score(image, self._model(k), self.grids[k], new[k])[0]
 
     def _model(self, k: int) -> np.ndarray:
-        """The colour model part k is matched against: its own, or for the far arm's
-        forearm (``far_forearm``) its own and its twin's mirrored as alternatives
-        (blocks.similarity)."""
+        """Part k's colour model; the far forearm's own and its twin's mirrored as alternatives."""
         if k != self.far_forearm:
             return self.models[k]
         twin = self.models[TWIN_PART[k]]
@@ -378,12 +266,8 @@ class BodyTracker:
         return np.median(self.history, axis=0) if self.history else np.full(len(PARTS), np.inf)
 
     def _update(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, lost: bool) -> None:
-        """Velocities; colour models by linear weighting (matches at least UPDATE_MIN
-        of the part's median S only, so an occluder's colours stay out). A frame where
-        the body is ``lost`` changes neither the usual S nor the models (a lost
-        tracker's matches would teach them the clutter it follows), nor one where it
-        is held by standing out alone (``_judged_lost``: its matches lie far below
-        the usual S, and would lower it)."""
+        """Velocities and colour models (linear weighting of matches of at least UPDATE_MIN of the usual S); a lost or
+        held frame changes neither the usual S nor the models."""
         self.velocity = new - self.blocks
         self.velocity[:, THETA] = (self.velocity[:, THETA] + np.pi) % (2 * np.pi) - np.pi
         self.blocks = new

@@ -7,7 +7,7 @@ its T-pose (node translations = the bones' offsets, metres, y up) at the first
 frame's root. The body is one mesh of the model's 10 cylinders (their cross-sections
 ``body.semi_axes`` at 1.75 m, built by trimesh), skinned to it with JOINTS_0/WEIGHTS_0:
 each limb cylinder rides its proximal bone, the torso blends from Hips at the pelvis to
-Spine1 at the neck; a nose and a chest mark (``mocap.facing``, cones) ride their
+Spine1 at the neck; a nose and a chest mark (``mocap.silhouette.facing``, cones) ride their
 segment's bones, so that the way the body faces shows; one material. ``skin.inverseBindMatrices`` are the rest pose's.
 One animation: a sample per motion frame at 1/fps, a rotation channel per bone and the
 root's translation in the exports' world (the floor at y = 0); glTF's LINEAR
@@ -21,7 +21,7 @@ import pygltflib as gl
 import trimesh
 
 from mocap import body
-from mocap.facing import FACING_MARKS, facing_marks
+from mocap.io.export.marks import FACING_MARKS, facing_marks
 from mocap.lift.motion import Motion
 from mocap.lift.skeleton import BONE_INDEX, BONES, END_SITE, JOINT_BONES, PARENTS, rest_positions
 

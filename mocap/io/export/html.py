@@ -17,7 +17,7 @@ import numpy as np
 
 from mocap import body
 from mocap.errors import MocapError
-from mocap.facing import FACING_MARKS
+from mocap.io.export.marks import FACING_MARKS
 from mocap.io.export.atomic import write_export
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.motion import Motion
@@ -50,7 +50,7 @@ def playback_html(name: str, fps: float, joints: np.ndarray) -> str:
 
 
 def _marks() -> dict:
-    """What the page needs to draw mocap.facing's marks: the pairs of joints whose left
+    """What the page needs to draw mocap.silhouette.facing's marks: the pairs of joints whose left
     minus right is the body's left, and per mark its segment's joints, where along it,
     how far out in front it stands, its length and radius (metres)."""
     units = body.BODY_HEIGHT_M / body.BODY_HEIGHT

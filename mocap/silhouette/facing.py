@@ -1,102 +1,16 @@
-"""Which way the body faces (beyond the paper).
-
-Facing marks: a nose on the head and a stub on the chest's front, so that the way the
-body faces shows in 3D, where the cylinders alone look alike turned half round. The
-app's 3D bodies, the GLB/FBX character and the playback page draw them.
-
-The head's look: `mocap synth --hair` draws hair over the back of the head and the
-crown (``draw_hair``), and ``facing_away`` reads a video's heads for the orientation
-guess (mocap.lift.orientation): mostly face is seen from the front, mostly hair from
-behind, where the silhouette cannot tell.
-
-The near limbs: in a profile the arm on the camera's side crosses in front of the trunk
-and its outline shows there, while the far one passes behind it, hidden; so does the
-near leg's over the far one where they overlap (``near_limbs``); which of the fit's two
-arms and legs is near names them once the way the performer faces is known
-(mocap.lift.sides).
-"""
+"""Which way the performer faces, read from a video's silhouettes where the 2D pose
+cannot tell (beyond the paper): the head's look (mostly face from the front, mostly hair
+from behind: ``facing_away``) and which arm and leg are near the camera (their outlines
+cross the trunk and each other: ``near_limbs``); mocap.lift.orientation and
+mocap.lift.sides take both as arrays."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX,
-                        SEGMENT_JOINTS, SIDES, WIDTH, left_direction, semi_axes, unit)
-from mocap.edges import Edges
-
-# name -> (segment, where along it from its proximal joint, length and radius in model
-# units of a 175-unit body); each stands out of its segment's front
-FACING_MARKS: dict[str, tuple[str, float, float, float]] = {
-    "nose": ("head", 0.4, 6.0, 2.5), "chest": ("torso", 0.75, 4.0, 6.0)}
-
-
-def facing_marks(joints3d: np.ndarray, body_height: float = BODY_HEIGHT_M) -> np.ndarray:
-    """(2, 3, 3) per FACING_MARKS entry of a pose (16, 3; y up, its left from the limbs'
-    roots): its base on its segment's front (body.semi_axes' front-to-back radius), its
-    unit direction out (forward: the body's left crossed with the segment's axis) and
-    (length, radius, 0) in the pose's units."""
-    j, out = np.asarray(joints3d, float), np.zeros((len(FACING_MARKS), 3, 3))
-    for k, (segment, along, length, radius) in enumerate(FACING_MARKS.values()):
-        i = SEGMENT_INDEX[segment]
-        a, b = j[SEGMENT_JOINTS[i]]
-        out[k, 1] = unit(np.cross(left_direction(j), b - a))
-        out[k, 0] = a + along * (b - a) + out[k, 1] * semi_axes(body_height)[i, 1]
-        out[k, 2, :2] = np.array([length, radius]) * body_height / BODY_HEIGHT
-    return out
-
-
-# -- the head's look: hair behind, face in front ---------------------------------------
-# Hair covers the back of the head above the ears and the crown all round; the face the
-# front below the hairline. A silhouette (and every 2D joint) is the same seen from the
-# front or from behind with depths mirrored (the Necker ambiguity of an orthographic
-# view), but the head shows mostly face from the front and mostly hair from behind.
-HAIRLINE = 0.35          # of the head's length above the neck: hair above it at the back
-FRINGE = 0.8             # above it, hair all round (the forehead's hairline)
-HAIR_BGR = (38, 48, 66)  # dark brown
-_BACK_ARC = 0.25         # hair where the head's surface faces less than this far forward
-
-
-def hair_patches(joints: np.ndarray, radius: float, samples: int = 24) -> list[np.ndarray]:
-    """Points (N, 3) of each hair patch of a pose (16, 3; camera frame, z toward the
-    camera) whose head is a cylinder of ``radius``: the back of the head above
-    HAIRLINE and the crown above FRINGE, each only on the side facing the camera,
-    so that a patch projects to a convex region of the head's outline."""
-    a, b = joints[SEGMENT_JOINTS[SEGMENT_INDEX["head"]]]
-    axis = unit(b - a)
-    left = unit(left_direction(joints) - (left_direction(joints) @ axis) * axis)
-    angle = 2 * np.pi * np.arange(samples) / samples
-    normal = np.cos(angle)[:, None] * left + np.sin(angle)[:, None] * np.cross(left, axis)
-    seen = normal[:, 2] > -0.1
-    patches = []
-    for start, arc in ((HAIRLINE, seen & (np.sin(angle) < _BACK_ARC)), (FRINGE, seen)):
-        for run in _circular_runs(arc):
-            ring = normal[run] * radius
-            patches.append(np.concatenate([a + start * (b - a) + ring, b + ring]))
-    return patches
-
-
-def _circular_runs(mask: np.ndarray) -> list[np.ndarray]:
-    """Index arrays of the stretches of True (two or more) around a circular mask."""
-    if mask.all():
-        return [np.arange(len(mask))]
-    shift = int(np.argmin(mask))                    # start on a False: no run wraps
-    edges = np.flatnonzero(np.diff(np.r_[0, np.roll(mask, -shift).astype(int), 0]))
-    return [(np.arange(a, b) + shift) % len(mask) for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
-
-
-def draw_hair(img: np.ndarray, joints: np.ndarray, radius: float, project, outline: np.ndarray,
-              line: int) -> None:
-    """Paint the hair patches (``hair_patches``) onto a drawn head: ``project`` takes
-    camera-frame points to pixels, ``outline`` is the head's drawn convex hull in
-    sixteenths of a pixel (the patches are clipped to it)."""
-    outline = outline.reshape(-1, 2).astype(np.float32)
-    for points in hair_patches(joints, radius):
-        patch = cv2.convexHull(np.round(project(points) * 16).astype(np.float32))
-        area, shape = cv2.intersectConvexConvex(patch, outline)
-        if area > 0:
-            cv2.fillConvexPoly(img, np.round(shape).astype(np.int32), HAIR_BGR, line, 4)
-
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, WIDTH
+from mocap.image.edges import Edges
 
 # The upper head (from above the ears to the crown, of the fitted neck -> head top) is
 # split into its dark and light tones (Otsu); the dark one's share is about 0.35 seen
@@ -185,7 +99,7 @@ def near_limbs(silhouettes: list, joints2d: np.ndarray, body_px: np.ndarray, sca
     """(F, 2) for the arms and the legs of the fit (joints2d (F, 16, 2), image sides,
     video pixels; ``body_px`` (F,) video pixels of the model's body height), how much
     more the image-left limb shows its outline inside the silhouette than the
-    image-right one: the edge support (mocap.edges.Edges.inside, 0..1) along the sides
+    image-right one: the edge support (mocap.image.edges.Edges.inside, 0..1) along the sides
     of its two segments, Table 1's widths wide. Where an arm lies over the trunk, or
     one leg over the other, the near one's edges show and the far one's are hidden
     behind it; a limb off the body has its outline on the silhouette's, which does

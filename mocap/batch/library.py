@@ -8,7 +8,7 @@ leaves a folder without it, which the next run does again. A video that failed h
 ``failed.json`` (its one-line error) instead.
 
 ``DIR/index.html`` lists every video of the library with its contact sheet's
-thumbnail, frames, mean score and doubtful frames (``mocap.review``), and links to its
+thumbnail, frames, mean score and doubtful frames (``mocap.session.review``), and links to its
 playback page and exports; ``DIR/index.csv`` holds the same.
 """
 

@@ -9,9 +9,9 @@ import warnings
 
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
-from mocap.options import add_smooth, smooth_of
+from mocap.cli.options import add_smooth, smooth_of
 from mocap.person import CHOICES as PERSON_MODELS
-from mocap.progressbar import Bar
+from mocap.cli.progress import Bar
 
 
 def _add_fit(p) -> None:
@@ -84,7 +84,7 @@ def _add_synth(p) -> None:
 
 
 def _add_sheet(p) -> None:
-    from mocap.contact import add_sheet_arguments
+    from mocap.batch.sheet import add_sheet_arguments
     add_sheet_arguments(p)
 
 
@@ -103,7 +103,7 @@ def _add_serve(p) -> None:
             from app.main import main as serve
         except ImportError as exc:
             raise MocapError(f"mocap serve needs the app extra: pip install -e '.[app]' ({exc})") from None
-        from mocap.library import review_target
+        from mocap.batch.library import review_target
         target = review_target(args.video) if args.video else None
         video, notes = target or (args.video, None)
         serve(video, args.port, args.host, progress=_progress, annotations=notes, person=args.person_model)
@@ -233,6 +233,3 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     return code
 
-
-if __name__ == "__main__":
-    sys.exit(main())

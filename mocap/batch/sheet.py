@@ -19,7 +19,7 @@ from mocap.errors import MocapError
 from mocap.io.export.motion_json import read_motion
 from mocap.io.export.atomic import write_export
 from mocap.io.fileio import check_writable
-from mocap.overlay import silhouette_view
+from mocap.image.draw import silhouette_view
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.plate import clip_background
 from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame

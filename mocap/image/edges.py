@@ -17,7 +17,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from mocap.percentile import percentile
+from mocap.image.percentile import percentile
 
 INNER_PX = 2                       # edges this close to the silhouette's outline are left out
 SIDE_SAMPLES = np.linspace(0.15, 0.85, 6)   # points along each side, fractions of the length

@@ -24,9 +24,9 @@ from mocap import body
 from mocap.io.bvh import contract_joints, read_bvh
 from mocap.io.video import write_video
 from mocap.errors import MocapError
-from mocap.facing import draw_hair
-from mocap.truth import Camera, Truth, save_truth
-from mocap.walk import walk_cycle
+from mocap.synth.hair import draw_hair
+from mocap.synth.truth import Camera, Truth, save_truth
+from mocap.synth.walk import walk_cycle
 
 WALK_CYCLE = "walk-cycle"   # the source name of the procedural walk
 VIEWS = {"side": 0.0, "three-quarter": 45.0, "front": 90.0}
@@ -254,7 +254,7 @@ def draw_frame(scene: Scene, i: int) -> np.ndarray:
     for k in np.argsort(depth):
         for layer in range(len(_LAYERS)):
             cv2.fillConvexPoly(img, cv2.convexHull(px[k, layer]), _SHADES[k][layer], line, 4)
-        if k == _HEAD and scene.opts.hair:      # a face in front, hair behind (mocap.facing)
+        if k == _HEAD and scene.opts.hair:      # a face in front, hair behind (mocap.silhouette.facing)
             draw_hair(img, scene.joints_cam[i], scene.radii[k, 0], scene.camera.project_camera,
                       cv2.convexHull(px[k, 0]), line)
     if scene.opts.noise > 0:

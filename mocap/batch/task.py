@@ -2,7 +2,7 @@
 
 The video goes through the pipeline `mocap fit` runs (``mocap.pipeline.open_session``:
 the annotations' method, else the silhouette method), then every file
-of its library folder (``mocap.library``) is written, each atomically (the formats
+of its library folder (``mocap.batch.library``) is written, each atomically (the formats
 through the export registry, ``mocap.io.export.formats``), and the folder's
 record last. A bad video never raises out of the task: its one-line error comes back
 in the ``Outcome`` and is recorded in the folder, so one broken file does not stop the
@@ -19,14 +19,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from mocap.contact import contact_sheet, write_image
+from mocap.batch.sheet import contact_sheet, write_image
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import FORMATS, Clip, write_format
 from mocap.io.export.masks import mask_name
 from mocap.io.export.motion_json import read_motion
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.library import RECORD, write_failure, write_record
+from mocap.batch.library import RECORD, write_failure, write_record
 from mocap.pipeline import Progress, open_session
 from mocap.session import Session, SilhouetteSession
 from mocap.silhouette.background import Background
@@ -167,7 +167,7 @@ def write_sheets(folder: Path, info: VideoInfo) -> dict[str, str]:
 
 def summarise(session: Session, notes: Annotations) -> dict:
     """What the library shows of a fit: frames, frames with a person, mean score and
-    the number of doubtful frames (the review queue, ``mocap.review``)."""
+    the number of doubtful frames (the review queue, ``mocap.session.review``)."""
     scores = session.scores
     fitted = np.isfinite(scores)
     return {"method": notes.method or "silhouette", "frames": len(scores), "fitted": int(fitted.sum()),

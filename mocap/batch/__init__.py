@@ -1,8 +1,8 @@
 """`mocap batch`: many videos at once on a Dask cluster, resumable, into a motion library.
 
-Each video is one task (``mocap.batchtask.run_job``: the fit of `mocap fit`, the
+Each video is one task (``mocap.batch.task.run_job``: the fit of `mocap fit`, the
 exports, masks and contact sheet) that writes its own folder ``DIR/<name>``
-(``mocap.library``). Without ``--scheduler`` the tasks run on a local cluster of one
+(``mocap.batch.library``). Without ``--scheduler`` the tasks run on a local cluster of one
 single-threaded process per core (the fit is pure Python and numpy on small arrays:
 processes, not threads, scale it); with one, on an existing cluster whose workers have
 mocap installed and see the videos and DIR at the same paths.
@@ -30,11 +30,11 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from mocap.batchtask import DEFAULT_EXPORTS, EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
+from mocap.batch.task import DEFAULT_EXPORTS, EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
 from mocap.errors import MocapError
 from mocap.io.export.formats import require
-from mocap.library import ANNOTATIONS, is_finished, write_index
-from mocap.options import add_smooth, smooth_of
+from mocap.batch.library import ANNOTATIONS, is_finished, write_index
+from mocap.cli.options import add_smooth, smooth_of
 
 VIDEO_SUFFIXES = {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv",
                   ".ogv"}
