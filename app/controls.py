@@ -11,8 +11,8 @@ from pathlib import Path
 from app.signs import build_signs
 from app.state import AppState, FrameView
 from mocap.body import JOINTS, ORIENTATIONS
-from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
 from mocap.io.export.formats import FORMATS
+from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
 
 AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
 NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing"

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable
 
 from app import saving
 from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
+from mocap.session import marks_from_fit
 
 Change = Callable[[Annotations], Annotations]
 
@@ -104,11 +105,11 @@ class Edits:
         return self.edit(self._frame, lambda n: n.with_method(method))
 
     def marks_from_fit(self) -> bool:
-        """Place all 16 marks on frame 0 where the silhouette fit has them (SilhouetteSession.tracking_marks)."""
+        """Place all 16 marks on frame 0 where the silhouette fit has them (mocap.session.marks_from_fit)."""
         with self._lock:
             if self._fitted is None:
                 raise MocapError("frame 0 has no silhouette fit to take the marks from yet")
-            marks = self._fitted.tracking_marks()
+            marks = marks_from_fit(self._fitted)
 
         def change(notes: Annotations) -> Annotations:
             for name, xy in marks.items():

@@ -8,8 +8,8 @@ from functools import cache
 from app.controls import DOWNLOADS, NO_JOINT, Controls
 from app.signs import sign_button
 from app.state import AppState, FrameView
-from mocap.person import DEFAULT_MODEL, available
 from mocap.io.export.formats import FORMATS
+from mocap.person import DEFAULT_MODEL, available
 
 
 @cache

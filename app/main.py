@@ -8,21 +8,34 @@ import socket
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import viser
 
-from app.controls import (AUTO, DOWNLOADS, EDITS, FRAME_STEPS, KEY_STEPS, METHOD_CHOICES, NO_JOINT,
-                          Controls, build_controls, eyes_text, frame_text, orientation_text,
-                          review_text, stage_text, tracking_text)
+from app.controls import (
+    AUTO,
+    DOWNLOADS,
+    EDITS,
+    FRAME_STEPS,
+    KEY_STEPS,
+    METHOD_CHOICES,
+    NO_JOINT,
+    Controls,
+    build_controls,
+    eyes_text,
+    frame_text,
+    orientation_text,
+    review_text,
+    stage_text,
+    tracking_text,
+)
 from app.enabling import control_states
+from app.layout import Layout, place_cameras
 from app.player import Player
 from app.state import AppState, FrameView
-from app.layout import Layout, place_cameras
-from app.views import (FrameCache, SceneView, caption_image, silhouette_image, tracked_image,
-                       video_image)
+from app.views import FrameCache, SceneView, caption_image, silhouette_image, tracked_image, video_image
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.person import DEFAULT_MODEL, NONE

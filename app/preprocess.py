@@ -9,13 +9,13 @@ import re
 import sys
 import threading
 import traceback
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable
 
 from mocap.errors import MocapError
+from mocap.io.annotations import Annotations
 from mocap.person import NONE, available, check_name, install_hint
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
-from mocap.io.annotations import Annotations
 from mocap.session import check_tracking_marks, marks_of, remarks_of
 
 
@@ -193,7 +193,7 @@ class Preprocessing:
         try:
             session = open_session(self.info, notes, method="track",
                                    progress=lambda p: report(p.done, "tracking"))
-            session.inputs      # the 3D, before the lock
+            session.inputs  # noqa: B018 (the 3D worked out before the lock)
             with self._lock:
                 if self._annotations != notes:      # edits made while tracking
                     session.annotate(self._annotations)

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -19,12 +19,11 @@ from app.edits import Edits, placed
 from app.history import History
 from app.preprocess import Preprocessing
 from mocap.errors import MocapError
-from mocap.pipeline import Progress, person_model
 from mocap.io.annotations import Annotations
 from mocap.io.video import open_video, processing_scale
-from mocap.session import Session, SilhouetteSession, TrackSession, remarks_of
+from mocap.pipeline import Progress, person_model
+from mocap.session import FrameFit, Session, Silhouette, SilhouetteSession, TrackSession, remarks_of
 from mocap.session.review import Doubt
-from mocap.session import FrameFit, Silhouette
 
 
 @dataclass(frozen=True, eq=False)

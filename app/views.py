@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import threading
 from collections import OrderedDict
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 import cv2
 import numpy as np
@@ -14,8 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from app.layout import Layout
 from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
-from mocap.image.draw import (LANDMARK_BGR, LEARNED_BGR, draw_landmarks, draw_skeleton, segment_colour,
-                              silhouette_view)
+from mocap.image.draw import LANDMARK_BGR, LEARNED_BGR, draw_landmarks, draw_skeleton, segment_colour, silhouette_view
 from mocap.io.export.marks import FACING_MARKS, facing_marks
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.session import Silhouette

@@ -26,9 +26,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-
 from bench_naming import naming_errors
-from mocap.io.bvh import contract_joints, read_bvh
+
+from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.lift.taylor import yaw_of
 from mocap.pipeline import open_session
 from mocap.synth import RenderOptions, background, plan_scene, render_clip, resample_indices

@@ -26,13 +26,13 @@ import cv2  # noqa: E402
 cv2.setNumThreads(1)
 
 from mocap.body import JOINTS  # noqa: E402
-from mocap.silhouette.fit2d import FIT_SCALE, fit_frame  # noqa: E402
-from mocap.silhouette.torso import torso_spread  # noqa: E402
-from mocap.synth.metrics import side_matched_errors  # noqa: E402
-from mocap.pipeline import silhouette_passes  # noqa: E402
-from mocap.silhouette.passes import body_heights, normalise, normalised_grey  # noqa: E402
-from mocap.synth import render_motion  # noqa: E402
 from mocap.io.video import open_video  # noqa: E402
+from mocap.pipeline import silhouette_passes  # noqa: E402
+from mocap.silhouette.fit2d import FIT_SCALE, fit_frame  # noqa: E402
+from mocap.silhouette.passes import body_heights, normalise, normalised_grey  # noqa: E402
+from mocap.silhouette.torso import torso_spread  # noqa: E402
+from mocap.synth import render_motion  # noqa: E402
+from mocap.synth.metrics import side_matched_errors  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 CLIPS = [  # (bvh, view, source frame range)

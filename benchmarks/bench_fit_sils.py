@@ -33,8 +33,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 from bench_clips import CLIPS, clip_names, mask_silhouettes  # noqa: E402
 
 from mocap.body import JOINT_INDEX  # noqa: E402
-from mocap.synth.metrics import side_matched_errors  # noqa: E402
 from mocap.silhouette.passes import iter_fits  # noqa: E402
+from mocap.synth.metrics import side_matched_errors  # noqa: E402
 
 ARMS = [JOINT_INDEX[f"{j}_{s}"] for j in ("elbow", "wrist") for s in "lr"]
 LEGS = [JOINT_INDEX[f"{j}_{s}"] for j in ("knee", "ankle") for s in "lr"]

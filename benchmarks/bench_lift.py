@@ -34,15 +34,25 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.io.annotations import Annotations, annotations_for_poses
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_NAMES
-from mocap.lift.taylor import (clip_lengths, depth_fractions, facing_yaw, image_to_model, lift_pose,
-                        orientation_of_yaw, signs_of, yaw_of, UNIT_M)
-from mocap.synth.metrics import pa_mpjpe
+from mocap.io.annotations import Annotations
 from mocap.lift.orientation import NEGLIGIBLE, guess_signs
+from mocap.lift.taylor import (
+    UNIT_M,
+    clip_lengths,
+    depth_fractions,
+    facing_yaw,
+    image_to_model,
+    lift_pose,
+    orientation_of_yaw,
+    signs_of,
+    yaw_of,
+)
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session
 from mocap.synth import render_motion
+from mocap.synth.metrics import pa_mpjpe
+from mocap.synth.oracle import annotations_for_poses
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 CLIPS = (("walk", "cmu_walk.bvh"), ("walk", "walk01.bvh"), ("run", "cmu_run.bvh"),

@@ -19,8 +19,8 @@ import json
 import sys
 
 import numpy as np
-
 from bench_clips import CLIPS, clip_names, true_mask_session
+
 from mocap.body import JOINT_INDEX, LIMB_JOINTS
 from mocap.synth.metrics import side_matched_errors
 

@@ -27,9 +27,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from mocap.io.video import iter_frames, open_video
+from mocap.io.video import iter_frames, open_video, write_video
 from mocap.pipeline import FITTING, SILHOUETTES, Progress, fit_video_to_file
-from mocap.io.video import write_video
 from mocap.synth import render_motion
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh" / "cmu_01_01_jumps.bvh"

@@ -22,8 +22,8 @@ import json
 import sys
 
 import numpy as np
-
 from bench_clips import CLIPS, clip_names, true_mask_session
+
 from mocap.body import JOINT_INDEX
 from mocap.pipeline import open_session
 

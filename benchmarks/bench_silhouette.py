@@ -26,8 +26,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 from helpers import DOG_WALKER  # noqa: E402
 from test_silhouette import synthetic_scene  # noqa: E402
 
-from mocap.silhouette.background import estimate_background, extract_silhouette  # noqa: E402
 from mocap.io.video import iter_frames, open_video  # noqa: E402
+from mocap.silhouette.background import estimate_background, extract_silhouette  # noqa: E402
 
 REPEATS = 5  # passes over each clip's frames
 

@@ -18,7 +18,7 @@ orientation's side (the user's annotation); it assumes the default focal length
   (mocap.synth.metrics.facing_error), which PA-MPJPE's alignment forgives but an animation
   shows, from the tracked and from the exact 2D;
 - CPU ms/frame and frames/s: tracking alone (frames already decoded), one thread,
-  CPU time; "total" is track_video end to end (decoding, tracking, 3D);
+  CPU time; "total" is track_clip end to end (decoding, tracking, 3D);
 - silhouette: mocap.pipeline.fit_video on the same clip (2D error matched by image
   side); it estimates a static background, which a panning one is not, so its
   numbers there show its assumption broken. Beside it, the same motion and camera
@@ -53,17 +53,17 @@ cv2.setNumThreads(1)
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from helpers import DOG_WALKER, dog_walker_marks  # noqa: E402
+
 from mocap.body import JOINT_INDEX  # noqa: E402
-from mocap.track.marks import check_marks, shoulders_as_hips  # noqa: E402
-from mocap.synth.metrics import (facing_error, labelled_body_height, labelled_errors, pa_mpjpe,  # noqa: E402
-                           side_matched_errors)
-from mocap.track.calibration import default_camera  # noqa: E402
-from mocap.track.perspective import to_contract  # noqa: E402
+from mocap.camera import default_camera  # noqa: E402
+from mocap.io.video import iter_frames, open_video  # noqa: E402
 from mocap.pipeline import fit_video  # noqa: E402
 from mocap.session import SilhouetteSession as Session  # noqa: E402
 from mocap.synth import render_motion  # noqa: E402
-from mocap.track.tracking import steady_reconstruction, track_frames, track_video, turn_of  # noqa: E402
-from mocap.io.video import iter_frames, open_video  # noqa: E402
+from mocap.synth.metrics import facing_error, labelled_body_height, labelled_errors, pa_mpjpe, side_matched_errors  # noqa: E402
+from mocap.track.marks import check_marks, shoulders_as_hips  # noqa: E402
+from mocap.track.perspective import to_contract  # noqa: E402
+from mocap.track.tracking import steady_reconstruction, track_clip, track_frames, turn_of  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 FOCAL = 800.0
@@ -107,7 +107,7 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> dict:
     tracking = (time.process_time() - t) / len(decoded)
     del decoded
     t = time.process_time()
-    result = track_video(video, truth.joints2d[0], orientation=orientation)
+    result = track_clip(video, truth.joints2d[0], orientation=orientation)
     total = (time.process_time() - t) / len(truth.joints2d)
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px * 100
     exact = to_contract(steady_reconstruction(truth.joints2d, default_camera(truth.width, truth.height),
@@ -179,7 +179,7 @@ def real_clip_errors(video: Path, marks: dict[str, dict[str, list[float]]]) -> N
     info, fits = fit_video(video)
     fitted = Session(info, fits).inputs
     t = time.process_time()
-    result = track_video(info, shoulders_as_hips(fitted.joints2d[0]),
+    result = track_clip(info, shoulders_as_hips(fitted.joints2d[0]),
                          orientation=fitted.orientation[0])
     seconds = time.process_time() - t
     body_px = labelled_body_height(marks)
@@ -192,7 +192,7 @@ def real_clip_errors(video: Path, marks: dict[str, dict[str, list[float]]]) -> N
         cells = " | ".join(f"{np.median(x) / body_px * 100:{w}.1f} {np.percentile(x, 90) / body_px * 100:5.1f}"
                            for x, w in zip(d, (17, 14)))
         print(f"{kind:10s} {len(d[0]):5d} | {cells}")
-    print(f"track_video end to end: {info.frame_count / seconds:.0f} frames/s")
+    print(f"track_clip end to end: {info.frame_count / seconds:.0f} frames/s")
 
 
 if __name__ == "__main__":

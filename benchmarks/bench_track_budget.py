@@ -41,19 +41,18 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
 from bench_track import DATA, FOCAL, bench_main, orientation_of
-from mocap.session.review import covering, review_queue
-from mocap.io.annotations import Annotations
+
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_INDEX, WIDTH
-from mocap.synth.metrics import pa_mpjpe
-from mocap.track.calibration import default_camera
-from mocap.track.perspective import to_contract
-from mocap.synth import render_motion
-from mocap.track.tracking import (SPREAD_S, TrackResult, spread_corrections, steady_reconstruction,
-                         track_video, turn_of)
+from mocap.camera import default_camera
+from mocap.io.annotations import Annotations
 from mocap.session import TrackSession
+from mocap.session.review import covering, review_queue
+from mocap.synth import render_motion
+from mocap.synth.metrics import pa_mpjpe
 from mocap.synth.truth import Truth
+from mocap.track.perspective import to_contract
+from mocap.track.tracking import SPREAD_S, TrackResult, spread_corrections, steady_reconstruction, track_clip, turn_of
 
 LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
                for side in "lr" for kind, a, b in (("arm", "elbow", "wrist"), ("leg", "knee", "ankle"))}
@@ -180,7 +179,7 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, 
     truth = render_motion(DATA / bvh, video, frames=frames, fps=fps, yaw=yaw,
                           perspective=FOCAL, moving_background=True)
     orientation = orientation_of(truth.joints3d[0])
-    result = track_video(video, truth.joints2d[0], orientation=orientation)
+    result = track_clip(video, truth.joints2d[0], orientation=orientation)
     name = Path(bvh).stem.replace("cmu_01_01_", "cmu_")
     stops, far = review_plan(result, orientation)
     return f"{name} {yaw:.0f}", (budget(result.joints2d, truth, turn_of(orientation), stops, far),

@@ -40,15 +40,15 @@ import contract  # noqa: E402
 from score import score  # noqa: E402
 
 from mocap.body import JOINTS  # noqa: E402
+from mocap.camera import default_camera  # noqa: E402
 from mocap.io.annotations import load_annotations  # noqa: E402
 from mocap.io.video import open_video  # noqa: E402
-from mocap.synth.metrics import procrustes_aligned  # noqa: E402
-from mocap.session.tracking import TrackSession  # noqa: E402
-from mocap.track.calibration import default_camera  # noqa: E402
-from mocap.track.tracking import TrackResult  # noqa: E402
 from mocap.lift.taylor import orientation_of_yaw, yaw_of  # noqa: E402
 from mocap.pipeline import fit_video_to_file  # noqa: E402
+from mocap.session.tracking import TrackSession  # noqa: E402
 from mocap.synth import RenderOptions, render_motion  # noqa: E402
+from mocap.synth.metrics import procrustes_aligned  # noqa: E402
+from mocap.track.tracking import TrackResult  # noqa: E402
 
 SHARED = ("track_salsa", "track_walk")
 # name: (BVH, source frames A:B, render yaw, seed)

@@ -24,12 +24,12 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from bench_track_clips import RENDERED, SHARED, clip_files
 
-from bench_track_clips import SHARED, RENDERED, clip_files
 from mocap.body import JOINTS
+from mocap.camera import default_camera
 from mocap.io.video import iter_frames, open_video, processing_scale
 from mocap.track import blocks
-from mocap.track.calibration import default_camera
 from mocap.track.parts import PART_JOINTS, PARTS
 from mocap.track.tracker import BodyTracker
 from mocap.track.tracking import turn_of
@@ -77,9 +77,10 @@ def summary(costs: dict[str, np.ndarray], off: float) -> None:
     for k, part in enumerate(PARTS):
         bad = (costs["error"][:, k] > off) & ~costs["lost"]
         preferred = bad & (costs["tracked"][:, k] < costs["true"][:, k])
-        mean = (lambda x: f"{x[bad, k].mean():>6.1f}") if bad.any() else (lambda x: f"{'-':>6}")
+        tracked, true = (f"{costs[c][bad, k].mean():>6.1f}" if bad.any() else f"{'-':>6}"
+                         for c in ("tracked", "true"))
         print(f"{part.segment:<13} {bad.sum():>4} {preferred.sum():>9} {(bad & ~preferred).sum():>6} "
-              f"{mean(costs['tracked']):>7} {mean(costs['true'])}")
+              f"{tracked:>7} {true}")
 
 
 def frames_of(costs: dict[str, np.ndarray], segment: str) -> None:

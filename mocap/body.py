@@ -1,14 +1,9 @@
-"""The 10-cylinder body model of the silhouette paper (section 3.1, Table 1, with the
-elbow lower down: see _KIND_LENGTH).
+"""The 10-cylinder body model of the silhouette paper (section 3.1, Table 1); names as in CONTRACT.md.
 
-Names follow CONTRACT.md. Lengths and widths are in model units of a 175-unit body
-height; Table 1's "radii" are read as widths (diameters), which is what fits a body.
-
-2D conventions used by the fit: pixel coordinates (x right, y down); a segment's
-*angle* is the image direction from its proximal to its distal joint in degrees,
-counter-clockwise with y pointing up (90 = straight up, 270 = straight down), the
-convention of Table 1's joint limits. During 2D fitting "left" means the image left
-side (paper, section 3.3); anatomical sides are decided when lifting to 3D.
+Lengths and widths are model units of a 175-unit body; Table 1's "radii" are read as widths.
+2D: pixels, x right, y down; a segment's *angle* is the image direction from its proximal to its
+distal joint, degrees counter-clockwise with y up (90 up, 270 down), as in Table 1's joint limits.
+In the 2D fit "left" is image left (section 3.3); anatomical sides are decided in the 3D lift.
 """
 
 from __future__ import annotations
@@ -42,15 +37,11 @@ SEGMENT_NAMES: tuple[str, ...] = tuple(SEGMENTS)
 SEGMENT_INDEX: dict[str, int] = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 
 BODY_HEIGHT = 175.0
+STANDING_PERCENTILE = 90    # of a clip's head-to-feet heights: its standing height (bends are shorter)
 BODY_HEIGHT_M = 1.75
 
-# Table 1's lengths, but for the arm: Table 1 has the upper arm 25 and the lower arm 35
-# (its lower arm reaches into the hand); people (anthropometric tables: shoulder to
-# elbow 0.19 of body height, elbow to wrist 0.15, i.e. 33 and 26 units) and
-# motion-capture skeletons (28-35 and 23-27 units) bend further down and end at the
-# wrist, so the arm is 31 + 27 units (Algorithm 6's ratios up to RATIO_RANGE's 1.15
-# still reach into a hand). With 25/35 the fitted elbow sat 4-5% of body height too
-# high and the wrist 3-5% too low (bench_fit2d).
+# Table 1's lengths, but the arm is 31 + 27 (Table 1: 25 + 35, its lower arm reaching into
+# the hand): people's elbows sit lower and their arms end at the wrist.
 _KIND_LENGTH = {"head": 25.0, "torso": 52.0, "upper_arm": 31.0, "lower_arm": 27.0,
                 "upper_leg": 46.0, "lower_leg": 52.0}
 _KIND_WIDTH = {"head": 20.0, "torso": 40.0, "upper_arm": 10.0, "lower_arm": 10.0,
@@ -71,30 +62,21 @@ def segment_label(segment: str) -> str:
 LENGTH = np.array([_KIND_LENGTH[segment_kind(s)] for s in SEGMENT_NAMES])
 WIDTH = np.array([_KIND_WIDTH[segment_kind(s)] for s in SEGMENT_NAMES])
 
-# The torso's depth (front to back): its cross-section is an ellipse 40 wide and this
-# deep, so its width in the image tells how far the body is turned (section 3.4's
-# "horizontal foreshortening of the torso"); the other segments are round.
+# The torso's cross-section is an ellipse 40 wide and this deep, so its seen width tells how far
+# the body is turned (section 3.4's "horizontal foreshortening of the torso"); other segments are round.
 TORSO_DEPTH = 22.0
 
 # Where the limbs attach, in model units from the torso axis (not in Table 1):
 # arms hang beside the 40-wide torso, legs side by side under it.
 SHOULDER_HALF_SPAN = 18.0
 HIP_HALF_SPAN = 10.0
-# The shoulder joints sit this far below the neck (the base of the neck, the torso's
-# top), about 31 units under the crown as in people and in motion-capture skeletons.
+# shoulder joints this far below the neck (the torso's top), as in people and mocap skeletons
 SHOULDER_DROP = 6.0
-# The hip joints lie this far (model units) below where the model's thighs attach, along
-# the trunk: Table 1 puts the thighs' tops 77 units under the crown; hip joints sit
-# 86-89 units under it in people (anthropometric tables: 0.49-0.51 of body height
-# above the ankles) and 74-86 in motion-capture skeletons (2D fits placed them 2.5-5%
-# of body height too high on walks and runs). The fit keeps Table 1; the joints it
-# reports are moved (``reported_joints``).
+# Hip joints this far (model units) below where Table 1's thighs attach, along the trunk, as in
+# people; the fit keeps Table 1 and moves the joints it reports (``reported_joints``).
 HIP_BELOW_THIGH_TOPS = 4.0
-# The foot below the ankle: the contract's body ends at the ankles, a body's silhouette at
-# the soles, about 0.039 of the stature lower in people (anthropometric tables: ankle
-# height), 7 units under a 175-unit body. The 2D fit draws it (a piece that continues
-# each lower leg this far past the ankle) so that the ankle is not put at the sole;
-# no contract joint names it.
+# The sole below the ankle (ankle height): the 2D fit continues each lower leg this far so that
+# the ankle is not put at the silhouette's sole; no contract joint names it.
 FOOT_LENGTH = 7.0
 # chest: the point on the pelvis->neck axis at this fraction (apex of the key triangle)
 CHEST_FRACTION = 0.6
@@ -131,8 +113,7 @@ SEGMENT_OF_BONE: dict[tuple[str, str], str] = {ends: s for s, ends in SEGMENTS.i
 
 
 class Limb(NamedTuple):
-    """An arm or a leg: three joints, root (shoulder or hip) to end (wrist or ankle),
-    and the two segments between them."""
+    """An arm or a leg: three joints, root (shoulder or hip) to end, and its two segments."""
 
     kind: str                           # "arm" or "leg"
     side: str                           # "l" or "r"
@@ -141,8 +122,7 @@ class Limb(NamedTuple):
 
 
 def _limbs() -> tuple[Limb, ...]:
-    """Every limb, each side's in joint order: a chain of two bones down the tree from a
-    joint of that side whose parent is on neither side."""
+    """Every limb, per side in joint order: two bones down from a sided joint with an unsided parent."""
     out = []
     for side in SIDES:
         for root in JOINTS:
@@ -194,14 +174,12 @@ NECK_PER_SHOULDER = LENGTH[0] / (LENGTH[0] - SHOULDER_DROP)
 
 
 def reported_joints(joints: np.ndarray, px_per_unit: float) -> np.ndarray:
-    """(16, 2) a fitted model's joints as the fit reports them: the pelvis and hips
-    moved HIP_BELOW_THIGH_TOPS units from the neck's side, along the trunk's axis."""
+    """(16, 2) fitted joints as reported: pelvis and hips moved HIP_BELOW_THIGH_TOPS units down the trunk."""
     return _hips_moved(joints, HIP_BELOW_THIGH_TOPS * px_per_unit)
 
 
 def model_joints(reported: np.ndarray, px_per_unit: float) -> np.ndarray:
-    """(16, 2) the model's joints of joints as the fit reports them (the inverse of
-    ``reported_joints``): the pelvis and hips moved back up the trunk's axis."""
+    """(16, 2) the inverse of ``reported_joints``: pelvis and hips moved back up the trunk."""
     return _hips_moved(reported, -HIP_BELOW_THIGH_TOPS * px_per_unit)
 
 
@@ -215,8 +193,7 @@ def _hips_moved(joints: np.ndarray, pixels: float) -> np.ndarray:
 
 
 def torso_width(spread):
-    """Seen width of the torso (model units) for a seen shoulder/hip span fraction:
-    the ellipse's extent across the line of sight, W when frontal, TORSO_DEPTH in profile."""
+    """Seen torso width (model units) for a seen span fraction: W frontal, TORSO_DEPTH in profile."""
     w = WIDTH[SEGMENT_NAMES.index("torso")]
     return np.sqrt(TORSO_DEPTH ** 2 + (w ** 2 - TORSO_DEPTH ** 2) * np.asarray(spread) ** 2)
 
@@ -241,20 +218,15 @@ def direction(angle_deg):
 
 
 def image_angle(d: np.ndarray) -> float:
-    """The model's angle (degrees, counter-clockwise from image right) of an image
-    vector ``d`` (x right, y down): the inverse of ``direction``."""
+    """The angle (degrees, y up) of an image vector ``d`` (x right, y down): inverse of ``direction``."""
     return float(np.degrees(np.arctan2(-d[1], d[0])))
 
 
 @dataclass(frozen=True)
 class Pose2D:
-    """The 2D model: where the pelvis is, how big the body is, how each segment lies.
-
-    ``angle`` and ``ratio`` are indexed like SEGMENT_NAMES. ``ratio`` is the
-    foreshortening ratio of Algorithm 6 (projected length / model length).
-    ``spread`` in [0, 1] is how much of the shoulder and hip span is seen: 1 facing
-    the camera, 0 in profile.
-    """
+    """The 2D model. ``angle``, ``ratio`` are indexed like SEGMENT_NAMES; ``ratio`` is
+    Algorithm 6's foreshortening ratio (projected / model length); ``spread`` in [0, 1]
+    is the seen share of the shoulder and hip span (1 facing the camera, 0 in profile)."""
 
     pelvis: np.ndarray                     # (2,) pixels
     scale: float                           # pixels per model unit
@@ -302,9 +274,8 @@ KINEMATIC_MATRIX = _kinematic_matrix()
 
 def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndarray,
                                 ratio: np.ndarray, spread: np.ndarray) -> np.ndarray:
-    """Joints (B, 16, 2) for B poses given as arrays (B,2), (B,10), (B,10), (B,)
-    (the pelvis (2,) and the spread a float where the B poses share them): each a
-    fixed linear combination (KINEMATIC_MATRIX) of ``kinematic_basis``'s vectors."""
+    """Joints (B, 16, 2) of B poses (B, 2), (B, 10), (B, 10), (B,) (pelvis (2,), spread a
+    float where shared): KINEMATIC_MATRIX times ``kinematic_basis``'s vectors."""
     return joints_of_basis(kinematic_basis(pelvis, scale, angle, ratio, spread)[0])
 
 
@@ -342,11 +313,7 @@ def segment_endpoints(joints: np.ndarray) -> np.ndarray:
 
 
 def body_height(joints3d_rest: np.ndarray) -> float:
-    """Standing height of a skeleton: head + torso + upper leg + lower leg lengths.
-
-    Uses the mean of the two legs; this is the height that the 2D error is
-    measured against and that the model's 175 units correspond to.
-    """
+    """Standing height of a skeleton: head + torso + the mean leg (what the model's 175 units mean)."""
     seg = segment_endpoints(np.asarray(joints3d_rest, dtype=float))
     lengths = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=-1)
     by = dict(zip(SEGMENT_NAMES, lengths))
@@ -371,8 +338,7 @@ def left_direction(joints: np.ndarray) -> np.ndarray:
 
 
 def knee_facing(joints2d: np.ndarray) -> str:
-    """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward
-    over the frames given (knees bend forward)."""
+    """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward (forward)."""
     return "right" if sum(knee_bend(joints2d, side) for side in SIDES).sum() >= 0 else "left"
 
 
@@ -392,11 +358,9 @@ def limb_penalty(upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left:
                  side: float, leg: bool) -> np.ndarray:
     """Joint-limit violation (>= 0) of limbs given as 3D upper/lower vectors (..., 3).
 
-    Legs: thigh not more than 30 degrees back nor across the midline, knee bending
-    backward only. Arms: upper arm not across the midline nor more than 60 degrees
-    back, elbow bending forward, not outward. Both prefer the sagittal plane (limbs
-    swing forward and back; arms hang ARM_REST out from it, beside the torso).
-    """
+    Legs: thigh at most 30 degrees back, not across the midline, knee bending backward.
+    Arms: upper arm not across the midline nor over 60 degrees back, elbow bending forward,
+    not outward. Both prefer the sagittal plane (arms hang ARM_REST out from it)."""
     u, l = unit(upper), unit(lower)
     bend = l - (l * u).sum(-1, keepdims=True) * u
     uf, ul = (u * facing).sum(-1), side * (u * left).sum(-1)

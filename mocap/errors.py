@@ -1,5 +1,4 @@
-"""The one exception the command line turns into a one-line message, and the warning
-it prints as one line before going on."""
+"""The error and warning the command line prints as one line."""
 
 
 class MocapError(Exception):

@@ -1,21 +1,17 @@
-"""The one pipeline from a video to a 3D animation; the command line and the app
-both run it, reporting each step to a ``progress`` callback.
+"""The pipeline from a video to a 3D animation, run by the command line and the app.
 
-The silhouette method: silhouettes (section 3.2), then the 2D fits (section 3.3),
-streamed frame by frame (``mocap.silhouette.passes``); the lifting (section 3.4) and
-the motion follow from its session. The tracking method: the joints marked on frame
-0 followed through the video (mocap.track.tracking), the 3D from its session.
-``open_session`` runs either and returns the session (mocap.session) that lifts
-and exports; ``fit_video_to_file`` is `mocap fit`.
+Silhouette method: silhouettes (section 3.2) and 2D fits (section 3.3) streamed frame by frame,
+lifted (section 3.4) by its session; tracking method: the joints marked on frame 0 followed
+through the video. ``open_session`` runs either; ``fit_video_to_file`` is `mocap fit`.
 """
 
 from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable
 
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.annotations import Annotations, load_annotations
@@ -23,10 +19,10 @@ from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
 from mocap.person import DEFAULT_MODEL, NONE, available, check_name, install_hint, open_person_model
-from mocap.session.review import Doubt
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
+from mocap.session.review import Doubt
 from mocap.silhouette import Background, FrameFit, Silhouette, clip_background, fit_clip
-from mocap.track.tracking import TrackResult
+from mocap.track import TrackResult
 
 SILHOUETTES = "finding the performer's silhouette"
 FITTING = "fitting the body model"
@@ -35,11 +31,8 @@ TRACKING = "following the marked joints"
 
 @dataclass(frozen=True)
 class Progress:
-    """How far a run is: ``done`` of ``total`` steps (the silhouette method: two per
-    frame, the tracking method: one), at ``stage``. A step that produced a frame's
-    silhouette or 2D fit carries it (``frame``, ``product``: a Silhouette, None where
-    nobody is, or a FrameFit) so that a viewer can show it at once; a fit whose legs are
-    not chosen yet comes first as a report that is not ``final`` (done unchanged)."""
+    """``done`` of ``total`` steps (two per frame for silhouettes, one for tracking) at ``stage``;
+    ``product`` is the step's Silhouette (None: nobody), FrameFit or None, for viewers to show."""
 
     done: int
     total: int
@@ -63,9 +56,8 @@ def _quiet(_: Progress) -> None:
 
 def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None,
                       person: str = NONE) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    """The silhouette method over a video (mocap.silhouette.fit_clip), seen also by the
-    ``person`` model named (mocap.person; "none": background subtraction alone), each
-    silhouette and fit reported as it comes (``done`` counts both)."""
+    """The silhouette method over a video, also seen by the ``person`` model named ("none":
+    background subtraction alone); each silhouette and fit reported as it comes."""
     report, total, done = progress or _quiet, 2 * info.frame_count, [0]
 
     def shown(product: Silhouette | FrameFit | None, frame: int, final: bool) -> None:
@@ -88,9 +80,8 @@ def fit_video(video: str | os.PathLike | VideoInfo,
 
 
 def person_model(name: str | None) -> str:
-    """The person model a run uses: ``name``, else the environment's MOCAP_PERSON_MODEL,
-    else the default one; where its package is not installed a MocapWarning says how
-    to get it, and the run takes the paper's classical path ("none")."""
+    """``name``, else $MOCAP_PERSON_MODEL, else the default; "none" (with a MocapWarning
+    saying how to install it) where its package is missing."""
     name = check_name(name or os.environ.get("MOCAP_PERSON_MODEL") or DEFAULT_MODEL, " (MOCAP_PERSON_MODEL)")
     if name == NONE or available(name):
         return name
@@ -100,16 +91,13 @@ def person_model(name: str | None) -> str:
 
 
 def tracked(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
-    """The tracking method's pass: the marks on frame 0 of ``notes`` (marks_of), and
-    on every frame they mark the whole body again, followed through the video
-    (mocap.session.tracking.tracked_video)."""
+    """The tracking method's pass: the body marked in ``notes`` followed through the video."""
     report = progress or _quiet
     return tracked_video(info, notes, lambda done, total: report(Progress(done, total, TRACKING)))
 
 
 def takes_tracking(method: str | None, notes: Annotations) -> bool:
-    """Whether a run takes the tracking method: ``method`` if given, else the
-    annotations' (the silhouette method when they name none)."""
+    """Whether ``method``, else the annotations', is the tracking method."""
     return (method or notes.method) == "track"
 
 
@@ -117,11 +105,9 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
                  method: str | None = None, smooth: float = 0.0,
                  background: str | os.PathLike | tuple[int, int] | None = None,
                  progress: Report | None = None, person: str = NONE) -> Session:
-    """Run a method over a video and return its session. ``method`` None: the
-    annotations' method, else the silhouette method; ``background``: the empty
-    scene for it (a photo or video file, or first and last frames of the clip;
-    None: the annotations', resolved by the caller, else estimated); ``person``: the
-    person model the silhouette method also looks through (``person_model``)."""
+    """Run a method (None: the annotations', else silhouette) over a video; its session.
+    ``background``: the empty scene (a photo or video, or first and last frames; None:
+    estimated); ``person``: the silhouette method's person model."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
     if takes_tracking(method, notes):
@@ -133,8 +119,7 @@ def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None
 
 @dataclass(frozen=True)
 class Written:
-    """What `mocap fit` wrote, and the frames the app's review would show (every
-    doubtful one, most doubtful first: mocap.session.review) of the clip's ``n_frames``."""
+    """What `mocap fit` wrote, and the review's doubtful frames (most first) of ``n_frames``."""
 
     paths: list[Path]
     doubtful: list[Doubt]
@@ -146,15 +131,11 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
                       smooth: float = 0.0, background: str | os.PathLike | None = None,
                       masks: str | os.PathLike | None = None, foot_lock: bool = False,
                       progress: Report | None = None, person: str | None = None) -> Written:
-    """`mocap fit`: fit (silhouette method) or track (tracking method), lift,
-    interpolate and write the files asked for, {format key: path} of
-    mocap.io.export.formats (the motion file "json" always: VIDEO.motion.json unless
-    given). ``background``: the empty scene (else the
-    annotations'); ``masks``: a folder for the silhouettes, named in the motion
-    file; ``foot_lock``: planted feet kept in place; ``person``: the person model
-    (``person_model``: None, the default where installed). A background that holds the
-    performer is a MocapWarning; a format this installation cannot write is refused
-    before the video is read."""
+    """`mocap fit`: fit or track, lift, and write ``exports`` ({format key: path}; "json" always,
+    VIDEO.motion.json unless given). ``background``: the empty scene (else the annotations');
+    ``masks``: a folder for the silhouettes; ``foot_lock``: planted feet kept in place; ``person``:
+    None for ``person_model``'s. Unwritable formats are refused before reading; a background
+    holding the performer is a MocapWarning."""
     for key, path in exports.items():
         require(key)
         check_ending(key, path)

@@ -1,21 +1,18 @@
-"""The smoothest sequence of discrete choices over a clip: which of a few states each
-frame takes (a foreshortening sign pair, a limb's depth solution) when states cost
-something each and changes of acceleration cost more."""
+"""The smoothest sequence of discrete per-frame states (a foreshortening sign pair, a limb's
+depth solution) by Viterbi search: state costs plus acceleration costs."""
 
 from __future__ import annotations
 
 import numpy as np
+
 DEPTH_SMOOTH_S = 0.1       # seconds: Gaussian sigma of the lifted depths over time (Inputs.smooth_depths)
 
 
 def smoothest_states(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None,
                      squared: bool = False) -> np.ndarray:
     """(F,) state per frame minimising sum(emission) + sum ||x[t+1] - 2 x[t] + x[t-1]||
-    (its square with ``squared``): a Viterbi search over pairs of consecutive states.
-
-    ``values`` (F, S, D) is what each state puts where, ``emission`` (F, S) a cost per
-    state, ``allowed`` (F, S) a hard mask (every frame needs one allowed state).
-    """
+    (squared with ``squared``). ``values`` (F, S, D): each state's position; ``emission``
+    (F, S): state costs; ``allowed`` (F, S): hard mask, one allowed state per frame."""
     n, s = emission.shape
     cost = np.where(allowed if allowed is not None else True, emission, np.inf)
     if n == 1:

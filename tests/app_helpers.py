@@ -107,4 +107,4 @@ def hold_fitting(monkeypatch, at: int, gate, held=None) -> None:
 
         def finish(self):
             return hold(super().finish())
-    monkeypatch.setattr("mocap.pipeline.FitStream", Held)
+    monkeypatch.setattr("mocap.silhouette.FitStream", Held)

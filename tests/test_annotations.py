@@ -10,11 +10,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mocap.io.annotations import (Annotations, annotations_for_poses, annotations_from_text,
-                               load_annotations, save_annotations)
 from mocap.body import SEGMENT_INDEX
 from mocap.errors import MocapError
+from mocap.io.annotations import Annotations, annotations_from_text, load_annotations, save_annotations
 from mocap.lift.orientation import held_user_signs
+from mocap.synth.oracle import annotations_for_poses
 from mocap.synth.walk import walk_cycle
 
 CONTRACT_EXAMPLE = {

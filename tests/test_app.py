@@ -15,22 +15,21 @@ import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, hold_fitting, tiny_video  # noqa: F401
 from helpers import render_walk, write_empty_scene
 
-from mocap.silhouette.passes import iter_fits, iter_silhouettes
-from mocap.session import review
-from mocap.session.review import Doubt, broken_limits, covering, likely_swaps, review_queue
 from app.controls import REVIEW_LINES, review_text
 from app.edits import toggled_keyframe
+from app.layout import Layout
 from app.saving import annotations_path
 from app.state import AppState
-from app.layout import Layout
 from app.views import DISPLAY_HEIGHT, segment_transforms, video_image
-from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
 from mocap.errors import MocapError
-from mocap.pipeline import fit_video
-from mocap.silhouette.passes import body_heights
+from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.video import open_video, processing_scale
+from mocap.pipeline import fit_video
+from mocap.session import review
+from mocap.session.review import Doubt, broken_limits, covering, likely_swaps, review_queue
+from mocap.silhouette.passes import body_heights, iter_fits, iter_silhouettes
 
 
 def saved(state: AppState) -> Annotations:
@@ -84,8 +83,15 @@ def whole_clip_fits(silhouettes: list, scale: float, fps: float) -> list:
     """Pass two with every window taken over the whole clip at once: the body heights
     (passes.body_heights), the low percentile of the per-frame torso spreads around
     each frame and the lift's spread from its own per-frame ones (passes.torso_reads)."""
-    from mocap.silhouette.passes import (SPREAD_PERCENTILE, SPREAD_WINDOW_S, Fitter, half_window, lift_spread,
-                                         rolling_percentile, torso_reads)
+    from mocap.silhouette.passes import (
+        SPREAD_PERCENTILE,
+        SPREAD_WINDOW_S,
+        Fitter,
+        half_window,
+        lift_spread,
+        rolling_percentile,
+        torso_reads,
+    )
     heights = body_heights(silhouettes, fps)
     reads = [(np.nan, np.nan, False) if s is None else torso_reads(s, h) for s, h in zip(silhouettes, heights)]
     raw, lift_raw, readable = (np.array(values) for values in zip(*reads))

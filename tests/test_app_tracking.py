@@ -14,9 +14,9 @@ from helpers import DOG_WALKER, dog_walker_marks
 
 from app.controls import frame_text, review_text
 from app.state import AppState
-from mocap.io.annotations import load_annotations
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
+from mocap.io.annotations import load_annotations
 from mocap.synth.metrics import labelled_body_height, labelled_errors
 from mocap.track.marks import shoulders_as_hips
 

@@ -13,8 +13,8 @@ from helpers import SHARED_DATA
 
 from mocap.body import JOINT_INDEX
 from mocap.io.video import iter_frames, open_video, processing_scale
-from mocap.synth.metrics import side_matched_errors
 from mocap.silhouette.passes import Silhouette, iter_fits
+from mocap.synth.metrics import side_matched_errors
 
 CLIPS = SHARED_DATA / "clips"
 FRAMES = 30

@@ -24,11 +24,11 @@ import pytest
 from helpers import frame_joints, render_walk, text_mp4
 
 from mocap.batch import Tally, find_videos, library_names
+from mocap.batch.library import ANNOTATIONS, FAILED, RECORD, is_finished, read_record, review_target
 from mocap.batch.task import Outcome
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
-from mocap.batch.library import ANNOTATIONS, FAILED, RECORD, is_finished, read_record, review_target
 
 pytest.importorskip("dask.distributed")
 GOOD = ("walk_a", "walk_b", "walk_c")

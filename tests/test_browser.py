@@ -19,14 +19,33 @@ import sys
 import bvhio
 import numpy as np
 import pytest
-from browser_helpers import (SKIP_WITHOUT_CHROMIUM, TIMEOUT_MS, VIEWPORT, browser, chromium,  # noqa: F401
-                             open_page, screen_point, shot, unhidden_point, wait_until)
-from app_helpers import (TINY_FRAMES, app, deepest_segment, download_export,  # noqa: F401
-                         fresh_copy, hold_fitting, panning_clip, started_app, tiny_video)
+from app_helpers import (  # noqa: F401
+    TINY_FRAMES,
+    app,
+    deepest_segment,
+    download_export,
+    fresh_copy,
+    hold_fitting,
+    panning_clip,
+    started_app,
+    tiny_video,
+)
+from browser_helpers import (  # noqa: F401
+    SKIP_WITHOUT_CHROMIUM,
+    TIMEOUT_MS,
+    VIEWPORT,
+    browser,
+    chromium,
+    open_page,
+    screen_point,
+    shot,
+    unhidden_point,
+    wait_until,
+)
 
 from app.signs import segment_label, sign_button
-from mocap.io.annotations import Annotations, load_annotations
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
+from mocap.io.annotations import Annotations, load_annotations
 
 pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 sync_api = pytest.importorskip("playwright.sync_api")
@@ -54,7 +73,7 @@ def mark_by_clicking(page, app, joints2d: np.ndarray) -> None:
     for it on the video frame."""
     page.get_by_role("button", name="Mark joints").click()
     for name in JOINTS:
-        wait_until(lambda: app.controls.joint.value == name)
+        wait_until(lambda name=name: app.controls.joint.value == name)
         xy = joints2d[JOINT_INDEX[name]]
         page.mouse.click(*screen_point(page, app, video_point(app, xy)))
 
@@ -197,6 +216,7 @@ def test_two_tabs_one_truth(browser, app):
 def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypatch):
     """Fitted frames show at once; the others say they are not fitted yet."""
     import threading
+
     from app.main import create
     gate = threading.Event()
     hold_fitting(monkeypatch, TINY_FRAMES // 2, gate)

@@ -9,8 +9,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from app_helpers import shaped_app  # noqa: F401
-from browser_helpers import (SKIP_WITHOUT_CHROMIUM, box_of, chromium, fitted_camera,  # noqa: F401
-                             open_page, panel_boxes, shot, wait_until)
+from browser_helpers import (  # noqa: F401
+    SKIP_WITHOUT_CHROMIUM,
+    box_of,
+    chromium,
+    fitted_camera,
+    open_page,
+    panel_boxes,
+    shot,
+    wait_until,
+)
 
 from app.layout import CAPTION_CHARS
 

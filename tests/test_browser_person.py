@@ -11,8 +11,16 @@ import cv2
 import numpy as np
 import pytest
 from app_helpers import tiny_video  # noqa: F401
-from browser_helpers import (SKIP_WITHOUT_CHROMIUM, browser, chromium, fitted_camera,  # noqa: F401
-                             open_page, panel_boxes, shot, wait_until)
+from browser_helpers import (  # noqa: F401
+    SKIP_WITHOUT_CHROMIUM,
+    browser,
+    chromium,
+    fitted_camera,
+    open_page,
+    panel_boxes,
+    shot,
+    wait_until,
+)
 from test_app_person import NEEDS_MEDIAPIPE, app, seen_frame  # noqa: F401
 
 pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM, NEEDS_MEDIAPIPE]

@@ -15,16 +15,27 @@ import threading
 import numpy as np
 import pytest
 from app_helpers import deepest_segment, hold_fitting, shaped_app  # noqa: F401
-from browser_helpers import (SKIP_WITHOUT_CHROMIUM, TIMEOUT_MS, VIEWPORT, browser, chromium,  # noqa: F401
-                             fitted_camera, open_page, screen_point, shot, unhidden_point, visible_point,
-                             wait_until)
+from browser_helpers import (  # noqa: F401
+    SKIP_WITHOUT_CHROMIUM,
+    TIMEOUT_MS,
+    VIEWPORT,
+    browser,
+    chromium,
+    fitted_camera,
+    open_page,
+    screen_point,
+    shot,
+    unhidden_point,
+    visible_point,
+    wait_until,
+)
 from helpers import render_walk_with_exit
 
 from app.signs import SIGN_LOOK, segment_label, sign_groups
 from mocap.body import SEGMENT_INDEX, SEGMENT_NAMES
-from mocap.io.export.marks import FACING_MARKS
 from mocap.io.annotations import load_annotations
 from mocap.io.export.formats import FORMATS
+from mocap.io.export.marks import FACING_MARKS
 
 pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 sync_api = pytest.importorskip("playwright.sync_api")

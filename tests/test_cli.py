@@ -18,12 +18,10 @@ from helpers import run_cli as run
 
 from mocap.cli import main
 from mocap.io.export.motion_json import read_motion
-from mocap.synth.metrics import side_matched_errors
-from mocap.io.video import write_video
+from mocap.io.video import iter_frames, write_video
 from mocap.synth import render_clip
+from mocap.synth.metrics import side_matched_errors
 from mocap.synth.walk import walk_cycle
-from mocap.io.video import iter_frames
-
 
 # -- bad input ----------------------------------------------------------------------
 

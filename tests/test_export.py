@@ -13,12 +13,12 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from mocap import body
-from mocap.io.bvh import contract_joints, read_bvh
 from mocap.cli import main
 from mocap.errors import MocapError
-from mocap.io.export.marks import FACING_MARKS, facing_marks
+from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.io.export.formats import FORMATS, Clip, write_format
 from mocap.io.export.glb import SIDES
+from mocap.io.export.marks import FACING_MARKS, facing_marks
 from mocap.lift.motion import build_motion
 from mocap.lift.skeleton import BONES, JOINT_BONES
 from mocap.synth import resample_indices
@@ -168,7 +168,7 @@ def test_glb_is_one_skinned_character(walk_motion, tmp_path):
                 ring = moved[part][np.abs(along - end_at) < 1e-4]
                 assert np.abs(ring.mean(0) - joint).max() < 1e-5, (start, end)
         marks = moved[per_segment * len(body.SEGMENTS):].reshape(len(FACING_MARKS), per_mark, 3)
-        for (segment, *_), (base, out, _), mark in zip(FACING_MARKS.values(),
+        for (segment, *_), (_, out, _), mark in zip(FACING_MARKS.values(),
                                                        facing_marks(world[sample]), marks):
             start, end = world[sample, [body.JOINT_INDEX[j] for j in body.SEGMENTS[segment]]]
             axis = (end - start) / np.linalg.norm(end - start)

@@ -10,9 +10,9 @@ from helpers import SHARED_DATA
 from mocap import body
 from mocap.body import JOINT_INDEX
 from mocap.io.export.marks import FACING_MARKS, facing_marks
-from mocap.silhouette.facing import arm_over_head, facing_away, near_limbs
 from mocap.lift import taylor as lift
 from mocap.pipeline import open_session
+from mocap.silhouette.facing import arm_over_head, facing_away, near_limbs
 from mocap.silhouette.passes import fit_arrays
 from mocap.synth import RenderOptions, render_clip, render_motion
 from mocap.synth.walk import walk_cycle

@@ -9,23 +9,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import SHARED_DATA
 
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, Pose2D, default_angles, forward_kinematics_2d
-from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_cross
+from mocap.io.video import open_video
+from mocap.pipeline import silhouette_passes
 from mocap.silhouette.arms import elbow_bends_back, two_link_angles
+from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_cross
 from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, fit_frame
-from mocap.silhouette.search import coarse_to_fine
-from mocap.silhouette.torso import head_top_row
 from mocap.silhouette.legchain import LegChain
 from mocap.silhouette.legs import ends_in_foot, raised_leg
-from mocap.synth.metrics import side_matched_errors
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
-from mocap.silhouette.torso import torso_spread
-from mocap.pipeline import silhouette_passes
+from mocap.silhouette.search import coarse_to_fine
+from mocap.silhouette.torso import head_top_row, torso_spread
 from mocap.synth import render_motion
-from mocap.io.video import open_video
-
-from helpers import SHARED_DATA
+from mocap.synth.metrics import side_matched_errors
 
 CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 

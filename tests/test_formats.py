@@ -16,9 +16,9 @@ from helpers import page_data
 
 from app.controls import DOWNLOADS
 from app.state import AppState
-from mocap.cli import main
 from mocap import body
-from mocap.io.bvh import read_bvh
+from mocap.cli import main
+from mocap.io.bvh_reader import read_bvh
 from mocap.io.export.formats import FORMATS
 from mocap.io.export.html import motion_file_html
 

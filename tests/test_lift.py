@@ -9,10 +9,9 @@ from helpers import SHARED_DATA
 from scipy.spatial.transform import Rotation
 
 from mocap import synth
-
-from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
-from mocap.io.bvh import contract_joints, read_bvh
+from mocap.io.bvh_reader import contract_joints, read_bvh
+from mocap.lift import taylor as lift
 from mocap.synth.metrics import facing_error, pa_mpjpe
 from mocap.synth.walk import walk_cycle
 

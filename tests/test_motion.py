@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from mocap import body
-from mocap.io.bvh import contract_joints, read_bvh
 from mocap.errors import MocapError
+from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.lift.motion import build_motion
 from mocap.lift.skeleton import BONES, JOINT_BONES, PARENTS, forward_kinematics, rest_positions
 from mocap.synth import resample_indices

@@ -11,16 +11,23 @@ import pytest
 from helpers import SHARED_DATA
 
 from mocap import body, synth
-
-from mocap.lift import taylor as lift
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, MIRROR_JOINTS
-from mocap.io.bvh import contract_joints, read_bvh
-from mocap.io.annotations import Annotations
-from mocap.lift.inputs import resolve_inputs
+from mocap.io.bvh_reader import contract_joints, read_bvh
+from mocap.lift import taylor as lift
+from mocap.lift.inputs import Said, resolve_inputs
+from mocap.lift.orientation import (
+    GROWTH,
+    NEGLIGIBLE,
+    PROFILE_SPREAD,
+    facing_evidence,
+    guess_orientations,
+    guess_signs,
+    held_user_signs,
+    legs_crossed,
+    merge_short_runs,
+)
 from mocap.lift.sides import SEPARATED, known_sides, naming_path, track_sides
 from mocap.lift.taylor import runs
-from mocap.lift.orientation import (GROWTH, NEGLIGIBLE, PROFILE_SPREAD, facing_evidence, guess_orientations, guess_signs,
-                                   held_user_signs, legs_crossed, merge_short_runs)
 from mocap.smoothest import smoothest_states
 from mocap.synth.walk import walk_cycle
 
@@ -319,9 +326,9 @@ def lift_spreads_and_truth(name: str) -> tuple[np.ndarray, np.ndarray]:
     pass two works it out (passes.FitStream), and the truth's |cos yaw|."""
     import cv2
     from helpers import DEV_CLIPS
+
     from mocap.io.video import iter_frames, open_video, processing_scale
-    from mocap.silhouette.passes import (SPREAD_WINDOW_S, Silhouette, body_heights, half_window, lift_spread,
-                                         torso_reads)
+    from mocap.silhouette.passes import SPREAD_WINDOW_S, Silhouette, body_heights, half_window, lift_spread, torso_reads
     clip = DEV_CLIPS / name
     if not (clip / "truth.json").is_file():
         pytest.skip(f"real data absent: {clip} (../shared/data beside the checkout)")
@@ -381,7 +388,7 @@ def stored_fit_named_right(file: str) -> tuple[np.ndarray, np.ndarray]:
     legs are named as the truth names them, and whether that matters there."""
     data = json.loads((Path(__file__).parent / "data" / file).read_text())
     inputs = resolve_inputs(np.array(data["joints2d"]), np.array(data["body_px"]), np.array(data["spread"]),
-                            data["fps"], Annotations(), away=np.array(data["away"]), near=np.array(data["near"]))
+                            data["fps"], Said.nothing(len(data["joints2d"])), away=np.array(data["away"]), near=np.array(data["near"]))
     return inputs.swap[:, 1] == np.array(data["right_is_image_left"]), np.array(data["clear"])
 
 

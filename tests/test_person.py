@@ -6,8 +6,8 @@ name is refused."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import importlib.util
+import json
 import socket
 import sys
 from pathlib import Path
@@ -23,9 +23,9 @@ from mocap.body import JOINT_INDEX
 from mocap.cli import main
 from mocap.errors import MocapError
 from mocap.io.export.motion_json import read_motion
-from mocap.synth.metrics import side_matched_errors
 from mocap.person import CHOICES, DEFAULT_MODEL, NONE, PersonView, available, open_person_model
 from mocap.synth import RenderOptions
+from mocap.synth.metrics import side_matched_errors
 from mocap.synth.walk import walk_cycle
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"

@@ -8,14 +8,16 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from mocap.track import calibration as C, keydepths as K, perspective as P
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX
 from mocap.errors import MocapError
-from mocap.track.marks import shoulders_as_hips, turned_apart
-from mocap.synth.metrics import pa_mpjpe
-from mocap.track.rays import choose_limb, ray_roots
 from mocap.synth import RenderOptions, plan_scene, scene_truth
+from mocap.synth.metrics import pa_mpjpe
 from mocap.synth.walk import walk_cycle
+from mocap.track import calibration as C
+from mocap.track import keydepths as K
+from mocap.track import perspective as P
+from mocap.track.marks import shoulders_as_hips, turned_apart
+from mocap.track.rays import choose_limb, ray_roots
 
 CAMERA = C.Pinhole(800.0, 320.0, 240.0)
 

@@ -9,14 +9,13 @@ import json
 import cv2
 import numpy as np
 import pytest
-
 from helpers import DEV_CLIPS
 
 from mocap import synth
 from mocap.cli import main as mocap_main
 from mocap.errors import MocapError
-from mocap.session.review import GUESSED
 from mocap.io.video import iter_frames, open_video, write_video
+from mocap.session.review import GUESSED
 from mocap.silhouette.background import estimate_background, extract_silhouette, noise_floor
 from mocap.silhouette.masks import held_warning, silhouette_confidence
 from mocap.silhouette.passes import Silhouette

@@ -12,8 +12,8 @@ import pytest
 from helpers import page_data
 
 from mocap.cli import main as cli
-from mocap.io.export.marks import facing_marks
 from mocap.io.export.html import DATA_SLOT, TEMPLATE, motion_html
+from mocap.io.export.marks import facing_marks
 from mocap.io.export.motion_json import write_motion
 from mocap.lift.motion import build_motion
 from mocap.synth.walk import walk_cycle

@@ -9,17 +9,18 @@ import numpy as np
 import pytest
 from helpers import render_walk, render_walk_with_exit
 
-from mocap.lift import inputs as mocap_inputs
-from mocap.lift import taylor as lift
-from mocap.io.annotations import Annotations, annotations_for_poses, save_annotations
 from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
 from mocap.cli import main
+from mocap.io.annotations import Annotations, save_annotations
 from mocap.io.export.motion_json import read_motion
-from mocap.smoothest import DEPTH_SMOOTH_S
-from mocap.synth.metrics import pa_mpjpe
+from mocap.lift import inputs as mocap_inputs
+from mocap.lift import taylor as lift
 from mocap.lift.orientation import NEGLIGIBLE
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session
+from mocap.smoothest import DEPTH_SMOOTH_S
+from mocap.synth.metrics import pa_mpjpe
+from mocap.synth.oracle import annotations_for_poses
 
 
 @pytest.fixture(scope="module")

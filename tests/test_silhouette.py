@@ -9,9 +9,9 @@ import pytest
 from helpers import DOG_WALKER
 
 from mocap.errors import MocapError
+from mocap.io.video import iter_frames, open_video
 from mocap.silhouette import background as background_module
 from mocap.silhouette.background import clean_mask, estimate_background, exposure_gain, extract_silhouette
-from mocap.io.video import iter_frames, open_video
 
 EXPOSURE = {4: 1.3, 9: 0.75}  # frame index -> global exposure factor of that frame
 

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from mocap import body, synth
-from mocap.synth.truth import load_truth
-from mocap.synth.walk import walk_cycle
 from mocap.cli import main
 from mocap.errors import MocapError
+from mocap.synth.truth import load_truth
+from mocap.synth.walk import walk_cycle
 
 J = body.JOINT_INDEX
 
@@ -102,13 +102,13 @@ def test_body_shapes_change_the_widths_not_the_joints():
     """A slim or broad body (--shape) covers fewer or more pixels around the same
     joints, filmed by the same camera: each silhouette lies within the next wider one."""
     joints = walk_cycle(1.0, 10.0)[:3]
-    masks = {}
+    masks, joints2d = {}, None
     for shape in ("slim", "model", "broad"):
         scene = synth.plan_scene(joints, synth.RenderOptions(view="three-quarter", noise=0.0,
                                                              antialias=False, shape=shape))
         truth = synth.scene_truth(scene, "walk-cycle", np.arange(3))
         masks[shape] = np.array([body_mask(scene, i) for i in range(3)])
-        joints2d = truth.joints2d if shape == "slim" else joints2d
+        joints2d = truth.joints2d if joints2d is None else joints2d
         assert np.allclose(truth.joints2d, joints2d)
     for thin, wide in (("slim", "model"), ("model", "broad")):
         assert not (masks[thin] & ~masks[wide]).any()

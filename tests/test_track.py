@@ -10,23 +10,43 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from mocap import synth
-
-from mocap.track import blocks
 from mocap.body import JOINT_INDEX, JOINTS, unit
+from mocap.camera import Pinhole
 from mocap.errors import MocapError
-from mocap.track.headmotion import adapt_threshold, head_displacement, two_peak_displacement
-from mocap.track.marks import check_marks
-from mocap.track.tracking import (LOW_RELIABILITY, carried_pins, fill_unreliable, joint_reliability,
-                         spread_corrections, track_video)
 from mocap.image.edges import Edges
-from mocap.track.calibration import FACING_CAMERA, KEY, Calibration, Pinhole
-from mocap.track.limbs import (ARM_M, FOLD_COST, JUMP_COST, KNEE_STEP, LIMITS_COST, OUTLINE_COST, added,
-                               around_root, arm_limits_cost, leg_limits_cost, limb_penalty, marked_lengths,
-                               outline_cost, overlap,
-                               settled_knee, twin_overlap)
-from mocap.track.tracker import FAR_UPPER_SCALES, FAR_UPPER_WEIGHT
-from mocap.track.parts import PARTS, beside, far_arm, far_forearm, mirrored_model, own_colour, told_apart
 from mocap.synth.walk import walk_cycle
+from mocap.track import blocks
+from mocap.track.calibration import FACING_CAMERA, KEY, Calibration
+from mocap.track.headmotion import adapt_threshold, head_displacement, two_peak_displacement
+from mocap.track.limbs import (
+    ARM_M,
+    FOLD_COST,
+    JUMP_COST,
+    KNEE_STEP,
+    LIMITS_COST,
+    OUTLINE_COST,
+    added,
+    arm_limits_cost,
+    around_root,
+    leg_limits_cost,
+    limb_penalty,
+    marked_lengths,
+    outline_cost,
+    overlap,
+    settled_knee,
+    twin_overlap,
+)
+from mocap.track.marks import check_marks
+from mocap.track.parts import PARTS, beside, far_arm, far_forearm, mirrored_model, own_colour, told_apart
+from mocap.track.tracker import FAR_UPPER_SCALES, FAR_UPPER_WEIGHT
+from mocap.track.tracking import (
+    LOW_RELIABILITY,
+    carried_pins,
+    fill_unreliable,
+    joint_reliability,
+    spread_corrections,
+    track_clip,
+)
 
 
 @pytest.fixture(scope="module")
@@ -458,7 +478,7 @@ def test_joint_reliability_follows_the_parts_that_placed_it():
 def test_tracking_a_rendered_walk_on_a_moving_background(walk):
     video, truth = walk
     done = []
-    result = track_video(video, truth.joints2d[0], lambda d, t: done.append((d, t)),
+    result = track_clip(video, truth.joints2d[0], lambda d, t: done.append((d, t)),
                          orientation="forward_right")
     n = len(truth.joints2d)
     assert result.joints2d.shape == (n, 16, 2) and result.reliability.shape == (n, 16)
@@ -480,7 +500,7 @@ def test_a_slim_or_broad_body_is_tracked(shape, tmp_path):
     video = tmp_path / f"{shape}.mp4"
     truth = synth.render_clip(walk_cycle(1.6, 15.0), video, size=(320, 240), fps=15.0, yaw=45.0,
                               perspective=400.0, moving_background=True, seed=3, shape=shape)
-    result = track_video(video, truth.joints2d[0], orientation="forward_right")
+    result = track_clip(video, truth.joints2d[0], orientation="forward_right")
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     trunk = [JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis")]
     assert np.median(err) < 0.025 and np.percentile(err, 90) < 0.08
@@ -494,7 +514,7 @@ def test_the_head_is_kept_where_the_image_difference_points_it_wrong(tmp_path):
     1.8 body heights off by the end, the whole body with it)."""
     truth = synth.render_clip(walk_cycle(2.0, 15.0), tmp_path / "side.mp4", size=(320, 240),
                               fps=15.0, yaw=0.0, perspective=400.0, moving_background=True, seed=3)
-    result = track_video(tmp_path / "side.mp4", truth.joints2d[0])
+    result = track_clip(tmp_path / "side.mp4", truth.joints2d[0])
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     head = [JOINT_INDEX[j] for j in ("head_top", "neck")]
     assert err[:, head].max() < 0.03 and np.median(err) < 0.03
@@ -505,6 +525,6 @@ def test_track_video_refuses_bad_marks_before_tracking(walk):
     marks = truth.joints2d[0].copy()
     marks[JOINT_INDEX["hip_r"]] = (400.0, 10.0)
     with pytest.raises(MocapError, match="hip_r"):
-        track_video(video, marks)
+        track_clip(video, marks)
     with pytest.raises(MocapError, match="orientation"):
-        track_video(video, truth.joints2d[0], orientation="upside_down")
+        track_clip(video, truth.joints2d[0], orientation="upside_down")

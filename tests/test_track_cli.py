@@ -9,19 +9,17 @@ import json
 import numpy as np
 import pytest
 
-from mocap import synth
-
-from mocap.lift import taylor as lift
-from mocap.io.annotations import Annotations
+from mocap import pipeline, synth
 from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.cli import main
+from mocap.io.annotations import Annotations
 from mocap.io.export.motion_json import read_motion
-from mocap.lift.orientation import NEGLIGIBLE
-from mocap.track.tracking import guessed_turn, track_video
-from mocap import pipeline
-from mocap.session import TrackSession
 from mocap.io.video import open_video
+from mocap.lift import taylor as lift
+from mocap.lift.orientation import NEGLIGIBLE
+from mocap.session import TrackSession
 from mocap.synth.walk import walk_cycle
+from mocap.track.tracking import guessed_turn, track_clip
 
 IN_PLANE = 0.1      # |dZ| / length: a segment this flat shows no sign
 
@@ -169,7 +167,7 @@ def test_the_root_keeps_the_perspective_depth(clip, session, tmp_path):
     video, truth = clip
     tracked, _ = session
     info = open_video(video)
-    exact = TrackSession(info, track_video(info, truth.joints2d[0], focal_px=400.0,
+    exact = TrackSession(info, track_clip(info, truth.joints2d[0], focal_px=400.0,
                                            orientation="forward_right"), tracked.annotations)
     for s, depth_scale in ((exact, 1.0), (tracked, 320.0 / 400.0)):
         root = s.root()

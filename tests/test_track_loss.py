@@ -9,8 +9,8 @@ import json
 
 import numpy as np
 import pytest
-
 from helpers import SHARED_DATA, render_walk_with_exit, render_walk_with_occluder
+
 from mocap.body import JOINTS
 from mocap.cli import main
 from mocap.io.annotations import parse_annotations
@@ -21,7 +21,7 @@ from mocap.synth import render_motion
 from mocap.track import blocks
 from mocap.track.loss import DISTINCT, bridged, ramp, stretches
 from mocap.track.reacquire import distinctness
-from mocap.track.tracking import track_video
+from mocap.track.tracking import track_clip
 
 GONE = slice(10, 24)          # frames the performer is out of the picture
 HIDDEN = slice(10, 18)        # frames a board hides the performer whole
@@ -108,7 +108,7 @@ def test_a_body_whose_match_falls_where_it_stands_out_is_held(tmp_path):
     video = tmp_path / "jumps.mp4"
     truth = render_motion(JUMPS, video, frames=(1, 161), fps=30.0, yaw=45.0, size=(320, 240),
                           perspective=400.0, moving_background=True)
-    result = track_video(video, truth.joints2d[0], orientation="forward_right")
+    result = track_clip(video, truth.joints2d[0], orientation="forward_right")
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     assert not result.lost[:20].any() and result.lost.mean() < 0.4
     assert np.median(err[~result.lost], axis=1).max() < 0.03

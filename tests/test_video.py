@@ -8,7 +8,6 @@ import types
 import cv2
 import numpy as np
 import pytest
-
 from helpers import png_avi, text_mp4
 
 from mocap.errors import MocapError, MocapWarning

@@ -1,15 +1,8 @@
-"""`mocap batch`: many videos at once on a Dask cluster, resumable, into a motion library.
+"""`mocap batch`: many videos on a Dask cluster into a motion library, one task and folder each.
 
-Each video is one task (``mocap.batch.task.run_job``: the fit of `mocap fit`, the
-exports, masks and contact sheet) that writes its own folder ``DIR/<name>``
-(``mocap.batch.library``). Without ``--scheduler`` the tasks run on a local cluster of one
-single-threaded process per core (the fit is pure Python and numpy on small arrays:
-processes, not threads, scale it); with one, on an existing cluster whose workers have
-mocap installed and see the videos and DIR at the same paths.
-
-A video whose folder is finished with the same settings and is newer than the video
-is skipped, so a killed batch is finished by running it again. A failed video is
-reported with its error and does not stop the others.
+Without ``--scheduler``, a local cluster of one single-threaded process per core (the fit is
+Python and numpy on small arrays); with it, workers must see the videos and DIR at the same
+paths. Finished, up-to-date folders are skipped, so rerunning resumes; failures do not stop others.
 """
 
 from __future__ import annotations
@@ -30,11 +23,11 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from mocap.batch.library import ANNOTATIONS, is_finished, write_index
 from mocap.batch.task import DEFAULT_EXPORTS, EXPORTS, FRAMES_TOPIC, Job, Outcome, run_job
+from mocap.cli.options import add_smooth, smooth_of
 from mocap.errors import MocapError
 from mocap.io.export.formats import require
-from mocap.batch.library import ANNOTATIONS, is_finished, write_index
-from mocap.cli.options import add_smooth, smooth_of
 
 VIDEO_SUFFIXES = {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv",
                   ".ogv"}
@@ -44,8 +37,7 @@ SINGLE_THREADED = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREA
 
 
 def find_videos(inputs: list[str]) -> list[Path]:
-    """The videos named by files, folders (searched below for video suffixes) and glob
-    patterns (for shells that did not expand them), each once, in order."""
+    """The videos named by files, folders (searched below) and glob patterns, each once, in order."""
     found: dict[Path, None] = {}
     for item in inputs:
         path = Path(item)
@@ -88,9 +80,8 @@ def settings_of(exports: list[str], smooth: float, annotations: Path | None) -> 
 
 
 def annotations_for(source: Path | None, name: str) -> Path | None:
-    """A video's annotations in ``--annotations-from DIR``: a reviewed library folder's
-    (``DIR/<name>/annotations.json``) or a file ``DIR/<name>.annotations.json`` (the
-    app's own name beside a video)."""
+    """A video's annotations in ``--annotations-from DIR``: ``DIR/<name>/annotations.json``
+    (a reviewed library folder) or ``DIR/<name>.annotations.json``; None if neither."""
     if source is None:
         return None
     for path in (source / name / ANNOTATIONS, source / f"{name}.annotations.json"):
@@ -156,9 +147,8 @@ def dashboard(client) -> str:
 
 @dataclass
 class Tally:
-    """How the batch is going: counts and frames done. Each video's end is a line on
-    stderr with the counts so far; on a terminal a bar (tqdm) stays below the lines:
-    videos done of the total, failures, frames per second over the cluster."""
+    """How the batch is going: a stderr line per video ended, and on a terminal a tqdm bar
+    below (videos done, failures, frames per second over the cluster)."""
 
     total: int
     skipped: int = 0

@@ -1,15 +1,8 @@
-"""The motion library that `mocap batch` builds: one folder per video, and an index.
+"""The motion library of `mocap batch`: a folder per video, and ``index.html`` / ``index.csv``.
 
-``DIR/<name>/`` holds a video's motion file, exports, masks, playback page and contact
-sheet, and last of all ``batch.json`` (format ``mocap-batch``): the video it was made
-from, the settings it was made with, what the fit found and which files belong to it.
-Written last and atomically, it is the mark of a finished video: a batch killed halfway
-leaves a folder without it, which the next run does again. A video that failed has
-``failed.json`` (its one-line error) instead.
-
-``DIR/index.html`` lists every video of the library with its contact sheet's
-thumbnail, frames, mean score and doubtful frames (``mocap.session.review``), and links to its
-playback page and exports; ``DIR/index.csv`` holds the same.
+``DIR/<name>/`` holds a video's outputs and, written last and atomically, ``batch.json``
+(format ``mocap-batch``: video, settings, fit summary, files), the mark of a finished video;
+a failed one has ``failed.json`` (its one-line error) instead.
 """
 
 from __future__ import annotations
@@ -36,8 +29,7 @@ FILE_COLUMNS = COLUMNS[COLUMNS.index("playback"):]
 
 def write_record(folder: Path, video: str, settings: dict, annotations: str | None,
                  summary: dict, files: dict) -> Path:
-    """Mark a video's folder finished: its video, the settings and annotations file
-    it was made with, the summary of its fit and its files (relative to the folder)."""
+    """Mark a video's folder finished: video, settings, annotations, summary, files (relative)."""
     (folder / FAILED).unlink(missing_ok=True)
     return atomic_write_json(folder / RECORD, {
         "format": FORMAT, "version": VERSION, "video": video, "settings": settings,
@@ -61,8 +53,7 @@ def write_failure(folder: Path, video: str, error: str) -> Path:
 
 
 def is_finished(folder: Path, video: str, settings: dict) -> bool:
-    """Whether a folder holds a finished result of ``video`` made with ``settings``:
-    its record says so, every file it names is there, and it is newer than the video."""
+    """Whether a folder's record is of ``video`` and ``settings``, complete, and newer than the video."""
     record = read_record(folder)
     if record is None or record["video"] != video or record["settings"] != settings:
         return False
@@ -142,10 +133,8 @@ def _href(path: str) -> str:
 
 
 def review_target(path: str | os.PathLike) -> tuple[str, Path] | None:
-    """For `mocap serve`: a library folder (``DIR/<name>`` or a file in it) -> its
-    video and the annotations file its review saves to (``DIR/<name>/annotations.json``,
-    which ``mocap batch --annotations-from DIR`` reads). None for anything else.
-    The first review starts from the annotations the batch used."""
+    """For `mocap serve`: a library folder (or a file in it) -> its video and the annotations
+    file its review saves to (seeded from the batch's); None for anything else."""
     path = Path(path)
     folder = path if path.is_dir() else path.parent
     record = read_record(folder)

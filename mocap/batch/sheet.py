@@ -1,32 +1,27 @@
-"""`mocap sheet`: a contact sheet to judge a fit at a glance.
-
-For frames spread evenly over the clip, one tile each: the video frame and, beside
-it, the frame's silhouette (recomputed as `mocap fit` computes it, section 3.2) with
-the fitted skeleton of the motion file drawn over it, captioned with the frame index
-and the fit's silhouette similarity S (Eq. 3), or "no person".
-"""
+"""`mocap sheet`: a contact sheet to judge a fit at a glance. Frames spread over the clip, each
+beside its silhouette (section 3.2) and fitted skeleton, captioned with S (Eq. 3) or "no person"."""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import cv2
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.io.export.motion_json import read_motion
-from mocap.io.export.atomic import write_export
-from mocap.io.fileio import check_writable
 from mocap.image.draw import silhouette_view
+from mocap.io.export.atomic import write_export
+from mocap.io.export.motion_json import read_motion
+from mocap.io.fileio import check_writable
+from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.plate import clip_background
-from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
 
 Progress = Callable[[int, int, str], None]   # done, total, stage
 DEFAULT_FRAMES = 12
-TILE_HEIGHT = 240          # px: small videos (dog_walker is 144 tall) are upscaled to this
+TILE_HEIGHT = 240          # px: smaller videos are upscaled to this
 COLUMNS = 3                # tiles per row
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 

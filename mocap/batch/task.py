@@ -1,13 +1,5 @@
-"""One video of `mocap batch`: the task a Dask worker runs (``run_job``).
-
-The video goes through the pipeline `mocap fit` runs (``mocap.pipeline.open_session``:
-the annotations' method, else the silhouette method), then every file
-of its library folder (``mocap.batch.library``) is written, each atomically (the formats
-through the export registry, ``mocap.io.export.formats``), and the folder's
-record last. A bad video never raises out of the task: its one-line error comes back
-in the ``Outcome`` and is recorded in the folder, so one broken file does not stop the
-others.
-"""
+"""One video of `mocap batch`, the task a Dask worker runs (``run_job``): `mocap fit`'s pipeline,
+then each file of its library folder atomically, the record last. Errors are returned, not raised."""
 
 from __future__ import annotations
 
@@ -19,6 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from mocap.batch.library import RECORD, write_failure, write_record
 from mocap.batch.sheet import contact_sheet, write_image
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, load_annotations
@@ -26,7 +19,6 @@ from mocap.io.export.formats import FORMATS, Clip, write_format
 from mocap.io.export.masks import mask_name
 from mocap.io.export.motion_json import read_motion
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.batch.library import RECORD, write_failure, write_record
 from mocap.pipeline import Progress, open_session
 from mocap.session import Session, SilhouetteSession
 from mocap.silhouette.background import Background
@@ -57,8 +49,7 @@ class Job:
 
 @dataclass(frozen=True)
 class Outcome:
-    """What became of a job: frames done, seconds taken (and of them the worker's CPU
-    seconds: the work itself, whatever else the machine runs), or its one-line error."""
+    """What became of a job: frames, wall and CPU seconds, or its one-line error."""
 
     name: str
     frames: int = 0
@@ -110,9 +101,8 @@ REPORT_EVERY_S = 1.0
 
 
 class Report:
-    """How far a video is, sent to the client about once a second as a Dask event
-    (``FRAMES_TOPIC``: name and frames done), for the frames per second of the whole
-    cluster while long videos run. Outside a Dask worker it says nothing."""
+    """A pipeline progress callback sending frames done as a ``FRAMES_TOPIC`` Dask event about
+    once a second; silent outside a Dask worker."""
 
     def __init__(self, name: str, frames: int):
         self.name, self.frames, self.last = name, frames, time.monotonic()
@@ -132,18 +122,14 @@ class Report:
 
 
 def scene(session: Session) -> Background:
-    """The empty scene the video's masks are told against: the silhouette method's
-    own, else (the tracking method finds no silhouettes) the clip's
-    (mocap.silhouette.plate, section 3.2)."""
+    """The empty scene for the masks: the silhouette method's, else the clip's (section 3.2)."""
     if isinstance(session, SilhouetteSession) and session.background is not None:
         return session.background
     return clip_background(session.info, processing_scale(session.info))
 
 
 def write_exports(folder: Path, clip: Clip, exports: list[str], masks: Path | None) -> dict[str, str]:
-    """The motion file (each frame naming its mask when ``masks`` were written
-    there), the playback page and the exports asked for, through the export
-    registry; their names."""
+    """Write the motion file (naming the ``masks``), playback page and ``exports``; their names."""
     files = {}
     if masks is not None:
         files["masks"] = masks.name
@@ -166,8 +152,7 @@ def write_sheets(folder: Path, info: VideoInfo) -> dict[str, str]:
 
 
 def summarise(session: Session, notes: Annotations) -> dict:
-    """What the library shows of a fit: frames, frames with a person, mean score and
-    the number of doubtful frames (the review queue, ``mocap.session.review``)."""
+    """What the library shows of a fit: frames, frames fitted, mean score, doubtful frames."""
     scores = session.scores
     fitted = np.isfinite(scores)
     return {"method": notes.method or "silhouette", "frames": len(scores), "fitted": int(fitted.sum()),

@@ -7,11 +7,11 @@ import os
 import sys
 import warnings
 
+from mocap.cli.options import add_smooth, smooth_of
+from mocap.cli.progress import Bar
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
-from mocap.cli.options import add_smooth, smooth_of
 from mocap.person import CHOICES as PERSON_MODELS
-from mocap.cli.progress import Bar
 
 
 def _add_fit(p) -> None:
@@ -158,8 +158,7 @@ DESCRIPTION = ("Motion capture from one fixed camera: `mocap fit VIDEO` fits a b
 
 
 class _Version(argparse.Action):
-    """--version: the installed version, looked up only when asked (importlib.metadata
-    costs every run's start a tenth of a second)."""
+    """--version: looked up only when asked (importlib.metadata would slow every start)."""
 
     def __init__(self, option_strings, dest, **kwargs):
         super().__init__(option_strings, dest, nargs=0, help="print mocap's version and exit")
@@ -181,9 +180,8 @@ _COMMANDS = {    # name: (help, the function that adds its arguments)
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The parser of every command, with the arguments of ``command`` only where it is
-    given: a command's arguments import its modules (`mocap fit` would otherwise start
-    by importing the renderer, the contact sheet and the batch runner)."""
+    """Every command's parser, with arguments only for ``command`` if given (adding them imports
+    the command's modules)."""
     parser = argparse.ArgumentParser(prog="mocap", description=DESCRIPTION)
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -195,14 +193,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def _command(argv: list[str]) -> str | None:
-    """The command named on a command line: its first word that is not an option
-    (`mocap` itself takes only --help and --version)."""
+    """The command named on a command line: its first word that is not an option."""
     return next((word for word in argv if not word.startswith("-")), None)
 
 
 def _warn_in_one_line(show):
-    """warnings.showwarning that prints a MocapWarning as `mocap: warning: ...` (other
-    warnings as `show` does)."""
+    """warnings.showwarning printing a MocapWarning as `mocap: warning: ...`, others via ``show``."""
     def showwarning(message, category, *args, **kwargs) -> None:
         if not issubclass(category, MocapWarning):
             return show(message, category, *args, **kwargs)

@@ -1,5 +1,4 @@
-"""Command-line options that more than one command takes (`mocap fit`, `mocap batch`):
-declared and checked once."""
+"""Command-line options shared by `mocap fit` and `mocap batch`, declared and checked once."""
 
 from __future__ import annotations
 

@@ -1,7 +1,5 @@
-"""The command line's progress bar (tqdm) for long work: `mocap fit`, `mocap sheet`, the
-preprocessing of `mocap serve`. Drawn on stderr only when stderr is a terminal and
---quiet was not given: in a log or a pipe a bar is only noise, and tqdm is imported only
-then (it takes 15-30 ms)."""
+"""The command line's tqdm progress bar, drawn on stderr only when it is a terminal and --quiet
+was not given (tqdm is imported only then)."""
 
 from __future__ import annotations
 
@@ -9,8 +7,7 @@ import sys
 
 
 class Bar:
-    """Called as ``bar(done, total, stage)`` after each step of the work; a new total
-    starts a new bar. ``close`` ends a drawn bar's line before other output."""
+    """``bar(done, total, stage)`` after each step; a new total starts a new bar; ``close`` before other output."""
 
     def __init__(self, quiet: bool = False):
         self.quiet = quiet

@@ -1,14 +1,12 @@
-"""Drawing a fitted body over an image (OpenCV): the views of the app and contact sheets,
-and what a person model (mocap.person) added: the silhouette's pixels only its mask
-gave, tinted (LEARNED_BGR), and its joints as small dots on a thin skeleton
-(LANDMARK_BGR)."""
+"""Drawing fitted bodies, silhouettes and a person model's additions over images (OpenCV), for
+the app's views and contact sheets."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from mocap.body import JOINT_INDEX, SEGMENT_JOINTS, SEGMENTS, SEGMENT_NAMES
+from mocap.body import JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, SEGMENTS
 from mocap.person import SURE
 
 # BGR per segment kind: torso/head white, the performer's left limbs orange, right ones blue
@@ -55,10 +53,8 @@ def silhouette_view(mask: np.ndarray, joints2d: np.ndarray | None,
 
 def draw_landmarks(image: np.ndarray, joints2d: np.ndarray, confidence: np.ndarray,
                    radius: float = 3.0) -> np.ndarray:
-    """A person model's 16 joints (pixels of ``image``) as small LANDMARK_BGR dots on
-    a one-pixel skeleton (LANDMARK_BONES), drawn in place and returned: a joint it is
-    sure of (confidence >= SURE) a filled dot, any other a ring; a bone only between
-    two sure joints."""
+    """Draw (in place) a person model's 16 joints (pixels) as LANDMARK_BGR dots, filled where
+    confidence >= SURE, else rings, with LANDMARK_BONES between sure joints; return the image."""
     pts = np.round(np.asarray(joints2d, float) * 16).astype(np.int32)
     sure = np.asarray(confidence) >= SURE
     for a, b in LANDMARK_BONES:

@@ -1,15 +1,8 @@
-"""Edges of a frame along a limb's sides: the cue where colour and silhouette have none.
+"""Edges of a frame along a limb's sides (beyond both papers): the cue for an arm in front of the
+trunk, where Eq. 1-3's silhouette similarity cannot place it but its outline still shows.
 
-Beyond both papers. An arm in front of the trunk lies wholly inside the silhouette,
-where the similarity of Eq. 1-3 cannot tell one placement from another, and the fit
-hangs it wherever it explains a sliver of the silhouette's edge. The frame still shows
-the arm: its outline (a sleeve over a shirt, a forearm over the chest) is an edge
-inside the silhouette, running along the arm. A candidate segment is scored by how
-strongly the image changes across its two long sides (the gradient along the side's
-normal), inside the silhouette only: the silhouette's own outline is Eq. 1-3's.
-The tracking method's arm blocks use the whole frame's edges the same way
-(mocap.track.limbs.outline_cost): a sleeve over a shirt of its colour matches the shirt
-anywhere, and only its outline tells where it is.
+A segment is scored by the gradient across its two long sides, inside the silhouette only
+(the outline itself is Eq. 1-3's); mocap.track.limbs uses the whole frame's edges the same way.
 """
 
 from __future__ import annotations
@@ -29,15 +22,14 @@ _BOTH_SIDES = np.array([1.0, -1.0]).reshape(2, 1, 1, 1, 1)
 
 
 class Edges:
-    """A frame's grey-level gradient in units of a strong edge of it (its
-    STRONG_PERCENTILE magnitude where edges count), so that the support of a segment
-    is about 1 on a clear outline, 0 on flat colour."""
+    """A frame's grey gradient in units of its STRONG_PERCENTILE magnitude: support ~1 on a clear
+    outline, 0 on flat colour."""
 
     def __init__(self, grey: np.ndarray, where: np.ndarray | None = None):
         smooth = cv2.GaussianBlur(grey, (3, 3), 0)
         planes = [cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)]
         if where is not None:
-            for plane in planes:            # each plane by a 2D mask: (H, W, 2) by one costs 8x more
+            for plane in planes:            # each plane by a 2D mask: faster than (H, W, 2) at once
                 plane[~where] = 0.0
         gradient = cv2.merge(planes)
         sample = gradient[::STRONG_STRIDE, ::STRONG_STRIDE]
@@ -50,8 +42,7 @@ class Edges:
 
     @classmethod
     def inside(cls, grey: np.ndarray, silhouette: np.ndarray) -> "Edges":
-        """The edges of a frame inside a silhouette (both at the fit's scale), INNER_PX
-        from its outline."""
+        """The edges of a frame inside a silhouette (both at the fit's scale), INNER_PX from its outline."""
         size = 2 * INNER_PX + 1
         inner = cv2.erode((silhouette > 0).astype(np.uint8), np.ones((size, size), np.uint8)) > 0
         return cls(grey, inner)

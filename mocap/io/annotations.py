@@ -1,11 +1,6 @@
-"""What the user said: the `mocap-annotations` file (CONTRACT.md) — validation that
-names the bad place, sticky resolution, atomic saving.
-
-Orientation and foreshortening are sticky: a frame's entry holds from that frame on
-until a later entry changes it. Joint overrides hold for their own frame only.
-``keyframes`` is optional (None: every frame). How a held sign meets the automatic
-first guess is decided in ``mocap.lift.orientation.resolve_inputs``.
-"""
+"""What the user said: the ``mocap-annotations`` file (CONTRACT.md), checked with messages naming the
+bad place, resolved sticky (orientation and foreshortening hold until a later entry, joint overrides
+on their own frame only) and saved atomically. Held signs meet the first guess in mocap.lift.inputs."""
 
 from __future__ import annotations
 
@@ -18,11 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.body import JOINTS, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
+from mocap.body import FORESHORTENING, JOINTS, ORIENTATIONS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.io.fileio import atomic_write_json
 from mocap.io.jsoncheck import Bad, describe, expect, is_number
-from mocap.body import FORESHORTENING, ORIENTATIONS
 
 FORMAT, VERSION = "mocap-annotations", 1
 _FRAME_KEY = re.compile(r"0|[1-9][0-9]*")
@@ -55,12 +49,10 @@ class FrameNote:
 
 @dataclass(frozen=True)
 class Annotations:
-    """All the user's inputs: frame index -> FrameNote, the keyframes (None: all) and
-    the method the user chose (None: not said, the silhouette method). ``method`` is a
-    field beyond CONTRACT.md's: "track" makes frame 0's joints2d the tracking
-    method's marks. So is ``background``, the empty scene for the silhouette method:
-    a photo or video file (relative to the annotation file) or the (first, last)
-    frames of the clip that show the stage empty; None: estimated from the clip."""
+    """All the user's inputs: frame -> FrameNote, ``keyframes`` (None: all), and beyond CONTRACT.md
+    ``method`` (None: the silhouette method; "track": frame 0's joints2d are the tracking method's marks)
+    and ``background``, the empty scene: a photo or video (relative to the annotation file), the clip's
+    (first, last) frames showing the stage empty, or None (estimated from the clip)."""
 
     frames: dict[int, FrameNote] = field(default_factory=dict)
     keyframes: tuple[int, ...] | None = None
@@ -108,8 +100,7 @@ class Annotations:
         return replace(self, method=method)
 
     def with_background(self, background: str | tuple[int, int] | None) -> "Annotations":
-        """Give the empty scene (a file name, or first and last frames), or with None
-        let the clip's background be estimated."""
+        """Give the empty scene (a file name, or first and last frames); None: estimate it from the clip."""
         try:
             checked = None if background is None else _background(
                 list(background) if isinstance(background, tuple) else background, None)
@@ -118,8 +109,7 @@ class Annotations:
         return replace(self, background=checked)
 
     def background_source(self, path: str | os.PathLike | None) -> str | tuple[int, int] | None:
-        """The empty scene with a file name made relative to the annotation file at
-        ``path`` (None: the current folder)."""
+        """The empty scene, a file name made relative to the annotation file ``path`` (None: cwd)."""
         if isinstance(self.background, str) and path is not None:
             return str(Path(path).parent / self.background)
         return self.background
@@ -302,37 +292,3 @@ def load_annotations(path: str | os.PathLike, frame_count: int | None = None) ->
 def save_annotations(path: str | os.PathLike, annotations: Annotations) -> Path:
     """Write the annotation file atomically (a crash never leaves half a file)."""
     return atomic_write_json(path, annotations.to_dict())
-
-
-def annotations_for_poses(joints3d: np.ndarray, joints2d: np.ndarray | None = None) -> Annotations:
-    """What a user who knew the 3D poses (F, 16, 3; contract frame) would say: each
-    orientation change (lift.orientation_of_yaw) and every segment's sign on every
-    frame; with their 2D joints (F, 16, 2), also where the left wrist and ankle are,
-    once per profile stretch (on its frame within a second where the pair is widest
-    apart), since in a profile the image cannot tell the sides apart.
-    For benchmarks and tests against ground truth."""
-    from mocap.lift.taylor import orientation_of_yaw, signs_of, yaw_of
-    joints3d = np.asarray(joints3d, float)
-    names = [orientation_of_yaw(yaw_of(pose)) for pose in joints3d]
-    notes = Annotations()
-    for i, (pose, name) in enumerate(zip(joints3d, names)):
-        if i == 0 or name != names[i - 1]:
-            notes = notes.with_orientation(i, name)
-            if joints2d is not None and name in ("left", "right"):
-                notes = _side_anchors(notes, joints2d, i, names)
-        for segment, sign in zip(SEGMENT_NAMES, signs_of(pose)):
-            notes = notes.with_foreshortening(i, segment, FORESHORTENING[0] if sign > 0 else FORESHORTENING[1])
-    return notes
-
-
-def _side_anchors(notes: Annotations, joints2d: np.ndarray, start: int, names: list[str]) -> Annotations:
-    stop = start
-    while stop < min(len(names), start + 30) and names[stop] == names[start]:
-        stop += 1
-    for kind in LIMB_JOINTS.values():                   # each limb's end, left
-        joint = f"{kind[-1]}_l"
-        j, k = JOINTS.index(joint), JOINTS.index(joint[:-1] + "r")
-        gap = np.linalg.norm(joints2d[start:stop, j] - joints2d[start:stop, k], axis=-1)
-        i = start + int(np.argmax(gap))
-        notes = notes.with_joint(i, joint, tuple(float(v) for v in joints2d[i, j]))
-    return notes

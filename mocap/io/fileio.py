@@ -43,9 +43,8 @@ def check_writable(*paths: str | os.PathLike | None) -> None:
 
 
 def check_writable_folder(folder: str | os.PathLike) -> None:
-    """Refuse, before the long work, an output folder that cannot be made or
-    replaced: a file of that name, or a folder around it that is missing or takes
-    no new file (the folder is written beside itself first, io.export.masks)."""
+    """Refuse, before the long work, an output folder that cannot be made or replaced (a file of that
+    name, or a missing or unwritable parent: the folder is first written beside itself)."""
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise MocapError(f"{folder}: is a file, not a folder")
@@ -53,9 +52,8 @@ def check_writable_folder(folder: str | os.PathLike) -> None:
 
 
 def _check_folder_takes_files(path: Path) -> None:
-    """Refuse ``path`` unless its folder exists and takes a new file. The probe is a
-    real file made and removed there: permission bits say nothing to root, and
-    read-only mounts and folders like /proc refuse files whatever the bits say."""
+    """Refuse ``path`` unless its folder exists and takes a new file, probed by making and removing one
+    (permission bits say nothing to root, nor to read-only mounts or /proc)."""
     folder = path.parent
     if folder.exists() and not folder.is_dir():
         raise MocapError(f"{path}: {folder} is a file, not a folder")

@@ -1,6 +1,5 @@
-"""Checking decoded JSON documents (annotations, motion files): a problem is raised at
-its place in the document, with what was found there, and the loader turns it into one
-MocapError line."""
+"""Checking decoded JSON documents (annotations, motion files): a problem is raised at its place in
+the document, with what was found there; the loader turns it into one MocapError line."""
 
 from __future__ import annotations
 

@@ -1,24 +1,9 @@
 """Reading video frames and metadata with OpenCV (FFmpeg backend), and writing videos.
 
-Frames are BGR uint8 arrays, streamed one at a time: nothing here holds a whole video
-in memory. Every bad input becomes a `MocapError` whose one-line message names the
-file and the problem.
-
-Truncated or damaged files: the complete frames that decode are the video.
-`open_video` counts them (cheaply when the container's frame count is right, by
-decoding every frame when it is missing or wrong), `VideoInfo.frame_count` is that
-number, and iteration and random access stay inside it. When fewer frames decode
-than the container announces (a file cut short), the last one decoded is dropped:
-the cut almost always falls inside it, and FFmpeg then returns it half-decoded or
-repeats the previous picture; a `MocapWarning` says how many of the announced frames
-decode.
-
-Large frames: `processing_scale` gives the factor that brings the longer side down
-to `max_side`; `iter_frames`, `read_frame` and `sample_frames` take it as `scale` and
-return frames resized with area averaging. Results computed on such frames are in
-downscaled pixels; the caller divides coordinates by the scale to get back to the
-original frame's pixels (CONTRACT.md).
-"""
+Frames are BGR uint8, streamed one at a time; every bad input is a one-line ``MocapError`` naming the
+file. A video is the complete frames that decode (``open_video`` counts them). With ``scale`` (see
+``processing_scale``) frames come area-downscaled and results are in downscaled pixels: divide
+coordinates by the scale for the original frame's (CONTRACT.md)."""
 
 from __future__ import annotations
 
@@ -26,8 +11,8 @@ import math
 import os
 import warnings
 from collections.abc import Iterator
-from pathlib import Path
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -85,11 +70,8 @@ def processing_scale(info: VideoInfo, max_side: int = 1280) -> float:
 def iter_frames(source: VideoInfo | str | os.PathLike, start: int = 0,
                 stop: int | None = None, step: int = 1,
                 scale: float = 1.0) -> Iterator[tuple[int, np.ndarray]]:
-    """Yield `(index, frame)` for frames start, start+step, ... before `stop`.
-
-    `stop` defaults to (and is clipped to) the frame count. Frames are decoded one by
-    one; with `scale` < 1 each is downscaled (area averaging) as soon as it is read.
-    """
+    """Yield ``(index, frame)`` for start, start+step, ... before ``stop`` (default and limit: the frame
+    count), decoded one by one, downscaled (area averaging) when ``scale`` < 1."""
     info = source if isinstance(source, VideoInfo) else open_video(source)
     stop = info.frame_count if stop is None else min(stop, info.frame_count)
     if start < 0 or step < 1:
@@ -182,9 +164,9 @@ def _check_file(path: str) -> None:
 
 
 def _count_frames(cap: cv2.VideoCapture, path: str) -> int:
-    """Complete frames that decode. The container's count is trusted only when its
-    last frame decodes and nothing follows it; else every frame is decoded (grab) and
-    counted, less the cut-off last one when the file holds fewer than announced."""
+    """Complete frames that decode: the container's count if its last frame decodes and nothing follows,
+    else every frame grabbed and counted, less the cut-off last one (with a ``MocapWarning``) when fewer
+    than announced."""
     claimed = cap.get(cv2.CAP_PROP_FRAME_COUNT)
     announced = 0 < claimed < 2**31
     if announced:
@@ -214,8 +196,7 @@ def _no_frame_message(path: str, cap: cv2.VideoCapture) -> str:
 
 
 def _unopenable_message(path: str) -> str:
-    """Name the container when it is recognisable, so that the message can tell a
-    damaged or unsupported video from a file that is no video at all."""
+    """A message naming the container when recognisable: a damaged or unsupported video, or no video."""
     with open(path, "rb") as f:
         head = f.read(4096)
     for offset, magic, name in _CONTAINERS:

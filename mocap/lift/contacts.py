@@ -42,8 +42,7 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
 
 
 def pinned_targets(ankle: np.ndarray, planted: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 3) where an ankle (F, 3) should be: each contact's mean position, the shift fading
-    linearly within BLEND_S around it."""
+    """(F, 3) where an ankle (F, 3) should be: each contact's mean position, fading out over BLEND_S."""
     shift = np.zeros_like(ankle)
     weight = np.zeros(len(ankle))
     blend = max(1, int(round(BLEND_S * fps)))

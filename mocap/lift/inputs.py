@@ -8,15 +8,32 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
-from mocap.io.annotations import Annotations
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
-from mocap.smoothest import DEPTH_SMOOTH_S
-from mocap.track.calibration import default_camera
-from mocap.lift.cues import Cues, side_evidence, world_depths, world_signs, world_yaws, with_landmarks
+from mocap.camera import default_camera
+from mocap.lift.cues import Cues, side_evidence, with_landmarks, world_depths, world_signs, world_yaws
+from mocap.lift.orientation import (
+    NEGLIGIBLE,
+    facing_evidence,
+    guess_orientations,
+    guess_signs,
+    held_user_signs,
+    legs_crossed,
+    looks_away,
+    rule_evidence,
+    segment_vectors,
+    yaws,
+)
 from mocap.lift.sides import known_sides, track_sides
-from mocap.lift.taylor import LENGTH, anatomical_joints, orientation_of_yaw, clip_lengths, exchange_legs, lift_pose, runs
-from mocap.lift.orientation import (NEGLIGIBLE, guess_orientations, guess_signs, held_user_signs, looks_away,
-                               legs_crossed, facing_evidence, rule_evidence, segment_vectors, yaws)
+from mocap.lift.taylor import (
+    LENGTH,
+    anatomical_joints,
+    clip_lengths,
+    exchange_legs,
+    lift_pose,
+    orientation_of_yaw,
+    runs,
+)
+from mocap.smoothest import DEPTH_SMOOTH_S
 
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length (a high
 # percentile would measure the fit's scatter); the torso and head, mostly upright, where
@@ -29,8 +46,7 @@ ARM_MEDIAN_S = 0.2
 
 @dataclass(frozen=True, eq=False)
 class Inputs:
-    """Everything the lifting needs per frame. Frames without a person have
-    orientation None and NaN joints."""
+    """Everything the lifting needs per frame; frames without a person: orientation None, NaN joints."""
 
     orientation: list[str | None]
     yaw: np.ndarray            # (F,) degrees, see lift.facing_yaw
@@ -88,15 +104,32 @@ def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (a == b) | (np.isnan(a) & np.isnan(b))
 
 
+@dataclass(frozen=True, eq=False)
+class Said:
+    """What the user said, as arrays over F frames (mocap.io.annotations.Annotations holds
+    it as written): each frame's orientation (None: not said), the joint overrides
+    {frame: {joint: (x, y)}}, and each segment's latest sign (F, 10; +1 toward, -1 away,
+    0 none) with the frame it was said on (-1 none)."""
+
+    orientation: list[str | None]
+    overrides: dict[int, dict[str, tuple[float, float]]]
+    signs: np.ndarray
+    since: np.ndarray
+
+    @classmethod
+    def nothing(cls, n: int) -> "Said":
+        return cls([None] * n, {}, np.zeros((n, len(SEGMENT_NAMES)), np.int8),
+                   np.full((n, len(SEGMENT_NAMES)), -1))
+
+
 def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
-                   annotations: Annotations, lengths: np.ndarray | None = None,
+                   said: Said, lengths: np.ndarray | None = None,
                    guessed: list[str | None] | None = None, away: np.ndarray | None = None,
                    near: np.ndarray | None = None, cues: Cues | None = None) -> Inputs:
     """Per-frame lifting inputs: the user's sticky orientation over ``guessed`` (None: guessed here);
     sides (sides.track_sides, orientation.legs_crossed); arms steadied; overrides put in; ``lengths``
-    (None: the clip's); signs guessed under the user's held ones. ``away`` (F,): the heads' look
-    (mocap.facing.facing_away); ``near`` (F, 2): mocap.facing.near_limbs; ``cues``: a person model's
-    landmarks, first guesses of orientation, yaw, sides, signs and 2D joints where they see somebody."""
+    (None: the clip's); signs under the user's held ones. ``away`` (F,) the heads' look, ``near`` (F, 2)
+    the near limbs (mocap.silhouette.facing); ``cues``: person-model landmarks, first guesses where seen."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if cues is not None:
@@ -105,21 +138,20 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
         guessed = guess_orientations(joints_image, body_px, spread, fps, away)
     world_yaw = np.full(n, np.nan) if cues is None else world_yaws(cues)
     guessed = [g if np.isnan(y) else orientation_of_yaw(y) for g, y in zip(guessed, world_yaw)]
-    said = annotations.orientations(n)
-    orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said, guessed))]
-    overrides = {i: o for i, o in annotations.overrides().items() if i < n and person[i]}
+    orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said.orientation, guessed))]
+    overrides = {i: o for i, o in said.overrides.items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
     rule = rule_evidence(orientation, spread, facing_evidence(joints_image, body_px, fps, away))
-    rule = np.where([s is None for s in said], rule, 0.0)
-    known = known_sides(said, overrides, joints_image)
+    rule = np.where([s is None for s in said.orientation], rule, 0.0)
+    known = known_sides(said.orientation, overrides, joints_image)
     if cues is not None:
         known = np.where(known >= 0, known, side_evidence(joints_image, cues, 0.5 * np.nanmedian(body_px)))
     names = track_sides(joints_image, known, facing_x, fps, looks_away(away, fps, n), near, rule)
     swap = names[:, :2]
     ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
-    yaw = np.where(np.isfinite(world_yaw) & np.array([s is None for s in said]), world_yaw, yaw)
-    values, since = annotations.held_signs(n)
+    yaw = np.where(np.isfinite(world_yaw) & np.array([s is None for s in said.orientation]), world_yaw, yaw)
+    values, since = said.signs, said.since
     joints = exchange_legs(anatomical_joints(joints_image, swap), names[:, 2])
     if person.any():
         seen = clip_lengths(joints_image[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)

@@ -14,8 +14,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from mocap.body import JOINT_INDEX, JOINTS
 from mocap.errors import MocapError
 from mocap.lift.contacts import foot_contacts, foot_lock
-from mocap.lift.skeleton import (ANKLE_HEIGHT, JOINT_BONES, UNIT_M, clip_offsets,
-                                 forward_kinematics, pose_rotations)
+from mocap.lift.skeleton import ANKLE_HEIGHT, JOINT_BONES, UNIT_M, clip_offsets, forward_kinematics, pose_rotations
 
 # the floor: this low percentile of the lower ankle's height over the clip, less the
 # ankle's height above the sole (a percentile, not the minimum: a fit's stray frame)
@@ -159,9 +158,8 @@ def _root_track(keys: np.ndarray, pelvis: np.ndarray, root: np.ndarray | None,
 
 
 def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndarray:
-    """Gaussian smoothing along axis 0 plus the keyframes' residual through a natural cubic spline,
-    so keyframes keep their exact values."""
-    from scipy.interpolate import CubicSpline   # here: only --smooth needs it
+    """Gaussian smoothing along axis 0, the keyframes' residual added back by a natural cubic spline."""
+    from scipy.interpolate import CubicSpline  # here: only --smooth needs it
     smooth = gaussian_filter1d(track, sigma, axis=0, mode="nearest")
     residual = track[keys] - smooth[keys]
     if len(keys) == 1:
@@ -171,8 +169,7 @@ def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndar
 
 
 def stage_origin(world: np.ndarray) -> np.ndarray:
-    """(3,) the exports' origin for joints (F, 16, 3) in the root's frame: on the floor (FLOOR_PERCENTILE
-    of the lower ankle less ANKLE_HEIGHT) below the first frame's pelvis."""
+    """(3,) the exports' origin for joints (F, 16, 3) in the root's frame: the floor below frame 0's pelvis."""
     ankles = world[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]], 1].min(axis=1)
     floor = np.percentile(ankles, FLOOR_PERCENTILE) - ANKLE_HEIGHT * UNIT_M
     pelvis = world[0, JOINT_INDEX["pelvis"]]

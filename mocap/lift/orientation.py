@@ -1,19 +1,37 @@
-"""First guesses where the user said nothing (beyond the paper, which asks): orientation and signs.
+"""First guesses where the user said nothing (the paper asks the user): orientation and signs.
 
-Facing side: walking direction and knee bends. Forward or backward (a silhouette cannot tell: the
-Necker ambiguity): body growth, else the head's look (mocap.facing.facing_away), else forward. Signs:
-joint limits and the smoothest depths (second-order Viterbi), so a sign changes only where its
-segment passes the image plane; user entries are hard constraints. ``legs_crossed``: see there."""
+Facing side from walking direction and knee bends; forward or backward (the Necker ambiguity) from
+body growth, else the head's look (silhouette.facing.facing_away), else forward. Signs from joint limits
+and the smoothest depths (second-order Viterbi); user entries are hard constraints on their frames."""
 
 from __future__ import annotations
 
 import numpy as np
 from scipy.ndimage import median_filter
 
-from mocap.body import (JOINT_INDEX, LIMB_JOINTS, LIMBS, SEGMENT_INDEX, SEGMENT_JOINTS, SIDE_SIGN, SIDES,
-                        knee_bend, limb, limb_penalty, unit)
-from mocap.lift.taylor import (LENGTH, TOWARD, exchange_legs, facing_yaw, image_left_is_right, lateral_axis,
-                               relative_depths, runs)
+from mocap.body import (
+    JOINT_INDEX,
+    LIMB_JOINTS,
+    LIMBS,
+    SEGMENT_INDEX,
+    SEGMENT_JOINTS,
+    SIDE_SIGN,
+    SIDES,
+    knee_bend,
+    limb,
+    limb_penalty,
+    unit,
+)
+from mocap.lift.taylor import (
+    LENGTH,
+    TOWARD,
+    exchange_legs,
+    facing_yaw,
+    image_left_is_right,
+    lateral_axis,
+    relative_depths,
+    runs,
+)
 from mocap.smoothest import smoothest_states, two_state_path
 
 NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not matter
@@ -86,8 +104,7 @@ def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.nda
 def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
                     away: np.ndarray | None = None) -> np.ndarray:
     """(F,) in [-1, 1]: turned toward (> 0) or away (< 0): +-1 where the median growth over CUE_WINDOW_S
-    exceeds GROWTH per second (a crouch or jump says nothing), else the pooled head look ``away`` over
-    twice AWAY_SAYS, negated; 0 where neither says."""
+    passes GROWTH per second, else the pooled head look ``away`` / (2 AWAY_SAYS), negated; else 0."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
     out = np.zeros(len(ok))
     for r in runs(ok):
@@ -235,9 +252,8 @@ def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarra
 def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
                  px_per_unit: np.ndarray, lengths: np.ndarray, pinned: np.ndarray) -> np.ndarray:
     """(F,) bool: frames of anatomical 2D joints (F, 16, 2) whose knees and ankles belong to the other
-    hip, by the user's held signs (``user_signs`` (F, 10)) against each leg's ``sagittal_depth``: a
-    two-state path, exchanging costing SWITCH_WEIGHT per leg length apart, crossing KEEP_RULE a frame;
-    ``pinned`` (F,) frames never cross; without user signs nothing crosses."""
+    hip, by the user's held signs (``user_signs`` (F, 10)) against ``sagittal_depth``: a two-state path,
+    SWITCH_WEIGHT per leg length apart to exchange, KEEP_RULE a crossed frame; ``pinned`` (F,) never."""
     crossed = np.ones(len(joints), bool)
     costs = np.stack([_leg_sign_cost(joints, user_signs, yaw, px_per_unit, lengths),
                       _leg_sign_cost(exchange_legs(joints, crossed), user_signs, yaw, px_per_unit, lengths)],

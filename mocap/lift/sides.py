@@ -34,13 +34,12 @@ _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
                 away: np.ndarray | None = None, near: np.ndarray | None = None,
                 rule: np.ndarray | None = None) -> np.ndarray:
-    """(F, 3) bool: the image-left arm, the image-left leg (hips) is the right one; the knees and
-    ankles belong to the other hip. Per run with a person the legs' naming minimises ``_naming_costs``
-    plus each departure's certainty from the followed legs (``bridge_parity``, ``naming_path``).
-    ``known`` (F, 2) arms, legs: 1 swap, 0 keep, -1 unknown (the user's, held); ``rule`` (F,) > 0 swap
-    (orientation.rule_evidence); ``away`` (F,) bool: looking away, so keep by default, not swap;
-    ``facing_x`` (F,) +1 image right; ``near`` (F, 2) (mocap.facing.near_limbs) names a run in profile
-    throughout (``_nearer_naming``); arms by ``_arm_sides`` in a profile; ``fps`` sets the windows."""
+    """(F, 3) bool: whether the image-left arm, the image-left leg (hip) is the right one, and whether the
+    knees and ankles belong to the other hip. Per person run the legs' naming minimises ``_naming_costs``
+    plus each departure's certainty from the followed legs (``naming_path``). ``known`` (F, 2) arms, legs:
+    1 swap, 0 keep, -1 unknown (the user's, held); ``rule`` (F,) > 0 swap; ``away`` (F,) bool: keep by
+    default, not swap; ``facing_x`` (F,) +1 image right; ``near`` (F, 2) (silhouette.facing.near_limbs)
+    decides a run in profile throughout; arms by ``_arm_sides`` in a profile; ``fps`` sets the windows."""
     n = len(known)
     out = np.zeros((n, 3), bool)
     away = np.zeros(n, bool) if away is None else away
@@ -72,9 +71,8 @@ def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, f
 
 
 def _leg_order(legs: np.ndarray, leg_px: float, crossing: int) -> np.ndarray:
-    """(F,) in [-1, 1]: 1 where the fit's image-left leg (``legs`` (F, 2, 2, 2): knee, ankle per side)
-    lies image-left, down to -1 at SEPARATED leg lengths right of the other (median over ``crossing``
-    frames either side): the fit orders hips by image side, so a leg stepped across crosses the thighs."""
+    """(F,) in [-1, 1]: 1 where the fit's image-left leg (``legs`` (F, 2, 2, 2): knee, ankle per side) lies
+    image-left, down to -1 at SEPARATED leg lengths image-right of the other (median over ``crossing``)."""
     across = (legs[:, 1, :, 0] - legs[:, 0, :, 0]).mean(-1) / (SEPARATED * leg_px)
     held = median_filter(across, 2 * crossing + 1, mode="nearest")
     return np.where(held < 0, np.clip(held, -1.0, 0.0), 1.0)
@@ -133,10 +131,9 @@ def _limb_px(joints2d: np.ndarray, root: str, tip: str) -> float:
 
 
 def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """(F,) 0/1: each frame's limbs swapped relative to the first stretch apart, and (F - 1,) each
-    link's certainty; ``pair`` (F, 2, 3, 2) each limb's root, middle, distal joint. Apart, limbs follow
-    the nearer ones of the frame before; across a close stretch ``_crosses`` decides, less sure where it
-    outlasts ``crossing`` frames; nothing is sure outside the stretches apart."""
+    """(F,) 0/1: limbs swapped relative to the first stretch apart, and (F - 1,) each link's certainty,
+    of ``pair`` (F, 2, 3, 2) (root, middle, distal joint). Apart, limbs follow the nearer of the frame
+    before; across a close stretch ``_crosses`` decides, less surely past ``crossing`` frames."""
     n = len(pair)
     apart = np.linalg.norm(pair[:, 0, 2] - pair[:, 1, 2], axis=-1) / limb_px > SEPARATED
     pieces = [p for p in runs(apart) if p.stop - p.start >= MIN_APART]

@@ -1,8 +1,7 @@
-"""The exported skeleton: bone names and hierarchy animation tools expect (Mixamo's, most BVH
+"""The exported skeleton: the bone names and hierarchy animation tools expect (Mixamo's, most BVH
 libraries': Hips, Spine, Spine1, Neck, Head, Left/Right Shoulder, Arm, ForeArm, Hand, UpLeg, Leg,
 Foot, ToeBase), its T-pose rest (facing +z, y up, left at +x, arms out) and the rotations posing it
-as the contract body. Offsets: metres in the parent's frame, one symmetric set per clip; ``*_End``
-bones are End Sites that never rotate; bones the video does not show are placed by proportion."""
+as the contract body. Offsets: metres, parent's frame, symmetric; ``*_End`` End Sites never rotate."""
 
 from __future__ import annotations
 

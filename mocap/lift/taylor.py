@@ -1,18 +1,32 @@
 """Scaled orthographic lifting of 2D joints to a 3D pose (section 3.4, Eq. 4-5, after Taylor).
 
-Eq. 4 gives x, y up to the scale s (the body's image height); Eq. 5 gives each segment's depth
-dZ = +-sqrt(l^2 - ((u1 - u2)^2 + (v1 - v2)^2) / s^2), signed by the foreshortening (``toward``: distal
-joint nearer the camera), chained from the pelvis; the yaw places hips and shoulders. Model units of a
-175-unit body inside (body.LENGTH); 3D out in metres (CONTRACT.md: pelvis origin, y up, z to camera)."""
+x, y by Eq. 4 up to the scale s (the body's image height); each segment's depth by Eq. 5,
+dZ = +-sqrt(l^2 - ((u1 - u2)^2 + (v1 - v2)^2) / s^2), signed by its foreshortening (``toward``: the
+distal joint nearer the camera), chained from the pelvis. Model units (body.LENGTH) inside, metres out."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, BODY_HEIGHT_M, CHEST_FRACTION, HIP_HALF_SPAN,
-                        JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS,
-                        SEGMENT_NAMES, SHOULDER_DROP, SHOULDER_HALF_SPAN, SIDE_SIGN, AWAY,
-                        ORIENTATIONS, TOWARD, left_direction)
+from mocap.body import (
+    AWAY,
+    BODY_HEIGHT,
+    BODY_HEIGHT_M,
+    CHEST_FRACTION,
+    HIP_HALF_SPAN,
+    JOINT_INDEX,
+    LENGTH,
+    LIMB_JOINTS,
+    ORIENTATIONS,
+    SEGMENT_INDEX,
+    SEGMENT_JOINTS,
+    SEGMENT_NAMES,
+    SHOULDER_DROP,
+    SHOULDER_HALF_SPAN,
+    SIDE_SIGN,
+    TOWARD,
+    left_direction,
+)
 
 UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT            # metres per model unit
 SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)     # model half-spans: shoulders, hips
@@ -96,7 +110,7 @@ def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -
 def relative_depths(joints2d: np.ndarray, px_per_unit, signs: np.ndarray,
                     lengths: np.ndarray = LENGTH) -> np.ndarray:
     """(..., 10) dZ per segment (Eq. 5), model units, distal minus proximal, of joints (..., 16, 2) at
-    ``px_per_unit`` (scalar or (...,)); ``signs`` +1 toward, -1 away (0: toward); 0 where seen over-long."""
+    ``px_per_unit`` (scalar or (...,)); ``signs`` +1 toward, -1 away (0: toward); 0 if seen over-long."""
     ends = np.asarray(joints2d, float)[..., SEGMENT_JOINTS, :]          # (..., 10, 2, 2)
     seen = (np.linalg.norm(ends[..., 1, :] - ends[..., 0, :], axis=-1)
             / np.asarray(px_per_unit, float)[..., None])
@@ -113,9 +127,9 @@ def image_to_model(joints2d: np.ndarray, px_per_unit: float) -> np.ndarray:
 def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: np.ndarray,
               lengths: np.ndarray = LENGTH, spans: tuple[float, float] = SPANS,
               seen_depths: np.ndarray | None = None) -> np.ndarray:
-    """(16, 3) metres (contract frame) from anatomical 2D joints (16, 2): x, y by Eq. 4; z from the
-    pelvis: torso and head by Eq. 5, hips and shoulders at ``spans`` along the yaw's lateral axis, then
-    each limb segment by Eq. 5. ``seen_depths`` (10,) |dZ| (model units) replace Eq. 5's where finite."""
+    """(16, 3) metres (contract frame) from anatomical 2D joints (16, 2): x, y by Eq. 4; z from the pelvis:
+    torso and head by Eq. 5, hips and shoulders at ``spans`` along the yaw's lateral axis, then each limb
+    by Eq. 5. ``seen_depths`` (10,): a person model's |dZ| (cues.world_depths), signed by ``signs``, where finite."""
     xy = image_to_model(joints2d, px_per_unit)
     dz = relative_depths(joints2d, px_per_unit, signs, lengths)
     if seen_depths is not None:

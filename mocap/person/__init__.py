@@ -1,11 +1,6 @@
-"""Learned eyes: a person model that sees, on each frame, the performer's mask, 2D
-joints and 3D joints, as data for the silhouette method's fit and lift.
-
-One small interface (``PersonModel``: frames in, in order, ``PersonView`` out) and a
-registry of implementations by name (``open_person_model``); MediaPipe Pose is the
-one today (``mocap.person.mediapipe_pose``). Another model (RTMPose, ViTPose) is a
-module with a class like it and a line in ``MODELS``.
-"""
+"""Learned eyes: a person model that sees the performer's mask, 2D joints and 3D joints on each frame, for the
+silhouette method's fit and lift. ``PersonModel`` is the interface, ``MODELS`` the registry by name
+(``open_person_model``); another model is a module with a ``Model`` class and a line in ``MODELS``."""
 
 from __future__ import annotations
 
@@ -23,11 +18,9 @@ SURE = 0.5                      # a landmark confidence from which it is taken a
 
 @dataclass(frozen=True)
 class Landmarks:
-    """A person model's joints on one frame, in the contract's 16 joints and order,
-    sides anatomical: ``joints2d`` (16, 2) pixels of the frame it was given,
-    ``confidence`` (16,) in [0, 1] (how sure it is that the joint is where it says,
-    visible or not), ``world`` (16, 3) metres, pelvis at the origin, x image-right,
-    y up, z toward the camera (CONTRACT.md's 3D)."""
+    """A person model's 16 contract joints on one frame, sides anatomical: ``joints2d`` (16, 2) pixels of the
+    frame given; ``confidence`` (16,) in [0, 1], that the joint is where it says (visible or not); ``world`` (16,
+    3) metres, pelvis at the origin, x image-right, y up, z toward the camera (CONTRACT.md's 3D)."""
 
     joints2d: np.ndarray
     confidence: np.ndarray
@@ -40,16 +33,14 @@ class Landmarks:
 
 @dataclass(frozen=True)
 class PersonView:
-    """What a person model sees on one frame: ``mask`` (H, W) float32, the
-    probability that each pixel is the performer, and the ``landmarks``."""
+    """What a person model sees on a frame: ``mask`` (H, W) float32 performer probabilities, ``landmarks``."""
 
     mask: np.ndarray
     landmarks: Landmarks
 
 
 class PersonModel(Protocol):
-    """A person model over one video: ``observe`` each frame in order (BGR uint8);
-    None where it sees nobody. ``close`` frees it."""
+    """A person model over one video: ``observe`` each BGR uint8 frame in order (None: nobody seen)."""
 
     name: str
 
@@ -60,8 +51,7 @@ class PersonModel(Protocol):
 
 @dataclass(frozen=True)
 class Entry:
-    """A person model of the registry: the module holding its ``Model`` class, the
-    package it needs and the command that installs that package."""
+    """A registry entry: the module holding the ``Model`` class, the package it needs, its install command."""
 
     module: str
     package: str
@@ -74,16 +64,14 @@ CHOICES = (*MODELS, NONE)
 
 
 def check_name(name: str, where: str = "") -> str:
-    """``name`` if it names a person model or "none", else a MocapError in one line
-    (``where``: where the name was given)."""
+    """``name`` if it names a person model or "none", else a one-line MocapError (``where``: its source)."""
     if name not in CHOICES:
         raise MocapError(f"unknown person model {name!r}{where}: choose one of {', '.join(CHOICES)}")
     return name
 
 
 def open_person_model(name: str = DEFAULT_MODEL) -> PersonModel | None:
-    """A fresh person model by name, None for ``"none"``; a MocapError in one line
-    when the name is unknown or its package is not installed."""
+    """A fresh person model by name (None for "none"); a one-line MocapError if unknown or absent."""
     if check_name(name) == NONE:
         return None
     if not available(name):

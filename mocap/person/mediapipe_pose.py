@@ -1,15 +1,6 @@
-"""MediaPipe Pose (BlazePose GHUM, the legacy ``solutions.pose`` graph) as a person
-model: ``model_complexity=1``, whose model files ship inside the mediapipe 0.10.14
-wheel, so it runs offline (complexities 0 and 2 download theirs at first use), in
-video mode (each frame's search starts from the last one's landmarks), with its
-segmentation mask.
-
-Its 33 landmarks map onto the contract's 16 joints (``to_joints``): shoulders,
-elbows, wrists, hips, knees and ankles are its own; the pelvis is the hips' middle;
-the neck and the head's top lie on the line from the shoulders' middle through the
-ears' middle, where body proportions put them (NECK_ALONG, HEAD_TOP_ALONG); the
-chest on the pelvis-neck axis at the body model's CHEST_FRACTION.
-"""
+"""MediaPipe Pose (BlazePose GHUM, the legacy ``solutions.pose`` graph) as a person model:
+``model_complexity=1``, whose model files ship in the mediapipe 0.10.14 wheel (it runs offline), in video mode,
+with its segmentation mask; its 33 landmarks map onto the contract's 16 joints (``to_joints``)."""
 
 from __future__ import annotations
 
@@ -52,7 +43,7 @@ class Model:
                              "and the packages mocap lists, or --person-model none") from None
 
     def observe(self, frame: np.ndarray) -> PersonView | None:
-        """Its view of one BGR frame (the next of the video), None if it sees nobody."""
+        """Its view of the video's next BGR frame, None if it sees nobody."""
         rgb = np.ascontiguousarray(frame[:, :, ::-1])
         if self._first:                 # its first inference logs how it set itself up
             with _quiet_native_logs():
@@ -75,9 +66,9 @@ class Model:
 
 
 def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """BlazePose's 33 points (33, D) and their visibilities -> the contract's 16
-    joints (16, D) and their confidences (a derived joint's: the least of the points
-    it is made of)."""
+    """BlazePose's 33 points (33, D) and visibilities -> the contract's 16 joints (16, D) and confidences: pelvis
+    the hips' middle, neck and head top along shoulders -> ears (NECK_ALONG, HEAD_TOP_ALONG), chest at
+    CHEST_FRACTION; a derived joint's confidence is the least of its points'."""
     out = np.zeros((len(JOINTS), points.shape[1]))
     conf = np.zeros(len(JOINTS))
     for name, k in _OWN.items():
@@ -94,11 +85,8 @@ def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, n
 
 @contextlib.contextmanager
 def _quiet_native_logs():
-    """Standard error closed while the model is built and runs its first frame:
-    MediaPipe's C++ side prints its set-up log lines there (TensorFlow Lite's delegate,
-    absl's warnings), which would break the command line's one-line messages. Not for
-    longer: the file descriptor is the whole process's, and the app's other threads
-    write there too."""
+    """Standard error closed while the model is built and runs its first frame (MediaPipe's C++ set-up logs would
+    break the one-line messages); no longer, since the descriptor is the whole process's."""
     try:
         saved = os.dup(2)
     except OSError:

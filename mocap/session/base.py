@@ -6,18 +6,18 @@ Each method's session supplies ``inputs``, ``pose3d`` and ``root``; the keyframe
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, FrameNote
-from mocap.lift.contacts import FEET
 from mocap.io.export.formats import Clip, export_file
 from mocap.io.video import VideoInfo
-from mocap.lift.inputs import Inputs, root_track
+from mocap.lift.contacts import FEET
+from mocap.lift.inputs import Inputs, Said, root_track
 from mocap.lift.motion import Motion, build_motion
 from mocap.lift.taylor import depth_fractions
 from mocap.session.review import Doubt, covering, review_queue
@@ -205,3 +205,8 @@ def source_note(entry: int | None, frame: int) -> str:
     if entry is None or entry < 0:
         return "guessed"
     return "set here" if entry == frame else f"held from frame {entry}"
+
+
+def said_of(notes: Annotations, n_frames: int) -> Said:
+    """The user's annotations as the lift reads them: arrays over ``n_frames``."""
+    return Said(notes.orientations(n_frames), notes.overrides(), *notes.held_signs(n_frames))

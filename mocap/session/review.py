@@ -1,23 +1,10 @@
-"""The review queue: which frames' fits deserve a look, and why (the app's Review).
+"""The review queue (the app's Review): which frames' fits deserve a look, and why.
 
-Five signs of a doubtful frame, each a short function over a session's resolved
-lifting inputs (anatomical 2D joints, overrides applied) and fits:
-
-- a low score: the silhouette similarity S (Eq. 3) of the fit, or the tracking
-  method's reliability;
-- a segment seen nearly end-on (foreshortening ratio near zero), where its image
-  direction and its depth (Eq. 5) are least sure;
-- a joint limit of Table 1 broken (waist, neck, hips);
-- a likely left/right swap: the left and right hands or feet each lie nearer where
-  the other one was on the frame before;
-- a silhouette partly told from a guessed background (its confidence below
-  ``mocap.silhouette.masks.DOUBTFUL``: the performer never left those pixels).
-
-Frames where the tracking lost the body come before all of these, one stop at the
-start of every lost stretch, asking for the body to be marked there
-(``lost_stretches``). With the tracking method the review otherwise stops evenly,
-one frame in every stretch its pins cover, the most doubtful stretches first
-(``covering``).
+Signs of doubt over a session's resolved 2D joints: a low score (S of Eq. 3, or the tracking's
+reliability), a segment seen end-on (its direction and Eq. 5 depth least sure), a Table 1 joint
+limit broken, a likely left/right swap of hands or feet, a silhouette partly from a guessed
+background. Lost tracking stretches come first (``lost_stretches``); the tracking method
+otherwise stops evenly (``covering``).
 """
 
 from __future__ import annotations
@@ -26,10 +13,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mocap.track.loss import stretches
-from mocap.body import (ANGLE_LIMITS, BODY_HEIGHT, JOINT_INDEX, LIMB_JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS,
-                        SEGMENT_NAMES, segment_label)
+from mocap.body import (
+    ANGLE_LIMITS,
+    BODY_HEIGHT,
+    JOINT_INDEX,
+    LIMB_JOINTS,
+    SEGMENT_INDEX,
+    SEGMENT_JOINTS,
+    SEGMENT_NAMES,
+    segment_label,
+)
 from mocap.silhouette.masks import DOUBTFUL
+from mocap.track.loss import stretches
 
 LOW_SCORE = 0.7           # S below this is a doubtful fit
 END_ON_RATIO = 0.3        # seen length / length below this: the segment points at the camera
@@ -82,9 +77,7 @@ def likely_swaps(joints2d: np.ndarray, px_per_unit: np.ndarray) -> np.ndarray:
 
 
 def lost_stretches(session) -> list[Doubt]:
-    """A stop at the first frame of every stretch where the body was lost
-    (Session.lost), the longest first: a body marked there again is tracked from
-    there on (mocap.track.reseed)."""
+    """A stop at the first frame of every stretch where the body was lost, longest first."""
     out = [Doubt(first, LOST_DOUBT + (stop - first) / session.n_frames,
                  (f"body lost on frames {first}-{stop - 1}: mark the body here",))
            for first, stop in stretches(session.lost)]
@@ -92,8 +85,7 @@ def lost_stretches(session) -> list[Doubt]:
 
 
 def review_queue(session) -> list[Doubt]:
-    """Every doubtful frame with a person of a session (mocap.session), most doubtful
-    first, after the lost stretches (``lost_stretches``)."""
+    """Every doubtful frame with a person of a session, most doubtful first, after ``lost_stretches``."""
     inputs = session.inputs
     scores = session.scores
     signs = (end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
@@ -114,20 +106,9 @@ GUESSED = "silhouette partly guessed (the performer never leaves those pixels: a
 
 
 def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:
-    """One stop in every stretch of 2 ``spacing`` frames of the clip, at its middle
-    frame, the stretches most doubtful first (a stretch's doubt and reasons are those
-    of its most doubtful frame in ``queue``; stretches without one come last, in
-    order). A session's review_spacing: the tracking method's pins carry ``spacing``
-    frames to either side, so a pin at every stop reaches every frame.
-
-    Beyond the paper: the tracking's doubts are weak guides to where it is off (a
-    hidden or lost limb often matches well), and the even stops serve a user better.
-    A simulated user pinning every joint more than 4% off at the stops: PA-MPJPE
-    60.7 mm over the 8 clips of benchmarks/bench_track_budget.py (94 visits); at
-    the worst frame of each stretch instead of its middle, 62.7; at one frame per
-    doubtful stretch only, 64.2 (55 visits; the even stops' first 52: 63.8).
-    The lost stretches of ``queue`` (lost_stretches) stay first, as they are.
-    """
+    """A stop at the middle of every 2 ``spacing``-frame stretch (pins carry ``spacing`` frames
+    each way), most doubtful first by the stretch's worst frame in ``queue``; lost stretches stay
+    first. Beyond the paper: the tracking's doubts are weak guides, even stops serve users better."""
     width = 2 * spacing
     lost = [d for d in queue if d.value >= LOST_DOUBT]
     queue = [d for d in queue if d.value < LOST_DOUBT]

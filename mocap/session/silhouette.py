@@ -11,21 +11,19 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.body import JOINTS
 from mocap.errors import MocapError
-from mocap.silhouette.facing import facing_away, near_limbs
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
 from mocap.lift.cues import Cues
 from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.motion import Motion
 from mocap.lift.orientation import guess_orientations
-from mocap.session.base import Session
-from mocap.silhouette.background import Background
 from mocap.person import NONE
+from mocap.session.base import Session, said_of
+from mocap.silhouette.background import Background
+from mocap.silhouette.facing import facing_away, near_limbs
 from mocap.silhouette.masks import held_warning, silhouette_confidence, write_masks, write_silhouettes
 from mocap.silhouette.passes import FrameFit, Silhouette, fit_arrays
-from mocap.track.marks import shoulders_as_hips
 
 
 class SilhouetteSession(Session):
@@ -120,21 +118,14 @@ class SilhouetteSession(Session):
     def inputs(self) -> Inputs:
         if self._inputs is None:
             joints, body_px, spread = self._arrays
-            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps, self._annotations,
+            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps,
+                                          said_of(self._annotations, len(joints)),
                                           guessed=self._guessed, away=self._away, near=self._near,
                                           cues=self.cues)
         return self._inputs
 
     def held_signs(self) -> np.ndarray:
         return self.inputs.held
-
-    def tracking_marks(self) -> dict[str, tuple[float, float]]:
-        """Frame 0's 16 joints as tracking marks to 0.1 px (sides resolved, overrides kept, shoulders in
-        the hips' order: mocap.track.marks.shoulders_as_hips): a start for the user to correct."""
-        if not self.person[0]:
-            raise MocapError("frame 0 has no silhouette fit to take the marks from")
-        joints = shoulders_as_hips(self.inputs.joints2d[0])
-        return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
 
     def pose3d(self, frame: int) -> np.ndarray | None:
         """(16, 3) lifted joints of a frame (metres, contract frame); None without a person."""

@@ -7,22 +7,30 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap.io.annotations import Annotations
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_JOINTS
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_JOINTS, STANDING_PERCENTILE
+from mocap.camera import default_camera
 from mocap.errors import MocapError
-from mocap.lift.inputs import Inputs
-from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
-from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
-from mocap.track.calibration import UNIT_M, calibrate, default_camera
-from mocap.track.keydepths import key_joints
-from mocap.track.perspective import place_joints, sided_key, steady_depths, to_contract
-from mocap.session.base import Session
-from mocap.silhouette.passes import SCALE_PERCENTILE
-from mocap.track.parts import far_arm
-from mocap.track.marks import check_marks
-from mocap.track.tracking import (TrackResult, carried_pins, guessed_turn, spread_corrections,
-                                  spread_frames, steady_joints, track_video, turn_of)
+from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo
+from mocap.lift.inputs import Inputs
+from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
+from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
+from mocap.session.base import Session
+from mocap.track.calibration import UNIT_M, calibrate
+from mocap.track.keydepths import key_joints
+from mocap.track.marks import check_marks, shoulders_as_hips
+from mocap.track.parts import far_arm
+from mocap.track.perspective import place_joints, sided_key, steady_depths, to_contract
+from mocap.track.tracking import (
+    TrackResult,
+    carried_pins,
+    guessed_turn,
+    spread_corrections,
+    spread_frames,
+    steady_joints,
+    track_clip,
+    turn_of,
+)
 
 MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
                 'with frames["0"].joints2d, or mark them in the app)')
@@ -45,8 +53,18 @@ def remarks_of(notes: Annotations) -> dict[int, dict[str, tuple[float, float]]]:
 
 def tracked_video(info: VideoInfo, notes: Annotations, progress=None, focal_px: float | None = None) -> TrackResult:
     """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of."""
-    return track_video(info, marks_of(notes), progress, focal_px=focal_px,
+    return track_clip(info, marks_of(notes), progress, focal_px=focal_px,
                        orientation=notes.orientations(1)[0], remarks=remarks_of(notes))
+
+
+def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:
+    """Frame 0's 16 joints of a silhouette method's session as tracking marks to 0.1 px
+    (sides resolved, overrides kept, shoulders in the hips' order: shoulders_as_hips):
+    a start for the user to correct."""
+    if not fitted.person[0]:
+        raise MocapError("frame 0 has no silhouette fit to take the marks from")
+    joints = shoulders_as_hips(fitted.inputs.joints2d[0])
+    return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
 
 
 def check_tracking_marks(info: VideoInfo, notes: Annotations) -> None:
@@ -191,7 +209,7 @@ class TrackSession(Session):
 
 
 def body_px(joints2d: np.ndarray) -> float:
-    """Standing height in pixels over a clip: the SCALE_PERCENTILE of head-top-to-ankles distances."""
+    """Standing height in pixels over a clip: the STANDING_PERCENTILE of head-top-to-ankles distances."""
     ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
     heights = np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
-    return float(np.percentile(heights, SCALE_PERCENTILE))
+    return float(np.percentile(heights, STANDING_PERCENTILE))

@@ -1,10 +1,9 @@
-"""The silhouette method (the 2013 paper): background, silhouettes, and the 10-cylinder
-model fitted to each (Algorithms 1-6, Eq. 1-3). ``fit_clip`` is its front door: what a
-session needs of a video, its silhouettes and 2D fits."""
+"""The silhouette method (the 2013 paper: Algorithms 1-6, Eq. 1-3): background, silhouettes and the 10-cylinder
+model fitted to each; ``fit_clip`` is its front door."""
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, processing_scale
@@ -20,11 +19,9 @@ __all__ = ["Background", "FrameFit", "Silhouette", "clip_background", "fit_clip"
 
 def fit_clip(info: VideoInfo, background: Background | None = None, model: PersonModel | None = None,
              shown: Shown | None = None) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    """Each frame's silhouette (section 3.2; against ``background``, else the clip's own,
-    seen also through the person ``model`` where given) and 2D fit (section 3.3),
-    streamed: ``shown(product, frame, final)`` hears of each silhouette (None where
-    nobody is) and each fit as it comes, a fit whose legs are not chosen yet first with
-    ``final`` False. A MocapError where no frame holds a person."""
+    """Each frame's silhouette (section 3.2; against ``background``, else the clip's own, with the person
+    ``model`` if given) and 2D fit (section 3.3), streamed to ``shown(product, frame, final)`` (fits whose legs
+    are not chosen yet first with ``final`` False). MocapError if no frame holds a person."""
     n, scale = info.frame_count, processing_scale(info)
     stream, fits = FitStream(scale, info.fps), []
     say = shown or (lambda product, frame, final: None)

@@ -1,9 +1,7 @@
-"""The arms of the 2D fit (section 3.3): first guesses by contour analysis with elbow detection
-(Algorithms 2-4), refined by Algorithm 1 (upper arm with the lower attached, then the lower arm)
-and Algorithm 6. Beyond the paper: each arm explains only its own image side; guesses bending the
-elbow backward (the knees tell the facing) are dropped; the lower arm reaches on into a hand
-(raster.HAND_LENGTH); with grey levels the inner edges along an arm add to S (mocap.image.edges),
-which places an arm in front of the trunk, where the silhouette cannot."""
+"""The arms of the 2D fit (section 3.3): first guesses by contour analysis with elbow detection (Algorithms 2-4),
+refined by Algorithm 1 (upper arm with the lower attached, then the lower arm) and Algorithm 6. Beyond the paper:
+each arm explains only its image side, backward-bending elbows are dropped, the lower arm reaches into a hand
+(raster.HAND_LENGTH), and inner edges (mocap.image.edges) place an arm in front of the trunk."""
 
 from __future__ import annotations
 
@@ -11,11 +9,22 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, WIDTH, Pose2D,
-                        forward_kinematics_2d, image_angle, knee_bend, limb)
+from mocap.body import (
+    BODY_HEIGHT,
+    JOINT_INDEX,
+    LENGTH,
+    SEGMENT_INDEX,
+    SIDES,
+    WIDTH,
+    Pose2D,
+    forward_kinematics_2d,
+    image_angle,
+    knee_bend,
+    limb,
+)
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
 from mocap.silhouette.raster import HAND_LENGTH, Canvas, draw_model, pose_quads, posed_quads, sweep_scorer
-from mocap.silhouette.search import Knob, span, refine_limb, search_angle
+from mocap.silhouette.search import Knob, refine_limb, search_angle, span
 
 ARM = {side: limb("arm", side).segments for side in SIDES}
 GUESS_RATIOS = (1.0, 0.8)
@@ -41,8 +50,7 @@ def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[fl
 
 
 def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) -> list[tuple[float, float]]:
-    """(upper, lower) angles of a two-segment limb from ``start`` whose tip reaches ``end``, for both
-    elbow bends; the straight limb pointing at ``end`` when it is out of reach."""
+    """(upper, lower) angles, both bends, of a two-segment limb from ``start`` to ``end`` (straight if far)."""
     d = end - start
     dist = float(np.hypot(*d))
     toward = image_angle(d)
@@ -58,10 +66,9 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
 
 
 def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, crossing: bool = False):
-    """First guesses (G, 4) of one arm's (upper, lower) angles and ratios: contour analysis (Algorithms
-    2-4) of its image side's arm curve (``crossing``: either side), the arm reaching the curve's tip
-    bent either way or straight and foreshortened, hanging down, ``prev``'s arm, and with edges the
-    ARM_GRID last; new guesses at each GUESS_RATIOS (a turned arm is shorter), the grid's at the first."""
+    """First guesses (G, 4) of one arm's (upper, lower) angles and ratios: from its side's arm curve (Algorithms
+    2-4; ``crossing``: either side's), hanging down, ``prev``'s, and with edges ARM_GRID (last), each new one at
+    GUESS_RATIOS (a turned arm is shorter), the grid's at the first."""
     upper, lower = (SEGMENT_INDEX[s] for s in ARM[side])
     angles, guesses = [(270.0, 270.0)], []
     if prev is not None:
@@ -84,8 +91,8 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[float, float],
                    reach: tuple[float, float]):
-    """An arm curve's (upper, lower) angle guesses (Algorithms 3-4, and the ``reach``-long arm bent
-    either way to its farthest point), and the straight arm foreshortened to it: ((u, l), (r, r))."""
+    """An arm curve's (upper, lower) angle guesses (Algorithms 3-4, and the ``reach``-long arm bent either way to
+    its farthest point), and the straight arm foreshortened to it: ((u, l), (r, r))."""
     tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
     toward = image_angle(tip - shoulder)
     ratio = min(float(np.hypot(*(tip - shoulder))) / sum(reach), 1.0)
@@ -93,9 +100,7 @@ def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[floa
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
-    """Pixels (H, W bool) on one image side ('l'/'r') of the torso's axis, where that arm may explain
-    silhouette (section 3.3 names limbs by image side); above the head either arm may (raised hands
-    meet there, and the axis's line there says nothing of which shoulder a hand belongs to)."""
+    """Pixels (H, W bool) one arm may explain: its image side of the torso's axis, and above the head."""
     joints = forward_kinematics_2d(pose)
     pelvis, neck = joints[JOINT_INDEX["pelvis"]], joints[JOINT_INDEX["neck"]]
     ys, xs = np.arange(shape[0])[:, None], np.arange(shape[1])[None, :]
@@ -105,11 +110,9 @@ def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
 
 
 def fit_arms(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, facing: int = 0) -> Pose2D:
-    """Both arms, each on its image side (``fit_arm``) and committed once fitted, image-left first.
-    Near profile (spread below CROSS_SPREAD) arms held in front lie on one side of the torso's axis:
-    the arm on the ``facing`` side (from the knees) comes first and the other may take the silhouette
-    left anywhere, unless it then explains under half a hand's area beyond the fitted parts (edges
-    alone placed it), when it is fitted again on its side."""
+    """Both arms, each on its image side (``fit_arm``), committed once fitted. Near profile (CROSS_SPREAD) the
+    ``facing`` arm comes first and the other may take what is left anywhere, unless it then explains under half a
+    hand's area beyond the fitted parts, when it is fitted again on its side."""
     profile = pose.spread < CROSS_SPREAD
     order = ("r", "l") if profile and facing > 0 else SIDES
     for side in order:
@@ -128,16 +131,15 @@ def hand_area(scale: float) -> float:
 
 
 def own_pixels(canvas: Canvas, pose: Pose2D, side: str) -> int:
-    """Silhouette pixels that one arm of pose covers and the canvas's fitted part does not."""
+    """Silhouette pixels that one arm of ``pose`` covers and the canvas's fitted part does not."""
     drawn = draw_model(pose, canvas.sil.shape, ARM[side])
     return int(np.count_nonzero(drawn & canvas.sil & canvas.free))
 
 
 def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
             facing: int = 0, crossing: bool = False) -> Pose2D:
-    """One arm on its image side (``crossing``: anywhere): the best first guess whose elbow bends the
-    way the performer faces (``facing``: +1 image right, -1 left, 0 unknown), refined by Algorithm 1
-    (upper arm with the lower attached, then the lower arm) and Algorithm 6."""
+    """One arm on its image side (``crossing``: anywhere): the best first guess bending the elbow the way the
+    performer faces (``facing``: +1 image right, -1 left, 0 unknown), refined by Algorithms 1 and 6."""
     keep = None if crossing else image_side(canvas.sil.shape, pose, side)
     own = canvas.fork(keep=keep, by_edges=True)
     pose = best_arm_guess(own, pose, side, prev, facing, crossing)
@@ -149,9 +151,7 @@ def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
                    facing: int = 0, crossing: bool = False) -> Pose2D:
-    """The ``arm_candidates`` guess with the highest S, among those not bending the elbow backward
-    (``elbow_bends_back``); the grid's arms narrowed as Algorithm 1 narrows: all at full length, then
-    the GRID_SHORTENED best at the other GUESS_RATIOS on the partial silhouette the first outlines."""
+    """The guess best by S of those not bending the elbow back, the grid narrowed as Algorithm 1 narrows."""
     guesses = arm_candidates(canvas, pose, side, prev, crossing)
     backward = elbow_bends_back(guesses[:, 0], guesses[:, 1], pose.spread, facing)
     grid = np.arange(len(guesses)) >= len(guesses) - (len(_GRID_GUESSES) if canvas.by_edges else 0)
@@ -169,8 +169,7 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
 
 
 def _scored_guesses(canvas: Canvas, pose: Pose2D, side: str, guesses: np.ndarray, score=None):
-    """(angles, ratios, S plus edge support, scorer) of one arm's guesses (G, 4); ``score``: an
-    earlier round's scorer (``sweep_scorer``), else the guesses outline the partial silhouette."""
+    """(angles, ratios, S with edges, scorer) of guesses (G, 4); ``score``: an earlier round's scorer."""
     both = Knob("angle", ARM[side])
     pelvis, angle, ratio, spread = both.batch(pose, guesses[:, 0])
     angle[:, both.indices[1]] = guesses[:, 1]
@@ -181,18 +180,15 @@ def _scored_guesses(canvas: Canvas, pose: Pose2D, side: str, guesses: np.ndarray
 
 
 def facing_of_knees(pose: Pose2D) -> int:
-    """+1 if the knees of a 2D pose bend toward image right (the performer faces it), -1 toward
-    left, 0 if both legs are straight (bend under KNEE_FACING of the body height)."""
+    """+1/-1 if the knees bend toward image right/left (the performer faces it), 0 if legs are straight."""
     joints = forward_kinematics_2d(pose)[None]
     bend = sum(float(knee_bend(joints, side)[0]) for side in SIDES) / (BODY_HEIGHT * pose.scale)
     return 0 if abs(bend) < KNEE_FACING else int(np.sign(bend))
 
 
 def elbow_bends_back(upper: np.ndarray, lower: np.ndarray, spread: float, facing: int) -> np.ndarray:
-    """Whether arms at ``upper`` and ``lower`` degrees (counter-clockwise, y up) bend the elbow back
-    by over ELBOW_BACK, told only near profile (spread under ELBOW_SHOWS_SPREAD) with ``facing`` known.
-    Not for an arm held up (elbow over shoulder, hand over elbow): raised sideways it bends any way in
-    the image, and raised arms narrow the torso into a false profile."""
+    """Whether arms at ``upper``, ``lower`` degrees (counter-clockwise, y up) bend the elbow back by over
+    ELBOW_BACK: told only near profile (ELBOW_SHOWS_SPREAD) with ``facing`` known, never for an arm held up."""
     upper, lower = np.asarray(upper, float), np.asarray(lower, float)
     if not facing or spread >= ELBOW_SHOWS_SPREAD:
         return np.zeros(np.shape(upper), bool)

@@ -1,22 +1,20 @@
-"""Background estimation and silhouette extraction (paper, section 3.2), made robust.
-
-The background is the per-pixel temporal median of samples brought to one exposure; each frame
-is brought to its exposure, differenced against a per-pixel noise threshold, cleared of soft
-shadows and reduced to the one person-sized region (empty when nobody is there). Masks are in
-the pixels of the frames given (see `video.processing_scale`)."""
+"""Background estimation and silhouette extraction (paper, section 3.2), made robust: the per-pixel temporal
+median of samples at one exposure, per-pixel noise thresholds, soft shadows removed, the mask reduced to the one
+person-sized region (empty when nobody is there). Masks are in the pixels of the frames given
+(`video.processing_scale`)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cache, cached_property
 
 import cv2
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.io.video import VideoInfo, sample_frames
 from mocap.image.percentile import percentile, row_medians
+from mocap.io.video import VideoInfo, sample_frames
 
 MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
@@ -30,10 +28,9 @@ SHADOW_NCC = 0.5      # correlation with the background's texture that a shadow 
 
 @dataclass(frozen=True)
 class Background:
-    """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel `threshold` (HxW uint8 grey
-    levels) and the clip's noise `sigma` (grey levels); `held` (HxW bool or None): pixels the
-    performer never left in the samples, where `image` is a guess; `stood` (HxW bool or None):
-    where the clip's median showed the performer (mocap.silhouette.plate)."""
+    """The empty scene: `image` (HxWx3 uint8 BGR), per-pixel `threshold` (HxW uint8 grey levels), the clip's
+    noise `sigma` (grey levels); `held` (HxW bool or None): pixels the performer never left in the samples, where
+    `image` is a guess; `stood` (HxW bool or None): where the clip's median showed the performer (plate)."""
 
     image: np.ndarray
     threshold: np.ndarray
@@ -55,10 +52,8 @@ class Background:
 def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
                         scale: float = 1.0, k: float = K_SIGMA,
                         min_threshold: float = MIN_THRESHOLD) -> Background:
-    """Per-pixel temporal median (section 3.2) of frames first brought to one exposure.
-    `source`: a video (`n_samples` frames read at `scale`) or the frames (all used). The threshold
-    is `k` robust noise sigmas per pixel, at least `min_threshold` grey levels (which keeps a clean
-    clip's compression artefacts out)."""
+    """Per-pixel temporal median (section 3.2) of frames brought to one exposure: `source` is a video
+    (`n_samples` frames read at `scale`) or the frames; threshold `k` noise sigmas, at least `min_threshold`."""
     if isinstance(source, VideoInfo):
         frames = [f for _, f in sample_frames(source, n_samples, scale)]
     else:
@@ -80,9 +75,8 @@ def noise_floor(sigma: float) -> int:
 
 
 def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float]:
-    """Per-pixel noise sigma (HxW float32) of the largest channel difference, and the global one.
-    The per-pixel one (>= 5 frames) comes from the lower quartile over time, right even where the
-    performer covers a pixel in most samples; dilated over texture edges, floored at the global."""
+    """Per-pixel noise sigma (HxW float32) of the largest channel difference, from the lower quartile over time
+    (>= 5 frames: right where the performer stays), dilated, floored at the global one; and the global one."""
     deviation = np.stack([_largest_channel(cv2.absdiff(f, background)) for f in stack])
     sigma = MAD_TO_SIGMA * median_level(deviation)
     noise = np.full(background.shape[:2], sigma, np.float32)
@@ -94,8 +88,7 @@ def _noise(stack: np.ndarray, background: np.ndarray) -> tuple[np.ndarray, float
 
 
 def median_level(values: np.ndarray | list[np.ndarray]) -> float:
-    """The median of a stack of uint8 images, from histogram counts (numpy's convention: the
-    mean of the two middle values for an even count)."""
+    """The median of uint8 images, from histogram counts (even count: the mean of the middle two)."""
     counts = sum(cv2.calcHist([image], [0], None, [256], [0, 256]).ravel().astype(np.int64) for image in values)
     cumulative = np.cumsum(counts)
     n = cumulative[-1]
@@ -116,8 +109,7 @@ def _quantile(stack: np.ndarray, q: float, rows: int = 32) -> np.ndarray:
 
 
 def _sorted(stack: np.ndarray) -> list[np.ndarray]:
-    """A uint8 stack sorted over its first axis, pixel by pixel: Batcher's odd-even merge sort
-    as a network of cv2.min/cv2.max over whole images (padded with 255 to a power of two)."""
+    """A uint8 stack sorted over its first axis pixel by pixel (Batcher's merge sort as cv2.min/max)."""
     size = 1 << (len(stack) - 1).bit_length()
     ranked = [np.ascontiguousarray(f) for f in stack] + [np.full(stack.shape[1:], 255, np.uint8)] * (size - len(stack))
     for a, b in _merge_sort_pairs(size):
@@ -125,7 +117,7 @@ def _sorted(stack: np.ndarray) -> list[np.ndarray]:
     return ranked
 
 
-@lru_cache(maxsize=None)
+@cache
 def _merge_sort_pairs(n: int) -> tuple[tuple[int, int], ...]:
     """The compare-exchange pairs of Batcher's odd-even merge sort of n (a power of two)."""
     pairs = []
@@ -153,9 +145,8 @@ def _largest_channel(image: np.ndarray) -> np.ndarray:
 
 
 def exposure_gain(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Per-channel gains (3,) that bring `frame` to the exposure of `reference`: the median
-    ratio over a grid of well-exposed pixels, again over the three quarters agreeing best with it
-    (the performer and shadows drop out)."""
+    """Per-channel gains (3,) that bring `frame` to `reference`'s exposure: the median ratio over a grid of
+    well-exposed pixels, redone on the three quarters agreeing best (the performer and shadows drop out)."""
     grid = _gain_grid(frame.shape[:2])
     f = _channel_rows(frame[grid].reshape(-1, 3))
     r = _channel_rows(reference[grid].reshape(-1, 3))
@@ -178,15 +169,14 @@ def _gain_grid(shape: tuple[int, ...]) -> tuple[slice, slice]:
 def extract_silhouette(frame: np.ndarray, background: Background,
                        shadow_ratio: tuple[float, float] = SHADOW_RATIO,
                        shadow_chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """The performer's silhouette in `frame` (HxW uint8 0/255, empty if nobody): section 3.2's
-    thresholded difference after exposure compensation, soft shadows removed, cleaned (``clean_mask``)."""
+    """The performer's silhouette in `frame` (HxW uint8 0/255, empty if nobody): module doc."""
     frame = at_exposure(frame, background)
     mask = foreground(frame, background)
     return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma), stood=background.stood)
 
 
 def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
-    """`frame` brought to the background's exposure (``exposure_gain``); ValueError if it does not match."""
+    """`frame` brought to the background's exposure; ValueError if it does not match the background."""
     if frame.shape != background.image.shape or frame.dtype != np.uint8:
         raise ValueError(f"frame {frame.shape} {frame.dtype} does not match the "
                          f"background {background.image.shape} uint8")
@@ -194,22 +184,20 @@ def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
 
 
 def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
-    """Pixels (0/255) where any channel's difference exceeds the pixel's threshold (the 0/255
-    channel comparisons give a nonzero grey level: each channel weighs at least 29/255 in it)."""
+    """Pixels (0/255) where any channel's difference exceeds the pixel's threshold."""
     over = cv2.compare(cv2.absdiff(frame, background.image), background.channel_threshold, cv2.CMP_GT)
     return cv2.compare(cv2.cvtColor(over, cv2.COLOR_BGR2GRAY), 0, cv2.CMP_GT)
 
 
 def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
                    ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """`mask` without its soft shadows (section 3.2's noted failure): ``without_shadows`` of ``shadow_candidates``."""
+    """`mask` without its soft shadows (section 3.2's noted failure)."""
     return without_shadows(mask, frame, background, shadow_candidates(mask, frame, background, ratio, chroma))
 
 
 def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Background,
                       ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
-    """Pixels of `mask` (0/255) that each look like shadow: the background darkened by one factor
-    in `ratio` in all channels, the colour kept within `chroma` of its brightest channel."""
+    """Pixels of `mask` (0/255) darker than the background by one factor in `ratio`, hue within `chroma`."""
     candidates = np.zeros_like(mask)
     box = mask_box(mask, 0)                     # the work only where `mask` has pixels
     if box is None:
@@ -230,8 +218,7 @@ def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Backgroun
 
 def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
                     candidates: np.ndarray) -> np.ndarray:
-    """`mask` without the solid areas of shadow `candidates` that keep the background's texture
-    (``_textured_alike``); thin runs of candidates inside the person (dark hair) survive the opening."""
+    """`mask` without the solid areas of shadow `candidates` that keep the background's texture."""
     box = shadow_box(candidates)
     if box is None:
         return mask
@@ -245,8 +232,7 @@ def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
 
 
 def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] | None:
-    """The box ``without_shadows`` works in (`margin` pixels more): around the candidates' solid areas
-    (the opening keeps nothing else), within the texture vote's reach; None if there are none."""
+    """The box (slices) of the candidates' solid areas, plus the vote's reach and `margin`; None if none."""
     disk = _disk(candidates.shape)
     near = mask_box(candidates, disk.shape[0])  # the opening keeps nothing outside the candidates' box
     if near is None:
@@ -260,8 +246,7 @@ def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] |
 
 
 def mask_box(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
-    """The box (slices) of a mask's nonzero pixels and `margin` more within the image, None if empty:
-    local mask operations give the same there as on the whole image."""
+    """The box (slices) of a mask's nonzero pixels and `margin` more within the image, None if empty."""
     x, y, w, h = cv2.boundingRect(mask)
     if not w:
         return None
@@ -270,11 +255,10 @@ def mask_box(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
 
 def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray,
                     sigma: float, frame_shape: tuple[int, ...]) -> np.ndarray:
-    """The shadow `candidates` (0/255) that keep the background's texture.
-    A shadow scales texture: over 5x5 pixels the frame correlates with the background (NCC over
-    SHADOW_NCC) with at least half the contrast the darkening leaves; cloth over a pattern does not.
-    The test tells only where that contrast clears the noise (K_SIGMA sigmas), so the candidates
-    vote within _vote_size (where none tells, over their connected piece)."""
+    """The shadow `candidates` (0/255) that keep the background's texture: a shadow scales it, so over 5x5 pixels
+    the frame correlates with the background (over SHADOW_NCC) with at least half the darkened contrast, which
+    cloth over a pattern does not. Only where that contrast clears K_SIGMA noise does it tell, so candidates vote
+    within _vote_size (where none tells, over their connected piece)."""
     frame, bg = grey.astype(np.float32), grey_bg.astype(np.float32)
     frame_mean, frame_spread = _local_spread(frame)
     bg_mean, bg_spread = _local_spread(bg)
@@ -307,10 +291,9 @@ def _local_spread(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001,
                min_piece: float = 0.02, stood: np.ndarray | None = None) -> np.ndarray:
-    """Open (speckle), close (gaps), keep the person, fill its holes under `max_hole` of its area.
-    The person is the largest region (none if under `min_area` of the frame) plus nearby regions of
-    at least `min_piece` of it (a leg cut off by a gap), less those lying mostly where `stood`
-    (``Background.stood``, see ``_apart_where_stood``)."""
+    """Open (speckle), close (gaps), keep the person, fill its holes under `max_hole` of its area. The person is
+    the largest region (none under `min_area` of the frame) and nearby regions of `min_piece` of it (a leg cut
+    off), less those lying mostly where `stood` (``_apart_where_stood``)."""
     out, disk = np.zeros_like(mask), _disk(mask.shape)
     box = mask_box(mask, 2 * disk.shape[0] + 2)  # beyond the closing's reach, and a ring of zeros
     if box is None:
@@ -348,8 +331,7 @@ def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: floa
 
 
 def _person_regions(contours, parents, areas, min_area: float, min_piece: float) -> list[int]:
-    """Indices of the outer contours that make the person: the largest region and the large
-    regions whose bounding boxes come within a tenth of its height of it."""
+    """Indices of the person's outer contours: the largest, and large ones within a tenth of its height."""
     outer = np.flatnonzero(parents < 0)
     main = outer[np.argmax(areas[outer])]
     if areas[main] < min_area:
@@ -367,8 +349,8 @@ def _person_regions(contours, parents, areas, min_area: float, min_piece: float)
 
 
 def _apart_where_stood(contour: np.ndarray, stood: np.ndarray) -> bool:
-    """Whether a region apart from the person's largest lies mostly where `stood`: a performer
-    standing there joins their body, so such a region is scene uncovered when they left (a jump)."""
+    """Whether a region apart from the person's largest lies mostly where `stood`: there it is scene uncovered
+    when the performer left (a jump), since a performer standing there joins their body."""
     inside = np.zeros(stood.shape, np.uint8)
     cv2.drawContours(inside, [contour], -1, 1, cv2.FILLED)
     area = cv2.countNonZero(inside)

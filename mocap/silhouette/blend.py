@@ -1,19 +1,22 @@
-"""The silhouette's pixels where the body and the scene blend.
-
-An outline pixel is partly body, partly scene (lens, antialiasing and codec blur the edge), so
-thresholded silhouettes run about a pixel wide all round and the closing bridges slits of scene.
-Read as a blend (Porter and Duff, SIGGRAPH 1984: I = alpha F + (1 - alpha) B, F the body colour
-beside it), a pixel is kept where the body covers at least half of it. That *cover* is what the
-silhouettes are written out as (mask files); the 2D fit keeps the plain thresholded silhouette
-(``background.extract_silhouette``), on which its limb widths and scores were made."""
+"""The silhouette's pixels where body and scene blend: an outline pixel is partly both (lens, antialiasing and
+codec blur), so thresholded silhouettes run about a pixel wide and closing bridges slits. As a blend (Porter and
+Duff, SIGGRAPH 1984: I = alpha F + (1 - alpha) B, F the body colour beside it) a pixel is kept where the body
+covers half of it. That *cover* is written out as masks; the 2D fit keeps the plain thresholded silhouette."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from mocap.silhouette.background import (Background, at_exposure, clean_mask, foreground, shadow_box,
-                                         shadow_candidates, without_shadows)
+from mocap.silhouette.background import (
+    Background,
+    at_exposure,
+    clean_mask,
+    foreground,
+    shadow_box,
+    shadow_candidates,
+    without_shadows,
+)
 
 SHADOW_ANGLE = 0.06     # radians: a shadow's mean hue over 5x5 pixels from the scene's (the cover's)
 MIN_ALPHA = 0.5         # the share of a pixel the body covers for it to be the body's
@@ -23,9 +26,8 @@ _REACH = 2              # pixels: the widest window's (5x5) reach around a pixel
 
 
 def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.ndarray, np.ndarray]:
-    """The 2D fit's silhouette of ``frame`` (``background.extract_silhouette``) and its cover
-    (0/255 each): shadows also told by hue (``keeps_hue``), cleaned, less the pixels the body covers
-    under MIN_ALPHA of (``trim_blends``)."""
+    """The 2D fit's silhouette of ``frame`` (``background.extract_silhouette``) and its cover (0/255 each):
+    shadows also told by hue (``keeps_hue``), cleaned, less pixels under MIN_ALPHA body (``trim_blends``)."""
     frame = at_exposure(frame, background)
     differs = foreground(frame, background)
     candidates = shadow_candidates(differs, frame, background)
@@ -41,10 +43,9 @@ def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.
 
 def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,
               angle: float = SHADOW_ANGLE) -> np.ndarray:
-    """The shadow ``candidates`` (0/255) that keep the background's hue over 5x5 pixels: their mean
-    residual from the darkened background within ``angle`` radians of their mean colour. A shadow
-    darkens all channels alike; dark cloth of the scene's hue is a few degrees off, which 25 pixels'
-    mean shows. Where the background is a guess (``held``) every candidate stays."""
+    """The shadow ``candidates`` (0/255) whose mean residual from the darkened background over 5x5 pixels is
+    within ``angle`` radians of their mean colour (a shadow darkens all channels alike, dark cloth of the scene's
+    hue is a few degrees off); all stay where the background is a guess (``held``)."""
     box = shadow_box(candidates, margin=2)      # the rest stays, whatever its hue
     if box is None:
         return candidates
@@ -67,10 +68,9 @@ def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,
 
 def trim_blends(person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scene: np.ndarray,
                 threshold: np.ndarray) -> np.ndarray:
-    """``person`` (0/255, cleaned) without pixels the body covers under MIN_ALPHA of: those the
-    cleaning added (not in ``differs``) against differing pixels within two, then the outline against
-    pixels a step further in. ``frame``, ``scene``: BGR at one exposure; ``threshold``: grey levels. A
-    pixel stays with no body pixel near, or where body and scene are within CLEAR thresholds."""
+    """``person`` (0/255) without pixels the body covers under MIN_ALPHA of: those cleaning added (not in
+    ``differs``), then the outline, each against body pixels near. ``frame``, ``scene``: BGR at one exposure;
+    ``threshold``: grey levels. A pixel stays with no body near, or body and scene within CLEAR thresholds."""
     x, y, w, h = cv2.boundingRect(person)
     if not w:
         return person
@@ -90,8 +90,8 @@ def trim_blends(person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scen
 
 def _drop(mask: np.ndarray, index: np.ndarray, body: np.ndarray, window: int, frame: np.ndarray,
           scene: np.ndarray, threshold: np.ndarray) -> np.ndarray:
-    """``mask`` without the pixels of flat ``index`` (``window`` // 2 from the edges) under MIN_ALPHA
-    of the mean ``body`` (0/255) colour in the window around each; ``frame``, ``scene`` float32."""
+    """``mask`` less the flat ``index`` pixels (``window`` // 2 from the edges) under MIN_ALPHA of the mean
+    ``body`` colour in their window; ``frame``, ``scene`` float32."""
     if not len(index):
         return mask
     count, total = _window_sums(body > 0, frame, index, window)
@@ -108,8 +108,8 @@ def _drop(mask: np.ndarray, index: np.ndarray, body: np.ndarray, window: int, fr
 
 def _window_sums(chosen: np.ndarray, image: np.ndarray, index: np.ndarray,
                  window: int) -> tuple[np.ndarray, np.ndarray]:
-    """How many ``chosen`` (bool) pixels each window around the flat ``index`` pixels holds (``window``
-    // 2 from the edges), and the sum of their ``image`` colours, gathered pixel by pixel."""
+    """How many ``chosen`` (bool) pixels each ``window`` around the flat ``index`` pixels (``window`` // 2 from
+    the edges) holds, and the sum of their ``image`` colours."""
     r, width = window // 2, chosen.shape[1]
     around = index[:, None] + (np.arange(-r, r + 1)[:, None] * width + np.arange(-r, r + 1)).ravel()
     weight = chosen.reshape(-1)[around]

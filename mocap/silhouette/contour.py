@@ -1,7 +1,5 @@
-"""Contour analysis of the silhouette (section 3.3.2, Algorithms 2-5). Limb curves are read off
-horizontal scan lines: for the lower legs the runs below the knees, for the arms the runs that
-torso, head and legs do not explain. Angles: the body module's (degrees, y up), along the curve
-from its first point to its last."""
+"""Contour analysis of the silhouette (section 3.3.2, Algorithms 2-5): limb curves read off horizontal scan
+lines; angles in the body module's convention (degrees, y up), from a curve's first point to its last."""
 
 from __future__ import annotations
 
@@ -55,8 +53,7 @@ def _near(angle: float, reference: float) -> float:
 
 
 def find_elbow_corner(points: np.ndarray) -> int:
-    """Algorithm 4: the split of an arm curve with the largest angle between the two
-    fitted lines, if at least MIN_CORNER_ANGLE; -1 when there is none."""
+    """Algorithm 4: the arm curve's split with the largest angle, if at least MIN_CORNER_ANGLE; else -1."""
     pts = np.asarray(points, dtype=float)
     n = len(pts)
     idx = np.arange(MIN_CORNER_DISTANCE, n - 2)
@@ -75,8 +72,7 @@ def find_elbow_corner(points: np.ndarray) -> int:
 
 
 def lower_leg_band(sil: np.ndarray, joints: np.ndarray, scale: float) -> tuple[int, int]:
-    """The rows (first, end) Algorithm 2 reads the lower legs on: from just below the knees of
-    straight legs under the pelvis (feet at the silhouette's bottom) to just above the feet."""
+    """The rows (first, end) Algorithm 2 reads the lower legs on: below the knees to above the feet."""
     pelvis = joints[JOINT_INDEX["pelvis"]]
     ys = np.nonzero(sil.any(axis=1))[0]
     bottom = ys.max() if len(ys) else int(pelvis[1])
@@ -86,8 +82,8 @@ def lower_leg_band(sil: np.ndarray, joints: np.ndarray, scale: float) -> tuple[i
 
 
 def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
-    """GetLeft/RightLowerKneeCurve of Algorithm 2: per scan line of ``lower_leg_band``, the centres
-    of the leftmost and rightmost leg ({'l', 'r'}: (N, 2) x, y), and each line's run count (Algorithm 5)."""
+    """GetLeft/RightLowerKneeCurve of Algorithm 2: per ``lower_leg_band`` line the centres of the outer legs
+    ({'l', 'r'}: (N, 2) x, y), and each line's run count (Algorithm 5)."""
     pelvis = joints[JOINT_INDEX["pelvis"]]
     y0, y1 = lower_leg_band(sil, joints, scale)
     half = 45 * scale
@@ -110,8 +106,8 @@ def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
 
 
 def _leg_centres(s: np.ndarray, e: np.ndarray, leg_w: float, curves) -> dict[str, float]:
-    """Which legs one scan line shows, and where: the outer runs of two or more; one wide run split at
-    both ends; one narrow run to the leg whose curve it continues, or to both where they overlap."""
+    """Which legs one scan line shows, and where: the outer runs, or one wide run split, or one narrow run for
+    the leg whose curve it continues (both where they overlap)."""
     if len(s) >= 2:
         return {"l": (s[0] + e[0]) / 2, "r": (s[-1] + e[-1]) / 2}
     if e[0] - s[0] > 1.6 * leg_w:
@@ -125,8 +121,7 @@ def _leg_centres(s: np.ndarray, e: np.ndarray, leg_w: float, curves) -> dict[str
 
 
 def lower_legs_cross(line_counts) -> bool:
-    """Algorithm 5: the lower legs cross when their scan lines start as one line and
-    become two for the rest."""
+    """Algorithm 5: the lower legs cross when their scan lines start as one and become two."""
     c = np.asarray(line_counts)
     if len(c) < 4 or c[0] != 1:
         return False
@@ -138,9 +133,8 @@ def lower_legs_cross(line_counts) -> bool:
 
 
 def arm_curve(canvas, joints: np.ndarray, side: str, scale: float, runs: str | None = None) -> np.ndarray:
-    """GetLeft/RightArmCurve of Algorithm 2: (N, 2) points from the shoulder, the centres of the
-    outermost runs not explained by torso, head or legs on that image side (``runs``: on that side
-    instead, for an arm that crosses the torso's axis)."""
+    """GetLeft/RightArmCurve of Algorithm 2: (N, 2) from the shoulder, the centres of the outermost runs that
+    torso, head and legs leave on that image side (``runs``: that side instead, for a crossing arm)."""
     shoulder = joints[JOINT_INDEX[f"shoulder_{side}"]]
     neck, pelvis = joints[JOINT_INDEX["neck"]], joints[JOINT_INDEX["pelvis"]]
     reach = (LENGTH[SEGMENT_INDEX["upper_arm_l"]] + LENGTH[SEGMENT_INDEX["lower_arm_l"]]) * scale

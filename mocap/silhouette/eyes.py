@@ -1,7 +1,6 @@
-"""What a person model's eyes (mocap.person) give the silhouette method: the silhouette where
-background subtraction cannot see (``fused_mask``), and landmarks as targets of the 2D fit's
-searches (``fit_targets``), as SMPLify fits a body model to learned keypoints. Landmarks name
-anatomical sides, the fit image sides (section 3.3): ``image_sided`` renames them."""
+"""What a person model (mocap.person) gives the silhouette method: the silhouette where background subtraction
+cannot see (``fused_mask``), and landmarks the 2D fit's searches draw toward (``fit_targets``), renamed from
+anatomical to image sides (section 3.3: ``image_sided``)."""
 
 from __future__ import annotations
 
@@ -25,10 +24,9 @@ _LIMB_SEGMENTS = {"arm": ("upper_arm", "lower_arm"), "leg": ("upper_leg", "lower
 
 def fused_mask(classical: np.ndarray, person: np.ndarray, held: np.ndarray | None
                ) -> tuple[np.ndarray, np.ndarray] | None:
-    """The silhouette (uint8 0/255) from ``classical`` (0/255) and the person model's probabilities
-    ``person``, and the pixels only the person model gave (bool); None where its mask is empty. The
-    person mask (it sees a body part that never moves) is grown by background subtraction's pixels
-    in an EDGE_BAND around it where the scene was seen (not ``held``), to follow the frame's edges."""
+    """The silhouette (uint8 0/255): the person model's mask (probabilities ``person``) grown by the
+    ``classical`` (0/255) pixels in an EDGE_BAND around it, not ``held``; and the pixels only the model gave
+    (bool). None where its mask is empty."""
     inside = person >= PERSON_LEVEL
     rows = np.flatnonzero(inside.any(axis=1))
     if not len(rows):
@@ -45,9 +43,8 @@ def fused_mask(classical: np.ndarray, person: np.ndarray, held: np.ndarray | Non
 
 @dataclass(frozen=True)
 class Targets:
-    """Landmarks as the fit's searches read them: ``points`` (16, 2) in the fitted silhouette's
-    pixels, named by image side, with the model's pelvis and hips (body.reported_joints puts them
-    lower); ``weight`` (16,) their confidences."""
+    """Landmarks as the searches read them: ``points`` (16, 2) in fitted-silhouette pixels, image-sided, the
+    model's pelvis and hips (body.reported_joints puts them lower); ``weight`` (16,) their confidences."""
 
     points: np.ndarray
     weight: np.ndarray
@@ -55,8 +52,7 @@ class Targets:
 
 def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px_per_unit: float,
                 prev: Pose2D | None) -> Targets | None:
-    """A frame's landmarks (processing pixels) in the pixels of its crop normalised for the fit
-    (``origin``, ``step``: passes.normalise), image-sided; None without landmarks."""
+    """A frame's landmarks in its normalised crop's pixels (``origin``, ``step``), image-sided, or None."""
     if landmarks is None:
         return None
     points = (landmarks.joints2d + 0.5 - origin) / step - 0.5
@@ -66,9 +62,8 @@ def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px
 
 def image_sided(points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_per_unit: float
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Landmarks (16, 2) and weights with each limb pair named by image side as the fit names it: the
-    image-left shoulder (hip) is '_l' where the two lie APART, else the pairing nearer ``prev``'s
-    segment angles, so the fit keeps following the same limbs."""
+    """Landmarks (16, 2) and weights with limb pairs named by image side: by the shoulders' (hips') x where they
+    lie APART, else by the pairing nearer ``prev``'s angles."""
     points, weight = points.copy(), weight.copy()
     for limb, joints in _PAIRS.items():
         left = [_J[f"{j}_l"] for j in joints]
@@ -87,8 +82,7 @@ def image_sided(points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_
 
 
 def _angle_cost(points: np.ndarray, prev: Pose2D, limb: str, swapped: bool) -> float:
-    """How far (degrees, summed) a limb pair's segment angles lie from the previous
-    fit's, the landmarks' sides exchanged or not."""
+    """Degrees (summed) a limb pair's segment angles lie from ``prev``'s, sides exchanged or not."""
     total = 0.0
     for kind in _LIMB_SEGMENTS[limb]:
         for side, other in (("l", "r"), ("r", "l")):
@@ -104,9 +98,8 @@ def segment_angle(points: np.ndarray, segment: str) -> float:
 
 
 def centred_on(prev: Pose2D | None, targets: Targets | None) -> Pose2D | None:
-    """The pose whose angles centre the searches (``prev`` of mocap.silhouette.fit2d):
-    the previous fit's with each segment whose two landmarks are SURE turned as they
-    lie; with no previous fit, the landmarks' pose where they are sure of every segment."""
+    """The pose centring the searches: ``prev`` with each segment whose landmarks are SURE turned as they lie;
+    without ``prev``, the landmarks' pose if they are sure of every segment, else None."""
     if targets is None:
         return prev
     sure = {s: bool(targets.weight[[_J[a], _J[b]]].min() >= SURE) for s, (a, b) in SEGMENTS.items()}

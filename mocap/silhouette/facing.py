@@ -1,8 +1,6 @@
-"""Which way the performer faces, read from a video's silhouettes where the 2D pose
-cannot tell (beyond the paper): the head's look (mostly face from the front, mostly hair
-from behind: ``facing_away``) and which arm and leg are near the camera (their outlines
-cross the trunk and each other: ``near_limbs``); mocap.lift.orientation and
-mocap.lift.sides take both as arrays."""
+"""Which way the performer faces, from a video's silhouettes where the 2D pose cannot tell (beyond the paper):
+the head's look (face or hair: ``facing_away``) and which arm and leg are near the camera (their outlines cross
+the trunk and each other: ``near_limbs``); mocap.lift.orientation and mocap.lift.sides take both."""
 
 from __future__ import annotations
 
@@ -13,10 +11,7 @@ from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_IN
 from mocap.image.edges import Edges
 
 # The upper head (from above the ears to the crown, of the fitted neck -> head top) is
-# split into its dark and light tones (Otsu); the dark one's share is about 0.35 seen
-# from the front (a hairline), 0.5 three-quarter from the front, 0.75 three-quarter
-# from behind and from behind (measured on the development clips' independent renders
-# and on `mocap synth`'s, people with hair darker than their skin).
+# split into its dark and light tones (Otsu): the dark one (hair) grows as the head turns away.
 HEAD_BAND = (0.35, 1.1, 0.4)   # along the head from, to; half-width across (head lengths)
 SHARE_BETWEEN = 0.6            # the dark share between the three-quarter views, front and back
 SHARE_SPAN = 0.15              # from it to a sure front or back
@@ -25,8 +20,7 @@ _J_TOP, _J_NECK = JOINT_INDEX["head_top"], JOINT_INDEX["neck"]
 
 
 def hair_share(grey: np.ndarray, mask: np.ndarray, neck: np.ndarray, top: np.ndarray) -> float:
-    """The dark tone's share of the upper head's pixels in a grey image where ``mask``
-    is the performer (NaN when the head shows one tone or too few pixels)."""
+    """The dark tone's share of the upper head in ``grey`` within ``mask`` (NaN: one tone, few pixels)."""
     u = top - neck
     length = float(np.hypot(*u))
     if not np.isfinite(length) or length < 2:
@@ -49,12 +43,9 @@ def hair_share(grey: np.ndarray, mask: np.ndarray, neck: np.ndarray, top: np.nda
 
 
 def facing_away(silhouettes: list, joints2d: np.ndarray, scale: float) -> np.ndarray:
-    """(F,) evidence in [-1, 1] that the performer faces away from the camera (> 0) or
-    toward it (< 0), from ``hair_share`` on each frame's silhouette (its box, mask and
-    grey levels, mocap.silhouette.passes.Silhouette, in pixels of ``scale`` times the
-    video's) and image joints (F, 16, 2; video pixels); 0 where the head says nothing
-    or an arm lies over it (``arm_over_head``: a raised hand or sleeve is read as face
-    or hair)."""
+    """(F,) evidence in [-1, 1] that the performer faces away (> 0) or toward the camera (< 0), by ``hair_share``
+    on each Silhouette (pixels of ``scale`` times the video's) at the joints (F, 16, 2; video pixels); 0 where
+    the head tells nothing or an arm lies over it (``arm_over_head``)."""
     out = np.zeros(len(joints2d))
     for i, (sil, joints) in enumerate(zip(silhouettes, joints2d)):
         if sil is None or sil.grey is None or not np.isfinite(joints).all():
@@ -76,9 +67,7 @@ _ARM_SAMPLES = np.linspace(0.0, 1.0, 9)
 
 
 def arm_over_head(joints: np.ndarray) -> bool:
-    """Whether an arm of a pose (16, 2) lies over the upper head that ``hair_share``
-    reads (HEAD_BAND, widened by half an arm's width, Table 1's): points along the
-    upper and lower arms, head lengths from the neck along and across the head."""
+    """Whether an arm of a pose (16, 2) lies over the head band ``hair_share`` reads (HEAD_BAND)."""
     neck, u = joints[_J_NECK], joints[_J_TOP] - joints[_J_NECK]
     length2 = float(u @ u)
     if not length2 > 0:
@@ -96,14 +85,9 @@ def arm_over_head(joints: np.ndarray) -> bool:
 
 
 def near_limbs(silhouettes: list, joints2d: np.ndarray, body_px: np.ndarray, scale: float) -> np.ndarray:
-    """(F, 2) for the arms and the legs of the fit (joints2d (F, 16, 2), image sides,
-    video pixels; ``body_px`` (F,) video pixels of the model's body height), how much
-    more the image-left limb shows its outline inside the silhouette than the
-    image-right one: the edge support (mocap.image.edges.Edges.inside, 0..1) along the sides
-    of its two segments, Table 1's widths wide. Where an arm lies over the trunk, or
-    one leg over the other, the near one's edges show and the far one's are hidden
-    behind it; a limb off the body has its outline on the silhouette's, which does
-    not count. 0 where there is no silhouette."""
+    """(F, 2) for the arms and the legs (joints2d (F, 16, 2), image sides, video pixels; ``body_px`` (F,)): how
+    much more the image-left limb's outline shows inside the silhouette than the right one's (edge support,
+    mocap.image.edges, 0..1): a near limb's edges show over the trunk or the other limb. 0 without a silhouette."""
     out = np.zeros((len(joints2d), 2))
     for i, (sil, joints) in enumerate(zip(silhouettes, joints2d)):
         if sil is None or sil.grey is None or not np.isfinite(joints).all() or not np.isfinite(body_px[i]):

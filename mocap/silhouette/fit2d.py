@@ -1,20 +1,6 @@
-"""Fitting the 2D cylinder model to a silhouette: the paper's Algorithms 1-6.
-
-All functions work on a silhouette already normalised so that the body is a known
-number of pixels tall (``pose.scale`` pixels per model unit); ``session`` does the
-cropping and scaling. Left and right are image sides here (section 3.3).
-
-Order of the fit (section 3.3), one module a step: the torso with the head by
-Algorithm 1, its position and turn (``torso``); the legs, lower legs by contour
-analysis (Algorithm 2) with the knee-crossing test (Algorithm 5), upper legs by
-Algorithm 1 with the lower legs attached (``legs``); the arms by contour analysis
-with elbow detection (Algorithms 2-4, ``arms``); every segment's foreshortening
-ratio by Algorithm 6. All searches are the narrowing of Algorithms 1 and 6
-(``search``). Beyond the paper: each search may be centred on the previous frame's
-pose (temporal coherence, the paper's future work), contour estimates are refined
-by Algorithm 1 on the similarity, and the legs come as a few hypotheses among which
-``mocap.silhouette.legchain`` chooses over time.
-"""
+"""Fitting the 2D cylinder model to a normalised silhouette (``pose.scale`` pixels per model unit): the paper's
+Algorithms 1-6 (section 3.3), left and right being image sides. Torso and head, legs, then arms, each by the
+narrowing search; beyond the paper, searches centred on the previous frame (temporal coherence)."""
 
 
 from __future__ import annotations
@@ -35,9 +21,7 @@ FIT_SCALE = FIT_BODY_PX / (BODY_HEIGHT + FOOT_LENGTH)  # the silhouette is the b
 
 @dataclass(frozen=True)
 class Fit2D:
-    """A fitted 2D pose, its joints (pixels of the fitted silhouette) and its S;
-    ``alternatives``: the same fit with the other leg hypotheses, for a choice over
-    time (``mocap.silhouette.legchain``)."""
+    """A fitted 2D pose, its joints (16, 2; fitted-silhouette pixels), its S, and the other leg hypotheses."""
 
     pose: Pose2D
     joints: np.ndarray
@@ -47,12 +31,9 @@ class Fit2D:
 
 def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
               spread: float | None = None, grey: np.ndarray | None = None, targets=None) -> Fit2D:
-    """Fit the 10-cylinder model to one normalised silhouette (section 3.3) with the
-    best leg hypothesis, the others as ``alternatives``; with ``spread`` the torso's
-    horizontal foreshortening is taken as given; with the frame's ``grey`` levels
-    (same size) the arms also follow the edges inside the silhouette; with a person
-    model's ``targets`` (mocap.silhouette.eyes.Targets) every search also draws the
-    joints toward its landmarks (raster.Canvas.landmark_scores)."""
+    """Fit the 10-cylinder model to one normalised silhouette (section 3.3), other leg hypotheses as
+    ``alternatives``; ``spread``: the torso's if given; ``grey``: the frame's (edges guide the arms);
+    ``targets``: landmarks (eyes.Targets) every search draws joints toward."""
     canvas = Canvas(silhouette, grey, targets)
     pose = initial_pose(canvas.sil, scale)
     if prev is not None:
@@ -68,7 +49,7 @@ def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
 
 
 def with_legs(silhouette: np.ndarray, pose: Pose2D, legs: Pose2D) -> Fit2D:
-    """The fit of pose with the legs of ``legs``, scored on the whole silhouette (Eq. 3)."""
+    """The fit of ``pose`` with the legs of ``legs``, scored on the whole silhouette (Eq. 3)."""
     k = [SEGMENT_INDEX[s] for s in LEGS]
     angle, ratio = pose.angle.copy(), pose.ratio.copy()
     angle[k], ratio[k] = legs.angle[k], legs.ratio[k]

@@ -1,9 +1,6 @@
-"""Choosing each frame's legs over time (beyond the paper, whose fit is per frame).
-
-Where the legs pass each other in profile, S (Eq. 3) tells a frame's leg hypotheses
-(``legs.leg_hypotheses``) apart badly, so they are chosen by Viterbi: the path maximising the
-frames' S less SMOOTH_WEIGHT times the knees' and ankles' motion (each by name, keeping each
-leg's identity), decided LAG frames late (fixed-lag smoothing); a frame without a person ends it."""
+"""Choosing each frame's legs over time (beyond the paper): where the legs pass in profile S (Eq. 3) tells the
+hypotheses (``legs.leg_hypotheses``) apart badly, so fixed-lag Viterbi picks the path maximising S less
+SMOOTH_WEIGHT times the knees' and ankles' motion (each by name); a frame without a person ends the path."""
 
 from __future__ import annotations
 
@@ -26,8 +23,7 @@ def leg_offsets(fit: Fit2D) -> np.ndarray:
 
 
 def motion_cost(before: list[Fit2D], after: list[Fit2D]) -> np.ndarray:
-    """(len(before), len(after)): SMOOTH_WEIGHT times the mean distance (body heights) the knees and
-    ankles move from each hypothesis to each next one."""
+    """(len(before), len(after)): SMOOTH_WEIGHT times the mean distance the knees and ankles move."""
     a = np.stack([leg_offsets(f) for f in before])[:, None]
     b = np.stack([leg_offsets(f) for f in after])[None]
     return SMOOTH_WEIGHT * np.linalg.norm(a - b, axis=-1).mean(-1)
@@ -41,9 +37,8 @@ class _Frame:
 
 
 class LegChain:
-    """Fixed-lag Viterbi over the frames' leg hypotheses: ``push`` a frame's item (anything the
-    caller needs back) with its fit, None where nobody is, to get the (item, chosen fit) pairs now
-    decided, in frame order."""
+    """Fixed-lag Viterbi over the frames' leg hypotheses: ``push`` an item (returned as is) with its fit, or None
+    where nobody is; get the (item, chosen fit) pairs now decided, in frame order."""
 
     def __init__(self, lag: int):
         self.lag = lag

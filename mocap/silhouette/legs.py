@@ -1,8 +1,7 @@
-"""The legs of the 2D fit (section 3.3, Fig. 3b-c): lower-leg angles by contour analysis
-(Algorithm 2) with the knee-crossing test (Algorithm 5), upper legs by Algorithm 1 with the lower
-legs attached, ratios by Algorithm 6. Beyond the paper: both lower-to-upper pairings are scored,
-crossed thighs get their own knees back, a raised knee's lower leg is searched over every bend,
-and the legs come as scored hypotheses (``leg_hypotheses``) among which ``legchain`` chooses."""
+"""The legs of the 2D fit (section 3.3, Fig. 3b-c): lower legs by contour analysis (Algorithm 2) with the
+knee-crossing test (Algorithm 5), upper legs by Algorithm 1 with the lower legs attached, ratios by Algorithm 6.
+Beyond the paper: pairings checked by S, crossed thighs uncrossed, raised knees' lower legs searched over every
+bend, and a few leg hypotheses (``leg_hypotheses``) for ``legchain`` to choose among over time."""
 
 from __future__ import annotations
 
@@ -10,12 +9,21 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (FOOT_LENGTH, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, Pose2D,
-                        forward_kinematics_2d, image_angle, limb)
+from mocap.body import (
+    FOOT_LENGTH,
+    JOINT_INDEX,
+    LENGTH,
+    LIMB_JOINTS,
+    SEGMENT_INDEX,
+    SIDES,
+    Pose2D,
+    forward_kinematics_2d,
+    image_angle,
+    limb,
+)
 from mocap.silhouette.contour import find_angle, lower_leg_band, lower_leg_curves, lower_legs_cross
 from mocap.silhouette.raster import Canvas, pose_quads, poses_quads, sweep_scorer
-from mocap.silhouette.search import (RATIO_RANGE, TRACK_HALF_RANGE, Knob, around, span,
-                                     refine_limb, search_angle)
+from mocap.silhouette.search import RATIO_RANGE, TRACK_HALF_RANGE, Knob, around, refine_limb, search_angle, span
 
 LEG = {side: limb("leg", side).segments for side in SIDES}
 LEGS = LEG["l"] + LEG["r"]
@@ -37,11 +45,9 @@ DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this clos
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised: float) -> Pose2D:
-    """Lower legs by contour analysis (Algorithm 2) and knee crossing (Algorithm 5), thighs by
-    Algorithm 1 with them attached (Fig. 3b-c), each lower leg refined by Algorithm 1, then ratios
-    (Algorithm 6). A knee raised above the row ``raised`` (``raised_knee_row``, ``raised_leg``) got
-    the other leg's curve, so its lower leg is searched over every bend (``search_shin``).
-    ``reading``: the curves and run counts of ``contour.lower_leg_curves``."""
+    """Lower legs by Algorithms 2 and 5 (``reading``: ``contour.lower_leg_curves``'s), thighs by Algorithm 1 with
+    them attached (Fig. 3b-c), lower legs refined by Algorithm 1, ratios by Algorithm 6; a knee raised above the
+    row ``raised`` took the other leg's curve, so its lower leg is searched over every bend (``search_shin``)."""
     curves, runs = reading
     crossed = lower_legs_cross(runs)
     for side, other in (("l", "r"), ("r", "l")):
@@ -59,9 +65,8 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised:
 
 
 def raised_knee_row(sil: np.ndarray, joints: np.ndarray, scale: float, runs) -> float:
-    """The image row above which a knee is raised: RAISED_KNEE of a thigh above the rows Algorithm 2
-    reads (``contour.lower_leg_band``) where fewer than ONE_LEG_SHARE of them show two runs (the
-    raised leg's curve was the other's); -inf where they show two. ``scale``: pixels per unit."""
+    """The image row above which a knee is raised: RAISED_KNEE of a thigh above Algorithm 2's rows where fewer
+    than ONE_LEG_SHARE of them show two runs; -inf where they show two. ``scale``: pixels per unit."""
     if not len(runs) or np.mean(np.asarray(runs) >= 2) >= ONE_LEG_SHARE:
         return -np.inf
     top = lower_leg_band(sil, joints, scale)[0]
@@ -69,22 +74,19 @@ def raised_knee_row(sil: np.ndarray, joints: np.ndarray, scale: float, runs) -> 
 
 
 def raised_leg(pose: Pose2D, side: str, row: float) -> bool:
-    """Whether one side's knee lies above image ``row`` on a thigh at least THIGH_MATCH as long in the
-    image as the other (a "knee" on a short thigh is a hand hanging by the legs, as in a squat)."""
+    """Whether a knee is above image ``row`` on a thigh THIGH_MATCH as long as the other (else a hand)."""
     up, other = SEGMENT_INDEX[LEG[side][0]], SEGMENT_INDEX[LEG[other_side(side)][0]]
     return bool(row > -np.inf and pose.ratio[up] >= THIGH_MATCH * pose.ratio[other]
                 and forward_kinematics_2d(pose)[JOINT_INDEX[f"knee_{side}"], 1] < row)
 
 
 def other_side(side: str) -> str:
-    """'r' for 'l' and 'l' for 'r'."""
     return "r" if side == "l" else "l"
 
 
 def search_shin(canvas: Canvas, pose: Pose2D, side: str) -> Pose2D:
-    """One lower leg by Algorithm 1 over every bend of its knee (KNEE_REACH either way of its thigh,
-    no higher than THIGH_RANGE); kept where it ends the silhouette as a raised lower leg does
-    (``ends_in_foot``), else the pose as it was."""
+    """One lower leg by Algorithm 1 over every bend of its knee (within KNEE_REACH and THIGH_RANGE), kept if it
+    ends the silhouette as a raised lower leg does (``ends_in_foot``), else the pose as it was."""
     t, at = (pose.angle[SEGMENT_INDEX[s]] for s in LEG[side])
     lo, hi = max(t - KNEE_REACH, THIGH_RANGE[0]), min(t + KNEE_REACH, THIGH_RANGE[1])
     at = 270.0 + (at - 270.0 + 180.0) % 360.0 - 180.0
@@ -93,9 +95,8 @@ def search_shin(canvas: Canvas, pose: Pose2D, side: str) -> Pose2D:
 
 
 def ends_in_foot(sil: np.ndarray, pose: Pose2D, side: str) -> bool:
-    """Whether one side's lower leg ends where the silhouette does: its ankle inside, and silhouette
-    past it no longer than FOOT_REACH feet (FOOT_LENGTH). One that runs on into the silhouette was
-    hung from a hand or laid along the other leg."""
+    """Whether one side's lower leg ends where the silhouette does: its ankle inside, and no more than FOOT_REACH
+    feet of silhouette past it (else it was hung from a hand or laid along the other leg)."""
     j = forward_kinematics_2d(pose)
     knee, ankle = j[JOINT_INDEX[f"knee_{side}"]], j[JOINT_INDEX[f"ankle_{side}"]]
     step = (ankle - knee) / max(np.hypot(*(ankle - knee)), 1e-6)
@@ -114,10 +115,9 @@ def search_thigh(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -
 
 
 def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Pose2D]:
-    """Beyond the paper: distinct leg fits, best first by S of both legs together. The legs are
-    searched one at a time, so both can take the same leg of the silhouette: each is also refitted
-    beside the other (``refit_leg_beside``); near profile each fit also enters with the legs' names
-    exchanged, since only their motion over time tells them apart (``legchain``)."""
+    """Beyond the paper: distinct leg fits, best first by S of both legs together: ``fit_legs``, each leg
+    refitted beside the other (both may take the same leg), and near profile each with the legs' names exchanged,
+    which only their motion over time tells apart (``legchain``)."""
     joints = forward_kinematics_2d(pose)
     reading = lower_leg_curves(canvas.sil, joints, pose.scale)
     raised = raised_knee_row(canvas.sil, joints, pose.scale, reading[1])
@@ -131,9 +131,8 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
 
 
 def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, raised: float) -> Pose2D:
-    """One leg refitted with the other taken as fitted, to explain what the other leaves: the thigh
-    by Algorithm 1 from ``prev``'s lower-leg angle, then the lower leg (``search_shin`` above the row
-    ``raised``). Lengths stay: beside the other leg Algorithm 6 would shrink this one."""
+    """One leg refitted with the other taken as fitted: the thigh by Algorithm 1 from ``prev``'s lower-leg angle,
+    then the lower leg; lengths stay (beside the other leg, Algorithm 6 would shrink it)."""
     beside = canvas.fork(pose_quads(pose, LEG[other_side(side)]))
     lower = LEG[side][1]
     pose = Knob("angle", (lower,)).apply(pose, (prev or pose).angle[SEGMENT_INDEX[lower]])
@@ -170,10 +169,8 @@ def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) 
 
 
 def _uncrossed_thighs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
-    """Beyond the paper: thighs crossing in the image (each hip reaching for the other's knee, where
-    either way explains the same silhouette) get their own knees back, lower legs staying under them,
-    unless crossed explains clearly more (CROSSED_GAIN) or continues ``prev``'s thighs clearly better
-    (CROSSED_TURN: a leg swinging past the other crosses for real)."""
+    """Beyond the paper: thighs crossing in the image get their own knees back (lower legs staying under them)
+    unless crossed explains clearly more (CROSSED_GAIN) or continues ``prev`` better (CROSSED_TURN)."""
     j = forward_kinematics_2d(pose)
     hips = [j[JOINT_INDEX["hip_l"]], j[JOINT_INDEX["hip_r"]]]
     knees = [j[JOINT_INDEX["knee_l"]], j[JOINT_INDEX["knee_r"]]]
@@ -213,8 +210,7 @@ def _exchange_legs(pose: Pose2D) -> Pose2D:
 
 
 def _best_leg_pairing(canvas: Canvas, pose: Pose2D) -> Pose2D:
-    """The better by S of both ways of joining the lower legs to the knees (a check on Algorithm
-    5's scan-line verdict)."""
+    """The better by S of both ways of joining lower legs to knees (checks Algorithm 5's verdict)."""
     swapped = _swap_segments(pose, [LOWER_LEGS])
     scores = leg_scores(canvas, [pose, swapped])
     return swapped if scores[1] > scores[0] else pose

@@ -1,12 +1,5 @@
-"""The silhouettes out of the fit: mask files (CONTRACT.md's optional "masks"), each
-frame's silhouette confidence, and the clip's warning when the background had to
-be guessed where the performer never leaves.
-
-A silhouette pixel that the performer covers on every sample of the background
-(``Background.held``) was told from an inpainted guess of the scene
-(mocap.silhouette.plate), not from the scene itself; a frame's confidence is the
-share of its silhouette that was not.
-"""
+"""The silhouettes out of the fit: mask files (CONTRACT.md's optional "masks"), each frame's silhouette
+confidence (the share not over the inpainted background, ``Background.held``), and the clip's warning."""
 
 from __future__ import annotations
 
@@ -28,8 +21,7 @@ DOUBTFUL = 0.8          # a frame's silhouette confidence below this is worth a 
 
 
 def silhouette_confidence(silhouettes: list, background: Background) -> np.ndarray:
-    """(F,) each frame's share of silhouette pixels told from the seen scene, in
-    [0, 1]; NaN where nobody was found. ``silhouettes`` are session.Silhouette."""
+    """(F,) each frame's share of silhouette told from the seen scene; NaN where nobody is."""
     out = np.full(len(silhouettes), np.nan)
     for i, sil in enumerate(silhouettes):
         if sil is None:
@@ -44,8 +36,7 @@ def silhouette_confidence(silhouettes: list, background: Background) -> np.ndarr
 
 
 def held_warning(confidence: np.ndarray) -> str | None:
-    """The clip-level warning when the performer never leaves a good part of their
-    silhouette (median share over HELD_WARNING), else None."""
+    """The clip's warning if the median share of silhouette over guessed pixels is HELD_WARNING, else None."""
     found = confidence[np.isfinite(confidence)]
     if not len(found) or 1.0 - float(np.median(found)) < HELD_WARNING:
         return None
@@ -55,9 +46,7 @@ def held_warning(confidence: np.ndarray) -> str | None:
 
 
 def write_masks(folder: str | os.PathLike, info: VideoInfo, background: Background) -> Path:
-    """Every frame's silhouette as written out (``written_masks``) as
-    ``folder/NNNNNN.png``: 8-bit, 255 = performer, the video's size. The folder is
-    replaced whole (io.export.masks.MaskFolder), as mocap batch writes it."""
+    """Every frame's ``written_masks`` as ``folder/NNNNNN.png``, replacing the folder whole."""
     out = MaskFolder(folder)
     for i, mask in enumerate(written_masks(info, background)):
         out.add(i, mask)
@@ -65,8 +54,7 @@ def write_masks(folder: str | os.PathLike, info: VideoInfo, background: Backgrou
 
 
 def write_silhouettes(folder: str | os.PathLike, info: VideoInfo, silhouettes: list) -> Path:
-    """The fit's own silhouettes (passes.Silhouette, processing pixels; None: nobody)
-    as ``write_masks`` writes its masks: 8-bit, 255 = performer, the video's size."""
+    """The fit's own silhouettes (processing pixels; None: nobody) written as ``write_masks`` does."""
     out = MaskFolder(folder)
     scale, size = processing_scale(info), (info.width, info.height)
     for i, sil in enumerate(silhouettes):
@@ -84,11 +72,8 @@ def video_sized(mask: np.ndarray, size: tuple[int, int]) -> np.ndarray:
 
 
 def written_masks(info: VideoInfo, background: Background) -> Iterator[np.ndarray]:
-    """Each frame's silhouette as written out, at the video's size (uint8, 255 =
-    performer), from a pass of its own over the video (the fit does not make them):
-    the cover (mocap.silhouette.blend) where the fit's silhouette holds somebody
-    (passes.holds_person), that silhouette where the cover holds nobody, else empty.
-    ``background`` is the fit's, at the processing scale."""
+    """Each frame's mask (uint8, 255 = performer, the video's size), from a pass of its own: the cover (blend)
+    where the fit's silhouette holds somebody, that silhouette if the cover holds nobody, else empty."""
     size = (info.width, info.height)
     for _, frame in iter_frames(info, scale=processing_scale(info)):
         fit, cover = silhouette_and_cover(frame, background)

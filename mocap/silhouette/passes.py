@@ -1,7 +1,6 @@
-"""The silhouette method's two passes over a video, both streamed: silhouettes (section 3.2),
-kept as small bit-packed crops, then the 2D fit (section 3.3) on each crop normalised to the
-model's size, the body's height taken from the silhouettes around each frame (a performer
-walking toward the camera keeps a right scale). ``mocap.pipeline`` runs them."""
+"""The silhouette method's two streamed passes over a video: silhouettes (section 3.2), kept as bit-packed crops,
+then the 2D fit (section 3.3) on each crop normalised to the model's size, the body's height taken from the
+silhouettes around each frame (so a performer walking toward the camera keeps a right scale)."""
 
 from __future__ import annotations
 
@@ -11,20 +10,19 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, JOINTS, reported_joints
-from mocap.io.video import VideoInfo, iter_frames
+from mocap.body import BODY_HEIGHT, JOINTS, STANDING_PERCENTILE, reported_joints
 from mocap.image.percentile import nanpercentile, percentile
-from mocap.silhouette.background import Background, extract_silhouette
+from mocap.io.video import VideoInfo, iter_frames
 from mocap.person import Landmarks, PersonModel
+from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.eyes import centred_on, fit_targets, fused_mask
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
+from mocap.silhouette.legchain import LAG_S, LegChain
 from mocap.silhouette.plate import clip_background
 from mocap.silhouette.torso import head_top_row, torso_spread, torso_width_readable
-from mocap.silhouette.legchain import LAG_S, LegChain
 
 MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody
-SCALE_PERCENTILE = 90           # of silhouette heights around a frame: the standing height
-SCALE_WINDOW_S = 1.0            # half-width of that window, seconds
+SCALE_WINDOW_S = 1.0            # half-width of the body height's window, seconds
 MARGIN = 0.25                   # of the body height, around the silhouette's box when fitting
 SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame: the fit's
 LIFT_SPREAD_PERCENTILE = 20     # of the readable ones around a frame: the lift's
@@ -35,9 +33,9 @@ MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a sea
 
 @dataclass(frozen=True)
 class Silhouette:
-    """A frame's silhouette: ``box`` and the packed mask ``bits`` in it, the frame's ``grey`` levels
-    in the box (mocap.image.edges); with a person model (mocap.person), its ``landmarks`` (processing
-    pixels) and the pixels its mask gave (``learned``, packed like ``bits``)."""
+    """A frame's silhouette: ``box`` (processing pixels) and the packed mask ``bits`` in it, the frame's ``grey``
+    levels there (mocap.image.edges); with a person model, its ``landmarks`` and the pixels its mask gave
+    (``learned``, packed like ``bits``)."""
 
     box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
     bits: np.ndarray
@@ -63,7 +61,7 @@ class Silhouette:
         return self._unpacked(self.bits)
 
     def learned_mask(self) -> np.ndarray | None:
-        """(h, w) 0/1 in the box: the pixels the person model's mask gave, None without it."""
+        """(h, w) 0/1 in the box: the pixels the person model's mask gave; None without it."""
         return None if self.learned is None else self._unpacked(self.learned)
 
     def _unpacked(self, bits: np.ndarray) -> np.ndarray:
@@ -79,8 +77,7 @@ def holds_person(mask: np.ndarray) -> bool:
 
 @dataclass(frozen=True)
 class FrameFit:
-    """The fit of one frame: joints (16, 2) in original video pixels (image sides), None when
-    no person was found."""
+    """The fit of one frame: joints (16, 2) in video pixels (image sides); None where nobody was found."""
 
     index: int
     joints2d: np.ndarray | None
@@ -93,9 +90,8 @@ class FrameFit:
 
 def iter_silhouettes(info: VideoInfo, scale: float, background: Background | None = None,
                      person: PersonModel | None = None) -> Iterator[Silhouette | None]:
-    """Pass one (section 3.2): each frame's Silhouette, None where nobody is (the background is
-    ``plate.clip_background``'s unless given); with a ``person`` model, fused with its mask and
-    carrying its landmarks wherever it sees somebody (``eyes.fused_mask``)."""
+    """Pass one (section 3.2): each frame's Silhouette or None (background: ``plate.clip_background`` unless
+    given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``)."""
     background = background or clip_background(info, scale)
     for _, frame in iter_frames(info, scale=scale):
         classical = extract_silhouette(frame, background)
@@ -108,27 +104,25 @@ def iter_silhouettes(info: VideoInfo, scale: float, background: Background | Non
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
-    """The standing body height in pixels around each frame (NaN where nobody is): a high percentile
-    within SCALE_WINDOW_S of the heights from the head's top (``head_to_feet``, not a raised hand's)
-    to the feet, at the scale the whole heights suggest."""
+    """The standing body height in pixels around each frame (NaN where nobody is): a high percentile within
+    SCALE_WINDOW_S of the heights from the head's top (``head_to_feet``, not a raised hand's)."""
     half = half_window(SCALE_WINDOW_S, fps)
     h = np.array([np.nan if s is None else s.height for s in silhouettes], float)
-    rough = rolling_percentile(h, half, SCALE_PERCENTILE)
+    rough = rolling_percentile(h, half, STANDING_PERCENTILE)
     for i, sil in enumerate(silhouettes):
         if sil is not None:
             h[i] = head_to_feet(sil, rough[i])
-    return rolling_percentile(h, half, SCALE_PERCENTILE)
+    return rolling_percentile(h, half, STANDING_PERCENTILE)
 
 
 def head_to_feet(sil: Silhouette, rough: float) -> float:
-    """A silhouette's height from the head's top (``torso.head_top_row``) to the feet, given a
-    rough body height in pixels."""
+    """A silhouette's height from the head's top to the feet, given a rough body height in pixels."""
     return sil.height - head_top_row(sil.mask(), rough * FIT_SCALE / FIT_BODY_PX)
 
 
 def normalise(sil: Silhouette, body_px: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """The silhouette cropped with a MARGIN and resized so that ``body_px`` becomes FIT_BODY_PX;
-    returns (mask, origin in processing pixels, processing pixels per fit pixel)."""
+    """The silhouette cropped with a MARGIN and resized so that ``body_px`` becomes FIT_BODY_PX; returns (mask,
+    origin in processing pixels, processing pixels per fit pixel)."""
     pad = int(np.ceil(MARGIN * body_px))
     small = _fit_sized(sil.mask() * 255, pad, FIT_BODY_PX / body_px) > 127
     origin = np.array([sil.box[0] - pad, sil.box[1] - pad], float)
@@ -164,18 +158,16 @@ def window_percentile(values, i: int, half: int, q: float) -> float:
 
 
 def torso_reads(sil: Silhouette, height: float, small: np.ndarray | None = None) -> tuple[float, float, bool]:
-    """A frame's torso spread (``torso.torso_spread``) as the fit reads it (normalised to ``height``),
-    as the lift reads it (processing resolution, finer), and whether the torso's width is readable;
-    ``small``: ``normalise``'s mask, where the caller has it."""
+    """A frame's torso spread as the fit reads it (normalised to ``height``) and as the lift does (at the
+    processing resolution, finer), and whether its width is readable; ``small``: ``normalise``'s mask if at hand."""
     small = normalise(sil, height)[0] if small is None else small
     return (torso_spread(small, FIT_SCALE), torso_spread(sil.mask(), height * FIT_SCALE / FIT_BODY_PX),
             torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
 
 
 def lift_spread(spreads, readable, i: int, half: int) -> float:
-    """A frame's torso spread (section 3.4, |cos yaw|) for the lift: a low percentile of the
-    readable ones within +-half (arms across the torso widen some), the median of all where none
-    is; the fit's low percentile of all reads a back view with arms up or a crouch as a profile."""
+    """A frame's torso spread (section 3.4, |cos yaw|) for the lift: a low percentile of the readable ones within
+    +-half, the median of all where none is (the fit's percentile of all reads arms up or a crouch as profile)."""
     lo, hi = max(0, i - half), i + half + 1
     values = np.asarray(spreads[lo:hi], float)
     good = values[np.asarray(readable[lo:hi], bool) & np.isfinite(values)]
@@ -198,8 +190,7 @@ def iter_fits(silhouettes: list[Silhouette | None], scale: float, fps: float) ->
 
 
 class Fitter:
-    """Pass two's frames in order, each search centred on the previous fit; the legs are chosen over
-    time (``legchain``), so a fit comes out LAG_S after its frame."""
+    """Pass two's frames in order, searches centred on the previous fit, legs chosen LAG_S later."""
 
     def __init__(self, scale: float, fps: float):
         self.scale, self.chain = scale, LegChain(half_window(LAG_S, fps))
@@ -207,9 +198,8 @@ class Fitter:
 
     def fit(self, index: int, sil: Silhouette | None, height: float, spread: float,
             lift_spread: float, normalised: tuple | None = None) -> list[FrameFit]:
-        """Fit a frame with the torso's ``spread`` (``lift_spread`` kept for the lift; ``normalised``:
-        ``normalise(sil, height)`` if at hand); returns the fits now decided, and sets ``latest`` to
-        this frame's fit with the best path's legs until it is decided."""
+        """Fit a frame with the torso's ``spread`` (``normalised``: ``normalise(sil, height)`` if at hand);
+        returns the fits now decided, ``latest`` holding this frame's fit with the best path's legs until then."""
         self.latest = None
         if sil is None:
             return list(_frame_fits(self.chain.push(index, None), self.scale))
@@ -232,10 +222,8 @@ class Fitter:
 
 
 class FitStream:
-    """Pass two alongside pass one: ``push`` each silhouette in order to get the fits now decided,
-    ``finish`` for the rest. A frame is fitted once the silhouettes its chained windows need are in
-    (spread, body height, rough height), so the fits equal those with every window over the whole
-    clip, the first coming out while the video is still read."""
+    """Pass two alongside pass one: ``push`` each silhouette to get the fits now decided, ``finish`` for the
+    rest. A frame is fitted once its chained windows' silhouettes are in, so the fits equal whole-clip ones."""
 
     def __init__(self, scale: float, fps: float):
         self.scale, self.fitter = scale, Fitter(scale, fps)
@@ -259,7 +247,7 @@ class FitStream:
 
     @property
     def provisional(self) -> list[FrameFit]:
-        """Fits of the last push whose legs are not chosen yet, with the best path's legs (a preview)."""
+        """Fits of the last push whose legs are not chosen yet, with the best path's legs."""
         return self._provisional
 
     def finish(self) -> list[FrameFit]:
@@ -270,12 +258,12 @@ class FitStream:
         while len(self._standing) < n and (end or len(self._standing) + half < n):
             j, sil = len(self._standing), self.silhouettes[len(self._standing)]
             self._standing.append(np.nan if sil is None else head_to_feet(
-                sil, window_percentile(self._sizes, j, half, SCALE_PERCENTILE)))
+                sil, window_percentile(self._sizes, j, half, STANDING_PERCENTILE)))
         known = len(self._standing)
         while len(self._heights) < known and (end or len(self._heights) + half < known):
             i, sil = len(self._heights), self.silhouettes[len(self._heights)]
             height = np.nan if sil is None else window_percentile(self._standing, i, half,
-                                                                  SCALE_PERCENTILE)
+                                                                  STANDING_PERCENTILE)
             self._heights.append(height)
             if sil is not None:
                 self._normalised[i] = normalise(sil, height)
@@ -297,8 +285,8 @@ class FitStream:
 
 
 def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
-    """FrameFits of ``LegChain``'s (item, fit) pairs; item: (index, crop origin, crop step, lift
-    spread, landmarks in video pixels), or just the index where fit is None."""
+    """FrameFits of ``LegChain``'s (item, fit) pairs; item: (index, crop origin, crop step, lift spread,
+    video-pixel landmarks), or the index alone where fit is None."""
     for item, fit in decided:
         if fit is None:
             yield FrameFit(item, None, None)
@@ -309,8 +297,7 @@ def _frame_fits(decided: list, scale: float) -> Iterator[FrameFit]:
 
 
 def fit_arrays(fits: list[FrameFit]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Image-side joints (F, 16, 2), body heights (F,) and torso spreads as the lift
-    reads them (F,) of the fits, NaN where nobody was found."""
+    """Image-side joints (F, 16, 2), body heights (F,), the lift's spreads (F,); NaN where nobody is."""
     nan = np.full((len(JOINTS), 2), np.nan)
     joints = np.array([nan if f.joints2d is None else f.joints2d for f in fits], float)
     body_px = np.array([np.nan if f.body_px is None else f.body_px for f in fits], float)

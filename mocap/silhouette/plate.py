@@ -1,16 +1,10 @@
-"""A background that does not hold a performer who stays in place.
-
-The temporal median of ``background.estimate_background`` (section 3.2's "regions that do not
-change") shows the performer wherever they stand for over half the clip. ``performer_free`` puts
-the scene back there: (1) evidence: each sample's difference from the median; (2) the performer's
-region: evidence within a body part's radius on at least HALF the samples, closed to its convex
-hull; (3) GrabCut (Rother et al., SIGGRAPH 2004) splits the median there into performer and scene;
-(4) a piece is the performer when most of its colours are likelier in the evidence than in the
-scene, grown by such colours joined to it, less steady pieces bordered mostly by scene; (5) the
-scene the samples uncover there (``uncover.uncovered_scene``), else the median of scene-coloured
-samples, else Telea inpainting (``held``); (6) the threshold there is the clip's noise floor;
-(7) those pixels go with the background as ``stood`` (``background.clean_mask``).
-Or the user gives the empty scene (``clean_plate``): a photo, a video of it, or clip frames."""
+"""A background that does not hold a performer who stays in place: the temporal median (section 3.2's "regions
+that do not change") shows them wherever they stand over half the clip. ``performer_free``: (1) evidence, each
+sample's difference from the median; (2) the region with evidence within a body part's radius on HALF the
+samples, to its convex hull; (3) GrabCut (Rother et al., SIGGRAPH 2004) splits the median there; (4) pieces whose
+colours are likelier in the evidence than the scene, grown by such colours, less steady pieces bordered by scene;
+(5) there, the scene the samples uncover (``uncover``), else scene-coloured samples, else inpainted (``held``);
+(6) the noise floor as threshold; (7) the pixels kept as ``stood``. Or the user's empty scene (``clean_plate``)."""
 
 from __future__ import annotations
 
@@ -22,8 +16,16 @@ import numpy as np
 
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, open_video, read_frame, sample_frames
-from mocap.silhouette.background import (MAD_TO_SIGMA, Background, estimate_background, exposure_gain,
-                                         foreground, median_level, noise_floor, remove_shadows)
+from mocap.silhouette.background import (
+    MAD_TO_SIGMA,
+    Background,
+    estimate_background,
+    exposure_gain,
+    foreground,
+    median_level,
+    noise_floor,
+    remove_shadows,
+)
 from mocap.silhouette.uncover import uncovered_scene
 
 HALF = 0.5              # evidence on at least this fraction of samples: the performer stays
@@ -36,8 +38,8 @@ MIN_UNCOVERED = 3       # samples showing the scene before a pixel's scene is ta
 
 def clip_background(info: VideoInfo, scale: float,
                     source: str | os.PathLike | tuple[int, int] | None = None) -> Background:
-    """A clip's background: the user's empty scene (``clean_plate``) when `source` is given, else
-    the median of BACKGROUND_FRAMES samples without the performer who stays (``performer_free``)."""
+    """A clip's background: the user's empty scene (``clean_plate``) if `source` is given, else the median of
+    BACKGROUND_FRAMES samples without the performer who stays (``performer_free``)."""
     if source is not None:
         return clean_plate(source, info, scale)
     samples = [f for _, f in sample_frames(info, BACKGROUND_FRAMES, scale)]
@@ -45,8 +47,7 @@ def clip_background(info: VideoInfo, scale: float,
 
 
 def performer_free(background: Background, frames: list[np.ndarray]) -> Background:
-    """``background`` with the performer who stays in place taken out (module doc, steps 1-7);
-    ``frames`` are the samples it was estimated from."""
+    """``background`` without the performer who stays in place (module doc); ``frames``: its samples."""
     frames = [cv2.transform(f, np.diag(exposure_gain(f, background.image))) for f in frames]
     masks = [_evidence(f, background) for f in frames]
     radius = _radius(masks)
@@ -82,8 +83,7 @@ def _radius(masks: list[np.ndarray]) -> int:
 
 
 def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
-    """The convex hull (0/1 uint8) of pixels with evidence within ``radius`` on at least HALF of the
-    samples; None when there are none (the performer moved on)."""
+    """The convex hull (0/1 uint8) of pixels with evidence within ``radius`` on HALF the samples, or None."""
     disk = _disk(radius)
     count = np.zeros(masks[0].shape, np.float32)
     for mask in masks:
@@ -98,8 +98,7 @@ def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
 
 def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray],
                   masks: list[np.ndarray]) -> np.ndarray:
-    """Pixels (bool) where the median image shows the performer (steps 3-4), and the colour odds:
-    GrabCut's pieces in the region kept by colour (``_colour_odds``), grown by joined colours."""
+    """Pixels (bool) where the median image shows the performer (steps 3-4), and the colour odds."""
     disk = _disk(radius)
     around = dilated(region, disk)
     cut = np.full(region.shape, cv2.GC_BGD, np.uint8)
@@ -127,8 +126,7 @@ def _grabcut(image: np.ndarray, cut: np.ndarray) -> np.ndarray:
 
 
 def _colour_odds(performer: np.ndarray, scene: np.ndarray) -> np.ndarray:
-    """A COLOUR_BINS^3 table: how much likelier each colour is among ``performer`` pixels (N, 3)
-    than among ``scene``'s (both histograms start at one per bin: unseen colours stay possible)."""
+    """A COLOUR_BINS^3 table: how much likelier each colour is among ``performer`` than ``scene`` pixels."""
     return _histogram(performer) / _histogram(scene)
 
 
@@ -160,8 +158,7 @@ def _majority_pieces(pieces: np.ndarray, like: np.ndarray) -> np.ndarray:
 
 
 def _joined(holds: np.ndarray, like: np.ndarray) -> np.ndarray:
-    """``holds`` and the performer-coloured (``like``) pixels connected to it: what stands still
-    outside the region the motion outlines (legs under jabbing arms)."""
+    """``holds`` and the performer-coloured ``like`` pixels connected to it (legs under jabbing arms)."""
     n, label = cv2.connectedComponents((holds | like).astype(np.uint8))
     joined = np.zeros(n, bool)
     joined[label[holds]] = True
@@ -170,8 +167,7 @@ def _joined(holds: np.ndarray, like: np.ndarray) -> np.ndarray:
 
 
 def _steady(image: np.ndarray, frames: list[np.ndarray], sigma: float) -> np.ndarray:
-    """Pixels (bool) where at least HALF of the ``frames`` show the median ``image`` within the noise
-    floor: a stable view (elsewhere the median is a mix of what passes)."""
+    """Pixels (bool) where HALF of the ``frames`` show the median within the noise floor: a stable view."""
     floor = noise_floor(sigma)
     agree = np.zeros(image.shape[:2], np.float32)
     for frame in frames:
@@ -180,9 +176,8 @@ def _steady(image: np.ndarray, frames: list[np.ndarray], sigma: float) -> np.nda
 
 
 def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
-    """``holds`` without its steady 4-connected pieces bordered mostly outside it: a still part of
-    the performer is bordered by moving parts, which the held region takes in too, while steady
-    scene taken in by its colour (a pale object beside the legs) goes on into the scene outside."""
+    """``holds`` without its steady 4-connected pieces bordered mostly outside it: scene taken in by its colour,
+    as a still part of the performer is bordered by moving parts the held region takes in too."""
     n, label = cv2.connectedComponents((holds & steady).astype(np.uint8), connectivity=4)
     if n < 2:
         return holds
@@ -196,18 +191,15 @@ def _without_steady_scene(holds: np.ndarray, steady: np.ndarray) -> np.ndarray:
 
 
 def _mixed_around(holds: np.ndarray, steady: np.ndarray, radius: int) -> np.ndarray:
-    """Pixels (bool, ``holds`` excluded) within ``radius`` of ``holds``, joined to it, that no steady
-    view covers: the median there mixes what passes, neither scene nor performer."""
+    """Pixels (bool) joined to ``holds`` within ``radius`` that no steady view covers (a mix there)."""
     near = dilated(holds.astype(np.uint8), _disk(radius)) > 0
     return _joined(holds, near & ~steady) & ~holds
 
 
 def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np.ndarray, masks: np.ndarray,
              radius: int, odds: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
-    """Step 5: the median image with the scene put back where it ``holds`` the performer or is
-    ``mixed`` (there only where uncovered), and the pixels that had to be inpainted (bool). The
-    scene: what the samples uncover from the border in (``uncover.uncovered_scene``), else the
-    scene-coloured samples' median (``_scene_coloured``: seen through a gap between the legs)."""
+    """Step 5: the median image with the scene put back where it ``holds`` the performer or is ``mixed`` (there
+    only where uncovered), and the pixels left to inpainting (bool)."""
     scene, seen = uncovered_scene(image, holds | mixed, frames, floor)
     image = np.where((mixed & seen)[..., None], scene, image)
     seen &= holds
@@ -221,8 +213,8 @@ def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np
 
 def _scene_coloured(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
                     odds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``image`` with the median of the scene-coloured samples differing from it (``masks``, odds
-    under one) where it ``holds`` the performer and MIN_UNCOVERED do, and where they do (bool)."""
+    """``image`` with the median of the scene-coloured samples that differ from it (``masks``) where it ``holds``
+    the performer and MIN_UNCOVERED do, and where they do (bool)."""
     index = np.flatnonzero(holds)
     plate = image.copy()
     seen = np.zeros(holds.shape, bool)
@@ -257,9 +249,8 @@ def dilated(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
 # -- the empty scene given by the user -----------------------------------------------
 
 def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, scale: float) -> Background:
-    """The background from the user's empty scene: a photo, a video of it (its median) or clip
-    frames (first, last), at the clip's processing size and tones (``scene_image``); threshold: the
-    clip's noise floor, the noise measured from the clip's samples' difference from it."""
+    """The background from the user's empty scene (a photo, a video's median, or clip frames (first, last)) in
+    the clip's size and tones (``scene_image``); threshold: the noise floor of the clip against it."""
     if isinstance(source, tuple):
         first, last = source
         if not 0 <= first <= last < info.frame_count:
@@ -280,9 +271,8 @@ def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, sc
 
 
 def scene_image(plate: np.ndarray, median: Background) -> np.ndarray:
-    """The clip's temporal ``median`` where it shows the scene, the ``plate`` (in the clip's tones,
-    ``match_tones``) where they differ by over the noise floor (opened 3x3, grown two pixels): the
-    median has the frames' camera, blur and encoding, which a separate photo lacks."""
+    """The clip's ``median`` where it shows the scene (it has the frames' camera, blur and encoding), the
+    ``plate`` in the clip's tones where they differ by over the noise floor (opened 3x3, grown two pixels)."""
     plate = match_tones(plate, median.image)
     differs = cv2.compare(cv2.absdiff(plate, median.image).max(axis=2), noise_floor(median.sigma), cv2.CMP_GT)
     holds = cv2.dilate(cv2.morphologyEx(differs, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8)), _disk(2)) > 0
@@ -292,9 +282,8 @@ def scene_image(plate: np.ndarray, median: Background) -> np.ndarray:
 
 
 def match_tones(plate: np.ndarray, scene: np.ndarray, rounds: int = 3) -> np.ndarray:
-    """``plate`` with each channel mapped onto the tones of ``scene`` (the clip's median) by a gain
-    and an offset (another exposure and encoding, which one gain does not undo): least squares refitted
-    ``rounds`` times to pixels within 2.5 robust sigmas, so a performer in ``scene`` does not pull it."""
+    """``plate`` mapped per channel onto the tones of ``scene`` (the clip's median) by a gain and offset, least
+    squares refitted ``rounds`` times within 2.5 robust sigmas."""
     out = []
     for p, s in zip(cv2.split(plate), cv2.split(scene)):
         p, s = p.ravel().astype(np.float32), s.ravel().astype(np.float32)
@@ -309,8 +298,7 @@ def match_tones(plate: np.ndarray, scene: np.ndarray, rounds: int = 3) -> np.nda
 
 
 def _plate_image(path: str, size: tuple[int, int]) -> np.ndarray:
-    """A photo of the empty scene, or the median of a video of it; MocapError unless it has the
-    clip's frame shape (any resolution)."""
+    """A photo of the empty scene or a video's median; MocapError unless of the clip's frame shape."""
     if os.path.isdir(path):
         raise MocapError(f"{path}: is a folder, not a background image or video")
     if not os.path.isfile(path):

@@ -1,8 +1,5 @@
-"""Drawing the 2D model as a mask, and the similarity S of the paper (Eq. 1-3).
-
-Segments are filled rectangles as wide as their cylinder and as long as their projection
-(OpenCV's sub-pixel polygon fill). Searches score candidates on a :class:`Canvas` holding the
-silhouette and the part of the model already fitted."""
+"""Drawing the 2D model as a mask (segments as filled rectangles as wide as their cylinder, as long as their
+projection), and the similarity S of the paper (Eq. 1-3), scored on a :class:`Canvas`."""
 
 from __future__ import annotations
 
@@ -12,8 +9,20 @@ import math
 import cv2
 import numpy as np
 
-from mocap.body import (BODY_HEIGHT, FOOT_LENGTH, KINEMATIC_MATRIX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES,
-                        WIDTH, Pose2D, joints_of_basis, kinematic_basis, torso_width)
+from mocap.body import (
+    BODY_HEIGHT,
+    FOOT_LENGTH,
+    KINEMATIC_MATRIX,
+    LENGTH,
+    SEGMENT_INDEX,
+    SEGMENT_JOINTS,
+    SEGMENT_NAMES,
+    WIDTH,
+    Pose2D,
+    joints_of_basis,
+    kinematic_basis,
+    torso_width,
+)
 from mocap.image.edges import EDGE_WEIGHT, Edges
 
 LANDMARK_WEIGHT = 0.6           # S that a confident landmark far from its joint takes away
@@ -52,9 +61,8 @@ def _rectangles(ends: np.ndarray, widths) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def _corner_weights(segments: tuple[int, ...], scale: float) -> np.ndarray:
-    """Weights (4k, _BASIS_ROWS) giving the corners of some segments' rectangles from ``_corner_basis``:
-    each corner is the proximal or distal joint (on into the hand, and past the ankle by the foot),
-    plus or minus half the width along the normal (the torso's normal comes scaled to its half width)."""
+    """Weights (4k, _BASIS_ROWS) giving some segments' rectangle corners from ``_corner_basis``: each the
+    proximal or distal joint (on into the hand, past the ankle by the foot) plus or minus the half width normal."""
     idx = np.array(segments, int)
     start, end = KINEMATIC_MATRIX[SEGMENT_JOINTS[idx, 0]], KINEMATIC_MATRIX[SEGMENT_JOINTS[idx, 1]]
     end = end + _HAND_REACH[idx, None] * (end - start)
@@ -70,8 +78,8 @@ def _corner_weights(segments: tuple[int, ...], scale: float) -> np.ndarray:
 
 def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
                   torso: bool) -> np.ndarray:
-    """``body.kinematic_basis``'s 12 vectors, then each segment's unit direction (cos, -sin) and
-    normal (sin, cos): (_BASIS_ROWS, B, 2); the torso's normal times its seen half width if ``torso``."""
+    """``body.kinematic_basis``'s 12 vectors, then each segment's unit direction (cos, -sin) and normal (sin,
+    cos): (_BASIS_ROWS, B, 2); the torso's normal times its seen half width if ``torso``."""
     basis, cos, sin = kinematic_basis(pelvis, scale, angle, ratio, spread, rows=_BASIS_ROWS)
     basis[_DIRECTIONS:_NORMALS, :, 0] = basis[_NORMALS:, :, 1] = cos
     basis[_DIRECTIONS:_NORMALS, :, 1] = -sin
@@ -83,10 +91,9 @@ def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, sp
 
 def posed_quads(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
                 segments=None) -> tuple[np.ndarray, np.ndarray]:
-    """Rectangles (B, k, 4, 2) of the ``segments`` (indices) of B poses given as
-    ``body.forward_kinematics_2d_batch`` takes them, and their joints (B, 16, 2). The torso is as wide
-    as ``spread`` makes it look, lower legs go on past the ankle by the foot (body.FOOT_LENGTH) and
-    lower arms into the hand (HAND_LENGTH); all corners are one product (``_corner_weights``)."""
+    """Rectangles (B, k, 4, 2) of the ``segments`` (indices) of B poses as ``body.forward_kinematics_2d_batch``
+    takes them, and their joints (B, 16, 2): the torso as wide as ``spread`` shows it, lower legs on past the
+    ankle by the foot (body.FOOT_LENGTH), lower arms into the hand (HAND_LENGTH)."""
     segments = _ALL_SEGMENTS if segments is None else tuple(segments)
     basis = _corner_basis(pelvis, scale, angle, ratio, spread, _TORSO in segments)
     weights = _corner_weights(segments, scale)
@@ -120,8 +127,7 @@ def draw_model(pose: Pose2D, shape: tuple[int, int], segments=SEGMENT_NAMES) -> 
 
 
 def similarity_from_counts(sil_area, model_area, overlap) -> np.ndarray:
-    """S = exp(-p - n)(1 - p) of Eq. 3 from pixel counts, with p (silhouette not covered) and n
-    (model outside the silhouette) of Eq. 1-2 as shares of the union; elementwise on arrays."""
+    """S = exp(-p - n)(1 - p) (Eq. 1-3) from pixel counts, elementwise on arrays."""
     sil_area = float(sil_area)
     union = np.maximum(sil_area + model_area - overlap, 1.0)
     p = (sil_area - overlap) / union
@@ -148,11 +154,9 @@ def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, i
 
 
 def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None = None):
-    """Score candidates (B, k, 4, 2) on the partial silhouette they outline (or the ``outline`` ones
-    do): the silhouette in the swept area that the canvas's fitted part does not explain. Returns
-    (S (B,) of Eq. 1-3, a scorer of further candidates). Pixels over the fitted part count neither
-    way (else the longest arm over the trunk would win; the edges place it: ``Canvas.edge_scores``).
-    One integer product counts both: a pixel weighs 1 if free, plus 2**shift if in the target."""
+    """S (B,) of candidates (B, k, 4, 2) on the partial silhouette they (or the ``outline`` ones) sweep less the
+    fitted part, and a scorer of more. Pixels over the fitted part count neither way (else the longest arm over
+    the trunk wins). One integer product: a pixel weighs 1 if free, plus 2**shift if in the target."""
     outline = slice(None) if outline is None else outline
     x0, y0, x1, y1 = bounding_window(sweep[outline], canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
@@ -183,9 +187,8 @@ def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0)
 
 
 class Canvas:
-    """A silhouette and the part of the model fitted so far. Searches score on the *partial
-    silhouette* (Algorithms 1 and 6): scoring the whole silhouette would reward a part for spilling
-    outside it while other parts are unexplained (Eq. 1 divides by the union)."""
+    """A silhouette and the part of the model fitted so far. Searches score on the *partial silhouette*
+    (Algorithms 1, 6): on the whole one a part spilling outside would win while others are unexplained."""
 
     def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None, targets=None):
         self.sil = (silhouette > 0).astype(np.uint8)
@@ -196,8 +199,7 @@ class Canvas:
         self.targets = targets                 # a person model's landmarks (mocap.silhouette.eyes.Targets)
 
     def fork(self, quads=(), keep: np.ndarray | None = None, by_edges: bool = False) -> "Canvas":
-        """A copy whose fitted part also holds ``quads`` and whose silhouette is only where ``keep``;
-        ``by_edges``: the copy follows the frame's inner edges where it has them (``edge_scores``)."""
+        """A copy with ``quads`` fitted too, silhouette only where ``keep``, following edges if ``by_edges``."""
         other = Canvas.__new__(Canvas)
         other.sil = self.sil if keep is None else self.sil & keep.astype(np.uint8)
         other.fixed, other.free = self.fixed.copy(), self.free
@@ -208,17 +210,16 @@ class Canvas:
         return other
 
     def edge_scores(self, joints: np.ndarray, segments: list[int], scale: float) -> np.ndarray:
-        """(B,) what the inner edges along the given segments of posed joints (B, 16, 2) add to S:
-        EDGE_WEIGHT times their support (mocap.image.edges); 0 on a canvas that does not follow edges."""
+        """(B,) what the inner edges along segments of posed joints (B, 16, 2) add to S: EDGE_WEIGHT times their
+        support (mocap.image.edges); 0 on a canvas not following edges."""
         if not self.by_edges:
             return np.zeros(len(joints))
         ends = joints[:, SEGMENT_JOINTS[segments]]
         return EDGE_WEIGHT * self.edges.support(ends[:, :, 0], ends[:, :, 1], WIDTH[segments] * scale)
 
     def landmark_scores(self, joints: np.ndarray, segments: list[int], scale: float) -> np.ndarray:
-        """(B,) what the person model's landmarks add to S for posed joints (B, 16, 2): minus
-        LANDMARK_WEIGHT times each joint's confidence-weighted robust distance d^2 / (d^2 + sigma^2),
-        sigma LANDMARK_SIGMA of the body height; 0 without landmarks."""
+        """(B,) what the landmarks add to S for posed joints (B, 16, 2): -LANDMARK_WEIGHT times the
+        confidence-weighted d^2 / (d^2 + sigma^2), sigma LANDMARK_SIGMA of the body height; 0 without landmarks."""
         if self.targets is None:
             return np.zeros(len(joints))
         idx = np.unique(SEGMENT_JOINTS[segments])

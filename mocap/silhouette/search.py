@@ -1,5 +1,4 @@
-"""The narrowing search of the paper's Algorithms 1 and 6: turn one pose parameter (a segment's
-angle, a foreshortening ratio, the torso's position or spread) over a range to maximise S
+"""The narrowing search of the paper's Algorithms 1 and 6: turn one pose parameter over a range to maximise S
 (Eq. 1-3) of the drawn segments on their partial silhouette."""
 
 from __future__ import annotations
@@ -20,14 +19,13 @@ ONE_ROUND = 31                   # grids of at most this many values (a limb's 3
 
 @dataclass(frozen=True)
 class Knob:
-    """One pose parameter a search turns: 'angle' or 'ratio' of some segments,
-    the pelvis's 'x', or the shoulder/hip 'spread'."""
+    """One pose parameter a search turns: 'angle' or 'ratio' of ``segments``, the pelvis's 'x', or 'spread'."""
 
     field: str
     segments: tuple[str, ...] = ()
 
     def apply(self, pose: Pose2D, value: float) -> Pose2D:
-        """The pose with the knob set to value (built directly: this runs per search)."""
+        """The pose with the knob set to ``value``."""
         pelvis, angle, ratio, spread = pose.pelvis, pose.angle, pose.ratio, pose.spread
         if self.field == "angle":
             angle = angle.copy()
@@ -42,8 +40,8 @@ class Knob:
         return Pose2D(pelvis=pelvis, scale=pose.scale, angle=angle, ratio=ratio, spread=spread)
 
     def batch(self, pose: Pose2D, values: np.ndarray):
-        """(pelvis, angle, ratio, spread) of the pose with each value set: angles, ratios (B, 10); the
-        pelvis (2,) and spread (float) as the pose has them, (B, 2) and (B,) if the knob turns them."""
+        """(pelvis, angle, ratio, spread) of the pose with each value set: angles, ratios (B, 10); pelvis (2,)
+        and spread (float) as the pose has them, (B, 2) and (B,) if the knob turns them."""
         n = len(values)
         pelvis, angle, ratio, spread = pose.pelvis, pose.angle[None].repeat(n, 0), pose.ratio[None].repeat(n, 0), pose.spread
         if self.field == "angle":
@@ -64,10 +62,8 @@ class Knob:
 
 def coarse_to_fine(score, n: int, opening: list[int], opening_scores: list[float], start: int,
                    interval: int) -> int:
-    """The shared narrowing of Algorithms 1 and 6 over n ordered values; returns the best index.
-    The opening round (``opening`` with the incumbent ``start``, already scored) picks the best,
-    ``start`` winning ties (the paper's S = 0 start lets a flat score drift); then the ``interval``
-    around it is scored at full resolution. ``score`` maps a list of indices to their S."""
+    """The narrowing of Algorithms 1 and 6 over n values: the best of the scored ``opening`` (``start`` winning
+    ties, so a flat score keeps it), then the ``interval`` around it; ``score`` maps indices to S."""
     known = dict(zip(opening, opening_scores))
     best = max(opening, key=lambda i: (known[i], i == start))
     near = [i for i in range(max(best - interval // 2, 0), min(best + interval // 2, n - 1) + 1)
@@ -81,8 +77,7 @@ def coarse_to_fine(score, n: int, opening: list[int], opening_scores: list[float
 
 @dataclass(frozen=True)
 class Search:
-    """One knob to turn over [lo, hi] to ``resolution`` for the drawn segments, first
-    divided every ``sweep_step`` (see ``search``)."""
+    """One knob turned over [lo, hi] to ``resolution`` for the drawn segments, divided every ``sweep_step``."""
 
     canvas: Canvas
     knob: Knob
@@ -95,10 +90,8 @@ class Search:
 
 
 def search(pose: Pose2D, job: Search) -> Pose2D:
-    """Turn one knob of ``pose`` to maximise S of the drawn segments on their partial silhouette:
-    Algorithm 1's (and 6's) narrowing with two levels of division, every value posed at once. The
-    first level (every ``sweep_step``) also outlines the partial silhouette; the second divides the
-    two divisions around the best at full resolution; grids up to ONE_ROUND values are scored whole."""
+    """Turn one knob of ``pose`` to maximise S of the drawn segments on their partial silhouette (Algorithms 1,
+    6): a first division every ``sweep_step`` outlines it, a second at full resolution around the best."""
     n = max(3, int(round((job.hi - job.lo) / job.resolution)) + 1)
     step = (job.hi - job.lo) / (n - 1)
     values = job.lo + step * np.arange(n)
@@ -139,8 +132,7 @@ def search_ratio(canvas: Canvas, pose: Pose2D, segment: str, drawn) -> Pose2D:
 
 
 def refine_limb(pose: Pose2D, limb: tuple[str, str], canvas: Canvas, half_range: float) -> Pose2D:
-    """A limb's distal angle within ``half_range`` (Algorithm 1), then its proximal
-    and distal foreshortening ratios (Algorithm 6)."""
+    """A limb's distal angle within ``half_range`` (Algorithm 1), then both its ratios (Algorithm 6)."""
     upper, lower = limb
     pose = search_angle(canvas, pose, (lower,), (lower,),
                         *span(pose.angle[SEGMENT_INDEX[lower]], half_range))

@@ -1,6 +1,5 @@
-"""The torso and head of the 2D fit (section 3.3, Fig. 3a): where the body stands, how far it
-is turned (the torso's horizontal foreshortening, section 3.4), the torso and head angles by
-Algorithm 1 and their lengthwise ratios by Algorithm 6."""
+"""The torso and head of the 2D fit (section 3.3, Fig. 3a): where the body stands, how far it is turned (the
+torso's horizontal foreshortening, section 3.4), their angles by Algorithm 1 and ratios by Algorithm 6."""
 
 from __future__ import annotations
 
@@ -12,8 +11,7 @@ from mocap.body import BODY_HEIGHT, FOOT_LENGTH, LENGTH, SEGMENT_INDEX, Pose2D, 
 from mocap.image.percentile import percentile
 from mocap.silhouette.contour import row_runs
 from mocap.silhouette.raster import Canvas
-from mocap.silhouette.search import (RATIO_SWEEP_STEP, Knob, Search, around, search,
-                                     search_angle, search_ratio)
+from mocap.silhouette.search import RATIO_SWEEP_STEP, Knob, Search, around, search, search_angle, search_ratio
 
 TORSO_HEAD = ("torso", "head")
 WAIST_RANGE = (45.0, 135.0)      # Table 1
@@ -37,8 +35,7 @@ RAISED_PX = 1                    # fit pixels of silhouette over the head: none 
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
-    """Torso location from Table 1 ratios: the head at the silhouette's top (``head_top_row``), the
-    pelvis head+torso lengths below, x at the silhouette's horizontal middle there."""
+    """Torso location from Table 1: the pelvis head+torso under the head's top, x mid-silhouette there."""
     rows = np.flatnonzero(silhouette.any(axis=1))
     top, bottom = head_top_row(silhouette, scale), int(rows[-1])
     head = LENGTH[SEGMENT_INDEX["head"]] * scale
@@ -49,8 +46,7 @@ def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
 
 
 def head_top_row(silhouette: np.ndarray, scale: float) -> int:
-    """The silhouette's top row or, where an arm is raised above the head, HEAD_ROW_DEPTH above the
-    first row as wide as a head (HEAD_ROW_WIDTH; a forearm is about half as wide)."""
+    """The silhouette's top row or, above raised arms, HEAD_ROW_DEPTH above the first head-wide row."""
     rows, starts, ends = row_runs(silhouette)
     if len(rows) == 0:
         return 0
@@ -62,8 +58,7 @@ def head_top_row(silhouette: np.ndarray, scale: float) -> int:
 
 def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
                    spread: float | None = None) -> Pose2D:
-    """Torso angle by Algorithm 1 with the head along it (Fig. 3a), horizontal position and
-    foreshortening (unless ``spread`` is given), head angle, then both ratios (Algorithm 6)."""
+    """Torso angle (Algorithm 1, head along it: Fig. 3a), x, spread (unless given), head angle, ratios."""
     pose = place_torso(canvas, pose, prev)
     pose = fit_spread(canvas, pose) if spread is None else replace(pose, spread=spread)
     lo, hi, c = around(prev, "head", *NECK_RANGE, pose.angle[SEGMENT_INDEX["torso"]])
@@ -73,9 +68,8 @@ def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
 
 
 def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
-    """The torso's angle (Algorithm 1, head along it), the pelvis under the head at that lean, and the
-    horizontal position. A crouching body's torso turns over CROUCH_RANGE about ``crouch_pelvis``
-    (about a pelvis at the feet, an upright trunk explains as much as a leaning one)."""
+    """The torso's angle (Algorithm 1, head along it), the pelvis under the head at that lean, and the horizontal
+    position; a crouching body's torso turns over CROUCH_RANGE about ``crouch_pelvis``."""
     pelvis = crouch_pelvis(canvas.sil, pose)
     crouching = pelvis is not None
     lo, hi, c = around(prev, "torso", *(CROUCH_RANGE if crouching else WAIST_RANGE), 90.0)
@@ -85,9 +79,8 @@ def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
 
 
 def crouch_pelvis(silhouette: np.ndarray, pose: Pose2D) -> np.ndarray | None:
-    """The pelvis of a crouching body (from the head's top, shorter than CROUCH_SPAN of the standing
-    height), None if upright: the upright trunk's reach under the head's top less up to
-    CROUCH_TRUNK_SHARE of the height it lacks (phased in), in the silhouette's middle on that row."""
+    """The pelvis of a body shorter than CROUCH_SPAN of the standing height (None if upright): under the head's
+    top by the upright trunk less up to CROUCH_TRUNK_SHARE of the height lacked, mid-silhouette."""
     bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
     top, standing = head_top_row(silhouette, pose.scale), standing_px(pose.scale)
     short, allowed = standing - (bottom - top), (1.0 - CROUCH_SPAN) * standing
@@ -110,8 +103,7 @@ def trunk_reach(scale: float) -> float:
 
 
 def under_the_head(silhouette: np.ndarray, pose: Pose2D) -> Pose2D:
-    """The pelvis as far under the head's top as the leaning torso and head reach down (Table 1's
-    lengths at the torso's angle): a bending body's pelvis is higher under its head."""
+    """The pelvis as far under the head's top as the torso and head reach at the torso's lean."""
     lean = np.sin(np.radians(pose.angle[SEGMENT_INDEX["torso"]]))
     bottom = np.flatnonzero(silhouette.any(axis=1))[-1]
     y = min(head_top_row(silhouette, pose.scale) + trunk_reach(pose.scale) * lean, bottom)
@@ -119,9 +111,8 @@ def under_the_head(silhouette: np.ndarray, pose: Pose2D) -> Pose2D:
 
 
 def torso_spread(silhouette: np.ndarray, scale: float) -> float:
-    """The torso's horizontal foreshortening on one frame (section 3.4) from its seen width: the
-    narrowest quarter of the widths across the torso's middle rows, less SILHOUETTE_BLEED_PX, through
-    ``body.spread_for_width``. Arms widen some rows and frames, so callers take a low percentile."""
+    """The torso's horizontal foreshortening on one frame (section 3.4) from its seen width: the narrowest
+    quarter of widths across its middle rows, less SILHOUETTE_BLEED_PX, via ``body.spread_for_width``."""
     if not silhouette.any():
         return 1.0
     top = head_top_row(silhouette, scale)
@@ -137,9 +128,7 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
 
 
 def torso_width_readable(silhouette: np.ndarray, scale: float, body_px: float) -> bool:
-    """Whether a frame's torso width can be trusted: the body upright (height UPRIGHT_SPAN of
-    ``body_px``; a crouch puts the torso band on the legs) and nothing raised above the head (arms
-    held up draw the shoulders in)."""
+    """Whether a frame's torso width can be trusted: upright (UPRIGHT_SPAN of ``body_px``), no arm up."""
     rows = np.flatnonzero(silhouette.any(axis=1))
     if len(rows) == 0:
         return False
@@ -149,14 +138,12 @@ def torso_width_readable(silhouette: np.ndarray, scale: float, body_px: float) -
 
 
 def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
-    """The torso's horizontal position by the same search (the paper's silhouette middle is pulled off
-    by arms and a swinging leg)."""
+    """The torso's horizontal position by the same search (arms pull the silhouette's middle off)."""
     r = reach * pose.scale
     return search(pose, Search(canvas, Knob("x"), TORSO_HEAD, -r, r, 0.0, 0.5, 2.0))
 
 
 def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
-    """The torso's horizontal foreshortening (section 3.4: the seen share of the shoulder and hip span,
-    0 profile .. 1 frontal) by Algorithm 6's search."""
+    """The torso's horizontal foreshortening (0 profile .. 1 frontal) by Algorithm 6's search."""
     return search(pose, Search(canvas, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05,
                                RATIO_SWEEP_STEP))

@@ -1,11 +1,5 @@
-"""The scene behind a performer who stays in place, from the samples that uncover it.
-
-Where the clip's temporal median shows the performer (mocap.silhouette.plate), some
-samples show the scene: the performer uncovers connected patches of it as they move.
-Colours alone do not tell which samples those are (the performer's shaded trousers
-against a dark sky, a pale object behind them against their skin); the patches'
-connection to the scene around the performer does.
-"""
+"""The scene behind a performer who stays in place (mocap.silhouette.plate), from the samples that uncover it:
+colours alone do not tell which do; the patches' connection to the scene around the performer does."""
 
 from __future__ import annotations
 
@@ -20,17 +14,9 @@ MIN_GROUP = 3       # samples, whatever the share
 
 def uncovered_scene(image: np.ndarray, holds: np.ndarray, frames: np.ndarray,
                     floor: int) -> tuple[np.ndarray, np.ndarray]:
-    """The scene (uint8 image) where the median ``image`` ``holds`` the performer, and
-    where it was seen (bool), peeled in from the region's border one ring at a time:
-    a sample that shows the scene at a pixel's neighbour (within the noise ``floor``
-    of its scene) is a candidate to show it there too, since the performer uncovers
-    connected patches of it; the scene there is the median of the largest group of
-    candidates that agree within the floor and differ from the median (which shows
-    the performer), if it holds AGREEING of the samples (a body part that rests on
-    the pixel for a few samples is not the scene), and the samples that show it are
-    those within the floor of it. Colours alone do not tell the performer's shaded
-    trousers from a dark sky, nor a pale object behind them from their skin; the
-    samples that uncover a patch do."""
+    """The scene (uint8) where the median ``image`` ``holds`` the performer, and where seen (bool), peeled in
+    ring by ring: samples that show the scene at a neighbour and differ from the median are candidates; the scene
+    is the median of their largest group agreeing within ``floor``, if AGREEING of the samples."""
     scene = image.copy()
     seen = np.zeros(holds.shape, bool)
     box = mask_box(holds.astype(np.uint8), 1)
@@ -56,9 +42,7 @@ def uncovered_scene(image: np.ndarray, holds: np.ndarray, frames: np.ndarray,
 
 
 def _within(a: np.ndarray, b: np.ndarray, floor: int) -> np.ndarray:
-    """Whether colours ``a`` and ``b`` (..., 3, broadcast) differ by at most ``floor``
-    in every channel: their largest channel difference, compared channel by channel
-    (numpy's reduction over a last axis of three is ten times slower)."""
+    """Whether colours ``a``, ``b`` (..., 3) differ by at most ``floor`` in every channel."""
     out = np.abs(a[..., 0] - b[..., 0]) <= floor
     for channel in (1, 2):
         out &= np.abs(a[..., channel] - b[..., channel]) <= floor
@@ -66,8 +50,7 @@ def _within(a: np.ndarray, b: np.ndarray, floor: int) -> np.ndarray:
 
 
 def _near(mask: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
-    """(S, n): whether any 8-neighbour of each pixel (``ys``, ``xs``) is set in the
-    (S, h, w) ``mask`` (pixels beyond its edges are not)."""
+    """(S, n): whether any 8-neighbour of each pixel (``ys``, ``xs``) is set in the (S, h, w) ``mask``."""
     padded = np.pad(mask, ((0, 0), (1, 1), (1, 1)))
     out = np.zeros((len(mask), len(ys)), bool)
     for dy in (0, 1, 2):
@@ -77,9 +60,8 @@ def _near(mask: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
 
 
 def _largest_agreeing(values: np.ndarray, candidates: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per pixel of ``values`` (S, n, 3), whether the largest group of ``candidates``
-    (S, n) within ``floor`` of one of them has AGREEING of the samples (and
-    MIN_GROUP), and its median: (n,) bool and (n, 3) float."""
+    """Per pixel of ``values`` (S, n, 3): whether the largest group of ``candidates`` (S, n) within ``floor`` of
+    one has AGREEING of the samples and MIN_GROUP, and its median: (n,) bool, (n, 3) float."""
     agree = _within(values[:, None], values[None], floor)                 # (S, S, n)
     agree &= candidates[:, None] & candidates[None]
     best = agree.sum(axis=1).argmax(axis=0)

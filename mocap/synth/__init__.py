@@ -1,15 +1,9 @@
-"""`mocap synth`: render the 10-cylinder body into a video with exact ground truth.
+"""`mocap synth`: render the 10-cylinder body (Table 1 widths, lengths from the joints) into a
+video with exact ground truth, each cylinder the hull of its projected end circles, back to front.
 
-The body is posed by 3D joints (any proportions: segment lengths come from the joints;
-widths are Table 1's, read as diameters, scaled to the skeleton's body height) and seen
-by a fixed camera from a yaw angle about the vertical. Each cylinder is drawn as the
-convex hull of its two projected end circles, back to front by midpoint depth, over a
-static procedural background with mild per-frame sensor noise. The projection is
-scaled orthographic (the silhouette method's assumption) unless a focal length is given.
-
-World frame of the input joints: metres, right-handed, y up (BVH axes). Yaw 0 looks
-along the performer's initial lateral axis from their right side, so they face image
-right; 45 is three-quarter (turned toward the camera), 90 is the front view.
+Input joints: metres, right-handed, y up (BVH axes). Scaled orthographic projection unless a
+focal length is given. Yaw 0 looks from the performer's right side (they face image right);
+45 is three-quarter (turned toward the camera), 90 the front view.
 """
 
 from __future__ import annotations
@@ -21,9 +15,9 @@ import cv2
 import numpy as np
 
 from mocap import body
-from mocap.io.bvh import contract_joints, read_bvh
-from mocap.io.video import write_video
 from mocap.errors import MocapError
+from mocap.io.bvh_reader import contract_joints, read_bvh
+from mocap.io.video import write_video
 from mocap.synth.hair import draw_hair
 from mocap.synth.truth import Camera, Truth, save_truth
 from mocap.synth.walk import walk_cycle
@@ -100,8 +94,7 @@ def _rotation(yaw_deg: float, pitch_deg: float, joints0: np.ndarray) -> np.ndarr
 
 
 def frame_camera(joints_world: np.ndarray, radii: np.ndarray, opts: RenderOptions) -> Camera:
-    """The fixed camera that keeps every frame's body inside the image margins, the body
-    ``opts.body_fraction`` of the frame height tall when the whole path allows it."""
+    """The fixed camera keeping every frame's body inside the margins, ``opts.body_fraction`` tall if it fits."""
     rot = _rotation(opts.yaw_deg, opts.pitch, joints_world[0])
     height = body.body_height(joints_world[0])
     pts = cylinder_points(joints_world @ rot.T, radii, _LAYERS[:1]).reshape(-1, 3)
@@ -122,9 +115,8 @@ def frame_camera(joints_world: np.ndarray, radii: np.ndarray, opts: RenderOption
 
 
 def body_pieces(joints: np.ndarray) -> np.ndarray:
-    """(..., 12, 2, 3) ends of the drawn pieces of joints (..., 16, 3): the ten segments,
-    then each foot's heel and toe on its axis, half the foot's height above the sole,
-    at a right angle to the shin and pointing the way the hips and trunk face."""
+    """(..., 12, 2, 3) ends of the drawn pieces of joints (..., 16, 3): the ten segments, then
+    each foot's heel and toe, square to the shin and pointing the way the hips and trunk face."""
     ends, j = body.segment_endpoints(joints), body.JOINT_INDEX
     u = body.body_height(joints.reshape(-1, 16, 3)[0]) / body.BODY_HEIGHT
     trunk = _unit(joints[..., j["neck"], :] - joints[..., j["pelvis"], :], _UP)[..., None, :]
@@ -140,11 +132,8 @@ def body_pieces(joints: np.ndarray) -> np.ndarray:
 def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarray) -> np.ndarray:
     """(..., 12, L, 2R, 3) points on both end ellipses of every piece, camera frame.
 
-    ``radii`` (12, 2) are each segment's lateral and front-to-back radii (only the
-    torso's differ: its lateral axis runs from the right hip and shoulder to the left
-    ones). One ring per shading layer: radii times ``layer[0]``, shifted toward the
-    light by ``layer[1]`` radii.
-    """
+    ``radii`` (12, 2): lateral and front-to-back radii (the torso's lateral axis runs right to
+    left). One ring per layer: radii times ``layer[0]``, shifted ``layer[1]`` radii to the light."""
     ends = body_pieces(joints_cam)                                   # (..., 12, 2, 3)
     axis = _unit(ends[..., 1, :] - ends[..., 0, :], _UP)
     across = _unit(np.cross(axis, [0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
@@ -207,8 +196,7 @@ def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
 
 
 def _room(width: int, height: int, rng: np.random.Generator, clutter: bool) -> np.ndarray:
-    """A deterministic room: wall and floor gradients, pictures, texture; ``clutter``
-    adds many saturated shapes (a busy scene for tracking)."""
+    """A deterministic room (wall, floor, pictures, texture); ``clutter`` adds saturated shapes."""
     t = np.linspace(0.0, 1.0, height)[:, None, None]
     horizon = int(height * 0.62)
     wall = np.array([172, 178, 184]) - 25 * t
@@ -284,9 +272,8 @@ def render_clip(joints_world: np.ndarray, out_video: str | Path,
                 options: RenderOptions | None = None, *, truth_path: str | Path | None = None,
                 source: str = "joints", source_frames: np.ndarray | None = None,
                 **overrides) -> Truth:
-    """Render joints (F, 16, 3; metres, y up) to ``out_video`` and its truth JSON
-    (default: the video path with suffix .truth.json). Keyword ``overrides`` set
-    RenderOptions fields, e.g. ``render_clip(j, "a.mp4", view="front", seed=3)``."""
+    """Render joints (F, 16, 3; metres, y up) to ``out_video`` and its truth JSON (default
+    VIDEO.truth.json); ``overrides`` set RenderOptions fields, e.g. ``view="front"``."""
     opts = replace(options or RenderOptions(), **overrides)
     scene = plan_scene(joints_world, opts)
     n = len(scene.joints_cam)
@@ -299,8 +286,7 @@ def render_clip(joints_world: np.ndarray, out_video: str | Path,
 def resample_indices(n_source: int, frame_time: float, fps: float,
                      frames: tuple[int | None, int | None] | None = None,
                      seconds: float | None = None) -> np.ndarray:
-    """Source frame shown in each output frame: nearest frame in time, within the
-    ``frames`` (start, stop) range (Python slice rules), at most ``seconds`` long."""
+    """Source frame nearest in time for each output frame, in ``frames`` (slice rules), ``seconds`` long."""
     start, stop, _ = slice(*(frames or (None, None))).indices(n_source)
     if stop <= start:
         raise MocapError(f"frame range {frames} is empty (the motion has {n_source} frames)")

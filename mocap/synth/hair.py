@@ -1,6 +1,5 @@
-"""Hair for `mocap synth --hair`: drawn over the back of the head and the crown, so that
-a rendered performer shows mostly face from the front and mostly hair from behind, as
-people do (mocap.silhouette.facing reads it back)."""
+"""Hair for `mocap synth --hair` on the back of the head and crown: mostly face from the front,
+mostly hair from behind, as mocap.silhouette.facing expects."""
 
 from __future__ import annotations
 
@@ -16,10 +15,8 @@ _BACK_ARC = 0.25         # hair where the head's surface faces less than this fa
 
 
 def hair_patches(joints: np.ndarray, radius: float, samples: int = 24) -> list[np.ndarray]:
-    """Points (N, 3) of each hair patch of a pose (16, 3; camera frame, z toward the
-    camera) whose head is a cylinder of ``radius``: the back of the head above
-    HAIRLINE and the crown above FRINGE, each only on the side facing the camera,
-    so that a patch projects to a convex region of the head's outline."""
+    """Points (N, 3) per hair patch of a pose (16, 3; camera frame, z to the camera), head radius
+    ``radius``: back above HAIRLINE, crown above FRINGE, camera side only (each projects convex)."""
     a, b = joints[SEGMENT_JOINTS[SEGMENT_INDEX["head"]]]
     axis = unit(b - a)
     left = unit(left_direction(joints) - (left_direction(joints) @ axis) * axis)
@@ -45,9 +42,8 @@ def _circular_runs(mask: np.ndarray) -> list[np.ndarray]:
 
 def draw_hair(img: np.ndarray, joints: np.ndarray, radius: float, project, outline: np.ndarray,
               line: int) -> None:
-    """Paint the hair patches (``hair_patches``) onto a drawn head: ``project`` takes
-    camera-frame points to pixels, ``outline`` is the head's drawn convex hull in
-    sixteenths of a pixel (the patches are clipped to it)."""
+    """Paint ``hair_patches`` onto a drawn head; ``project``: camera frame -> pixels; ``outline``:
+    the head's hull in sixteenths of a pixel, which clips the patches."""
     outline = outline.reshape(-1, 2).astype(np.float32)
     for points in hair_patches(joints, radius):
         patch = cv2.convexHull(np.round(project(points) * 16).astype(np.float32))

@@ -13,9 +13,8 @@ LIMBS = tuple(tuple((f"{j}_l", f"{j}_r") for j in names) for names in LIMB_JOINT
 
 
 def side_matched_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """Per-joint distances (F, J) where the prediction's left/right are image sides
-    (the 2D fit, section 3.3): for each arm pair and leg pair, the assignment of the
-    two predicted limbs to the true ones that gives the smaller total error."""
+    """Per-joint distances (F, J) of a prediction with image sides (section 3.3), each limb pair
+    assigned to the true pair the way with the smaller total error."""
     err = np.linalg.norm(pred - truth, axis=-1)
     for limb in LIMBS:
         left = [JOINT_INDEX[a] for a, _ in limb]
@@ -48,20 +47,15 @@ def pa_mpjpe(pred: np.ndarray, truth: np.ndarray) -> float:
 
 
 def facing_error(pred: np.ndarray, truth: np.ndarray) -> float:
-    """Mean absolute difference (degrees) of the facing yaw (lift.yaw_of: the turn
-    about the vertical that PA-MPJPE's alignment forgives) of contract-frame poses
-    (F, 16, 3) and the truth's."""
+    """Mean absolute facing-yaw error (degrees; lift.yaw_of, which PA-MPJPE forgives) of poses (F, 16, 3)."""
     diff = np.array([yaw_of(p) - yaw_of(t) for p, t in zip(pred, truth)])
     return float(np.mean(np.abs((diff + 180.0) % 360.0 - 180.0)))
 
 
 def labelled_errors(joints2d: np.ndarray, labels: dict[str, dict[str, list[float]]]) -> dict[str, np.ndarray]:
-    """Distances in pixels (one per mark) of 2D joints (F, 16, 2) from hand marks,
-    by kind of joint: ``labels`` maps a frame index (a string, as in JSON) to joint ->
-    (x, y). A pair's marks name no anatomical side (``knee_a``, ``knee_b``: a hand
-    cannot tell them apart in profile), and either may be missing; they are matched to
-    the joints' pair (``knee_l``, ``knee_r``) in the order that gives the smaller sum,
-    each kind of joint on its own."""
+    """Pixel distances (one per mark) of 2D joints (F, 16, 2) from hand marks, by joint kind.
+    ``labels``: frame index (a string) -> joint -> (x, y); sideless pair marks (``knee_a``,
+    ``knee_b``, either optional) are matched to ``knee_l``/``knee_r`` the cheaper way."""
     out: dict[str, list[float]] = {}
     for frame, marks in labels.items():
         joints = joints2d[int(frame)]

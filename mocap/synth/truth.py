@@ -16,10 +16,9 @@ from mocap.io.fileio import atomic_write_json
 
 @dataclass(frozen=True, eq=False)
 class Camera:
-    """A fixed camera. ``rotation`` rows are the image right, image up and toward-camera
-    axes in world coordinates; ``origin`` is the world point at the image centre
-    (orthographic, ``scale`` px per metre) or the eye (perspective, ``scale`` = focal px).
-    """
+    """A fixed camera: ``rotation`` rows are image right, up and toward-camera in world axes;
+    ``origin`` the world point at the image centre (orthographic, ``scale`` px/m) or the eye
+    (perspective, ``scale`` = focal px)."""
 
     kind: str
     yaw_deg: float

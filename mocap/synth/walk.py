@@ -10,12 +10,8 @@ from mocap import body
 
 def walk_cycle(seconds: float = 4.0, fps: float = 30.0, *, in_place: bool = False,
                period: float = 1.1, hip_swing_deg: float = 20.0) -> np.ndarray:
-    """(F, 16, 3) joints of a walk with the model's proportions (body.LENGTH, 1.75 m).
-
-    Metres, y up; the walker faces +z (their left is +x) and advances along +z unless
-    ``in_place``. Hips swing sinusoidally, knees flex in early swing, arms swing
-    opposite to the legs; the pelvis rides so that the lower ankle is at y = 0.
-    """
+    """(F, 16, 3) joints of a walk with the model's proportions (1.75 m): metres, y up, facing
+    and (unless ``in_place``) advancing along +z, left +x; the lower ankle at y = 0."""
     n = max(1, int(round(seconds * fps)))
     phase = 2 * np.pi * np.arange(n) / (fps * period)
     unit = body.BODY_HEIGHT_M / body.BODY_HEIGHT
@@ -49,8 +45,7 @@ def walk_cycle(seconds: float = 4.0, fps: float = 30.0, *, in_place: bool = Fals
 def _chain(pose: dict, names: tuple[str, str, str], start: np.ndarray,
            lengths: tuple[float, float], angles: tuple[np.ndarray, np.ndarray],
            outward: float) -> None:
-    """Add a two-segment limb (e.g. hip, knee, ankle) to ``pose``, each segment
-    hanging down and swung forward by its angle."""
+    """Add a two-segment limb to ``pose``, each segment hanging down, swung forward by its angle."""
     middle = start + lengths[0] * _sagittal(angles[0], outward)
     end = middle + lengths[1] * _sagittal(angles[1], outward)
     pose.update(zip(names, (start, middle, end)))

@@ -1,19 +1,5 @@
-"""Morph blocks and their weighted similarity: the block-matching part of the
-tracking paper (Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000, section
-"Feature tracking", Fig. 6-7 and the block-matching Eq. 3-5).
-
-A feature morph-block is ``A = {(x, y), m, n, theta}`` (Fig. 7): (x, y) is where one
-short side meets the middle line, m the height (along the middle line, which is the
-projected skeleton), n the width and theta the angle of the middle line to the image
-x axis. Here a block is a row ``(x, y, theta, m, n)`` of an array, theta in radians
-measured in the image (x right, y down), so many candidates are scored at once.
-
-The colour of a block is read on a grid of sub-pixels ("gridding lines evenly in the
-direction of theta and theta + 90 degrees") by bilinear interpolation (cv2.remap).
-The paper samples the smaller block's m x n pixels; here every part has a fixed grid
-of at most ROWS x COLS sub-pixels in block coordinates, which keeps the colour model
-one array per part whatever the block's size and bounds the cost of a candidate.
-"""
+"""Morph blocks and their weighted similarity (Pan, Zhuang and Liu 2000, Fig. 6-7, block-matching Eq. 3-5): a block is
+a row (x, y, theta, m, n), (x, y) where a short side meets the middle line, theta in radians (y down)."""
 
 from __future__ import annotations
 
@@ -33,14 +19,8 @@ MIN_DIFF = 1.0                     # grey levels: keeps S = 1/D finite for a per
 
 @dataclass(frozen=True, eq=False)
 class Grid:
-    """Sub-pixel positions of a block in block units and the region weights of Eq. 5.
-
-    ``along`` (R,) runs from 0 (the side at (x, y)) to 1 (the far side) in units of m,
-    or past both sides (see ``make_grid``); ``across`` (C,) from -1/2 to 1/2 in units
-    of n; ``weights`` (R, C) are W_1 on the centre region b_1 and W_2 on the margin
-    b_2, normalised to sum to one so that 1/S is a weighted mean difference in grey
-    levels.
-    """
+    """Sub-pixel positions and Eq. 5 region weights: ``along`` (R,) 0 at (x, y) to 1 at the far side (units of m,
+    maybe past both), ``across`` (C,) -1/2 to 1/2 (units of n), ``weights`` (R, C) W_1 / W_2 summing to one."""
 
     along: np.ndarray
     across: np.ndarray
@@ -48,14 +28,8 @@ class Grid:
 
 
 def make_grid(m: float, n: float, beyond: float = 0.0) -> Grid:
-    """The grid of a block m x n pixels: one sub-pixel per pixel, at most ROWS x COLS,
-    with the centre region b_1 = {m/4 <= i <= 3m/4 and n/4 <= j <= 3n/4} (Eq. 5).
-
-    Beyond the paper, ``beyond`` > 0 stretches the rows that fraction of m past both
-    short sides: the block then also holds what lies beyond its joints (the next
-    part, or background), so that its ends, and with them its length, show in S.
-    Inside a limb of one colour a block can otherwise slide and shrink at no cost.
-    """
+    """The grid of an m x n block, one sub-pixel per pixel up to ROWS x COLS, centre region b_1 of Eq. 5; a positive
+    ``beyond`` extends rows that fraction of m past both ends, so a block's length shows in S."""
     rows = int(np.clip(round(m), 3, ROWS))
     cols = int(np.clip(round(n), 3, COLS))
     along = (np.arange(rows) + 0.5) / rows * (1 + 2 * beyond) - beyond
@@ -80,7 +54,7 @@ def block_end(blocks: np.ndarray) -> np.ndarray:
 
 
 def to_block(point: np.ndarray, block: np.ndarray) -> np.ndarray:
-    """A pixel in a block's own frame: (along, across) in units of its height m."""
+    """A pixel in a block's frame: (along, across) in units of its height m."""
     d = point - block[:2]
     c, s = np.cos(block[THETA]), np.sin(block[THETA])
     return np.array([d[0] * c + d[1] * s, -d[0] * s + d[1] * c]) / block[M]
@@ -110,8 +84,7 @@ def block_points(blocks: np.ndarray, grid: Grid) -> tuple[np.ndarray, np.ndarray
 
 
 def sample_blocks(image: np.ndarray, blocks: np.ndarray, grid: Grid) -> np.ndarray:
-    """Colours (B, R, C, 3) float32 of the blocks' sub-pixels, bilinear interpolation
-    ("quadric linear interpolation" of the paper's steps 2-3)."""
+    """Colours (B, R, C, 3) float32 of the blocks' sub-pixels by bilinear interpolation (steps 2-3)."""
     x, y = block_points(np.atleast_2d(blocks), grid)
     out = cv2.remap(image, x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     return out.reshape(len(np.atleast_2d(blocks)), len(grid.along), len(grid.across), 3
@@ -119,15 +92,10 @@ def sample_blocks(image: np.ndarray, blocks: np.ndarray, grid: Grid) -> np.ndarr
 
 
 def similarity(model: np.ndarray, samples: np.ndarray, grid: Grid) -> np.ndarray:
-    """S (B,) of each sampled block against the colour model (R, C, 3):
-
-    diff_ij = W_R |X_ij[R] - X'_ij[R]| + W_G |...G| + W_B |...B|          (Eq. 3)
-    S = 1 / (W_1 sum_{b_1} diff_ij + W_2 sum_{b_2} diff_ij)                 (Eq. 4)
-
-    with the region weights of Eq. 5 normalised (Grid), so 1/S is in grey levels.
-    Beyond the paper, a model (A, R, C, 3) holds A alternatives: a block's S is then
-    that of the alternative it matches best.
-    """
+    """S (B,) of sampled blocks against the colour model (R, C, 3), 1/S a weighted mean difference in grey levels:
+        diff_ij = W_R |X_ij[R] - X'_ij[R]| + W_G |...G| + W_B |...B|          (Eq. 3)
+        S = 1 / (W_1 sum_{b_1} diff_ij + W_2 sum_{b_2} diff_ij)                 (Eq. 4)
+    A model (A, R, C, 3) holds A alternatives (beyond the paper): a block's S is its best one's."""
     if model.ndim == 4:
         return np.max([similarity(one, samples, grid) for one in model], axis=0)
     weights = (grid.weights[:, :, None] * CHANNEL_WEIGHTS).ravel()        # W_1 or W_2 times W_c
@@ -141,8 +109,7 @@ def score(image: np.ndarray, model: np.ndarray, grid: Grid, blocks: np.ndarray) 
 
 
 def ring(radius: int) -> np.ndarray:
-    """Integer offsets (8r, 2) on the square ring of Chebyshev radius r around the
-    search centre (one circle of the search path, Fig. 6); r = 0 is the centre."""
+    """Integer offsets (8r, 2) on the square ring of radius r, one circle of Fig. 6's path (r = 0: the centre)."""
     if radius == 0:
         return np.zeros((1, 2))
     r = radius
@@ -152,9 +119,8 @@ def ring(radius: int) -> np.ndarray:
 
 
 def morphs(block: np.ndarray, d_theta: np.ndarray, d_m: np.ndarray, zoom: bool) -> np.ndarray:
-    """Candidate blocks (K, 5) at one position: theta' = theta + d_theta and
-    m' = m + d_m for every pair; with ``zoom`` n' changes in proportion,
-    n' = n + (n/m) d_m (the head zooms as a whole), else n' = n."""
+    """Candidate blocks (K, 5): every (theta + d_theta, m + d_m); with ``zoom`` n' = n + (n/m) d_m
+    (head zooms whole)."""
     t, dm = np.meshgrid(d_theta, d_m, indexing="ij")
     out = np.repeat(block[None], t.size, axis=0)
     out[:, THETA] += t.ravel()
@@ -165,8 +131,7 @@ def morphs(block: np.ndarray, d_theta: np.ndarray, d_m: np.ndarray, zoom: bool) 
 
 
 def penalised(s: np.ndarray, cands: np.ndarray, penalty: Penalty | None) -> np.ndarray:
-    """S (K,) of blocks (K, 5) with ``penalty(cands)`` grey levels added to their 1/S
-    (beyond the paper); S itself without a penalty."""
+    """S (K,) of blocks (K, 5) with ``penalty(cands)`` grey levels added to their 1/S; S as is without a penalty."""
     return s if penalty is None else 1.0 / (1.0 / s + penalty(cands))
 
 
@@ -174,15 +139,8 @@ def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
            d_theta: np.ndarray, d_m: np.ndarray, *, zoom: bool = False,
            max_ring: int = 0, step: float = 1.0,
            penalty: Penalty | None = None) -> tuple[np.ndarray, float]:
-    """The best block and its S, searched along the path of Fig. 6.
-
-    Every point of a circle of the path gets every morph (theta' in theta +- d_theta,
-    m' in m +- d_m); the search goes on to the next circle while the circle just done
-    held a better block than all before it, up to ``max_ring`` circles of ``step``
-    pixels (max_ring 0: the position is fixed, e.g. a limb hanging from its parent).
-    Beyond the paper, ``penalty`` (blocks (K, 5) -> grey levels (K,)) is added to
-    every candidate's 1/S (``penalised``).
-    """
+    """The best block and its S on Fig. 6's path: all morphs at each point of a circle, on while a circle improves, up
+    to ``max_ring`` circles ``step`` px apart (0: position fixed); ``penalty`` added to 1/S."""
     shapes = morphs(start, d_theta, d_m, zoom)
     best, best_s = start, -1.0
     for radius in range(max_ring + 1):
@@ -200,13 +158,7 @@ def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
 
 def lengthen(image: np.ndarray, model: np.ndarray, grid: Grid, block: np.ndarray,
              extra: np.ndarray, tolerance: float) -> tuple[np.ndarray, float]:
-    """The longest of the block and its versions lengthened by ``extra`` pixels whose
-    S is within ``tolerance`` of the best of them, with that S.
-
-    Beyond the paper: along a limb of one colour S hardly changes when the block
-    slides or shrinks inside the limb (an aperture problem), so a search by S alone
-    lets limbs shrink frame after frame; the limb's end is where S drops.
-    """
+    """The longest of ``block`` and its ``extra``-px lengthenings with S within ``tolerance`` of the best, its S."""
     cands = np.repeat(block[None], len(extra) + 1, axis=0)
     cands[1:, M] += extra
     s = score(image, model, grid, cands)

@@ -1,7 +1,5 @@
-"""Camera calibration on the marked frame (Pan, Zhuang and Liu 2000, section "Reconstruction of 3D human motion
-skeleton", Eq. 6-9): the body's rotation and translation by Newton's method on the key triangle's lines and, beyond
-the paper, the hips'. The focal length defaults to the frame width (53-degree field of view); a wrong one mostly
-changes the body's distance. Pinhole frame: X right, Y down, Z depth."""
+"""Camera calibration on the marked frame (Pan, Zhuang and Liu 2000, Eq. 6-9): the body's pose by Newton's method on
+the key triangle's lines and, beyond the paper, the hips'. Focal length default: the frame width. Pinhole frame."""
 
 from __future__ import annotations
 
@@ -12,6 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS
+from mocap.camera import Pinhole
 from mocap.errors import MocapError
 from mocap.track.marks import KEY_TRIANGLE, turned_apart
 
@@ -47,35 +46,6 @@ def model_skeleton() -> np.ndarray:
 
 
 MODEL = model_skeleton()
-
-
-@dataclass(frozen=True)
-class Pinhole:
-    """The camera: focal length and principal point in pixels."""
-
-    focal: float
-    cx: float
-    cy: float
-
-    def rays(self, pixels: np.ndarray) -> np.ndarray:
-        """(..., 3) viewing rays (x, y, 1) of pixels (..., 2): the point at depth Z is Z times the ray (Eq. 10)."""
-        p = np.asarray(pixels, float)
-        return np.stack([(p[..., 0] - self.cx) / self.focal, (p[..., 1] - self.cy) / self.focal,
-                         np.ones(p.shape[:-1])], axis=-1)
-
-    def project(self, points: np.ndarray) -> np.ndarray:
-        """(..., 2) pixels of pinhole-frame points (..., 3)."""
-        z = points[..., 2:3]
-        return np.array([self.cx, self.cy]) + self.focal * points[..., :2] / z
-
-    def scaled(self, factor: float) -> "Pinhole":
-        """The camera of the frames resized by ``factor``."""
-        return Pinhole(self.focal * factor, self.cx * factor, self.cy * factor)
-
-
-def default_camera(width: int, height: int, focal_px: float | None = None) -> Pinhole:
-    """The assumed camera of a video: ``focal_px`` or the frame's width, centred."""
-    return Pinhole(float(focal_px or width), width / 2.0, height / 2.0)
 
 
 @dataclass(frozen=True)
@@ -208,10 +178,9 @@ def held_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray, held: np.nda
 
 def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None,
               chest: float | None = None) -> Calibration:
-    """The body's pose relative to the camera on frame 0 from the marks (16, 2): Newton's method on Eq. 9 over the key
-    triangle's lines and, beyond the paper, the hips-chest triangle's, with the shoulder span and the chest's
-    height (``chest`` holds it) as unknowns since bodies differ from the model. ``turn`` "left"/"right"
-    (CONTRACT.md orientation's side) picks one of the two mirror fits, else the smaller residual; MocapError where
+    """The body's pose on frame 0 from the marks (16, 2): Newton's method on Eq. 9 over the key triangle's and, beyond
+    the paper, the hips-chest triangle's lines, with shoulder span and chest height (unless ``chest`` given)
+    unknown too. ``turn`` "left"/"right" picks one of two mirror fits, else the smaller residual; MocapError where
     none fits."""
     ranges = shape_ranges()
     if chest is not None:

@@ -1,8 +1,5 @@
-"""The head's motion from one frame to the next by image difference: the tracking
-paper's global motion model (Pan, Zhuang and Liu 2000, section "Feature tracking",
-"1. Head", Eq. 1-5 and Fig. 3-5), which predicts the calvaria point before the
-morph-block match refines it.
-"""
+"""The head's motion between frames by image difference (Pan, Zhuang and Liu 2000, "Feature tracking", "1. Head",
+Eq. 1-5, Fig. 3-5): the calvaria's predicted place before the morph-block match refines it."""
 
 from __future__ import annotations
 
@@ -28,14 +25,8 @@ class Displacement:
 
 def difference_lines(prev: np.ndarray, cur: np.ndarray, centre: np.ndarray,
                      diameter: float) -> tuple[np.ndarray, np.ndarray]:
-    """The colour difference along the 36 diameters of the difference region Omega.
-
-    Omega is the disc of radius 2L around the head centre O (L the head's diameter);
-    each line L_n through O at angle alpha_n is 4L long and sampled every pixel.
-    Returns (t (S,), diff (36, S)) where t is the signed distance from O along the
-    line (direction (cos alpha, -sin alpha), y down) and diff is
-    |dR| + |dG| + |dB| of Eq. 1-3 at each sample.
-    """
+    """(t (S,), diff (36, S)): |dR| + |dG| + |dB| (Eq. 1-3) along the 36 lines through the head centre ``centre`` of
+    the region Omega (radius 2L, L = ``diameter``), t the signed distance along (cos alpha, -sin alpha)."""
     t = np.arange(-2 * diameter, 2 * diameter + 0.5, 1.0, dtype=np.float32)
     x = centre[0] + np.cos(DIRECTIONS)[:, None] * t
     y = centre[1] - np.sin(DIRECTIONS)[:, None] * t
@@ -46,13 +37,8 @@ def difference_lines(prev: np.ndarray, cur: np.ndarray, centre: np.ndarray,
 
 
 def two_peak_displacement(t: np.ndarray, profile: np.ndarray, p: float) -> float:
-    """Signed displacement along one line from its two-peak difference curve (Fig. 5).
-
-    The curve is cut at Y = a p (a its mean); the runs above the cut are the
-    differences H'-background and H-background. The two strongest runs D_1 and D_2
-    have about the head's displacement as their width: the displacement is their
-    mean width, toward the run farther from O (0 when nothing rises above the cut).
-    """
+    """Signed displacement along a line from its two-peak curve (Fig. 5): the mean width of the two strongest runs
+    above Y = a p (a the mean), toward the one farther from O; 0 without runs."""
     above = np.r_[False, profile > profile.mean() * p, False]
     edges = np.flatnonzero(np.diff(above.astype(np.int8)))
     starts, stops = edges[::2], edges[1::2]
@@ -68,13 +54,7 @@ def two_peak_displacement(t: np.ndarray, profile: np.ndarray, p: float) -> float
 
 def head_displacement(prev: np.ndarray, cur: np.ndarray, calvaria: np.ndarray,
                       neck: np.ndarray, p: float) -> Displacement:
-    """The calvaria's motion between two frames (Eq. 1-5 of the head part).
-
-    The motion direction alpha is the line with the largest Sum_n (Eq. 4-5), the
-    length comes from that line's two-peak curve with threshold p. The paper assumes
-    a background that hardly changes between frames; with a moving background the
-    estimate is only a starting point for the morph-block search.
-    """
+    """The calvaria's motion (Eq. 1-5): direction of the largest Sum_n (Eq. 4-5), length from its two-peak curve."""
     diameter = max(float(np.hypot(*(calvaria - neck))), 2.0)
     t, diff = difference_lines(prev, cur, (calvaria + neck) / 2, diameter)
     n = int(np.argmax(diff.sum(axis=1)))
@@ -84,7 +64,6 @@ def head_displacement(prev: np.ndarray, cur: np.ndarray, calvaria: np.ndarray,
 
 
 def adapt_threshold(p: float, predicted: float, found: float) -> float:
-    """The adaptive threshold: raise p when the image difference over-estimated the
-    head's displacement found by the morph-block match, lower it otherwise."""
+    """Threshold p raised where the image difference over-estimated the displacement found, else lowered."""
     p = p + P_STEP if predicted > found else p - P_STEP
     return float(np.clip(p, *P_RANGE))

@@ -1,8 +1,5 @@
-"""The key triangle (both shoulders and the chest) on every frame after the marked one:
-the tracking paper's Eq. 10-11 (Pan, Zhuang and Liu, *Video motion capture in VBA*,
-2000), each frame's key depths from the previous frame's, and the choice between the
-two mirror-image triangles a frontal view leaves open.
-"""
+"""The key triangle (both shoulders and the chest) on every frame after the marked one: the paper's Eq. 10-11 (Pan,
+Zhuang and Liu 2000), and the choice between the two mirror-image triangles a frontal view leaves open."""
 
 from __future__ import annotations
 
@@ -10,19 +7,17 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from mocap.track.calibration import KEY, KEY_LINES, Pinhole, calibrate, newton
+from mocap.camera import Pinhole
+from mocap.track.calibration import KEY, KEY_LINES, calibrate, newton
 
-SIDE_MARGIN_DEG = 15.0          # a trunk turned less than this from facing the camera
-                                # (or from facing away) shows no side
+SIDE_MARGIN_DEG = 15.0          # a trunk turned less than this from facing the camera (or away) shows no side
 # the side a body is turned to ("left", "right", None: unsaid): one for every frame, or each frame's
 Turns = str | Sequence[str | None] | None
 
 
 def key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray) -> np.ndarray:
-    """Depths Z_i (3,) of the key joints on their rays (3, 3) of a new frame such that
-    the key triangle keeps its side lengths ``sides`` (3,) (Eq. 11 with P_i = Z_i ray_i,
-    Eq. 10), by Gauss-Newton from the previous frame's ``depths``. With 2D tracking
-    errors the equations have no exact solution: the least-squares one is kept."""
+    """Depths Z_i (3,) of the key joints on their ``rays`` (3, 3) keeping the triangle's ``sides`` (3,) (Eq. 11 with
+    P_i = Z_i ray_i, Eq. 10), least squares by Gauss-Newton from the previous ``depths``."""
     def residual(z):
         p = z[:, None] * rays
         return np.array([np.linalg.norm(p[i] - p[j]) for i, j in KEY_LINES]) - sides
@@ -30,9 +25,7 @@ def key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray) -> np.nd
 
 
 def body_axes(key: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotations body -> pinhole frame given by key joints (..., 3, 3):
-    x along the shoulders (right to left), y from the chest up to their middle,
-    z = x cross y (forward)."""
+    """(..., 3, 3) body -> pinhole rotations of key joints (..., 3, 3): columns left (shoulders), up, forward."""
     left = key[..., 0, :] - key[..., 1, :]
     left = left / np.linalg.norm(left, axis=-1, keepdims=True)
     up = (key[..., 0, :] + key[..., 1, :]) / 2 - key[..., 2, :]
@@ -48,8 +41,7 @@ def triangle_yaw(key: np.ndarray) -> np.ndarray:
 
 
 def turned_against(key: np.ndarray, turn: str | None) -> bool:
-    """Whether key joints (3, 3) face clearly (SIDE_MARGIN_DEG) to the other side than
-    ``turn`` ("left" or "right", None: either)."""
+    """Whether key joints (3, 3) face clearly (SIDE_MARGIN_DEG) to the other side than ``turn`` (None: either)."""
     yaw = float(triangle_yaw(key))
     clear = SIDE_MARGIN_DEG < abs(yaw) < 180.0 - SIDE_MARGIN_DEG
     return turn is not None and clear and (yaw > 0) != (turn == "right")
@@ -57,15 +49,8 @@ def turned_against(key: np.ndarray, turn: str | None) -> bool:
 
 def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
                      turn: str | None) -> np.ndarray:
-    """A frame's key depths (3,) from the previous frame's (Eq. 10-11, ``key_depths``),
-    on the side ``turn`` says.
-
-    Beyond the paper: a trunk turning through the frontal view shows two mirror-image
-    triangles alike, and the solution nearest the previous frame turns back where the
-    body turns on (the 2D sides never quite agree with the calibrated ones). Where the
-    triangle found faces the other side than the user's held orientation, the
-    solution from its depths mirrored about their mean is taken instead if it faces
-    the said side."""
+    """A frame's key depths (3,) from the previous frame's (Eq. 10-11) on the side ``turn`` says: where the solution
+    faces the other side, the one from its depths mirrored about their mean, if that faces ``turn``."""
     found = key_depths(rays, depths, sides)
     if not turned_against(found[:, None] * rays, turn):
         return found
@@ -75,14 +60,8 @@ def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
 
 def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
                before: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
-    """(F, 3, 3) the key joints of every frame: calibration on frame 0 (Eq. 6-9), then
-    each frame's depths from the previous frame's (Eq. 10-11, ``frame_key_depths``).
-
-    ``turns``: the side ("left", "right" or None) of each frame's held orientation,
-    or one side for every frame. ``before``: (2D joints, key joints) of an earlier
-    call on the same clip with the same ``turns``; only the frames whose key joints
-    moved in 2D are solved again (all of them when frame 0's did), each from the
-    frame before it, as a full solve would start them."""
+    """(F, 3, 3) key joints per frame: calibrated on frame 0 (Eq. 6-9), then each from the one before (Eq. 10-11).
+    ``turns``: one side or each frame's; ``before``: (2D joints, key joints) of an earlier call, reused unmoved."""
     rays = camera.rays(joints2d[:, KEY])
     held = [turns] * len(rays) if turns is None or isinstance(turns, str) else list(turns)
     depths, sides = calibrate(joints2d[0], camera, held[0]).key_triangle()
@@ -103,10 +82,7 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
 
 
 def mirror_images(key: np.ndarray, steps: int = 20) -> np.ndarray:
-    """(F, 3, 3) the other solution of Eq. 10-11 on every frame of key joints (F, 3, 3):
-    the triangle with their median side lengths on the same rays, from their depths
-    mirrored about their mean (as ``frame_key_depths``), by Gauss-Newton steps on all
-    frames at once (Eq. 11's Jacobian in closed form)."""
+    """(F, 3, 3) the other Eq. 10-11 solution for key joints (F, 3, 3), from depths mirrored about their mean."""
     lines = np.array(KEY_LINES)
     sides = np.median(np.linalg.norm(key[:, lines[:, 0]] - key[:, lines[:, 1]], axis=-1), axis=0)
     rays = key / key[..., 2:]

@@ -1,5 +1,5 @@
-"""Finding a limb on a frame, beyond the paper's constant-velocity start (Pan, Zhuang and Liu 2000, "Feature
-tracking"): the best directions around its root and penalties (grey levels added to 1/S) against impossible places."""
+"""Finding a limb on a frame, beyond the paper's constant-velocity start (Pan, Zhuang and Liu 2000): the best
+directions around its root, and penalties (grey levels added to 1/S) against impossible places."""
 
 from __future__ import annotations
 
@@ -7,12 +7,14 @@ import numpy as np
 
 from mocap import body
 from mocap.body import JOINT_INDEX, LENGTH, SEGMENT_INDEX
+from mocap.camera import Pinhole
 from mocap.image.edges import Edges
 from mocap.track import blocks
-from mocap.track.blocks import M, N, THETA, X, Y, block_end
-from mocap.track.calibration import KEY, MODEL, UNIT_M, Pinhole, calibrate
+from mocap.track.blocks import THETA, M, N, X, Y, block_end
+from mocap.track.calibration import KEY, MODEL, UNIT_M, calibrate
 from mocap.track.keydepths import body_axes, frame_key_depths
-from mocap.track.rays import limb_candidates, limb_penalty as joint_limits
+from mocap.track.rays import limb_candidates
+from mocap.track.rays import limb_penalty as joint_limits
 
 AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
 FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block (limbs look alike),
@@ -50,9 +52,8 @@ def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
 
 def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float,
                  avoid: tuple = ()) -> blocks.Penalty:
-    """Penalty of lower blocks of a limb whose upper part (``width``) runs from ``root``: FOLD_COST per overlap with
-    it, ``cost`` per overlap with each (cost, block) of ``avoid``, JUMP_COST per ``length`` its ends moved from
-    ``last``."""
+    """Penalty of lower blocks whose upper part (``width``) runs from ``root``: FOLD_COST per overlap with it,
+    ``cost`` per overlap with each (cost, block) of ``avoid``, JUMP_COST per ``length`` moved from ``last``."""
     def penalty(lowers: np.ndarray) -> np.ndarray:
         uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
         jump = (np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
@@ -98,8 +99,7 @@ def marked_lengths(marks: np.ndarray, camera: Pinhole, depth: float, kind: str) 
 
 def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int,
                     cost: float = LIMITS_COST) -> blocks.Penalty:
-    """Penalty of an arm's lower blocks for their 3D pose from its shoulder in ``key`` (3, 3); ``arm`` 0 left, 1
-    right."""
+    """Penalty of lower blocks for the arm's 3D pose from its shoulder in ``key`` (3, 3); ``arm``: 0 left, 1 right."""
     return limits_cost(camera, key[arm], body_axes(key), ARM_M, 1.0 if arm == 0 else -1.0, False, cost)
 
 
@@ -115,9 +115,8 @@ def leg_limits_cost(camera: Pinhole, key: np.ndarray, hip: np.ndarray, leg: int,
 
 def limits_cost(camera: Pinhole, root: np.ndarray, axes: np.ndarray, lengths: tuple[float, float],
                 side: float, leg: bool, cost: float = LIMITS_COST) -> blocks.Penalty:
-    """Penalty of a limb's lower blocks (K, 5): ``cost`` times the least joint-limit penalty of their ends' four
-    placements at ``lengths`` from ``root`` (3,) (rays.limb_candidates); ``axes`` (3, 3), ``side`` +1 left, -1
-    right."""
+    """Penalty of lower blocks (K, 5): ``cost`` times the least joint-limit penalty of their ends' four placements at
+    ``lengths`` from ``root`` (3,) (rays.limb_candidates); ``axes`` (3, 3); ``side`` +1 left, -1 right."""
     def penalty(lowers: np.ndarray) -> np.ndarray:
         rays = camera.rays(np.stack([lowers[:, :2], block_end(lowers)], axis=1))
         roots = np.broadcast_to(root, (len(lowers), 3))
@@ -140,9 +139,8 @@ def limb_cost(s: np.ndarray, k: int) -> float:
 def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
                 penalty: blocks.Penalty, upper_penalty: blocks.Penalty | None = None,
                 upper_weight: float = 1.0, upper_scales: tuple[float, ...] = (1.0,)) -> np.ndarray:
-    """The lower block of the least-cost pair of part directions around ``root`` (AROUND_STEP apart, usual lengths,
-    the upper also at ``upper_scales``): ``upper_weight`` times the upper 1/S plus the lower's plus penalties.
-    ``upper``, ``lower``: (colour model, grid, width, length)."""
+    """The lower block of the least-cost part directions around ``root`` (AROUND_STEP apart, usual lengths, upper at
+    ``upper_scales``): weighted 1/S plus penalties. ``upper``, ``lower``: (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
     ways = np.c_[np.cos(angles), np.sin(angles)]
@@ -162,8 +160,8 @@ def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
 def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_part: tuple,
                  shin_part: tuple, thigh_cost: blocks.Penalty,
                  shin_cost: blocks.Penalty) -> tuple[np.ndarray, float]:
-    """``shin`` and its S with the knee moved (7 x 3 places KNEE_STEP apart) where thigh and shin match best with
-    their costs: a shin alone slides up one-coloured trousers. ``thigh_part``: (model, grid, width); ``shin_part``."""
+    """``shin`` and S with the knee moved (7 x 3 places KNEE_STEP apart) where thigh and shin match best: a shin alone
+    slides up one-coloured trousers. ``thigh_part``: (model, grid, width); ``shin_part``: (model, grid)."""
     ankle, along = block_end(shin), np.array([np.cos(shin[THETA]), np.sin(shin[THETA])])
     steps = np.arange(-KNEE_STEPS, KNEE_STEPS + 1) * KNEE_STEP * shin[M]
     sideways = np.array([-1.0, 0.0, 1.0]) * KNEE_STEP * shin[M]

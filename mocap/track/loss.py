@@ -1,28 +1,5 @@
-"""Noticing that the tracker lost the body: a confidence in [0, 1] for every part on
-every frame from what the tracking (Pan, Zhuang and Liu, *Video motion capture in
-VBA*, 2000, section "Feature tracking") already knows, and which frames are lost.
-
-Beyond the paper, which takes the similarity S of a part's match as its
-reliability. A tracker that lost the body still matches something (clutter, the
-image's border, where blocks are clipped to): its S drops, but not always far. So
-each part's confidence is the product of five checks, each 1 where the part looks
-as tracked and falling to 0 where it looks lost:
-
-- its match S against the part's usual S (its median over the frames not lost):
-  full from MATCH_FULL of it, none below MATCH_NONE;
-- the body's change of scale (the head block's length) since the last frame;
-- its length against the calibrated one at the body's scale (a part stretched past
-  its bone's length is on something else);
-- how fast its ends moved, in metres per second at the body's scale;
-- whether its ends stay inside the frame (a lost tracker drifts to the border).
-
-A frame is lost where the head or the trunk, which every limb hangs from, is below
-LOST, and stays lost until the body is found again (mocap.track.reacquire) with both
-above FOUND; the limbs' joints take the trunk's confidence too (``joint_confidence``).
-Where the head and the trunk both stand out of the frame (DISTINCT times better
-matched where they lie than anywhere else, mocap.track.reacquire.distinctness) the
-body is held whatever their match against the usual S (mocap.track.tracker).
-"""
+"""Noticing that the tracker lost the body (beyond the paper): each part's confidence in [0, 1] is a product of ramps
+on its S, scale change, stretch, speed and ends in frame; lost below LOST, found again above FOUND."""
 
 from __future__ import annotations
 
@@ -54,10 +31,8 @@ def ramp(value: np.ndarray, full: float, none: float) -> np.ndarray:
 
 def part_confidence(new: np.ndarray, last: np.ndarray, s: np.ndarray, usual: np.ndarray,
                     expected: np.ndarray, shape: tuple, fps: float) -> np.ndarray:
-    """(10,) the confidence of every part's block ``new`` (10, 5) on a frame of
-    ``shape``, tracked from ``last`` (10, 5) with similarities ``s`` (10,) against the
-    parts' ``usual`` S (inf: none yet, the match then counts full), ``expected`` (10,)
-    its calibrated length in pixels at the frame's scale, ``fps`` frames a second."""
+    """(10,) confidence of blocks ``new`` (10, 5) tracked from ``last`` (10, 5) with S ``s`` (10,) against ``usual`` S
+    (inf: none yet), ``expected`` (10,) calibrated lengths in px, on a frame of ``shape`` at ``fps``."""
     zoom = new[HEAD, M] / last[HEAD, M]
     px_per_m = new[HEAD, M] / HEAD_M
     match = np.where(np.isfinite(usual), ramp(-s / usual, -MATCH_FULL, -MATCH_NONE), 1.0)
@@ -78,9 +53,7 @@ def inside(new: np.ndarray, shape: tuple) -> np.ndarray:
 
 
 def _joint_parts() -> list[tuple[int, ...]]:
-    """For every joint, the parts its confidence is the least of: the head's joints
-    the head's; the trunk's (with shoulders and hips) the trunk's; a limb's middle
-    and end joints both of its parts' and the trunk's, which carries the limb."""
+    """For every joint, the parts whose least confidence is its own; a limb's joints also take the trunk's."""
     out = [(TORSO,)] * len(JOINTS)
     out[JOINT_INDEX["head_top"]] = out[JOINT_INDEX["neck"]] = (HEAD,)
     for k in LIMBS:
@@ -97,9 +70,8 @@ def joint_confidence(parts: np.ndarray) -> np.ndarray:
 
 
 def body_lost(parts: np.ndarray, was_lost: bool = False) -> bool:
-    """Whether the body is lost on a frame of parts' confidence ``parts`` (10,): the
-    head or the trunk below LOST, or below FOUND where it was lost on the frame
-    before (a tracker on clutter matches it now and then as well as the body)."""
+    """Whether the body is lost given parts' confidence ``parts`` (10,): head or trunk below LOST, or below FOUND if
+    ``was_lost`` (a tracker on clutter now and then matches as well as the body)."""
     return min(parts[HEAD], parts[TORSO]) < (FOUND if was_lost else LOST)
 
 
@@ -110,12 +82,8 @@ def stretches(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def bridged(joints2d: np.ndarray, lost: np.ndarray, gap: int) -> tuple[np.ndarray, np.ndarray]:
-    """The joints (F, 16, 2) with every ``lost`` frame's put between the nearest
-    found frames (linear interpolation; held beyond the clip's first or last found
-    frame), and (F,) bool the frames that stay lost: those of lost stretches longer
-    than ``gap`` frames or touching the clip's end (what is not seen on either side
-    is not made up). The joints of frames left lost still get the bridged values, so
-    that the reconstruction runs on a sane body; the motion file gives them none."""
+    """Joints (F, 16, 2) with ``lost`` frames interpolated (held past the ends), and (F,) bool the frames left lost:
+    stretches over ``gap`` frames or touching the clip's end."""
     out, found = joints2d.copy(), np.flatnonzero(~lost)
     if not len(found):
         return out, np.ones(len(lost), bool)

@@ -1,8 +1,5 @@
-"""The user's marks: the 16 joints placed by hand on frame 0, the only input of the
-tracking method (Pan, Zhuang and Liu 2000: "the user only needs to mark the joints of
-the first frame"). Checked once here, so that the tracker and the calibration can
-trust them.
-"""
+"""The user's marks: the 16 joints placed by hand on frame 0, the tracking method's only input (Pan, Zhuang and Liu
+2000), checked once here so that the tracker and the calibration can trust them."""
 
 from __future__ import annotations
 
@@ -20,14 +17,8 @@ _LENGTH = dict(zip(SEGMENT_NAMES, LENGTH))
 
 
 def check_marks(marks, width: int, height: int) -> np.ndarray:
-    """The 16 marked joints of frame 0 as a (16, 2) array in JOINTS order, refused
-    with a MocapError naming the joint when one is missing or outside the
-    ``width`` x ``height`` frame, or when the key triangle (both shoulders and the
-    chest, from which the camera is calibrated) is degenerate.
-
-    ``marks`` is a (16, 2) array (NaN: not marked) or a mapping joint name -> (x, y),
-    such as frame 0's ``joints2d`` of an annotations file.
-    """
+    """The marks as (16, 2) in JOINTS order, from a (16, 2) array (NaN: unmarked) or joint -> (x, y); a MocapError
+    names a missing joint, one outside the ``width`` x ``height`` frame, or a degenerate key triangle."""
     if isinstance(marks, Mapping):
         unknown = sorted(set(marks) - set(JOINTS))
         if unknown:
@@ -47,8 +38,7 @@ def check_marks(marks, width: int, height: int) -> np.ndarray:
 
 
 def check_key_triangle(marks: np.ndarray) -> None:
-    """Refuse a key triangle with two corners nearly on one point (shoulders seen in
-    profile) or a corner nearly on the line through the other two."""
+    """Refuse a key triangle with two corners nearly on one point (a profile view) or nearly collinear."""
     pts = marks[[JOINT_INDEX[j] for j in KEY_TRIANGLE]]
     least = MIN_KEY_SIDE * BODY_HEIGHT * body_scale(marks)
     for i, j in ((0, 1), (0, 2), (1, 2)):
@@ -65,31 +55,21 @@ def check_key_triangle(marks: np.ndarray) -> None:
 
 
 def across_trunk(marks: np.ndarray, side: str) -> float:
-    """How far the left joint of a pair (``side``: "shoulder" or "hip") lies from the
-    right one square to the marked trunk (neck to pelvis), in pixels: positive on the
-    image right of an upright body. Both pairs have one sign on a body turned as a
-    whole: the left joints on the image right of a body facing the camera, on the
-    image left of one facing away."""
+    """Pixels the left joint of pair ``side`` ("shoulder", "hip") lies from the right, square to the marked trunk:
+    positive on the image right of an upright body (one sign for both pairs of a rigid trunk)."""
     axis = marks[JOINT_INDEX["pelvis"]] - marks[JOINT_INDEX["neck"]]
     across = np.array([axis[1], -axis[0]]) / max(np.hypot(*axis), 1e-9)
     return float((marks[JOINT_INDEX[f"{side}_l"]] - marks[JOINT_INDEX[f"{side}_r"]]) @ across)
 
 
 def turned_apart(marks: np.ndarray) -> bool:
-    """Whether the shoulders and the hips are marked turned opposite ways
-    (``across_trunk`` of opposite signs), which no rigid trunk shows."""
+    """Whether shoulders and hips are marked turned opposite ways (``across_trunk`` signs differ), as no trunk is."""
     return across_trunk(marks, "shoulder") * across_trunk(marks, "hip") < 0
 
 
 def shoulders_as_hips(marks: np.ndarray) -> np.ndarray:
-    """The marks with the two shoulders exchanged where they are ``turned_apart`` from
-    the hips. For marks taken from the silhouette method's fit: seen from the side,
-    the fit places its shoulders where the 2D model puts them, in either order,
-    while its hips follow the legs, whose sides it settles (mocap.lift.orientation). On
-    the real dog_walker clip (a walk seen from the side) the fit's frame 0 gives
-    shoulders and hips turned apart, which the calibration refuses; with the
-    shoulders exchanged it finds the body facing image right, turned 89 degrees
-    (with the hips exchanged instead: 131)."""
+    """The marks with the shoulders exchanged where ``turned_apart`` from the hips: the silhouette method's fit seen
+    from the side orders its shoulders arbitrarily while its hips follow the legs."""
     if not turned_apart(marks):
         return marks
     out = marks.copy()
@@ -99,8 +79,7 @@ def shoulders_as_hips(marks: np.ndarray) -> np.ndarray:
 
 
 def body_scale(marks: np.ndarray) -> float:
-    """Pixels per model unit of a marked skeleton: the least foreshortened of the
-    head-and-trunk line and the two legs against their model lengths."""
+    """Pixels per model unit of marks: the least foreshortened of head-and-trunk and the two legs."""
     def seen(*names: str) -> float:
         return sum(np.hypot(*(marks[JOINT_INDEX[a]] - marks[JOINT_INDEX[b]]))
                    for a, b in zip(names, names[1:]))

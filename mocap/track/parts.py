@@ -1,12 +1,5 @@
-"""The tracked body parts and their colour models (the tracking paper's feature
-tracking, Pan, Zhuang and Liu, *Video motion capture in VBA*, 2000): each of the 10
-parts is a morph block (mocap.track.blocks) from one of its joints to the other, as
-wide as its cylinder (body.WIDTH; the torso as wide as the marked shoulders show it
-turned), searched coarse to fine along the search path of Fig. 6 (``search_part``);
-the far arm's forearm is matched by its own colours or its twin's mirrored
-(``far_forearm``); an arm's sub-pixels weigh as much as they tell it from what lies
-beside it on the marked frame (``told_apart``).
-"""
+"""The 10 tracked body parts and their colour models (Pan, Zhuang and Liu 2000, "Feature tracking"): morph blocks
+between two joints, as wide as their cylinders, searched coarse to fine along Fig. 6's path (``search_part``)."""
 
 from __future__ import annotations
 
@@ -16,8 +9,7 @@ import cv2
 import numpy as np
 
 from mocap import body
-from mocap.body import (JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SEGMENTS, SHOULDER_HALF_SPAN, WIDTH,
-                        torso_width)
+from mocap.body import JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SEGMENTS, SHOULDER_HALF_SPAN, WIDTH, torso_width
 from mocap.track import blocks
 from mocap.track.blocks import M, N, block_end, from_block
 
@@ -31,9 +23,7 @@ LEAST_WEIGHT = 0.05        # ... the share of its weight a sub-pixel like what l
 
 @dataclass(frozen=True)
 class Stage:
-    """One morph-block search (blocks.search): angle offsets (degrees), length offsets
-    (fractions of m), circles of the position search path (0: the position is held)
-    and their spacing in pixels."""
+    """One morph-block search: angle offsets (deg), length offsets (of m), path circles (0: held), px spacing."""
 
     d_theta_deg: tuple[float, ...]
     d_m: tuple[float, ...]
@@ -81,8 +71,7 @@ TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}   # each forearm's twi
 
 
 def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
-    """(10,) block widths in pixels: each cylinder's width at ``scale`` pixels per
-    unit, the torso as wide as the marked shoulders show it turned."""
+    """(10,) block widths (px) at ``scale`` px per unit; the torso as wide as the marked shoulders show it."""
     j = JOINT_INDEX
     axis = marks[j["pelvis"]] - marks[j["neck"]]
     normal = np.array([-axis[1], axis[0]]) / max(np.hypot(*axis), 1e-9)
@@ -93,9 +82,7 @@ def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
 
 
 def part_lengths() -> np.ndarray:
-    """(parts,) model lengths the parts' blocks are measured against; an arm's two
-    parts each take the longer of the two (where the elbow sits along the arm
-    differs from body to body)."""
+    """(10,) model lengths of the parts; an arm's two parts both take the longer (elbows sit differently)."""
     def length(segment: str) -> float:
         if "_arm_" not in segment:
             return float(LENGTH[SEGMENT_INDEX[segment]])
@@ -104,8 +91,7 @@ def part_lengths() -> np.ndarray:
 
 
 def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
-    """(16, 2) joints of the 10 tracked blocks: each part's start and end joints, the
-    chest at ``chest`` in the trunk's block frame."""
+    """(16, 2) joints of the 10 blocks ``parts``: their ends, the chest at ``chest`` in the trunk's block frame."""
     joints = np.empty((len(JOINTS), 2))
     joints[PART_JOINTS[:, 0]] = parts[:, :2]
     joints[PART_JOINTS[:, 1]] = block_end(parts)
@@ -116,10 +102,8 @@ def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
 def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: np.ndarray,
                 part: Part, longest: float,
                 penalty: blocks.Penalty | None = None) -> tuple[np.ndarray, float]:
-    """The part's block and S in ``image``, searched coarse to fine from the predicted
-    ``start`` (candidates charged ``penalty``, blocks.search); every part but the head
-    kept between SHORTEST and 1 times ``longest`` pixels and finally lengthened to its
-    end (blocks.lengthen)."""
+    """The part's block and S searched coarse to fine from ``start`` (blocks.search, charged ``penalty``); every part
+    but the head kept within SHORTEST to 1 times ``longest`` px, then lengthened to its end (blocks.lengthen)."""
     best, s = start.copy(), 0.0
     for stage in part.schedule:
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
@@ -135,9 +119,7 @@ def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: 
 
 
 def far_arm(key_depths: np.ndarray) -> str | None:
-    """"l" or "r": the arm whose shoulder lies FAR_MARGIN_M or more deeper than the
-    other in a key triangle (``key_depths``: left shoulder, right shoulder, chest),
-    None for a body facing the camera or away."""
+    """"l" or "r": the arm whose shoulder is FAR_MARGIN_M deeper in ``key_depths`` (l, r, chest), else None."""
     gap = key_depths[0] - key_depths[1]
     if abs(gap) < FAR_MARGIN_M:
         return None
@@ -145,26 +127,14 @@ def far_arm(key_depths: np.ndarray) -> str | None:
 
 
 def far_forearm(key_depths: np.ndarray) -> int | None:
-    """Beyond the paper: the forearm part of the far arm of the marks' key triangle
-    (``far_arm``), None for a body facing the camera or away.
-
-    The far forearm is often behind the trunk on frame 0, where its marked colours
-    are the shirt's, and it keeps them: it then follows the trunk, also where the
-    arm shows. It is matched by either its own model or its twin's mirrored
-    (``mirrored_model``), so that it takes the trunk's colours where it is hidden
-    and an arm's where it shows. On the 8 benchmark clips (benchmarks/bench_track.py)
-    PA-MPJPE 71.1 -> 70.4 mm, no clip worse by more than 0.2 mm; the twin's model
-    not mirrored: 71.1; either model for both forearms: 72.5 (a near forearm then
-    matches the trunk). The twin's model in place of the far forearm's own lost the
-    far arm where it was hidden (an earlier tracker: 77 -> 83 mm)."""
+    """Beyond the paper: the far arm's forearm part (None facing or away), matched by its own colours or its twin's
+    mirrored: marked behind the trunk, its own are often the shirt's."""
     side = far_arm(key_depths)
     return None if side is None else ARMS[body.SIDES.index(side)] + 1
 
 
 def mirrored_model(model: np.ndarray, shape: tuple) -> np.ndarray:
-    """A colour model (R, C, 3) mirrored across its block (the twin limb's view: the
-    arms are mirror images, lit from the same side of the image) and resampled to
-    ``shape``."""
+    """A colour model (R, C, 3) mirrored across its block (the twin limb's view) and resized to ``shape``."""
     flipped = np.ascontiguousarray(model[:, ::-1])
     return cv2.resize(flipped, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
 
@@ -177,17 +147,9 @@ def beside(block: np.ndarray, side: float) -> np.ndarray:
 
 
 def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid, own: bool = False) -> blocks.Grid:
-    """Beyond the paper: ``grid`` with each sub-pixel's region weight (W_1 or W_2 of
-    Eq. 5) times how well it tells the part from what lies beside it on ``frame``
-    (the marked frame): its difference (Eq. 3) from the same sub-pixel of the block
-    moved one width to either side, the smaller, over TOLD_APART grey levels, kept
-    within [LEAST_WEIGHT, 1]; with ``own``, nothing for a sub-pixel between the
-    joints that is not of the part's own colour (``own_colour``).
-
-    A sleeve hanging beside a shirt of its colour, the shirt or the background the
-    block spans beside a narrow arm, match the trunk or the background anywhere; the
-    arm's block then matched the trunk better than the raised arm (lit otherwise,
-    over another background), its own colours (a forearm's skin) outweighed."""
+    """Beyond the paper: ``grid``'s weights (Eq. 5) scaled by each sub-pixel's difference (Eq. 3) from the block moved
+    a width aside on the marked ``frame``, over TOLD_APART within [LEAST_WEIGHT, 1] (``own``: other colours weigh 0
+    between the joints), so an arm's block beside same-coloured cloth does not match anywhere."""
     model = blocks.sample_blocks(frame, block, grid)[0]
     around = blocks.sample_blocks(frame, np.stack([beside(block, -1.0), beside(block, 1.0)]), grid)
     nearest = (np.abs(model - around) @ blocks.CHANNEL_WEIGHTS).min(axis=0)
@@ -198,12 +160,8 @@ def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid, own: boo
 
 
 def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.ndarray:
-    """(R, C) whether each sub-pixel of a part's marked colours ``model`` (R, C, 3) is of
-    the part's own colour: past its joints, always; between them, where its colour
-    lies nearer the part's (the median of its middle third of columns between the
-    joints) than the nearer of the colours about a width out from its long sides in
-    its row (the outer columns of ``around`` (2, R, C, 3), the block moved one width to
-    either side)."""
+    """(R, C) whether each sub-pixel of ``model`` (R, C, 3) is the part's own colour: past the joints always, else
+    nearer the middle columns' median than the colours a width out in ``around`` (2, R, C, 3)."""
     inside = (grid.along >= 0) & (grid.along <= 1)
     middle = np.argsort(np.abs(grid.across))[:max(1, len(grid.across) // 3)]
     own = np.median(model[inside][:, middle].reshape(-1, 3), axis=0)
@@ -214,10 +172,8 @@ def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.n
 
 
 def arm_grids(frame: np.ndarray, parts: np.ndarray, grids: list, far: int | None) -> list:
-    """Every part's grid, an arm's parts ``told_apart`` on the marked ``frame`` (a
-    forearm's of its own colour only, the sleeve or shirt its block spans at the elbow
-    left out) but those of the far arm (``far``: its forearm, ``far_forearm``), whose
-    marked colours are mostly the trunk it is behind."""
+    """Every part's grid, the arms' ``told_apart`` on the marked ``frame`` (forearms by own colour), but the far arm's
+    (``far``: its forearm), whose marked colours are mostly the trunk."""
     hidden = () if far is None else (far - 1, far)
     arms = {k + i for k in ARMS for i in (0, 1)} - set(hidden)
     return [told_apart(frame, parts[k], grid, k - 1 in ARMS) if k in arms else grid

@@ -9,11 +9,11 @@ from scipy.ndimage import gaussian_filter1d
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_JOINTS
+from mocap.camera import Pinhole
 from mocap.smoothest import DEPTH_SMOOTH_S, two_state_path
-from mocap.track.calibration import KEY, MODEL, UNIT_M, Pinhole
+from mocap.track.calibration import KEY, MODEL, UNIT_M
 from mocap.track.keydepths import Turns, body_axes, key_joints, mirror_images, turned_against
-from mocap.track.rays import (LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots,
-                              signs_allowed, toward_signs)
+from mocap.track.rays import LIMBS, choose_limb, limb_candidates, limb_penalty, ray_roots, signs_allowed, toward_signs
 
 # bones from the centre to the fringe: (known joint, joint placed from it)
 BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in body.bones_from(tuple(JOINTS[k] for k in KEY)))
@@ -88,10 +88,9 @@ def bone_lengths(joints3d: np.ndarray) -> np.ndarray:
 
 def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
                      seen: np.ndarray | None = None) -> np.ndarray:
-    """(13,) bone lengths (metres) over a clip: a percentile (LENGTH_PERCENTILES) of each bone's image length at the
-    body's depth ``depth`` (F,), sides pooled, over frames ``seen`` (F,) bool (default all; lost frames hold no
-    bones), scaled by the model key triangle; hips keep the model's span. Beyond the paper's anatomical lengths: a
-    bone taken too long gets depth it does not have."""
+    """(13,) bone lengths (m): a percentile (LENGTH_PERCENTILES) of each bone's image length at the body's ``depth``
+    (F,), sides pooled, over frames ``seen`` (F,) bool (default all), at the model triangle's scale; hip bones the
+    model's. Beyond the paper's anatomical lengths: a bone taken too long gets depth it does not have."""
     if seen is not None and seen.any():
         joints2d, depth = joints2d[seen], depth[seen]
     ends = joints2d[:, np.array(BONES)]                                     # (F, 13, 2, 2)
@@ -159,9 +158,8 @@ def reconstruct(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
 
 def sided_key(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole, turns: Turns = None,
               lengths: np.ndarray | None = None, seen: np.ndarray | None = None) -> np.ndarray:
-    """(F, 3, 3) per frame ``key`` or its mirror image, whichever the limbs take better: a two-state path, frames
-    costing the limbs' joint-limit penalty, switches MIRROR_SWITCH_COST per metre apart; a mirror image clearly
-    against ``turns`` is never taken. Beyond the paper: Eq. 10-11 alone keep a body wrongly turned from frame 0."""
+    """(F, 3, 3) per frame ``key`` or its mirror, whichever the limbs take better (two-state path, switches costing
+    MIRROR_SWITCH_COST per metre), never a mirror clearly against ``turns``: Eq. 10-11 alone keep a wrong turn."""
     if lengths is None:
         lengths = measured_lengths(joints2d, key[:, :, 2].mean(axis=1), camera, seen)
     mirror = mirror_images(key)
@@ -202,10 +200,9 @@ def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,
 
 def toward_swing_planes(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
                         fixed: np.ndarray | None = None) -> np.ndarray:
-    """Limb joints of ``joints`` (F, 16, 3) moved along their rays SWING_PLANE_WEIGHT of the way to the limb's swing
-    plane (through the root, square to the shoulders' axis), unless seen edge-on (SWING_PLANE_SIGHT) or ``fixed``:
-    a ray-sphere root's depth swings far with pixel errors near the image plane. Limbs raised sideways are drawn
-    toward the plane."""
+    """Limb joints of ``joints`` (F, 16, 3) moved SWING_PLANE_WEIGHT of the way along their rays to the swing plane
+    (through the root, square to the shoulders), unless edge-on or ``fixed``: ray-sphere depths swing with pixel
+    errors near the image plane. Limbs raised sideways are drawn toward the plane."""
     left = body_axes(joints[:, KEY])[..., 0]
     for root, middle, end, leg, _ in LIMBS:
         for parent, joint in ((root, middle), (middle, end)):
@@ -227,7 +224,7 @@ def plane_depths(point: np.ndarray, normal: np.ndarray, rays: np.ndarray) -> np.
 
 
 def steady_depths(points: np.ndarray, fps: float) -> np.ndarray:
-    """Pinhole joints (F, 16, 3) moved along their rays to depths smoothed over DEPTH_SMOOTH_S , against 2D jitter."""
+    """Pinhole joints (F, 16, 3) moved along their rays to depths smoothed over DEPTH_SMOOTH_S, against 2D jitter."""
     z = gaussian_filter1d(points[..., 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
     return points * (z / points[..., 2])[..., None]
 

@@ -1,7 +1,5 @@
-"""Joints on their viewing rays, centre to fringe (Pan, Zhuang and Liu 2000, "Reconstruction of 3D human motion
-skeleton"): two roots per joint, mirror images in depth. Beyond the paper, each limb's choice is made for the whole
-clip by dynamic programming, joint limits first (LIMIT_WEIGHT), then least acceleration; the user's foreshortening
-settles ties."""
+"""Joints on their viewing rays, centre to fringe (Pan, Zhuang and Liu 2000, reconstruction): two roots per joint,
+mirror images in depth; beyond the paper, each limb's are chosen over the clip by dynamic programming."""
 
 from __future__ import annotations
 
@@ -19,8 +17,7 @@ LIMIT_WEIGHT = 3.0      # m^2 of squared acceleration that a unit of joint-limit
 
 
 def ray_roots(known: np.ndarray, rays: np.ndarray, length: float) -> np.ndarray:
-    """(..., 2, 3) the points on rays (..., 3) at ``length`` from ``known`` (..., 3), nearer first; where the ray
-    passes farther (2D error), both its point nearest ``known``."""
+    """(..., 2, 3) points on rays (..., 3) at ``length`` from ``known`` (..., 3), nearer first (or both nearest)."""
     u = rays / np.linalg.norm(rays, axis=-1, keepdims=True)
     along = (u * known).sum(-1)
     half = np.sqrt(np.maximum(along ** 2 - (known * known).sum(-1) + length ** 2, 0.0))
@@ -33,8 +30,7 @@ def toward_signs(depths: np.ndarray) -> np.ndarray:
 
 
 def signs_allowed(signs: np.ndarray, fixed: np.ndarray) -> np.ndarray:
-    """(F, C) bool: candidates whose segment signs (F, C, S) match the user's ``fixed`` (F, S) (+1, -1, 0 unsaid); all
-    where none does."""
+    """(F, C) bool: candidates with signs (F, C, S) as ``fixed`` (F, S) (+1, -1, 0 unsaid); all where none is."""
     ok = ((fixed[:, None, :] == 0) | (signs == fixed[:, None, :])).all(axis=-1)
     return ok | ~ok.any(axis=1, keepdims=True)
 

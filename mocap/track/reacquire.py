@@ -1,20 +1,5 @@
-"""Finding the body again after the tracker lost it (mocap.track.loss): a search of
-the whole frame for the head by its colour model, the trunk hung from each head
-found, the best pair kept if both match as well as they usually do.
-
-Beyond the tracking paper (Pan, Zhuang and Liu, *Video motion capture in VBA*,
-2000), which tracks from frame to frame only and so never finds a body it lost
-(an occluder that crossed it, a jump cut, a performer who left the frame and came
-back). Its own tools do the search: the head's morph block (mocap.track.blocks,
-Eq. 3-5) scored on a grid over the whole frame, the best places refined by the
-search path of Fig. 6; with them the head the image difference points to (the
-tracker's own search on the frame, Eq. 1-5) and the last good pose's head. Each
-head's trunk is searched from the last good pose's trunk hung from it; both
-searches start only from the places that match best where they lie. The
-limbs are then found from the trunk by the tracker's own limb search
-(mocap.track.tracker), started from the last good pose carried by the trunk
-(``carried``).
-"""
+"""Finding the lost body again (mocap.track.loss), beyond the paper: the head's morph block (Eq. 3-5) scanned over the
+frame and refined along Fig. 6's path, the trunk hung from it, the limbs from the last good pose (``carried``)."""
 
 from __future__ import annotations
 
@@ -24,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from mocap.track import blocks
-from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
+from mocap.track.blocks import THETA, M, N, X, Y, block_end, from_block, to_block
 from mocap.track.parts import HEAD, TORSO
 
 PEAKS = 6                  # the best places of the head's scan refined by the search path
@@ -54,9 +39,7 @@ class Found(NamedTuple):
 
 def scanned(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid,
             block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(K, 5) ``block``'s shape (5,) moved to every place of a grid over ``frame``
-    SCAN_STEP of its width apart (those whose both ends lie inside), and (K,) their S
-    by the colour ``model``."""
+    """(K, 5) ``block`` moved over a grid SCAN_STEP of its width apart (ends inside ``frame``), and (K,) their S."""
     height, width = frame.shape[:2]
     step = max(SCAN_STEP * block[N], 2.0)
     xs, ys = np.arange(0.0, width, step), np.arange(0.0, height, step)
@@ -72,10 +55,7 @@ def scanned(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid,
 
 def scan_heads(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, head: np.ndarray,
                peaks: int = PEAKS) -> np.ndarray:
-    """(K, 5) the ``peaks`` best head blocks of ``frame`` over the places of
-    ``scanned`` (the ``head``'s shape moved there), scored by the head's colour
-    ``model``; places nearer than PEAK_SPACING head lengths to a better one are left
-    out (one place per head-like thing)."""
+    """(K, 5) the ``peaks`` best head blocks of ``scanned``, each PEAK_SPACING head lengths from better ones."""
     cands, s = scanned(frame, model, grid, head)
     kept: list[np.ndarray] = []
     for cand in cands[np.argsort(-s)]:
@@ -87,17 +67,7 @@ def scan_heads(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, head: np
 
 
 def distinctness(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, block: np.ndarray) -> float:
-    """How much better a part's ``block`` (5,) matches its colour ``model`` where it
-    lies than the same block anywhere else in ``frame``: its S over the best S of the
-    places of ``scanned`` at least the block's length away (inf where there are none).
-
-    Rendered motion capture over cluttered, panning backgrounds
-    (benchmarks/bench_track.py, bench_track_clips.py, tests/test_track_loss.py): a
-    tracked head or trunk stands out 5 to 13 times; one whose match halved because
-    what lies behind it changed, 1.7 to 3.5 times; one sitting on what is left where
-    the body went (it left, a board covers it, a cut regraded its colours), at most
-    1.03; a head and trunk partly off the body (arms thrown over the head, a spin:
-    the trunk 10-20% of the body's height off, still on the shirt), up to 2.4."""
+    """``block`` (5,)'s S where it lies over the best S at least its length away in ``frame`` (inf: nowhere)."""
     cands, s = scanned(frame, model, grid, block)
     far = np.hypot(*(cands[:, :2] - block[:2]).T) >= block[M]
     own = blocks.score(frame, model, grid, block[None])[0]
@@ -111,24 +81,9 @@ def _inside(points: np.ndarray, shape: tuple) -> np.ndarray:
 
 def reacquired(frame: np.ndarray, starts: np.ndarray, good: np.ndarray, usual: np.ndarray,
                head_search: HeadSearch, trunk_search: TrunkSearch, score: Score) -> Found | None:
-    """The head and trunk found again on ``frame``, or None, coarse to fine: each head
-    block of ``starts`` (K, 5) at each of ZOOMS (the body may have come nearer or gone
-    away) matched where it lies (``score``), the REFINED best refined by the
-    tracker's ``head_search``; under each head refined that matches at least REFOUND
-    of usual (a head matched worse is not looked under), the last good pose's trunk
-    (``good`` (10, 5)) hung from it at each turn (``hung_trunks``) matched where it
-    lies, the TRUNKS_REFINED best refined by ``trunk_search``. The pair whose worse
-    match (S over the part's ``usual`` S (10,)) is best is kept if that is at least
-    REFOUND.
-
-    Refining every head at every zoom and the trunk at every turn under each (about
-    130 block searches a lost frame) made a lost frame cost 10 times a tracked one;
-    the search moves a block a few pixels, degrees and a tenth of its size, which
-    seldom reorders places matched that far apart. The three best heads of all places
-    and zooms, not the best zoom of each of the three best places: with those the
-    board passing the performer (tests/test_track_loss.py) was found 5 frames late;
-    two trunks of seven, not three: laugh_arms_up (benchmarks/bench_track_clips.py)
-    lost 3 frames more."""
+    """Head and trunk found again on ``frame``, or None: heads of ``starts`` (K, 5) at ZOOMS, the REFINED best
+    refined; under each matching REFOUND of ``usual`` (10,) the ``good`` (10, 5) trunk hung at each turn, the
+    TRUNKS_REFINED best refined; the pair whose worse ratio to ``usual`` is best, if at least REFOUND."""
     heads = np.concatenate([zooms(start) for start in starts])
     best, best_ratio = None, -np.inf
     for start in heads[np.argsort(-score(frame, HEAD, heads))[:REFINED]]:
@@ -155,9 +110,7 @@ def zooms(head: np.ndarray) -> np.ndarray:
 
 
 def hung_trunks(good: np.ndarray, head: np.ndarray) -> np.ndarray:
-    """(A, 5) the last good pose's trunk block (``good`` (10, 5)) from the end of
-    ``head`` (5,), grown as the head did, turned by each of TRUNK_TURNS (the body
-    may have bent or leant since)."""
+    """(A, 5) the ``good`` (10, 5) trunk from the end of ``head`` (5,), scaled as the head, turned by TRUNK_TURNS."""
     trunks = np.repeat(good[None, TORSO], len(TRUNK_TURNS), axis=0)
     trunks[:, :2] = block_end(head)
     trunks[:, THETA] += TRUNK_TURNS
@@ -166,9 +119,7 @@ def hung_trunks(good: np.ndarray, head: np.ndarray) -> np.ndarray:
 
 
 def carried(good: np.ndarray, trunk: np.ndarray) -> np.ndarray:
-    """The last good pose's blocks (10, 5) carried rigidly by its trunk to ``trunk``
-    (5,): every block's two ends kept where they were in the trunk's block frame,
-    widths grown as the trunk."""
+    """The ``good`` blocks (10, 5) carried rigidly by their trunk to ``trunk`` (5,), widths scaled as the trunk."""
     out = good.copy()
     zoom = trunk[M] / good[TORSO, M]
     for k, block in enumerate(good):

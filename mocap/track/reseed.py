@@ -1,16 +1,5 @@
-"""Tracking from the body marked again on any frame: every frame where the user marked
-all 16 joints seeds the tracker (mocap.track.tracker) anew, forward to the next seed
-and backward to the one before; each frame between two seeds then takes the track
-that still holds the body there (``merged``).
-
-Beyond the tracking paper (Pan, Zhuang and Liu, *Video motion capture in VBA*,
-2000), which marks frame 0 only: a tracker that lost the body (mocap.track.loss)
-does not find it again by itself on every clip, and a user who marks it again where
-it was lost mends the frames after the mark and before it.
-
-Frames are streamed while there is one seed; with more, the frames between the
-first and the last seed are kept in memory for the backward passes.
-"""
+"""Tracking from the body marked again on later frames, beyond the paper: each seed is tracked forward and backward to
+its neighbours, each frame between taking the track that still holds the body (``merged``)."""
 
 from __future__ import annotations
 
@@ -19,14 +8,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from mocap.track.calibration import Pinhole
-from mocap.track.tracker import BodyTracker
+from mocap.camera import Pinhole
 from mocap.track.parts import PARTS
+from mocap.track.tracker import BodyTracker
 
 
 class Track(NamedTuple):
-    """One run of the tracker over consecutive frames: (F, 16, 2) joints, (F, 10)
-    similarities S (inf on its seed), (F, 10) confidences, (F,) lost."""
+    """One tracker run: (F, 16, 2) joints, (F, 10) S (inf on its seed), (F, 10) confidences, (F,) lost."""
 
     joints: np.ndarray
     similarity: np.ndarray
@@ -36,8 +24,7 @@ class Track(NamedTuple):
 
 def run_tracker(frames: Iterable[np.ndarray], marks: np.ndarray, tick: Callable[[], None],
                 camera: Pinhole | None, turn: str | None, fps: float) -> Track:
-    """The tracker seeded with ``marks`` (16, 2) on the first of ``frames``, run
-    through them all (``tick`` after each tracked frame)."""
+    """The tracker seeded with ``marks`` (16, 2) on the first of ``frames``, run through all (``tick`` each)."""
     it = iter(frames)
     tracker = BodyTracker(next(it), marks, camera, turn, fps)
     rows = [(marks, np.full(len(PARTS), np.inf), np.ones(len(PARTS)), False)]
@@ -49,10 +36,8 @@ def run_tracker(frames: Iterable[np.ndarray], marks: np.ndarray, tick: Callable[
 
 
 def merged(forward: Track, backward: Track) -> Track:
-    """Frames a..b tracked forward from a seed on a and backward from one on b
-    (``backward`` in the forward order): on every frame the track whose body is not
-    lost, where both hold it the one from the nearer seed, where neither the forward
-    one (lost)."""
+    """Frames a..b tracked ``forward`` from a and ``backward`` from b (in forward order): per frame the track not
+    lost, where both hold the body the nearer seed's, where neither the forward one."""
     n = len(forward.lost)
     nearer_back = np.arange(n) > (n - 1) / 2
     take_back = ~backward.lost & (forward.lost | nearer_back)
@@ -64,11 +49,8 @@ def merged(forward: Track, backward: Track) -> Track:
 def track_seeded(frames: Iterable[np.ndarray], seeds: dict[int, np.ndarray],
                  progress: Callable[[int], None] | None, camera: Pinhole | None,
                  turn: str | None, fps: float) -> Track:
-    """Track the body through ``frames`` from every seed (frame -> checked (16, 2)
-    marks; frame 0 among them): forward from each seed to the next, backward from
-    each seed after the first to the one before, merged (``merged``).
-    ``progress(done)`` counts the seed and the tracked frames of every pass: the
-    frame count and the last seed's frame in all."""
+    """Track ``frames`` from every seed (frame -> (16, 2) marks, frame 0 among them), forward and backward between
+    seeds, ``merged``; ``progress(done)`` counts every pass's frames."""
     keys = sorted(seeds)
     done = [0]
 

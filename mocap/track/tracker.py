@@ -1,6 +1,5 @@
-"""Frame-to-frame tracking of the marked body, head to feet (Pan, Zhuang and Liu 2000, section "Feature tracking"):
-each of the 10 parts a morph block (mocap.track.parts) matched against its frame-0 colour model, the head started
-by image difference (Eq. 1-5), each limb found around its root (mocap.track.limbs)."""
+"""Frame-to-frame tracking of the marked body, head to feet (Pan, Zhuang and Liu 2000, "Feature tracking"): morph
+blocks matched to frame-0 colours, the head started by image difference (Eq. 1-5), limbs found around roots."""
 
 from __future__ import annotations
 
@@ -9,19 +8,48 @@ from collections import deque
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.camera import Pinhole, default_camera
 from mocap.image.edges import Edges
 from mocap.track import blocks
-from mocap.track.blocks import M, N, THETA, X, Y, block_end, from_block, to_block
-from mocap.track.calibration import Pinhole, default_camera
+from mocap.track.blocks import THETA, M, N, X, Y, block_end, from_block, to_block
 from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
+from mocap.track.limbs import (
+    HEAD_COST,
+    LEG_OUTLINE_COST,
+    TWIN_COST,
+    TWIN_OVERLAP,
+    TrunkDepth,
+    added,
+    arm_limits_cost,
+    around_root,
+    leg_limits_cost,
+    limb_cost,
+    limb_penalty,
+    outline_cost,
+    settled_knee,
+    twin_overlap,
+)
 from mocap.track.loss import DISTINCT, body_lost, part_confidence
-from mocap.track.limbs import (HEAD_COST, LEG_OUTLINE_COST, TWIN_COST, TWIN_OVERLAP, TrunkDepth, added,
-                               arm_limits_cost, around_root, leg_limits_cost, limb_cost, limb_penalty,
-                               outline_cost, settled_knee, twin_overlap)
 from mocap.track.marks import body_scale
+from mocap.track.parts import (
+    ARMS,
+    HEAD,
+    LEGS,
+    LIMBS,
+    PART_JOINTS,
+    PARTS,
+    TORSO,
+    TWIN_PART,
+    TWINS,
+    arm_grids,
+    far_forearm,
+    mirrored_model,
+    part_lengths,
+    part_widths,
+    search_part,
+    skeleton,
+)
 from mocap.track.reacquire import carried, distinctness, reacquired, scan_heads
-from mocap.track.parts import (ARMS, HEAD, LEGS, LIMBS, PART_JOINTS, PARTS, TORSO, TWIN_PART, TWINS,
-                               arm_grids, far_forearm, mirrored_model, part_lengths, part_widths, search_part, skeleton)
 
 BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
 MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
@@ -90,8 +118,7 @@ class BodyTracker:
 
     def _judged_lost(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, refound: bool) -> bool:
         """Whether the body is lost on a frame tracked to ``new`` (``refound``: re-acquired): once lost, until
-        re-acquired; held (``_held``) head and trunk are judged without the usual S, which a changed background
-        lowers for good."""
+        re-acquired; a held (``_held``) frame is judged without the usual S, which a changed background lowers."""
         lost = self.lost and not refound or bool(body_lost(self.confidence, self.lost))
         self.held = lost and self._held(frame, new)
         if not self.held:
@@ -105,8 +132,7 @@ class BodyTracker:
                    for k in (HEAD, TORSO))
 
     def _reacquire(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> bool:
-        """Whether a lost body's head and trunk are found again (into ``new``, ``s``; limbs carried from the good
-        pose)."""
+        """Whether a lost body's head and trunk are found again (into ``new``, ``s``; limbs from the good pose)."""
         starts = np.concatenate([new[[HEAD]], self.good[[HEAD]],
                                  scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])])
         found = reacquired(frame, starts, self.good, self._usual(), self._head_search,
@@ -181,8 +207,7 @@ class BodyTracker:
 
     def _track_torso(self, frame: np.ndarray, predicted: np.ndarray,
                      head: np.ndarray) -> tuple[np.ndarray, float]:
-        """The trunk block searched from the prediction and from it at its usual length, the better kept: a trunk of
-        one colour matches at many lengths and would shrink."""
+        """Trunk searched from the prediction and at its usual length, the better kept: one colour lets it shrink."""
         usual = predicted.copy()
         usual[M] = self.lengths[TORSO] * self._zoom(head)
         return max((self._search(frame, TORSO, start, self._zoom(head)) for start in (predicted, usual)),
@@ -216,8 +241,7 @@ class BodyTracker:
         self._hang(image, new, s, k, root, lower, penalty)
 
     def _upper_trust(self, k: int) -> tuple[float, tuple[float, ...]]:
-        """Beyond the paper: limb k's upper-block 1/S weight and lengths tried around its root; the far arm's upper
-        arm, marked in the shirt's colours, weighs less and is tried shorter."""
+        """Limb k's upper-block 1/S weight and lengths tried around its root: less and shorter for the far arm."""
         if k + 1 == self.far_forearm:
             return FAR_UPPER_WEIGHT, FAR_UPPER_SCALES
         return 1.0, (1.0,)
@@ -228,8 +252,7 @@ class BodyTracker:
 
     def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
                     twins: tuple[int, int]) -> None:
-        """Beyond the paper: twin limbs whose lower blocks overlap (TWIN_OVERLAP) are tracked again each off the
-        other's; the placement of least 1/S plus overlap cost stays."""
+        """Twin limbs whose lower blocks overlap, tracked again each off the other's; least 1/S + overlap kept."""
         a, b = twins
         if twin_overlap(new[a + 1], new[b + 1]) < TWIN_OVERLAP:
             return
@@ -266,8 +289,7 @@ class BodyTracker:
         return np.median(self.history, axis=0) if self.history else np.full(len(PARTS), np.inf)
 
     def _update(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, lost: bool) -> None:
-        """Velocities and colour models (linear weighting of matches of at least UPDATE_MIN of the usual S); a lost or
-        held frame changes neither the usual S nor the models."""
+        """Velocities; colour models linearly weighted where S >= UPDATE_MIN of usual, unless lost or held."""
         self.velocity = new - self.blocks
         self.velocity[:, THETA] = (self.velocity[:, THETA] + np.pi) % (2 * np.pi) - np.pi
         self.blocks = new

@@ -1,6 +1,6 @@
 """The tracking method (Pan, Zhuang and Liu 2000) as one call: frame 0 marked, every frame tracked, unreliable
 stretches interpolated, 3D reconstructed under perspective. Frames are streamed at video.processing_scale; results
-are in the original frame's pixels. ``track_video("clip.mp4", marks)`` with marks (16, 2) or {joint: (x, y)}."""
+are in the original frame's pixels. ``track_clip("clip.mp4", marks)`` with marks (16, 2) or {joint: (x, y)}."""
 
 from __future__ import annotations
 
@@ -12,15 +12,15 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, limb
+from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
-from mocap.track.marks import check_marks
-from mocap.track.calibration import Pinhole, default_camera
-from mocap.track.keydepths import Turns
-from mocap.track.perspective import reconstruct, steady_depths, to_contract
-from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO
-from mocap.track.loss import GAP_S, bridged, joint_confidence
-from mocap.track.reseed import Track, track_seeded
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
+from mocap.track.keydepths import Turns
+from mocap.track.loss import GAP_S, bridged, joint_confidence
+from mocap.track.marks import check_marks
+from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO
+from mocap.track.perspective import reconstruct, steady_depths, to_contract
+from mocap.track.reseed import Track, track_seeded
 
 Progress = Callable[[int, int], None]
 LOW_RELIABILITY = 0.5      # a part matched this much worse than usual is taken as hidden
@@ -73,7 +73,7 @@ def track_frames(frames: Iterable[np.ndarray], marks: np.ndarray,
 
 
 def joint_reliability(similarity: np.ndarray) -> np.ndarray:
-    """(F, 16) joint reliability from parts' S (F, 10): S over its clip median, at most 1, least of the joint's parts."""
+    """(F, 16) per joint the least of its parts' S (F, 10) over their clip median, at most 1."""
     tracked = np.where(np.isfinite(similarity[1:]), similarity[1:], np.nan)   # marked frames aside
     usual = np.nanmedian(tracked, axis=0) if np.isfinite(tracked).any() else np.ones(len(PARTS))
     part = np.minimum(similarity / usual, 1.0)
@@ -82,8 +82,7 @@ def joint_reliability(similarity: np.ndarray) -> np.ndarray:
 
 def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray,
                     threshold: float = LOW_RELIABILITY) -> np.ndarray:
-    """Joints (F, 16, 2) with stretches below ``threshold`` between reliable frames linearly interpolated (the paper's
-    handling of self-occlusion); stretches at the clip's ends stay."""
+    """Joints (F, 16, 2), stretches below ``threshold`` between reliable frames interpolated (self-occlusion)."""
     out = joints2d.copy()
     frames = np.arange(len(joints2d))
     for j in range(joints2d.shape[1]):
@@ -165,7 +164,7 @@ def turn_of(orientation: str | None) -> str | None:
     return side
 
 
-def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None,
+def track_clip(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None,
                 *, focal_px: float | None = None, orientation: str | None = None,
                 remarks: dict | None = None) -> TrackResult:
     """Track a video (path or VideoInfo) from its 16 joints marked on frame 0 and reconstruct 3D. ``marks``: (16, 2)
@@ -192,8 +191,7 @@ def track_video(video: str | os.PathLike | VideoInfo, marks, progress: Progress 
 
 
 def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
-    """"left" or "right" from the knees' bend over the first TURN_CUE_S (orientation.knee_facing): the key triangle
-    and hips fit two mirror turns alike."""
+    """"left" or "right" by the knees' bend over the first TURN_CUE_S (knee_facing): mirror turns fit alike."""
     return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
 
 

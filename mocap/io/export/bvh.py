@@ -1,13 +1,7 @@
-"""BVH export of a Motion: the skeleton of ``mocap.lift.skeleton`` as a BVH hierarchy.
-
-Bones carry the names most tools map by themselves (Hips, Spine, Spine1, Neck, Head,
-LeftShoulder/LeftArm/LeftForeArm/LeftHand, LeftUpLeg/LeftLeg/LeftFoot/LeftToeBase,
-the right side's); End Sites at the head top, the finger tips and the toe tips.
-OFFSETs (centimetres) are the clip's one symmetric body in its T-pose rest (arms out
-sideways, facing +z, y up). The root (Hips) has 6 channels (its position in the
-exports' world: the floor at y = 0, then its rotation), every other joint 3 rotation
-channels, all in the order Z, X, Y (intrinsic, degrees, as in the CMU files).
-"""
+"""BVH export of a Motion: the skeleton of ``mocap.lift.skeleton`` (bone names most tools map by
+themselves; End Sites at head top, finger and toe tips), OFFSETs in centimetres from its T-pose rest.
+The root (Hips) has 6 channels (position in the exports' world, floor at y = 0, then rotation), every
+other joint 3; rotations in Z, X, Y order (intrinsic, degrees, as in the CMU files)."""
 
 from __future__ import annotations
 

@@ -1,20 +1,14 @@
-"""CSV export of a clip: one row per frame, a header naming every column with its
-unit and axes.
-
-Columns: ``frame``, ``time_s`` (seconds), ``keyframe`` (1 fitted, 0 interpolated),
-``score`` (the fit's score in [0, 1], empty on interpolated frames), then for the 16
-contract joints in canonical order their image position ``<joint>_u_right_px``,
-``<joint>_v_down_px`` (pixels from the frame's top-left corner; empty where nobody
-is), then their world position ``<joint>_x_right_m``, ``<joint>_y_up_m``,
-``<joint>_z_toward_camera_m`` (metres, the exports' world: right-handed, axes
-parallel to the camera's, the floor at y = 0, the first frame's pelvis above the
-origin), then ``ankle_l_contact``, ``ankle_r_contact`` (1 where the foot is planted).
-"""
+"""CSV export: one row per frame, a header naming each column with its unit and axes: ``frame``,
+``time_s``, ``keyframe`` (1 fitted, 0 interpolated), ``score`` (empty on interpolated frames), per
+joint ``_u_right_px``, ``_v_down_px`` (from the top-left corner; empty where nobody is) and
+``_x_right_m``, ``_y_up_m``, ``_z_toward_camera_m`` (the exports' world: right-handed, camera axes,
+floor at y = 0, first pelvis above the origin), then ``ankle_l_contact``, ``ankle_r_contact`` (1: planted)."""
 
 from __future__ import annotations
 
 import csv
 import io
+
 import numpy as np
 
 from mocap.body import JOINTS

@@ -1,14 +1,7 @@
-"""FBX export of a Motion through Blender as a Python module (``bpy``, the optional
-extra: ``pip install 'mocap[fbx]'``, Python 3.11).
-
-The skinned character of the GLB export (``mocap.io.export.glb``: one armature with
-the BVH's bone names, one skinned mesh with its material, one action) is imported into
-an empty Blender scene at the motion's frame rate and written by Blender's FBX
-exporter with the settings Unity and Unreal expect (y up, -z forward, the action baked
-on every frame without simplification, no extra leaf bones: the End Sites are bones
-already). Blender runs in a child process (``python -m mocap.io.export.fbx GLB FBX
-FPS``) so that its log stays off the command line's output and its state out of ours.
-"""
+"""FBX export of a Motion: the GLB export's skinned character imported into an empty Blender scene
+(``bpy``: ``pip install 'mocap[fbx]'``, Python 3.11) and written with the settings Unity and Unreal
+expect (y up, -z forward, baked on every frame, no extra leaf bones). Blender runs in a child process
+(``python -m mocap.io.export.fbx GLB FBX FPS``) to keep its log and state out of ours."""
 
 from __future__ import annotations
 
@@ -34,7 +27,7 @@ def has_blender() -> bool:
 
 def fbx_bytes(motion: "Motion") -> bytes:
     """The motion as an FBX file (mocap.io.export.formats checks that bpy is here)."""
-    # imported here: every command reads has_blender, and the GLB writer's trimesh takes 0.25 s
+    # imported here: every command reads has_blender, and trimesh is slow to import
     from mocap.io.export.glb import glb_bytes
     with tempfile.TemporaryDirectory(prefix="mocap-fbx-") as folder:
         glb, fbx = Path(folder) / "motion.glb", Path(folder) / "motion.fbx"

@@ -1,13 +1,13 @@
-"""The export registry: every file format a motion is written as, in one table that
-the command line (`mocap fit --out/--bvh/--glb/--csv/--html`) and the app (its
-download buttons) both read, so that both offer every format."""
+"""The export registry: one table of every format a motion is written as, read by the command line
+(``mocap fit --out/--bvh/--glb/--csv/--html``) and the app's download buttons alike."""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 from mocap.errors import MocapError
 from mocap.io.export.atomic import write_export
@@ -18,9 +18,8 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, eq=False)
 class Clip:
-    """What every format is made from: the clip's name (the video's stem), the motion
-    file's ``video`` entry and frames (CONTRACT.md), the motion, and the motion file's
-    optional top-level fields (``extra``, e.g. CONTRACT.md's "masks")."""
+    """What every format is made from: the clip's name (the video's stem), the motion file's ``video``
+    entry and frames, the motion, and the motion file's optional top-level fields (``extra``)."""
 
     name: str
     video: dict
@@ -35,9 +34,8 @@ def _always() -> bool:
 
 @dataclass(frozen=True)
 class Format:
-    """A file format: its key (the command line's option, the app's), the app's
-    button label, the file name's ending, what it holds, its bytes of a clip, and
-    whether this installation can write it (without, ``render`` says how to get it)."""
+    """A file format: its key (command line and app), button label, file ending, what it holds, its
+    bytes of a clip, and whether this installation can write it (else ``needs`` says how)."""
 
     key: str
     label: str

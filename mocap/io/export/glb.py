@@ -1,18 +1,8 @@
-"""GLB export of a Motion: a skinned character (glTF 2.0, binary) that Blender, Unity
-and Unreal import as one armature, one mesh and one animation.
-
-The armature is the skeleton of ``mocap.lift.skeleton`` (same bone names as the BVH,
-End Sites as leaf joints), one node per bone under an ``Armature`` node, resting in
-its T-pose (node translations = the bones' offsets, metres, y up) at the first
-frame's root. The body is one mesh of the model's 10 cylinders (their cross-sections
-``body.semi_axes`` at 1.75 m, built by trimesh), skinned to it with JOINTS_0/WEIGHTS_0:
-each limb cylinder rides its proximal bone, the torso blends from Hips at the pelvis to
-Spine1 at the neck; a nose and a chest mark (``mocap.silhouette.facing``, cones) ride their
-segment's bones, so that the way the body faces shows; one material. ``skin.inverseBindMatrices`` are the rest pose's.
-One animation: a sample per motion frame at 1/fps, a rotation channel per bone and the
-root's translation in the exports' world (the floor at y = 0); glTF's LINEAR
-interpolation of rotations is slerp. pygltflib writes the document and its binary.
-"""
+"""GLB export of a Motion: a skinned glTF 2.0 character that Blender, Unity and Unreal import as one
+armature (``mocap.lift.skeleton``'s bones, T-pose rest at the first frame's root), one mesh (the 10
+cylinders, ``body.semi_axes`` at 1.75 m, and ``io.export.marks``' cones, riding their segments' bones;
+the torso blends Hips to Spine1) and one animation (per frame at 1/fps: bone rotations, slerped by
+glTF LINEAR, and the root's translation in the exports' world, floor at y = 0)."""
 
 from __future__ import annotations
 
@@ -67,9 +57,8 @@ def _bone_node(motion: Motion, bone: int) -> gl.Node:
 
 
 def body_parts(rest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The body's mesh in the rest pose: vertices (V, 3), normals (V, 3), triangles
-    (T, 3), and per vertex the two bones it follows with the end bone's weight
-    (V, 3: start bone, end bone, weight)."""
+    """The rest-pose mesh: vertices (V, 3), normals (V, 3), triangles (T, 3) and per vertex (V, 3)
+    its start bone, end bone and the end bone's weight."""
     radii = body.semi_axes(body.BODY_HEIGHT_M)
     meshes, riders = [], []
     for i, (segment, (a, b)) in enumerate(body.SEGMENTS.items()):

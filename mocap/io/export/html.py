@@ -1,10 +1,6 @@
-"""The playback page: one self-contained HTML file that plays the 10-cylinder body.
-
-The page is ``static/playback.html`` (plain JavaScript drawing on a 2D canvas: no
-library, no server, no network) with the clip filled in: its name, frame rate,
-frame count and every frame's 16 world joints (metres, y up, z toward the camera;
-``null`` where the frame has no pose). A 100-frame clip makes a page of ~60 kB.
-"""
+"""The playback page: ``static/playback.html`` (plain JavaScript on a 2D canvas: no library, server or
+network) filled with the clip's name, frame rate and every frame's 16 world joints (metres, y up, z
+toward the camera; ``null`` where the frame has no pose)."""
 
 from __future__ import annotations
 
@@ -17,8 +13,8 @@ import numpy as np
 
 from mocap import body
 from mocap.errors import MocapError
-from mocap.io.export.marks import FACING_MARKS
 from mocap.io.export.atomic import write_export
+from mocap.io.export.marks import FACING_MARKS
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.motion import Motion
 
@@ -50,9 +46,8 @@ def playback_html(name: str, fps: float, joints: np.ndarray) -> str:
 
 
 def _marks() -> dict:
-    """What the page needs to draw mocap.silhouette.facing's marks: the pairs of joints whose left
-    minus right is the body's left, and per mark its segment's joints, where along it,
-    how far out in front it stands, its length and radius (metres)."""
+    """What the page needs to draw the facing marks (io.export.marks): the joint pairs whose left minus right
+    is the body's left, and per mark its segment's joints, place along it, offset in front, length, radius (m)."""
     units = body.BODY_HEIGHT_M / body.BODY_HEIGHT
     front = body.semi_axes(body.BODY_HEIGHT_M)[:, 1]
     return {"left": [[body.JOINT_INDEX[f"{names[0]}_l"], body.JOINT_INDEX[f"{names[0]}_r"]]
@@ -69,9 +64,8 @@ def motion_html(motion: Motion, name: str) -> str:
 
 
 def motion_file_html(path: str | os.PathLike) -> str:
-    """The page of a motion file: joints3d moved by the frame's ``root`` (the pelvis
-    path) where the file has one, less the file's ``origin`` (the exports' world, as
-    `mocap fit --html` shows it); frames without joints3d stay empty."""
+    """The page of a motion file: joints3d moved by each frame's ``root``, less the file's ``origin``
+    (the exports' world, as ``mocap fit --html`` shows it); frames without joints3d stay empty."""
     doc = read_motion(path)
     frames = doc.get("frames", [])
     joints = np.full((len(frames), len(body.JOINTS), 3), np.nan)

@@ -18,9 +18,8 @@ def mask_name(index: int) -> str:
 
 
 class MaskFolder:
-    """A masks folder written frame by frame and replaced whole by ``finish``: the
-    masks go into a hidden folder beside it first, so that a run killed halfway
-    leaves the old folder or none, never a half one."""
+    """A masks folder written frame by frame into a hidden folder beside it and put in place whole by
+    ``finish``, so a run killed halfway leaves the old folder or none."""
 
     def __init__(self, folder: str | Path):
         self.folder = Path(folder)

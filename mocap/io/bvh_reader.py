@@ -1,14 +1,8 @@
 """Reading BVH motion capture and mapping it onto the 16 contract joints.
 
-A BVH file is a HIERARCHY of joints (each with an OFFSET from its parent and a list
-of CHANNELS, any of X/Y/Z position and X/Y/Z rotation in any order) followed by
-MOTION: one line of channel values per frame. A joint's local translation is its
-OFFSET with any position channel replacing that component; its local rotation is the
-product of its rotation channels in the order listed (intrinsic Euler angles, degrees).
-
-``contract_joints`` turns the skeleton into the contract's 16 joints (CONTRACT.md) in
-metres, y up, scaled to a 1.75 m body height (``body.body_height``).
-"""
+A HIERARCHY of joints (OFFSET from the parent; CHANNELS: X/Y/Z position and rotation, any order),
+then MOTION, a line of channel values per frame; position channels replace OFFSET components,
+rotations compose in the listed order (intrinsic Euler, degrees)."""
 
 from __future__ import annotations
 
@@ -28,12 +22,8 @@ _HEAD_END_MIN_COSINE = 0.7   # a Head End Site this aligned with parent->Head is
 
 @dataclass(frozen=True, eq=False)
 class BvhMotion:
-    """A parsed BVH file. End Sites are joints too (``end_site`` marks them).
-
-    ``names[j]``, ``parents[j]`` (-1 for the root), ``offsets[j]`` (file units) and
-    ``channels[j]`` describe joint j; ``values`` holds the raw (F, C) channel values,
-    the columns of joint j starting at ``channel_start[j]``.
-    """
+    """A parsed BVH file: joint j is ``names[j]``, ``parents[j]`` (-1: root), ``offsets[j]`` (file units),
+    ``channels[j]``, ``end_site[j]``; ``values`` (F, C) raw channel values, joint j's from ``channel_start[j]``."""
 
     names: tuple[str, ...]
     parents: np.ndarray
@@ -196,12 +186,9 @@ def _find(motion: BvhMotion, candidates: list[str], role: str) -> int:
 
 
 def joint_map(motion: BvhMotion) -> dict[str, int]:
-    """BVH joint index of the head and of every limb joint of the contract.
-
-    Limbs are found from their distal joint (LeftWrist/LeftHand/lHand,
-    LeftAnkle/LeftFoot/lFoot) and walked up the parents, which resolves DAZ's
-    LeftShoulder (an upper arm) against CMU's LeftShoulder (a collar bone).
-    """
+    """BVH joint index of the head and every contract limb joint: limbs are walked up the parents from
+    their distal joint (LeftWrist/LeftHand/lHand, LeftAnkle/LeftFoot/lFoot), which tells DAZ's
+    LeftShoulder (an upper arm) from CMU's (a collar bone)."""
     found = {"head": _find(motion, ["head"], "head")}
     for side, prefixes in _SIDE_PREFIXES.items():
         for end, words in _LIMB_ENDS.items():
@@ -214,9 +201,8 @@ def joint_map(motion: BvhMotion) -> dict[str, int]:
 
 
 def _head_top(motion: BvhMotion, pos: np.ndarray, head: int) -> np.ndarray:
-    """(F, 3) top of the head: the Head's End Site if it continues the direction from
-    the Head's parent (a neck joint) to the Head, else the Head extended by twice that
-    parent->Head vector (DAZ files end the head with a sideways stub)."""
+    """(F, 3) head top: the Head's End Site if it continues the parent->Head direction, else the Head
+    plus twice that vector (DAZ files end the head with a sideways stub)."""
     parent = motion.parents[head]
     along = pos[:, head] - pos[:, parent]
     for j in np.flatnonzero(motion.end_site & (motion.parents == head)):
@@ -249,11 +235,8 @@ def contract_joints_units(motion: BvhMotion) -> np.ndarray:
 
 
 def contract_joints(motion: BvhMotion) -> np.ndarray:
-    """(F, 16, 3) contract joints in metres, BVH axes (y up), body height 1.75 m.
-
-    The scale makes ``body.body_height`` of the first frame exactly 1.75 m; the
-    world origin and the trajectory are kept (scaled), not re-centred.
-    """
+    """(F, 16, 3) contract joints in metres, BVH axes (y up), scaled so frame 0's ``body.body_height``
+    is 1.75 m; origin and trajectory kept (scaled), not re-centred."""
     joints = contract_joints_units(motion)
     return joints * (body.BODY_HEIGHT_M / body_height_units(joints))
 

@@ -1,0 +1,37 @@
+"""The camera both methods read: a pinhole with its focal length and principal point in
+pixels (the tracking method's perspective; the silhouette method's root depth)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Pinhole:
+    """The camera: focal length and principal point in pixels."""
+
+    focal: float
+    cx: float
+    cy: float
+
+    def rays(self, pixels: np.ndarray) -> np.ndarray:
+        """(..., 3) viewing rays (x, y, 1) of pixels (..., 2): the point at depth Z is Z times the ray (Eq. 10)."""
+        p = np.asarray(pixels, float)
+        return np.stack([(p[..., 0] - self.cx) / self.focal, (p[..., 1] - self.cy) / self.focal,
+                         np.ones(p.shape[:-1])], axis=-1)
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """(..., 2) pixels of pinhole-frame points (..., 3)."""
+        z = points[..., 2:3]
+        return np.array([self.cx, self.cy]) + self.focal * points[..., :2] / z
+
+    def scaled(self, factor: float) -> "Pinhole":
+        """The camera of the frames resized by ``factor``."""
+        return Pinhole(self.focal * factor, self.cx * factor, self.cy * factor)
+
+
+def default_camera(width: int, height: int, focal_px: float | None = None) -> Pinhole:
+    """The assumed camera of a video: ``focal_px`` or the frame's width, centred."""
+    return Pinhole(float(focal_px or width), width / 2.0, height / 2.0)
