@@ -7,7 +7,7 @@ import pytest
 
 from mocap import body
 from mocap.errors import MocapError
-from mocap.io import bvh
+from mocap.io import bvh_reader as bvh
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh"
 FILES = ["cmu_walk.bvh", "cmu_run.bvh", "cmu_01_01_jumps.bvh", "walk01.bvh"]

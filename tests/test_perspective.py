@@ -9,6 +9,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX
+from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.synth import RenderOptions, plan_scene, scene_truth
 from mocap.synth.metrics import pa_mpjpe
@@ -19,7 +20,7 @@ from mocap.track import perspective as P
 from mocap.track.marks import shoulders_as_hips, turned_apart
 from mocap.track.rays import choose_limb, ray_roots
 
-CAMERA = C.Pinhole(800.0, 320.0, 240.0)
+CAMERA = Pinhole(800.0, 320.0, 240.0)
 
 
 def known_pose(yaw_deg: float, span: float = 0.36, chest: float = C.MODEL[C.KEY[2], 1]) -> C.Calibration:
@@ -121,7 +122,7 @@ def test_key_joints_solve_again_only_the_frames_that_moved(monkeypatch):
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=50.0))
     joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
-    camera = C.default_camera(320, 240)
+    camera = default_camera(320, 240)
     first = K.key_joints(joints2d, camera, "right")
     moved = joints2d.copy()
     moved[12:15, JOINT_INDEX["chest"]] += [3.0, -2.0]
@@ -140,7 +141,7 @@ def test_key_joints_followed_turned_the_wrong_way_are_turned_back_by_the_limbs()
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=50.0))
     joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
-    camera = C.default_camera(320, 240)
+    camera = default_camera(320, 240)
     right = K.key_joints(joints2d, camera, "right")
     wrong = K.mirror_images(right)
     assert (K.triangle_yaw(wrong) < -25.0).all() and (K.triangle_yaw(right) > 25.0).all()
@@ -228,7 +229,7 @@ def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm, p
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=yaw))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
-    camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    camera = Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     turn = "right" if yaw < 90 else "left"
     monkeypatch.setattr(P, "GUIDE", C.MODEL)               # the model walk's head is upright
     pulled = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
@@ -317,7 +318,7 @@ def test_measured_lengths_read_bones_seen_side_on():
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=90.0))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
-    camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    camera = Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     depth = -truth.pelvis_camera[:, 2]
     found = P.measured_lengths(truth.joints2d, depth, camera)
     true = P.bone_lengths(truth.joints3d[0])
@@ -363,7 +364,7 @@ def test_frames_where_the_body_was_lost_measure_no_bones():
     scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
                                                            yaw=90.0))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
-    camera = C.Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
+    camera = Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     depth = -truth.pelvis_camera[:, 2]
     seen = np.arange(len(depth)) % 3 != 0
     tracked = truth.joints2d.copy()
