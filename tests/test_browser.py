@@ -30,12 +30,10 @@ from app_helpers import (  # noqa: F401
     started_app,
     tiny_video,
 )
-from browser_helpers import (  # noqa: F401
+from browser_helpers import (
     SKIP_WITHOUT_CHROMIUM,
     TIMEOUT_MS,
     VIEWPORT,
-    browser,
-    chromium,
     open_page,
     screen_point,
     shot,

@@ -11,10 +11,8 @@ import cv2
 import numpy as np
 import pytest
 from app_helpers import tiny_video  # noqa: F401
-from browser_helpers import (  # noqa: F401
+from browser_helpers import (
     SKIP_WITHOUT_CHROMIUM,
-    browser,
-    chromium,
     fitted_camera,
     open_page,
     panel_boxes,

@@ -13,15 +13,13 @@ import cv2
 import numpy as np
 import pytest
 from app_helpers import SHAPES, started_app
-from browser_helpers import (  # noqa: F401
+from browser_helpers import (
     ARTIFACTS,
     SKIP_WITHOUT_CHROMIUM,
-    chromium,
     fitted_camera,
     open_page,
     panel_boxes,
     shot,
-    wait_until,
 )
 from helpers import render_walk
 

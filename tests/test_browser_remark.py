@@ -11,7 +11,7 @@ import re
 import numpy as np
 import pytest
 from app_helpers import started_app
-from browser_helpers import SKIP_WITHOUT_CHROMIUM, browser, chromium, open_page, shot, wait_until  # noqa: F401
+from browser_helpers import SKIP_WITHOUT_CHROMIUM, browser, open_page, shot, wait_until  # noqa: F401
 from helpers import render_walk_with_exit
 from test_browser import mark_by_clicking, to_tracking
 

@@ -15,12 +15,10 @@ import threading
 import numpy as np
 import pytest
 from app_helpers import deepest_segment, hold_fitting, shaped_app  # noqa: F401
-from browser_helpers import (  # noqa: F401
+from browser_helpers import (
     SKIP_WITHOUT_CHROMIUM,
     TIMEOUT_MS,
     VIEWPORT,
-    browser,
-    chromium,
     fitted_camera,
     open_page,
     screen_point,
