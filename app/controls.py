@@ -9,26 +9,27 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from app.signs import build_signs
-from app.state import AppState, FrameView
+from app.texts import EYES_HELP, STAGE_HELP
 from mocap.body import JOINTS, ORIENTATIONS
 from mocap.io.export.formats import FORMATS
-from mocap.person import DEFAULT_MODEL, NONE, available, install_hint
+from mocap.person import DEFAULT_MODEL, available, install_hint
 
-AUTO = "auto"                       # the orientation dropdown's "no entry on this frame"
-NO_JOINT = "none"                   # the joint dropdown's "clicks place nothing"
+AUTO = "auto"  # the orientation dropdown's "no entry on this frame"
+NO_JOINT = "none"  # the joint dropdown's "clicks place nothing"
 FRAME_STEPS = ("◀ frame", "frame ▶")
 KEY_STEPS = ("◀ keyframe", "keyframe ▶")
 EDITS = ("↶ undo", "redo ↷")
-DOWNLOADS = {fmt.label: fmt.key for fmt in FORMATS.values()}     # button -> format
-METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}    # shown -> annotations'
-MARKING_HELP = ("The tracking method follows the 16 joints you mark on frame 0, over any "
-                "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "
-                "click where it is on the video frame. Then press **Track**. Where the review "
-                "says the body was lost, go to a frame that shows it and press **Mark joints** "
-                "again: the 16 joints marked there start the tracking anew; press **Track**.")
+DOWNLOADS = {fmt.label: fmt.key for fmt in FORMATS.values()}  # button -> format
+METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}  # shown -> annotations'
+MARKING_HELP = (
+    "The tracking method follows the 16 joints you mark on frame 0, over any "
+    "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "
+    "click where it is on the video frame. Then press **Track**. Where the review "
+    "says the body was lost, go to a frame that shows it and press **Mark joints** "
+    "again: the 16 joints marked there start the tracking anew; press **Track**."
+)
 STATIC = Path(__file__).resolve().parents[1] / "static"
-HELP_FILE = STATIC / "help.md"           # the Help folder; its pictures sit beside it
-REVIEW_LINES = 8                    # doubtful frames listed on the page
+HELP_FILE = STATIC / "help.md"  # the Help folder; its pictures sit beside it
 # action -> (label in the command palette, key, modifier). The keys of a video editor's
 # J/K/L; viser's own camera keys (W, A, S, D, Q, E, the arrows) are left alone.
 HOTKEYS: dict[str, tuple[str, str, str | None]] = {
@@ -44,19 +45,20 @@ HOTKEYS: dict[str, tuple[str, str, str | None]] = {
 }
 
 
-HELP = "  \n".join(f"**{'+'.join(filter(None, [mod, key]))}** {label.lower()}"
-                   for label, key, mod in HOTKEYS.values())
+HELP = "  \n".join(f"**{'+'.join(filter(None, [mod, key]))}** {label.lower()}" for label, key, mod in HOTKEYS.values())
 
 
 def help_markdown(path: Path = HELP_FILE) -> str:
     """The help page's markdown with its SVG pictures inlined as data URLs (viser reads
     raster images from ``image_root`` itself, but not SVG)."""
+
     def inline(match: re.Match) -> str:
         picture = path.parent / match.group(2)
         if picture.suffix != ".svg" or not picture.is_file():
             return match.group(0)
         data = base64.b64encode(picture.read_bytes()).decode()
         return f"![{match.group(1)}](data:image/svg+xml;base64,{data})"
+
     return re.sub(r"!\[([^]]*)\]\(([^)]*)\)", inline, path.read_text(encoding="utf-8"))
 
 
@@ -103,9 +105,12 @@ def build_controls(gui, n_frames: int) -> Controls:
     gui.main_panel.dock_right()
     progress = gui.add_progress_bar(0.0, animated=True)
     status = gui.add_markdown("Preprocessing…")
-    method = gui.add_dropdown("Method", tuple(METHOD_CHOICES), initial_value="silhouette",
-                              hint="silhouette: static camera and background, nothing to mark; "
-                                   "tracking: follows joints marked on frame 0")
+    method = gui.add_dropdown(
+        "Method",
+        tuple(METHOD_CHOICES),
+        initial_value="silhouette",
+        hint="silhouette: static camera and background, nothing to mark; tracking: follows joints marked on frame 0",
+    )
     frame = gui.add_slider("Frame", 0, max(n_frames - 1, 0), 1, 0)
     frame_steps = gui.add_button_group("Step", FRAME_STEPS)
     key_steps = gui.add_button_group("Jump", KEY_STEPS)
@@ -115,16 +120,25 @@ def build_controls(gui, n_frames: int) -> Controls:
     edits = gui.add_button_group("Edit", EDITS)
     tabs = gui.add_tab_group()
     with tabs.add_tab("Body"):
-        orientation = gui.add_dropdown("Facing", (AUTO, *ORIENTATIONS), initial_value=AUTO,
-                                       hint="which way the performer faces, from this frame on")
+        orientation = gui.add_dropdown(
+            "Facing",
+            (AUTO, *ORIENTATIONS),
+            initial_value=AUTO,
+            hint="which way the performer faces, from this frame on",
+        )
         orientation_note = gui.add_markdown("")
         segments = build_signs(gui)
     with tabs.add_tab("Joints"):
-        joint = gui.add_dropdown("Place", (NO_JOINT, *JOINTS), initial_value=NO_JOINT,
-                                 hint="choose a joint, then click where it is on the video frame")
+        joint = gui.add_dropdown(
+            "Place",
+            (NO_JOINT, *JOINTS),
+            initial_value=NO_JOINT,
+            hint="choose a joint, then click where it is on the video frame",
+        )
         gui.add_markdown("Choose a joint, then click where it is on the video frame.")
-        clear_override = gui.add_button("Clear override", icon="eraser",
-                                        hint="the chosen joint's, or every one on this frame")
+        clear_override = gui.add_button(
+            "Clear override", icon="eraser", hint="the chosen joint's, or every one on this frame"
+        )
         overrides = gui.add_markdown("")
     with tabs.add_tab("Tracking"):
         mark, marks_from_fit, track, track_info = _tracking_tab(gui)
@@ -136,48 +150,89 @@ def build_controls(gui, n_frames: int) -> Controls:
         learned_eyes, show_landmarks = _eyes_controls(gui)
     # folders, not tabs: used once, at the end, or seldom; a sixth tab wraps the tabs
     with gui.add_folder("Export", expand_by_default=False):
-        foot_lock = gui.add_checkbox("Foot lock", initial_value=False,
-                                     hint="keep each planted foot in place through its contact "
-                                          "in the files downloaded")
-        downloads = {f.label: gui.add_button(f.label, icon="download", disabled=True,
-                                             hint=None if f.available() else f.needs)
-                     for f in FORMATS.values()}
-        gui.add_markdown("*HTML page*: the playback page, one HTML file that plays the "
-                         "body in any browser, from disk, with no server.")
+        foot_lock = gui.add_checkbox(
+            "Foot lock",
+            initial_value=False,
+            hint="keep each planted foot in place through its contact in the files downloaded",
+        )
+        downloads = {
+            f.label: gui.add_button(f.label, icon="download", disabled=True, hint=None if f.available() else f.needs)
+            for f in FORMATS.values()
+        }
+        gui.add_markdown(
+            "*HTML page*: the playback page, one HTML file that plays the "
+            "body in any browser, from disk, with no server."
+        )
     with gui.add_folder("Help", expand_by_default=False):
         help_page = gui.add_markdown(help_markdown(), image_root=STATIC)
     with gui.add_folder("Keys", expand_by_default=False):
         gui.add_markdown(HELP)
-    commands = {action: gui.add_command(label, hotkey=key, modifier=mod)
-                for action, (label, key, mod) in HOTKEYS.items()}
-    return Controls(progress, status, method, frame, frame_steps, key_steps, keyframe, frame_info,
-                    orientation, orientation_note, segments, joint, clear_override, overrides,
-                    edits, doubtful, review, play, downloads, commands, help_page, track_info,
-                    mark, marks_from_fit, track, stage, use_stage, stage_info,
-                    learned_eyes, show_landmarks, foot_lock)
+    commands = {
+        action: gui.add_command(label, hotkey=key, modifier=mod) for action, (label, key, mod) in HOTKEYS.items()
+    }
+    return Controls(
+        progress,
+        status,
+        method,
+        frame,
+        frame_steps,
+        key_steps,
+        keyframe,
+        frame_info,
+        orientation,
+        orientation_note,
+        segments,
+        joint,
+        clear_override,
+        overrides,
+        edits,
+        doubtful,
+        review,
+        play,
+        downloads,
+        commands,
+        help_page,
+        track_info,
+        mark,
+        marks_from_fit,
+        track,
+        stage,
+        use_stage,
+        stage_info,
+        learned_eyes,
+        show_landmarks,
+        foot_lock,
+    )
 
 
 def _tracking_tab(gui) -> tuple[object, object, object, object]:
     """The Tracking tab's controls: marking, marks from the fit, Track, what it says."""
     gui.add_markdown(MARKING_HELP)
-    mark = gui.add_button("Mark joints", icon="pointer",
-                          hint="go to frame 0 and place each joint not yet marked; once all are, "
-                               "mark the body again on this frame (where the tracking lost it)")
-    marks_from_fit = gui.add_button("Marks from the silhouette fit", icon="wand",
-                                    hint="place all 16 marks where frame 0's fit has them")
-    track = gui.add_button("Track", icon="player-track-next",
-                           hint="track the marked joints through the video")
+    mark = gui.add_button(
+        "Mark joints",
+        icon="pointer",
+        hint="go to frame 0 and place each joint not yet marked; once all are, "
+        "mark the body again on this frame (where the tracking lost it)",
+    )
+    marks_from_fit = gui.add_button(
+        "Marks from the silhouette fit", icon="wand", hint="place all 16 marks where frame 0's fit has them"
+    )
+    track = gui.add_button("Track", icon="player-track-next", hint="track the marked joints through the video")
     return mark, marks_from_fit, track, gui.add_markdown("")
 
 
 def _stage_tab(gui) -> tuple[object, object, object]:
     """The Stage tab's controls: the empty stage's source, the button that uses it, what it says."""
     gui.add_markdown(STAGE_HELP)
-    stage = gui.add_text("Empty stage", initial_value="",
-                         hint="frames A-B of this video, or a photo or video file of the empty "
-                              "stage beside the annotation file; empty: estimated from the clip")
-    use_stage = gui.add_button("Use as the empty stage", icon="photo-check",
-                               hint="find the silhouettes again against it and refit")
+    stage = gui.add_text(
+        "Empty stage",
+        initial_value="",
+        hint="frames A-B of this video, or a photo or video file of the empty "
+        "stage beside the annotation file; empty: estimated from the clip",
+    )
+    use_stage = gui.add_button(
+        "Use as the empty stage", icon="photo-check", hint="find the silhouettes again against it and refit"
+    )
     return stage, use_stage, gui.add_markdown("")
 
 
@@ -186,127 +241,18 @@ def _eyes_controls(gui) -> tuple[object, object]:
     gui.add_markdown(EYES_HELP)
     installed = available(DEFAULT_MODEL)
     learned_eyes = gui.add_checkbox(
-        "Learned eyes (person model)", initial_value=False, disabled=True,
+        "Learned eyes (person model)",
+        initial_value=False,
+        disabled=True,
         hint="find the silhouettes again with the person model (on) or by the difference from the "
-             "empty stage alone (off), and refit" if installed else install_hint(DEFAULT_MODEL))
-    show_landmarks = gui.add_checkbox("Show the person model's joints", initial_value=True,
-                                      hint="its joints as magenta dots on the silhouette panel")
+        "empty stage alone (off), and refit"
+        if installed
+        else install_hint(DEFAULT_MODEL),
+    )
+    show_landmarks = gui.add_checkbox(
+        "Show the person model's joints", initial_value=True, hint="its joints as magenta dots on the silhouette panel"
+    )
     return learned_eyes, show_landmarks
 
 
 # -- what the controls say about a frame ------------------------------------------------
-
-def frame_text(view: FrameView) -> str:
-    """The frame's markdown: which frame, whether a keyframe, fit quality, doubts."""
-    head = f"**Frame {view.index}** of 0–{view.n_frames - 1} · " + (
-        "keyframe" if view.keyframe else "not a keyframe (interpolated in the export)")
-    if not view.fitted:
-        done = "tracked" if view.method == "track" else "fitted"
-        body = f"Not {done} yet." if view.progress.error is None else f"Not {done}."
-    elif view.score is None:
-        body = "Nobody found on this frame."
-    else:
-        score = "Tracking reliability" if view.method == "track" else "Similarity S ="
-        body = f"{score} **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
-        body += "".join(f"  \n↔ {', '.join(joints)} moved by the pin on frame {source}"
-                        for source, joints in pins_by_frame(view.carried).items())
-    return f"{head}  \n{body}"
-
-
-def pins_by_frame(carried: dict[str, int]) -> dict[int, list[str]]:
-    """frame -> the joints its pins carry to this frame (FrameView.carried)."""
-    out: dict[int, list[str]] = {}
-    for joint, source in carried.items():
-        out.setdefault(source, []).append(joint)
-    return dict(sorted(out.items()))
-
-
-STAGE_HELP = ("The silhouettes are the frame's difference from the empty stage. When the "
-              "performer never leaves a spot, the stage there is only guessed: give frames of "
-              "this video where the stage is empty (e.g. `0-40`), or a photo or short video of it "
-              "filmed from the same place.")
-
-
-EYES_HELP = ("**Learned eyes**: a person model (MediaPipe Pose) looks at each frame too. Where "
-             "it sees the performer, its mask is the silhouette, edged by the difference from the "
-             "empty stage (teal on the silhouette panel: where only it saw the body, e.g. a part "
-             "that never moved), and its joints (magenta dots) guide the fit. Off: the difference "
-             "from the empty stage alone, the paper's classical path.")
-PERSON_MODEL_NAMES = {"mediapipe": "MediaPipe"}     # a person model's name as the page says it
-
-
-def eyes_text(state) -> str:
-    """What the silhouette method looks through, and on how many frames the person model saw somebody."""
-    name = state.person_model
-    if name == NONE:
-        return "Eyes: silhouettes only (the difference from the empty stage)."
-    seen, done = state.eyes_seen()
-    text = f"Eyes: person model ({PERSON_MODEL_NAMES.get(name, name)}) + silhouettes"
-    if done:
-        text += f"; it saw the performer on {seen} of {done} frames"
-    return text + "."
-
-
-def stage_text(state) -> str:
-    """The empty stage in use and the fit's warning about it."""
-    background = state.annotations.background
-    used = ("estimated from the clip" if background is None else f"frames {background[0]}-{background[1]}"
-            if isinstance(background, tuple) else f"`{background}`")
-    warning = state.background_warning
-    return f"Empty stage: {used}." + (f"  \n**Warning:** {warning}." if warning else "")
-
-
-def orientation_text(view: FrameView) -> str:
-    """Which way the performer faces on the frame, and who said so."""
-    if view.orientation is None:
-        return "Facing: not known yet."
-    return f"Facing **{view.orientation.replace('_', ' ')}** ({view.orientation_note})."
-
-
-def review_text(state: AppState) -> str:
-    """The review queue's head as markdown."""
-    queue = state.review_stops()
-    if not state.progress.ready:
-        return "Ranked once every frame is fitted."
-    if not queue:
-        return "No doubtful frame."
-    lines = [f"- **{d.frame}**: {'; '.join(d.reasons)}" for d in queue[:REVIEW_LINES]]
-    head = (f"{len(queue)} frames to review, most doubtful first:" if len(queue) <= REVIEW_LINES else
-            f"{len(queue)} frames to review; the {REVIEW_LINES} most doubtful (Next doubtful frame "
-            "walks them all):")
-    return far_arm_text(state) + head + "\n" + "\n".join(lines)
-
-
-def far_arm_text(state: AppState) -> str:
-    """The tracking's advice to check its far arm first (TrackSession.far_arm)."""
-    side = state.far_arm()
-    if side is None:
-        return ""
-    name = {"l": "left", "r": "right"}[side]
-    return (f"The tracker loses the **far arm** most: at each stop, check the **{name}** "
-            f"elbow and wrist first (the performer's {name}, farther from the camera).\n\n")
-
-
-def tracking_text(state: AppState) -> str:
-    """The Tracking tab's state: the marks, whether they were tracked, the tracking."""
-    missing = state.unmarked()
-    if missing:
-        marks = f"**{16 - len(missing)} of 16** joints marked on frame 0; next: {', '.join(missing[:4])}" + (
-            "…" if len(missing) > 4 else "")
-    else:
-        marks = "All 16 joints marked on frame 0."
-    again = state.marking_frame()
-    left = state.unmarked(again)
-    if again and len(left) < 16:
-        marks += f"  \n**{16 - len(left)} of 16** joints marked again on frame {again}; next: {left[0]}" \
-            if left else f"  \nAll 16 joints marked again on frame {again}."
-    if state.method != "track":
-        return marks + "  \nChoose *tracking* as the method to see the tracked motion."
-    p = state.progress
-    if p.error is not None:
-        return f"{marks}  \n**Stopped:** {p.error}"
-    if not p.ready:
-        return marks + (f"  \nTracking… {100 * p.done // max(p.total, 1)}%" if state.tracking
-                        else "  \nPress **Track** when the marks are right.")
-    return marks + "  \n" + ("**The marks changed since the tracking: press Track again.**"
-                             if state.marks_changed else f"{p.total} frames tracked.")

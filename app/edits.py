@@ -73,12 +73,14 @@ class Edits:
 
     def flip_sign(self, frame: int, segment: str) -> bool:
         """Set a segment's foreshortening on ``frame`` to the opposite of what it is."""
+
         def change(notes: Annotations) -> Annotations:
             session = self._require_session()
             if not session.person[frame]:
                 raise MocapError("foreshortening needs the 3D pose of this frame (nobody found)")
             value = "away" if session.inputs.signs[frame, SEGMENT_INDEX[segment]] > 0 else "toward"
             return notes.with_foreshortening(frame, segment, value)
+
         return self.edit(frame, change)
 
     def set_orientation(self, frame: int, orientation: str | None) -> bool:
@@ -91,13 +93,15 @@ class Edits:
 
     def clear_overrides(self, frame: int, joint: str | None = None) -> bool:
         """Release ``joint`` on ``frame``, or with None every joint placed there (one edit)."""
+
         def change(notes: Annotations) -> Annotations:
             there = placed(notes, frame)
             if not there or joint is not None and joint not in there:
                 raise MocapError(f"no override of {joint or 'any joint'} on frame {frame}")
-            for name in ([joint] if joint else list(there)):
+            for name in [joint] if joint else list(there):
                 notes = notes.with_joint(frame, name, None)
             return notes
+
         return self.edit(frame, change)
 
     def set_method(self, method: str) -> bool:
@@ -115,6 +119,7 @@ class Edits:
             for name, xy in marks.items():
                 notes = notes.with_joint(0, name, xy)
             return notes
+
         return self.edit(0, change)
 
     @property

@@ -33,10 +33,14 @@ def control_states(c: Controls, state: AppState, view: FrameView) -> list[tuple[
     out += [(button, {"disabled": not lifted or not writable(label)}) for label, button in c.downloads.items()]
     out += [
         # a frame not fitted, or without anybody, lifts nothing; the last keyframe stays
-        (c.keyframe, {"label": "Unmark keyframe" if view.keyframe else "Mark as keyframe",
-                      "disabled": view.joints2d is None or (view.keyframe and len(keys) == 1)}),
-        (c.clear_override, {"disabled": not view.overrides
-                            or (joint != NO_JOINT and joint not in view.overrides)}),
+        (
+            c.keyframe,
+            {
+                "label": "Unmark keyframe" if view.keyframe else "Mark as keyframe",
+                "disabled": view.joints2d is None or (view.keyframe and len(keys) == 1),
+            },
+        ),
+        (c.clear_override, {"disabled": not view.overrides or (joint != NO_JOINT and joint not in view.overrides)}),
         (c.doubtful, {"disabled": not lifted or not state.review_stops()}),
         (c.foot_lock, {"disabled": not lifted}),
         (c.mark, {"disabled": not state.unmarked(state.marking_frame())}),

@@ -10,18 +10,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-PANEL_HEIGHT = 1.9          # scene units (metres) of each panel: a 1.75 m body fits
-GAP = 0.3                   # between panels, and above each row: room for its captions
+PANEL_HEIGHT = 1.9  # scene units (metres) of each panel: a 1.75 m body fits
+GAP = 0.3  # between panels, and above each row: room for its captions
 CAMERA_FOV = math.radians(30.0)
 # (columns, rows), in the order the panels fill them: video, silhouette, front, side
 ARRANGEMENTS = ((2, 2), (4, 1), (1, 4))
 # width / height of a usual window's 3D canvas less the notification band
 USUAL_CANVAS = 1.45
-USUAL_CANVAS_PX = (892, 720)    # a new tab's camera before its canvas's size is known
-NOTICE_PX = 110             # the canvas's top band where a notification (3 lines) appears
-MARGIN_PX = 6               # around the panels, inside the canvas
-SETTLE_S = 3.0              # a new tab's camera is fitted on every update this long
-CAPTION_CHARS = 30          # the longest caption fits a panel's width in this many characters
+USUAL_CANVAS_PX = (892, 720)  # a new tab's camera before its canvas's size is known
+NOTICE_PX = 110  # the canvas's top band where a notification (3 lines) appears
+MARGIN_PX = 6  # around the panels, inside the canvas
+SETTLE_S = 3.0  # a new tab's camera is fitted on every update this long
+CAPTION_CHARS = 30  # the longest caption fits a panel's width in this many characters
 
 
 @dataclass(frozen=True)
@@ -45,10 +45,15 @@ class Layout:
         def panel_size(grid: tuple[int, int]) -> float:
             extent_w, extent_h = _extent(w, *grid)
             return min(canvas / extent_w, 1.0 / extent_h)
+
         columns, rows = max(ARRANGEMENTS, key=panel_size)
-        centres = [((k % columns - (columns - 1) / 2) * (w + GAP),
-                    ((rows - 1) / 2 - k // columns) * (PANEL_HEIGHT + GAP) - GAP / 2)
-                   for k in range(4)]
+        centres = [
+            (
+                (k % columns - (columns - 1) / 2) * (w + GAP),
+                ((rows - 1) / 2 - k // columns) * (PANEL_HEIGHT + GAP) - GAP / 2,
+            )
+            for k in range(4)
+        ]
         return cls(w, PANEL_HEIGHT, columns, rows, *centres)
 
     @property
@@ -61,8 +66,9 @@ class Layout:
         """Caption text height (scene units): at most GAP / 3, with CAPTION_CHARS fitting a panel's width."""
         return min(GAP / 3, self.width / (0.6 * CAPTION_CHARS))
 
-    def camera(self, image_width: int, image_height: int, fov: float = CAMERA_FOV
-               ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    def camera(
+        self, image_width: int, image_height: int, fov: float = CAMERA_FOV
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """(position, look_at) of a camera on +z that shows every panel and caption on a
         canvas of ``image_width`` x ``image_height`` pixels, below its notification band."""
         free_w = max(image_width - 2 * MARGIN_PX, 1)
@@ -70,7 +76,7 @@ class Layout:
         extent_w, extent_h = self.extent
         per_px = max(extent_w / free_w, extent_h / free_h)
         distance = per_px * image_height / (2 * math.tan(fov / 2))
-        y = per_px * NOTICE_PX / 2                  # the panels' centre sits below the band
+        y = per_px * NOTICE_PX / 2  # the panels' centre sits below the band
         return (0.0, y, distance), (0.0, y, 0.0)
 
     def video_pixel(self, origin, direction, size: tuple[int, int]) -> tuple[float, float] | None:
@@ -115,6 +121,7 @@ def _fit_camera_of(client, layout: Layout) -> None:
         fitted.append(size)
         position, look_at = layout.camera(*size, fov=camera.fov)
         if not (np.allclose(camera.position, position) and np.allclose(camera.look_at, look_at)):
-            with client.atomic():       # position moves look_at along: set it after
+            with client.atomic():  # position moves look_at along: set it after
                 camera.position, camera.look_at = position, look_at
+
     client.camera.on_update(fit)

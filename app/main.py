@@ -3,13 +3,8 @@
 
 from __future__ import annotations
 
-import errno
-import socket
-import sys
 import threading
-import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import viser
@@ -24,23 +19,16 @@ from app.controls import (
     NO_JOINT,
     Controls,
     build_controls,
-    eyes_text,
-    frame_text,
-    orientation_text,
-    review_text,
-    stage_text,
-    tracking_text,
 )
 from app.enabling import control_states
 from app.layout import Layout, place_cameras
 from app.player import Player
 from app.state import AppState, FrameView
+from app.texts import eyes_text, frame_text, orientation_text, review_text, stage_text, tracking_text
 from app.views import FrameCache, SceneView, caption_image, silhouette_image, tracked_image, video_image
 from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.person import DEFAULT_MODEL, NONE
-
-SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
 
 
 class App:
@@ -52,14 +40,19 @@ class App:
         height, width = self.frames.get(0).shape[:2]
         self.size = (width, height)
         self.layout = Layout.for_video(width, height)
-        self.scene = SceneView(server.scene, self.layout, self.size, self._image_clicked,
-                               lambda segment, event: self._run(event.client, lambda: self._flip(segment)))
+        self.scene = SceneView(
+            server.scene,
+            self.layout,
+            self.size,
+            self._image_clicked,
+            lambda segment, event: self._run(event.client, lambda: self._flip(segment)),
+        )
         self.controls: Controls = build_controls(server.gui, state.n_frames)
         self.player = Player(state, lambda force: self.refresh(force=force))
         self._render_lock = threading.RLock()
         self._shown: dict[str, object] = {}
-        self._notices: dict[int, object] = {}       # client id -> its notification shown
-        self._marking = 0                            # the frame Mark joints marks the body on
+        self._notices: dict[int, object] = {}  # client id -> its notification shown
+        self._marking = 0  # the frame Mark joints marks the body on
         self._wire()
         place_cameras(server, self.layout)
         state.on_change(self.refresh)
@@ -82,7 +75,8 @@ class App:
             if last is not None:
                 last.remove()
             self._notices[client.client_id] = client.add_notification(
-                "Not done", text, color="red", auto_close_seconds=6.0)
+                "Not done", text, color="red", auto_close_seconds=6.0
+            )
 
     def _on(self, action: Callable[[], object]) -> Callable:
         """An event callback that runs ``action`` for the event's tab."""
@@ -105,15 +99,19 @@ class App:
             command.on_trigger(self._on(actions[action]))
         for handle, action in ((c.keyframe, "keyframe"), (c.doubtful, "doubtful"), (c.play, "play")):
             handle.on_click(self._on(actions[action]))
-        for group, options, pair in ((c.frame_steps, FRAME_STEPS, ("prev_frame", "next_frame")),
-                                     (c.key_steps, KEY_STEPS, ("prev_key", "next_key")),
-                                     (c.edits, EDITS, ("undo", "redo"))):
-            group.on_click(lambda e, o=options, p=pair: self._run(
-                e.client, actions[p[o.index(e.target.value)]]))
+        for group, options, pair in (
+            (c.frame_steps, FRAME_STEPS, ("prev_frame", "next_frame")),
+            (c.key_steps, KEY_STEPS, ("prev_key", "next_key")),
+            (c.edits, EDITS, ("undo", "redo")),
+        ):
+            group.on_click(lambda e, o=options, p=pair: self._run(e.client, actions[p[o.index(e.target.value)]]))
         c.frame.on_update(self._from_client(lambda: state.go_to(int(c.frame.value))))
-        c.orientation.on_update(self._from_client(lambda: state.set_orientation(
-            state.frame, None if c.orientation.value == AUTO else c.orientation.value)))
-        c.joint.on_update(lambda _e: self.refresh())      # the ring shown, Clear override's state
+        c.orientation.on_update(
+            self._from_client(
+                lambda: state.set_orientation(state.frame, None if c.orientation.value == AUTO else c.orientation.value)
+            )
+        )
+        c.joint.on_update(lambda _e: self.refresh())  # the ring shown, Clear override's state
         c.method.on_update(self._from_client(lambda: state.set_method(METHOD_CHOICES[c.method.value])))
         c.mark.on_click(self._on(self._start_marking))
         c.marks_from_fit.on_click(self._on(state.marks_from_fit))
@@ -147,24 +145,30 @@ class App:
 
     def _image_clicked(self, event) -> None:
         joint = self.controls.joint.value
+
         def place() -> None:
             if joint == NO_JOINT:
-                raise MocapError("choose a joint under Joints > Place first (or press Mark joints "
-                                 "on the Tracking tab), then click where it is")
+                raise MocapError(
+                    "choose a joint under Joints > Place first (or press Mark joints "
+                    "on the Tracking tab), then click where it is"
+                )
             at = self.layout.video_pixel(event.ray_origin, event.ray_direction, self.size)
             if at is not None:
                 xy = (at[0] / self.state.scale - 0.5, at[1] / self.state.scale - 0.5)
                 self.state.set_override(self.state.frame, joint, xy)
                 if self.state.frame == self._marking and self.state.method == "track":
                     self._next_mark()
+
         self._run(event.client, place)
 
     def _start_marking(self) -> None:
         """Go to the marking frame (AppState.marking_frame) and ask for its first unmarked joint."""
         self._marking = self.state.marking_frame()
         if not self.state.unmarked(self._marking):
-            raise MocapError(f"all 16 joints are marked on frame {self._marking}; to move one, choose "
-                             "it under Joints > Place and click on the frame")
+            raise MocapError(
+                f"all 16 joints are marked on frame {self._marking}; to move one, choose "
+                "it under Joints > Place and click on the frame"
+            )
         self.state.go_to(self._marking)
         self._next_mark()
 
@@ -180,7 +184,7 @@ class App:
             if on != (self.state.person_model != NONE):
                 self.state.set_person_model(DEFAULT_MODEL if on else NONE)
         finally:
-            self.refresh()      # a refused switch shows the checkbox as the fit has it again
+            self.refresh()  # a refused switch shows the checkbox as the fit has it again
 
     def _clear_override(self) -> None:
         joint = self.controls.joint.value
@@ -199,7 +203,7 @@ class App:
                 self._shown.clear()
             view = self.state.view()
             self._show_images(view)
-            if self.player.playing and view.progress.ready:    # (a new fit stops it)
+            if self.player.playing and view.progress.ready:  # (a new fit stops it)
                 self._show_animation(view.index)
             else:
                 self._show_pose(view)
@@ -225,34 +229,51 @@ class App:
             self.scene.show_video(video_image(self.frames.get(view.index), marks, self.state.scale))
         joints = None if view.joints2d is None else view.joints2d.tobytes()
         # the silhouette's object: a refit (new stage, learned eyes) brings new ones
-        if self._changed("silhouette", (view.index, view.method, view.silhouette_ready, joints,
-                                        view.sides_known, sorted(view.overrides.items()),
-                                        id(view.silhouette), self.state.person_model,
-                                        self.controls.show_landmarks.value)):
+        if self._changed(
+            "silhouette",
+            (
+                view.index,
+                view.method,
+                view.silhouette_ready,
+                joints,
+                view.sides_known,
+                sorted(view.overrides.items()),
+                id(view.silhouette),
+                self.state.person_model,
+                self.controls.show_landmarks.value,
+            ),
+        ):
             self.scene.show_silhouette(self._silhouette_image(view))
         joint = self.controls.joint.value
-        self.scene.caption("video", f"frame {view.index}"
-                           + (f" · click: {joint}" if joint != NO_JOINT else ""))
+        self.scene.caption("video", f"frame {view.index}" + (f" · click: {joint}" if joint != NO_JOINT else ""))
         if view.method == "track":
-            self.scene.caption("silhouette", "tracked" + (
-                f" · reliability {view.score:.2f}" if view.score is not None else ""))
+            self.scene.caption(
+                "silhouette", "tracked" + (f" · reliability {view.score:.2f}" if view.score is not None else "")
+            )
         else:
-            self.scene.caption("silhouette", "silhouette" + (
-                f" · S = {view.score:.2f}" if view.score is not None else ""))
+            self.scene.caption(
+                "silhouette", "silhouette" + (f" · S = {view.score:.2f}" if view.score is not None else "")
+            )
 
     def _silhouette_image(self, view: FrameView) -> np.ndarray:
         if view.method == "track":
             if view.joints2d is None:
                 return caption_image(self.size, "not tracked yet")
-            return tracked_image(self.frames.get(view.index), view.joints2d, view.overrides,
-                                 self.state.scale)
+            return tracked_image(self.frames.get(view.index), view.joints2d, view.overrides, self.state.scale)
         if not view.silhouette_ready:
             return caption_image(self.size, "silhouette not found yet")
         if view.silhouette is None:
             return caption_image(self.size, "nobody found on this frame")
-        return silhouette_image(view.silhouette, view.joints2d, view.sides_known, view.overrides,
-                                self.state.scale, self.size, self.controls.show_landmarks.value,
-                                self.state.person_model != NONE)
+        return silhouette_image(
+            view.silhouette,
+            view.joints2d,
+            view.sides_known,
+            view.overrides,
+            self.state.scale,
+            self.size,
+            self.controls.show_landmarks.value,
+            self.state.person_model != NONE,
+        )
 
     def _show_pose(self, view: FrameView) -> None:
         if self._changed("pose", None if view.pose3d is None else view.pose3d.tobytes()):
@@ -282,12 +303,17 @@ class App:
         _set(c.orientation_note, content=orientation_text(view))
         for handle, props in control_states(c, self.state, view):
             _set(handle, **props)
-        _set(c.overrides, content="  \n".join(f"**{j}** at ({x:.0f}, {y:.0f})"
-                                              for j, (x, y) in view.overrides.items())
-             or "No override on this frame.")
-        _set(c.play, disabled=not view.progress.ready,
-             label="Pause" if self.player.playing else "Play",
-             icon="player-pause" if self.player.playing else "player-play")
+        _set(
+            c.overrides,
+            content="  \n".join(f"**{j}** at ({x:.0f}, {y:.0f})" for j, (x, y) in view.overrides.items())
+            or "No override on this frame.",
+        )
+        _set(
+            c.play,
+            disabled=not view.progress.ready,
+            label="Pause" if self.player.playing else "Play",
+            icon="player-pause" if self.player.playing else "player-play",
+        )
         _set(c.review, content=review_text(self.state))
         _set(c.method, value=next(k for k, v in METHOD_CHOICES.items() if v == view.method))
         _set(c.track_info, content=tracking_text(self.state))
@@ -297,22 +323,32 @@ class App:
     def _show_progress(self, view: FrameView) -> None:
         p, c = view.progress, self.controls
         # a stopped run's bar stays where it stopped, red and still, beside its error
-        _set(c.progress, value=100.0 * p.done / max(p.total, 1), visible=not p.ready,
-             animated=p.error is None, color=None if p.error is None else "red")
+        _set(
+            c.progress,
+            value=100.0 * p.done / max(p.total, 1),
+            visible=not p.ready,
+            animated=p.error is None,
+            color=None if p.error is None else "red",
+        )
         done = "tracked" if view.method == "track" else "fitted"
         eyes = "" if view.method == "track" else f"  \n{eyes_text(self.state)}"
         if p.error is not None:
             text = f"**Stopped:** {p.error}{eyes}"
         elif p.ready:
-            text = (f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`.{eyes}"
-                    + ("  \n" if eyes else " ") + next_step(bool(self.state.review_stops())))
+            text = (
+                f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`.{eyes}"
+                + ("  \n" if eyes else " ")
+                + next_step(bool(self.state.review_stops()))
+            )
             if view.method != "track" and self.state.background_warning:
                 text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."
         elif view.method == "track" and not self.state.tracking:
             missing = len(self.state.unmarked())
-            text = ("Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."
-                    if not missing else f"Tracking: mark the 16 joints on frame 0 ({missing} to go; "
-                    "Tracking tab), then press Track.")
+            text = (
+                "Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."
+                if not missing
+                else f"Tracking: mark the 16 joints on frame 0 ({missing} to go; Tracking tab), then press Track."
+            )
         else:
             work = "Tracking" if view.method == "track" else "Preprocessing"
             text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%{eyes}"
@@ -321,8 +357,7 @@ class App:
 
 def next_step(doubtful: bool) -> str:
     """What a user who has the whole clip fitted does next."""
-    return ("Next: check the doubtful frames (Review tab, key N), then Export." if doubtful
-            else "Next: Export.")
+    return "Next: check the doubtful frames (Review tab, key N), then Export." if doubtful else "Next: Export."
 
 
 def _set(handle, **props) -> None:
@@ -330,59 +365,3 @@ def _set(handle, **props) -> None:
     for name, value in props.items():
         if getattr(handle, name) != value:
             setattr(handle, name, value)
-
-
-def create(video: str | Path | None = None, *, host: str = "127.0.0.1", port: int = 8080,
-           annotations: str | Path | None = None, person: str | None = None) -> App:
-    """The app on ``video`` (default: the sample) on a new viser server, edits saved to ``annotations``
-    (default: beside the video), ``person`` as AppState takes it; start with ``app.state.start()``."""
-    state = AppState(video or SAMPLE, annotations, person)
-    check_port(host, port)
-    server = viser.ViserServer(host=host, port=port, verbose=False)
-    if port and server.get_port() != port:  # taken between the check and viser's bind
-        server.stop()
-        raise MocapError(_taken(host, port))
-    return App(server, state)
-
-
-def _taken(host: str, port: int) -> str:
-    return (f"port {port} on {host} is taken (another program listens there): stop it, "
-            "or choose another with --port (--port 0: any free one)")
-
-
-def check_port(host: str, port: int) -> None:
-    """Refuse an address the server cannot have: viser would move to another port (the user's address
-    showing another program's page) or, for a host not of this machine, try a thousand ports."""
-    try:
-        family, kind, proto, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
-        with socket.socket(family, kind, proto) as probe:
-            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server binds
-            probe.bind(address)
-    except OSError as exc:
-        if exc.errno == errno.EADDRINUSE:
-            raise MocapError(_taken(host, port)) from None
-        raise MocapError(f"cannot listen on {host} port {port}: {exc.strerror or exc}") from None
-
-
-def main(video: str | None = None, port: int = 8080, host: str = "127.0.0.1",
-         progress: Callable[[int, int], None] | None = None,
-         annotations: str | Path | None = None, person: str | None = None) -> None:
-    """Serve until interrupted: print the page's address, then preprocess with
-    ``progress(done, total)`` reporting each step."""
-    app = create(video, host=host, port=port, annotations=annotations, person=person)
-    print(f"mocap: serving {app.state.info.path} at http://{host}:{app.server.get_port()}/",
-          flush=True)
-    app.state.start(progress)
-    try:
-        app.state.ready.wait()
-        if app.state.progress.error is not None:
-            print(f"mocap: {app.state.progress.error}", file=sys.stderr, flush=True)
-        else:
-            print(f"mocap: ready, {app.state.n_frames} frames fitted; edits are saved to "
-                  f"{app.state.path}", flush=True)
-        while True:
-            time.sleep(3600)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        app.server.stop()

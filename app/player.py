@@ -18,11 +18,11 @@ class Player:
 
     def __init__(self, state: AppState, refresh: Callable[[bool], None]):
         self.state, self._refresh = state, refresh
-        self._lock = threading.Lock()       # start and stop come from any tab's callback thread
+        self._lock = threading.Lock()  # start and stop come from any tab's callback thread
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._playing = False
-        self._animation: tuple[object, np.ndarray] | None = None    # (annotations, joints3d)
+        self._animation: tuple[object, np.ndarray] | None = None  # (annotations, joints3d)
 
     @property
     def playing(self) -> bool:
@@ -51,7 +51,7 @@ class Player:
         return None if not np.isfinite(joints).all() else joints
 
     def _start(self) -> None:
-        self.pose(self.state.frame)     # refused (MocapError) before every frame is fitted
+        self.pose(self.state.frame)  # refused (MocapError) before every frame is fitted
         if self.state.frame >= self.state.n_frames - 1:
             self.state.go_to(0)
         self._stop.clear()
@@ -71,10 +71,10 @@ class Player:
         start, origin = time.monotonic(), state.frame
         shown = origin
         while True:
-            if state.frame != shown:        # the user moved the frame: play on from there
+            if state.frame != shown:  # the user moved the frame: play on from there
                 start, origin = time.monotonic(), state.frame
             frame = origin + int((time.monotonic() - start) / period)
-            if not state.ready.is_set():    # fitting again (a new empty stage): no animation
+            if not state.ready.is_set():  # fitting again (a new empty stage): no animation
                 break
             if frame >= state.n_frames:
                 state.go_to(state.n_frames - 1)

@@ -54,14 +54,13 @@ class Preprocessing:
     def start(self, progress: Callable[[int, int], None] | None = None) -> threading.Thread:
         """Preprocess in a daemon thread; ``progress(done, total)`` reports each step.
         With the tracking method chosen and frame 0 marked, tracking starts too."""
-        thread = threading.Thread(target=self._preprocess, args=(progress,), daemon=True,
-                                  name="mocap-preprocess")
+        thread = threading.Thread(target=self._preprocess, args=(progress,), daemon=True, name="mocap-preprocess")
         thread.start()
         if self.method == "track":
             try:
                 self.start_tracking()
             except MocapError:
-                pass    # the marks are not complete: the page says what is missing
+                pass  # the marks are not complete: the page says what is missing
         return thread
 
     def _preprocess(self, progress: Callable[[int, int], None] | None) -> None:
@@ -74,7 +73,7 @@ class Preprocessing:
             self._fail(f"preprocessing failed: {exc!r}")
         finally:
             self.ready.set()
-            self._changed()     # what waits for it (the learned eyes' switch) is offered again
+            self._changed()  # what waits for it (the learned eyes' switch) is offered again
 
     def _run_passes(self, progress: Callable[[int, int], None]) -> None:
         report = Throttle(self._step, 2 * self.n_frames)
@@ -84,20 +83,26 @@ class Preprocessing:
                 if p.stage == SILHOUETTES:
                     self._silhouettes[p.frame], self._silhouettes_done = p.product, p.frame + 1
                 elif p.stage == FITTING and (p.final or self._fits[p.frame] is None):
-                    self._fits[p.frame] = p.product     # a first look until the legs are chosen
+                    self._fits[p.frame] = p.product  # a first look until the legs are chosen
                 # the passes run together: the page names the silhouettes' until all are in
                 stage = SILHOUETTES if self._silhouettes_done < self.n_frames else FITTING
                 shown = p.frame == self._frame
             progress(p.done, p.total)
             if not report(p.done, stage) and shown:
-                self._changed()     # the frame on the page has its silhouette or fit now
+                self._changed()  # the frame on the page has its silhouette or fit now
 
         with self._lock:
             notes, person = self._annotations, self._person
-        session = open_session(self.info, notes, method="silhouette", progress=step,
-                               background=notes.background_source(self.path), person=person)
+        session = open_session(
+            self.info,
+            notes,
+            method="silhouette",
+            progress=step,
+            background=notes.background_source(self.path),
+            person=person,
+        )
         with self._lock:
-            session.annotate(self._annotations)     # edits made while fitting
+            session.annotate(self._annotations)  # edits made while fitting
             self._fitted = session
             self._progress = Progress(2 * self.n_frames, 2 * self.n_frames, "ready")
         self._changed()
@@ -110,8 +115,7 @@ class Preprocessing:
             if not self.ready.is_set():
                 raise MocapError("the fit is still running: set the empty stage when it is done")
             if background == self._annotations.background and not isinstance(background, str):
-                used = ("estimated from the clip" if background is None
-                        else "frames {}-{}".format(*background))
+                used = "estimated from the clip" if background is None else "frames {}-{}".format(*background)
                 raise MocapError(f"the empty stage is already {used}: nothing to refit")
             notes = self._annotations.with_background(background)
             source = notes.background_source(self.path)
@@ -191,11 +195,10 @@ class Preprocessing:
     def _track(self, notes: Annotations) -> None:
         report = Throttle(lambda done, stage: self._track_step(done), self.n_frames)
         try:
-            session = open_session(self.info, notes, method="track",
-                                   progress=lambda p: report(p.done, "tracking"))
+            session = open_session(self.info, notes, method="track", progress=lambda p: report(p.done, "tracking"))
             session.inputs  # noqa: B018 (the 3D worked out before the lock)
             with self._lock:
-                if self._annotations != notes:      # edits made while tracking
+                if self._annotations != notes:  # edits made while tracking
                     session.annotate(self._annotations)
                 self._tracked, self._tracked_from = session, (marks_of(notes), remarks_of(notes))
                 self._track_progress = Progress(self.n_frames, self.n_frames, "tracked")
@@ -203,8 +206,7 @@ class Preprocessing:
             if not isinstance(exc, MocapError):
                 traceback.print_exc(file=sys.stderr)
             with self._lock:
-                self._track_progress = replace(self._track_progress, stage="stopped",
-                                               error=f"tracking failed: {exc}")
+                self._track_progress = replace(self._track_progress, stage="stopped", error=f"tracking failed: {exc}")
         finally:
             with self._lock:
                 self._tracking = False

@@ -34,30 +34,31 @@ class FrameView:
     n_frames: int
     version: int
     progress: Progress
-    silhouette: Silhouette | None       # processing pixels; None: none yet or nobody
+    silhouette: Silhouette | None  # processing pixels; None: none yet or nobody
     silhouette_ready: bool
-    fitted: bool                        # the 2D fit of this frame exists
+    fitted: bool  # the 2D fit of this frame exists
     overrides: dict[str, tuple[float, float]]
     keyframe: bool
     joints2d: np.ndarray | None = None  # (16, 2) video pixels; anatomical when sides_known
     sides_known: bool = False
     score: float | None = None
-    pose3d: np.ndarray | None = None    # (16, 3) metres, contract frame
-    signs: tuple[int, ...] | None = None    # +1 toward, -1 away, per SEGMENT_NAMES
-    sign_notes: tuple[str, ...] = ()    # where each sign comes from (Session.sign_sources)
-    depths: tuple[float, ...] = ()      # |dZ| / length per segment (0: in the image plane)
+    pose3d: np.ndarray | None = None  # (16, 3) metres, contract frame
+    signs: tuple[int, ...] | None = None  # +1 toward, -1 away, per SEGMENT_NAMES
+    sign_notes: tuple[str, ...] = ()  # where each sign comes from (Session.sign_sources)
+    depths: tuple[float, ...] = ()  # |dZ| / length per segment (0: in the image plane)
     orientation: str | None = None
     orientation_note: str = ""
     doubts: tuple[str, ...] = ()
-    method: str = "silhouette"          # whose joints and 3D these are ("track": tracking's)
-    carried: dict[str, int] = field(default_factory=dict)   # joint -> frame of the pin moving it
+    method: str = "silhouette"  # whose joints and 3D these are ("track": tracking's)
+    carried: dict[str, int] = field(default_factory=dict)  # joint -> frame of the pin moving it
 
 
 class AppState(Preprocessing, Edits):
     """A video, its preprocessing, its sessions and annotations, the current frame."""
 
-    def __init__(self, video: str | os.PathLike, annotations: str | os.PathLike | None = None,
-                 person: str | None = None):
+    def __init__(
+        self, video: str | os.PathLike, annotations: str | os.PathLike | None = None, person: str | None = None
+    ):
         """``person``: the silhouette method's person model (mocap.person's name; "none": silhouettes
         alone; None: the default where installed, else a MocapWarning and none)."""
         self.info = open_video(video)
@@ -71,14 +72,14 @@ class AppState(Preprocessing, Edits):
         self._fits: list[FrameFit | None] = [None] * n
         self._progress = Progress(0, 2 * n, "waiting")
         self._person = person_model(person)
-        self._fitted: SilhouetteSession | None = None    # the silhouette method's
-        self._tracked: TrackSession | None = None    # the tracking method's, once tracked
-        self._tracked_from: dict | None = None       # the marks it was tracked from
+        self._fitted: SilhouetteSession | None = None  # the silhouette method's
+        self._tracked: TrackSession | None = None  # the tracking method's, once tracked
+        self._tracked_from: dict | None = None  # the marks it was tracked from
         self._track_progress = Progress(0, n, "waiting for the 16 marks on frame 0")
         self._tracking = False
         self._history = History()
         self._frame = 0
-        self._reviewed: int | None = None      # the frame next_doubtful returned last
+        self._reviewed: int | None = None  # the frame next_doubtful returned last
         self._version = 0
         self._listeners: list[Callable[[], None]] = []
         self.ready = threading.Event()
@@ -149,16 +150,25 @@ class AppState(Preprocessing, Edits):
         with self._lock:
             i = self._frame if frame is None else frame
             fit = self._fits[i]
-            base = FrameView(i, self.n_frames, self._version, self.progress, self._silhouettes[i],
-                             self._silhouettes_done > i, fit is not None,
-                             placed(self._annotations, i),
-                             i in self._annotations.keyframe_indices(self.n_frames),
-                             method=self.method)
+            base = FrameView(
+                i,
+                self.n_frames,
+                self._version,
+                self.progress,
+                self._silhouettes[i],
+                self._silhouettes_done > i,
+                fit is not None,
+                placed(self._annotations, i),
+                i in self._annotations.keyframe_indices(self.n_frames),
+                method=self.method,
+            )
             if self.method == "track":
                 if self._tracked is None:
                     return replace(base, fitted=False)
-                return lifted_view(replace(base, fitted=True, carried=self._tracked.carried(i),
-                                           score=float(self._tracked.scores[i])), self._tracked)
+                return lifted_view(
+                    replace(base, fitted=True, carried=self._tracked.carried(i), score=float(self._tracked.scores[i])),
+                    self._tracked,
+                )
             if fit is None or fit.joints2d is None:
                 return base
             if self._fitted is None:
@@ -230,7 +240,15 @@ def lifted_view(base: FrameView, session: Session) -> FrameView:
     i, inputs = base.index, session.inputs
     doubt = next((d.reasons for d in session.review_queue() if d.frame == i), ())
     orientation, said = session.orientation_shown(i)
-    return replace(base, joints2d=inputs.joints2d[i].copy(), sides_known=True,
-                   pose3d=session.pose3d(i).copy(), signs=tuple(int(s) for s in inputs.signs[i]),
-                   sign_notes=session.sign_sources(i), depths=session.depths(i),
-                   orientation=orientation, orientation_note=said, doubts=doubt)
+    return replace(
+        base,
+        joints2d=inputs.joints2d[i].copy(),
+        sides_known=True,
+        pose3d=session.pose3d(i).copy(),
+        signs=tuple(int(s) for s in inputs.signs[i]),
+        sign_notes=session.sign_sources(i),
+        depths=session.depths(i),
+        orientation=orientation,
+        orientation_note=said,
+        doubts=doubt,
+    )

@@ -19,15 +19,15 @@ from mocap.io.export.marks import FACING_MARKS, facing_marks
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.session import Silhouette
 
-DISPLAY_HEIGHT = 480        # px: smaller frames are shown enlarged to this height
-CENTRE_RGB = (150, 150, 160)        # torso and head in 3D (the scene is white)
-MARK_RGB = (40, 40, 48)             # the nose and the chest's mark (mocap.silhouette.facing)
-CONE = trimesh.creation.cone(radius=1.0, height=1.0, sections=16)   # base at z = 0, tip at z = 1
-MARK_BGR = (0, 230, 255)            # joint overrides and the joint being placed
-UNSIDED_BGR = (90, 200, 90)         # the 2D model before left and right are known
-UNSEEN_BGR = (170, 170, 170)        # the legend's line where the person model saw nobody
-AMBIENT = 1.2                       # ambient light intensity beside the default lights
-UPRIGHT = (0.0, 1.0, 0.0, 0.0)      # half turn about x: viser images put row 0 at -y
+DISPLAY_HEIGHT = 480  # px: smaller frames are shown enlarged to this height
+CENTRE_RGB = (150, 150, 160)  # torso and head in 3D (the scene is white)
+MARK_RGB = (40, 40, 48)  # the nose and the chest's mark (mocap.silhouette.facing)
+CONE = trimesh.creation.cone(radius=1.0, height=1.0, sections=16)  # base at z = 0, tip at z = 1
+MARK_BGR = (0, 230, 255)  # joint overrides and the joint being placed
+UNSIDED_BGR = (90, 200, 90)  # the 2D model before left and right are known
+UNSEEN_BGR = (170, 170, 170)  # the legend's line where the person model saw nobody
+AMBIENT = 1.2  # ambient light intensity beside the default lights
+UPRIGHT = (0.0, 1.0, 0.0, 0.0)  # half turn about x: viser images put row 0 at -y
 SIDE = tuple(Rotation.from_euler("y", 90, degrees=True).as_quat(scalar_first=True))
 _J = JOINT_INDEX
 
@@ -82,8 +82,16 @@ def caption_image(size: tuple[int, int], text: str) -> np.ndarray:
     image = np.full((size[1], size[0], 3), 60, np.uint8)
     scale = size[1] / 400
     (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
-    cv2.putText(image, text, ((size[0] - tw) // 2, (size[1] + th) // 2), cv2.FONT_HERSHEY_SIMPLEX,
-                scale, (230, 230, 230), 2, cv2.LINE_AA)
+    cv2.putText(
+        image,
+        text,
+        ((size[0] - tw) // 2, (size[1] + th) // 2),
+        cv2.FONT_HERSHEY_SIMPLEX,
+        scale,
+        (230, 230, 230),
+        2,
+        cv2.LINE_AA,
+    )
     return image
 
 
@@ -93,8 +101,16 @@ def mark_joints(image: np.ndarray, points: dict[str, tuple[float, float]], scale
     for name, (x, y) in points.items():
         centre = (int(round(x * scale)), int(round(y * scale)))
         cv2.circle(image, centre, radius, MARK_BGR, 2, cv2.LINE_AA)
-        cv2.putText(image, name, (centre[0] + radius + 2, centre[1] - radius), cv2.FONT_HERSHEY_SIMPLEX,
-                    image.shape[0] / 800, MARK_BGR, 1, cv2.LINE_AA)
+        cv2.putText(
+            image,
+            name,
+            (centre[0] + radius + 2, centre[1] - radius),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            image.shape[0] / 800,
+            MARK_BGR,
+            1,
+            cv2.LINE_AA,
+        )
     return image
 
 
@@ -104,9 +120,16 @@ def video_image(frame_bgr: np.ndarray, marks: dict[str, tuple[float, float]], sc
     return cv2.cvtColor(mark_joints(image, marks, scale), cv2.COLOR_BGR2RGB)
 
 
-def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None, sides_known: bool,
-                     overrides: dict[str, tuple[float, float]], scale: float,
-                     size: tuple[int, int], landmarks: bool = True, eyes: bool = False) -> np.ndarray:
+def silhouette_image(
+    silhouette: Silhouette | None,
+    joints2d: np.ndarray | None,
+    sides_known: bool,
+    overrides: dict[str, tuple[float, float]],
+    scale: float,
+    size: tuple[int, int],
+    landmarks: bool = True,
+    eyes: bool = False,
+) -> np.ndarray:
     """The silhouette in grey with the fitted model over it (RGB, ``for_display``; ``size``: processed
     (w, h)); limbs in one colour until sides are known. With ``eyes``, the person model's mask-only
     pixels teal, its joints magenta dots (``landmarks``), and a legend."""
@@ -120,7 +143,7 @@ def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None,
             learned = np.zeros_like(mask)
             learned[y0:y1, x0:x1] = only
     view, scale = for_display(silhouette_view(mask, None, learned), scale)
-    factor = view.shape[0] / size[1]        # processing pixels to the image's
+    factor = view.shape[0] / size[1]  # processing pixels to the image's
     if joints2d is not None:
         thickness = max(2, view.shape[0] // 240)
         draw_skeleton(view, joints2d * scale, thickness, None if sides_known else UNSIDED_BGR)
@@ -134,8 +157,11 @@ def silhouette_image(silhouette: Silhouette | None, joints2d: np.ndarray | None,
         if not seen:
             legend(view, [("person model saw nobody here", UNSEEN_BGR, None)])
         else:
-            legend(view, [("person model's mask only", LEARNED_BGR, "box")]
-                   + ([("person model's joints", LANDMARK_BGR, "dot")] if landmarks else []))
+            legend(
+                view,
+                [("person model's mask only", LEARNED_BGR, "box")]
+                + ([("person model's joints", LANDMARK_BGR, "dot")] if landmarks else []),
+            )
     return cv2.cvtColor(view, cv2.COLOR_BGR2RGB)
 
 
@@ -157,8 +183,9 @@ def legend(image: np.ndarray, entries: list[tuple[str, tuple[int, int, int], str
     return image
 
 
-def tracked_image(frame_bgr: np.ndarray, joints2d: np.ndarray,
-                  overrides: dict[str, tuple[float, float]], scale: float) -> np.ndarray:
+def tracked_image(
+    frame_bgr: np.ndarray, joints2d: np.ndarray, overrides: dict[str, tuple[float, float]], scale: float
+) -> np.ndarray:
     """The video frame dimmed, the tracked joints (anatomical sides) over it (RGB, ``for_display``)."""
     view, scale = for_display((frame_bgr * 0.55).astype(np.uint8), scale)
     draw_skeleton(view, joints2d * scale, max(2, view.shape[0] // 240))
@@ -174,7 +201,7 @@ class FrameCache:
         self._frames: OrderedDict[int, np.ndarray] = OrderedDict()
         self._lock = threading.Lock()
         self._reader: Iterator[tuple[int, np.ndarray]] | None = None
-        self._next = -1                 # the frame the reader decodes next
+        self._next = -1  # the frame the reader decodes next
 
     def get(self, index: int) -> np.ndarray:
         with self._lock:
@@ -195,8 +222,14 @@ class FrameCache:
 class SceneView:
     """The scene's panels and the handles that update them."""
 
-    def __init__(self, scene, layout: Layout, image_size: tuple[int, int],
-                 on_image_click: Callable[[object], None], on_segment_click: Callable[[str, object], None]):
+    def __init__(
+        self,
+        scene,
+        layout: Layout,
+        image_size: tuple[int, int],
+        on_image_click: Callable[[object], None],
+        on_segment_click: Callable[[str, object], None],
+    ):
         self.layout, self.size = layout, image_size
         scene.set_up_direction("+y")
         # plain lights: the default image-based lighting is slow in software WebGL
@@ -207,31 +240,55 @@ class SceneView:
         self.video = self._image(scene, "/video", blank, layout.video)
         self.silhouette = self._image(scene, "/silhouette", blank, layout.silhouette)
         self.video.on_click(on_image_click)
-        self.captions = {name: scene.add_label(f"/captions/{name}", "", anchor="bottom-left",
-                                               font_size_mode="scene",
-                                               font_scene_height=layout.caption_height,
-                                               position=(at[0] - layout.width / 2,
-                                                         at[1] + layout.height / 2 + 0.02, 0.0))
-                         for name, at in (("video", layout.video), ("silhouette", layout.silhouette),
-                                          ("front", layout.front), ("side", layout.side))}
+        self.captions = {
+            name: scene.add_label(
+                f"/captions/{name}",
+                "",
+                anchor="bottom-left",
+                font_size_mode="scene",
+                font_scene_height=layout.caption_height,
+                position=(at[0] - layout.width / 2, at[1] + layout.height / 2 + 0.02, 0.0),
+            )
+            for name, at in (
+                ("video", layout.video),
+                ("silhouette", layout.silhouette),
+                ("front", layout.front),
+                ("side", layout.side),
+            )
+        }
         self.radii = semi_axes(BODY_HEIGHT_M)
         views = (("front", layout.front, (1.0, 0.0, 0.0, 0.0)), ("side", layout.side, SIDE))
         self.bodies = [self._body(scene, name, at, wxyz, on_segment_click) for name, at, wxyz in views]
         self.marks = [self._marks(scene, name, on_segment_click) for name, _, _ in views]
 
     def _image(self, scene, name: str, image: np.ndarray, at: tuple[float, float]):
-        return scene.add_image(name, image, self.layout.width, self.layout.height,
-                               jpeg_quality=85, wxyz=UPRIGHT, position=(at[0], at[1], 0.0),
-                               cast_shadow=False, receive_shadow=False)
+        return scene.add_image(
+            name,
+            image,
+            self.layout.width,
+            self.layout.height,
+            jpeg_quality=85,
+            wxyz=UPRIGHT,
+            position=(at[0], at[1], 0.0),
+            cast_shadow=False,
+            receive_shadow=False,
+        )
 
     @staticmethod
     def _body(scene, name: str, at: tuple[float, float], wxyz, on_click: Callable[[str, object], None]) -> list:
         scene.add_frame(f"/body/{name}", show_axes=False, wxyz=wxyz, position=(at[0], at[1], 0.0))
         handles = []
         for segment in SEGMENT_NAMES:
-            handle = scene.add_cylinder(f"/body/{name}/{segment}", radius=1.0, height=1.0,
-                                        color=segment_rgb(segment), radial_segments=20,
-                                        cast_shadow=False, receive_shadow=False, visible=False)
+            handle = scene.add_cylinder(
+                f"/body/{name}/{segment}",
+                radius=1.0,
+                height=1.0,
+                color=segment_rgb(segment),
+                radial_segments=20,
+                cast_shadow=False,
+                receive_shadow=False,
+                visible=False,
+            )
             handle.on_click(lambda event, s=segment: on_click(s, event))
             handles.append(handle)
         return handles
@@ -241,9 +298,16 @@ class SceneView:
         """The facing marks of a body (cones): a click on one is a click on its segment."""
         handles = []
         for mark, (segment, *_) in FACING_MARKS.items():
-            handle = scene.add_mesh_simple(f"/body/{name}/{mark}", CONE.vertices, CONE.faces,
-                                           color=MARK_RGB, flat_shading=True, cast_shadow=False,
-                                           receive_shadow=False, visible=False)
+            handle = scene.add_mesh_simple(
+                f"/body/{name}/{mark}",
+                CONE.vertices,
+                CONE.faces,
+                color=MARK_RGB,
+                flat_shading=True,
+                cast_shadow=False,
+                receive_shadow=False,
+                visible=False,
+            )
             handle.on_click(lambda event, s=segment: on_click(s, event))
             handles.append(handle)
         return handles

@@ -44,7 +44,7 @@ import viser
 import zstandard
 from websockets.sync.client import connect
 
-from app.main import SAMPLE, create
+from app.serve import SAMPLE, create
 from mocap.body import JOINTS, SEGMENT_NAMES
 from mocap.io.video import open_video
 from mocap.lift.taylor import depth_fractions
@@ -56,8 +56,7 @@ class Receiver:
     """A websocket client of the server that notes when a marker text arrives."""
 
     def __init__(self, port: int):
-        self.socket = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"],
-                              max_size=None)
+        self.socket = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
         self.wanted, self.arrived = b"", threading.Event()
         self._zstd = zstandard.ZstdDecompressor()
         threading.Thread(target=self._run, daemon=True).start()
@@ -65,7 +64,7 @@ class Receiver:
     def _run(self) -> None:
         for data in self.socket:
             inner, packed = int.from_bytes(data[:8], "little"), int.from_bytes(data[8:16], "little")
-            payload = self._zstd.decompress(data[16:16 + packed], max_output_size=inner)
+            payload = self._zstd.decompress(data[16 : 16 + packed], max_output_size=inner)
             if self.wanted and self.wanted in payload:
                 self.arrived.set()
 
@@ -101,10 +100,13 @@ def plan(app, rng: np.random.Generator) -> dict[str, tuple]:
     def override(frame: int):
         state.go_to(frame)
         return lambda: state.set_override(frame, "wrist_r", (rng.uniform(0, 640), rng.uniform(0, 480)))
-    return {"frame change -> three views": (lambda f: (lambda: state.go_to(f)), 100.0),
-            "toggle -> 3D pose": (flip, 50.0),
-            "joint override -> all views": (override, None),
-            "undo -> all views": (lambda f: state.undo, None)}
+
+    return {
+        "frame change -> three views": (lambda f: lambda: state.go_to(f), 100.0),
+        "toggle -> 3D pose": (flip, 50.0),
+        "joint override -> all views": (override, None),
+        "undo -> all views": (lambda f: state.undo, None),
+    }
 
 
 def deepest_segment(state) -> str:
@@ -130,19 +132,21 @@ def bench(video: Path, repeats: int, seed: int = 0, marks: np.ndarray | None = N
         switch_to_tracking(app.state, marks)
     receiver = Receiver(app.server.get_port())
     marker = app.server.scene.add_label("/bench-marker", "", visible=False)
-    measure(app, receiver, marker, lambda: None)                 # the backlog has arrived
+    measure(app, receiver, marker, lambda: None)  # the backlog has arrived
     rng = np.random.default_rng(seed)
     frames = [int(f) for f in 1 + rng.permutation(app.state.n_frames - 1)[:repeats]]
     info = app.state.info
-    print(f"{info.width}x{info.height}, {info.frame_count} frames; {len(frames)} repeats, "
-          "one connected websocket client")
-    print(f"{'action':30s} {'queued median':>13s} {'received median':>15s} {'p95':>7s} {'max':>7s}"
-          f" {'budget':>7s}")
+    print(
+        f"{info.width}x{info.height}, {info.frame_count} frames; {len(frames)} repeats, one connected websocket client"
+    )
+    print(f"{'action':30s} {'queued median':>13s} {'received median':>15s} {'p95':>7s} {'max':>7s} {'budget':>7s}")
     for name, (make, budget) in plan(app, rng).items():
         queued, received = np.array([measure(app, receiver, marker, make(f)) for f in frames]).T
         verdict = "" if budget is None else f"{budget:5.0f} {'ok' if received.max() <= budget else 'OVER'}"
-        print(f"{name:30s} {np.median(queued):11.1f}ms {np.median(received):13.1f}ms "
-              f"{np.percentile(received, 95):5.1f}ms {received.max():5.1f}ms  {verdict}".rstrip())
+        print(
+            f"{name:30s} {np.median(queued):11.1f}ms {np.median(received):13.1f}ms "
+            f"{np.percentile(received, 95):5.1f}ms {received.max():5.1f}ms  {verdict}".rstrip()
+        )
     app.server.stop()
 
 
@@ -154,11 +158,12 @@ def startup(video: Path) -> np.ndarray:
     app = create(video, port=0)
     state = app.state
 
-    def note() -> None:        # after the app's own listener: the page's update is queued
+    def note() -> None:  # after the app's own listener: the page's update is queued
         view = state.view(0)
         for name, reached in (("silhouette", view.silhouette_ready), ("fit", view.fitted)):
             if reached and name not in marks:
                 marks[name] = (time.perf_counter() - t0, time.process_time() - c0)
+
     state.on_change(note)
     state.start()
     state.ready.wait()
@@ -172,11 +177,14 @@ def startup(video: Path) -> np.ndarray:
 def bench_startup(video: Path, repeats: int) -> None:
     info = open_video(video)
     runs = np.stack([startup(video) for _ in range(repeats)])
-    print(f"{info.width}x{info.height}, {info.frame_count} frames at {info.fps:g} fps; {repeats} runs; "
-          "CPU: this process's (all its threads)")
+    print(
+        f"{info.width}x{info.height}, {info.frame_count} frames at {info.fps:g} fps; {repeats} runs; "
+        "CPU: this process's (all its threads)"
+    )
     print(f"{'from the app created to':34s} {'wall best':>9s} {'median':>7s} {'CPU median':>10s}")
-    for k, name in enumerate(("frame 0's silhouette on the page", "first fitted frame on the page",
-                              "every frame fitted")):
+    for k, name in enumerate(
+        ("frame 0's silhouette on the page", "first fitted frame on the page", "every frame fitted")
+    ):
         wall, cpu = runs[:, k, 0], runs[:, k, 1]
         print(f"{name:34s} {wall.min():8.2f}s {np.median(wall):6.2f}s {np.median(cpu):9.2f}s")
 
@@ -187,12 +195,14 @@ def bench_play(video: Path, repeats: int) -> None:
     app.state.ready.wait()
     receiver = Receiver(app.server.get_port())
     marker = app.server.scene.add_label("/bench-marker", "", visible=False)
-    measure(app, receiver, marker, lambda: None)                 # the backlog has arrived
+    measure(app, receiver, marker, lambda: None)  # the backlog has arrived
     state, shown = app.state, []
     state.on_change(lambda: shown.append(state.frame))
     n, fps = state.n_frames, state.info.fps
-    print(f"{state.info.width}x{state.info.height}, {n} frames at {fps:g} fps ({n / fps:.2f} s); "
-          "one connected websocket client")
+    print(
+        f"{state.info.width}x{state.info.height}, {n} frames at {fps:g} fps ({n / fps:.2f} s); "
+        "one connected websocket client"
+    )
     print(f"{'run':>3s} {'played in':>9s} {'frames shown':>12s} {'skipped':>7s}")
     for run in range(repeats):
         state.go_to(0)
@@ -204,13 +214,15 @@ def bench_play(video: Path, repeats: int) -> None:
         took, frames = time.perf_counter() - t0, len(set(shown))
         print(f"{run + 1:3d} {took:8.2f}s {frames:12d} {n - frames:7d}")
     steps = []
-    for frame in range(n):          # what a shown frame costs: stepping through every one
+    for frame in range(n):  # what a shown frame costs: stepping through every one
         t0 = time.perf_counter()
         state.go_to(frame)
         steps.append(time.perf_counter() - t0)
-    print(f"a frame shown (every view redrawn), frame after frame: median "
-          f"{1000 * np.median(steps):.1f} ms, p95 {1000 * np.percentile(steps, 95):.1f} ms "
-          f"(the video's frames are {1000 / fps:.1f} ms apart)")
+    print(
+        f"a frame shown (every view redrawn), frame after frame: median "
+        f"{1000 * np.median(steps):.1f} ms, p95 {1000 * np.percentile(steps, 95):.1f} ms "
+        f"(the video's frames are {1000 / fps:.1f} ms apart)"
+    )
     app.server.stop()
 
 
@@ -220,8 +232,9 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=None)
     parser.add_argument("--repeats", type=int, default=30)
     parser.add_argument("--track", action="store_true", help="the tracking method (needs --seconds)")
-    parser.add_argument("--startup", action="store_true",
-                        help="time to the first fitted frame and to every frame fitted")
+    parser.add_argument(
+        "--startup", action="store_true", help="time to the first fitted frame and to every frame fitted"
+    )
     parser.add_argument("--play", action="store_true", help="play the video through")
     args = parser.parse_args()
     if args.track and not args.seconds:
@@ -229,14 +242,21 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         video, marks = Path(tmp) / "bench.mp4", None
         if args.track:
-            truth = render_clip(walk_cycle(args.seconds, 30.0, in_place=True), video,
-                                size=(640, 480), fps=30.0, yaw=45.0, perspective=800.0, moving_background=True, seed=1)
+            truth = render_clip(
+                walk_cycle(args.seconds, 30.0, in_place=True),
+                video,
+                size=(640, 480),
+                fps=30.0,
+                yaw=45.0,
+                perspective=800.0,
+                moving_background=True,
+                seed=1,
+            )
             marks = truth.joints2d[0]
         elif args.seconds:
-            render_clip(walk_cycle(args.seconds, 30.0), video, size=(640, 480), fps=30.0,
-                        view="three-quarter", seed=1)
+            render_clip(walk_cycle(args.seconds, 30.0), video, size=(640, 480), fps=30.0, view="three-quarter", seed=1)
         else:
-            shutil.copy(args.video, video)           # edits are saved beside it: not the sample's
+            shutil.copy(args.video, video)  # edits are saved beside it: not the sample's
         if args.startup:
             bench_startup(video, args.repeats)
         elif args.play:

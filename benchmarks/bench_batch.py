@@ -42,7 +42,7 @@ def speed(videos: list[Path], workers: int) -> tuple[float, Tally]:
     """Wall seconds of `mocap batch` on the videos, and its tally."""
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        with contextlib.redirect_stdout(io.StringIO()):    # the table alone on stdout
+        with contextlib.redirect_stdout(io.StringIO()):  # the table alone on stdout
             tally = batch([str(v) for v in videos], tmp, workers=workers)
         wall = time.perf_counter() - start
     if tally.failed:
@@ -57,8 +57,7 @@ def looped(source: Path, out: Path, loops: int) -> Path:
     while (frame := cap.read())[0]:
         frames.append(frame[1])
     height, width = frames[0].shape[:2]
-    writer = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), cap.get(cv2.CAP_PROP_FPS),
-                             (width, height))
+    writer = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), cap.get(cv2.CAP_PROP_FPS), (width, height))
     for loop in range(loops):
         for frame in frames if loop % 2 == 0 else frames[::-1]:
             writer.write(frame)
@@ -95,29 +94,34 @@ def main() -> int:
         print(f"skipped: no clips in {CLIPS}")
         return 0
     frames = sum(int(cv2.VideoCapture(str(v)).get(cv2.CAP_PROP_FRAME_COUNT)) for v in videos)
-    print(f"{len(videos)} clips, {frames} frames; load average before: {os.getloadavg()[0]:.2f}; "
-          f"{os.cpu_count()} cores")
-    print(f"{'workers':>7s} {'wall s':>7s} {'videos/min':>10s} {'frames/s':>9s} {'speed-up':>8s} "
-          f"{'load':>5s} {'CPU ms/frame':>12s} {'cores had':>9s}")
+    print(
+        f"{len(videos)} clips, {frames} frames; load average before: {os.getloadavg()[0]:.2f}; {os.cpu_count()} cores"
+    )
+    print(
+        f"{'workers':>7s} {'wall s':>7s} {'videos/min':>10s} {'frames/s':>9s} {'speed-up':>8s} "
+        f"{'load':>5s} {'CPU ms/frame':>12s} {'cores had':>9s}"
+    )
     best: dict[int, tuple[float, Tally, float]] = {}
-    for _ in range(args.repeat):            # interleaved, the best of each: others' jobs come and go
+    for _ in range(args.repeat):  # interleaved, the best of each: others' jobs come and go
         for n in args.workers:
             wall, tally = speed(videos, n)
             if n not in best or tally.fps > best[n][1].fps:
                 best[n] = (wall, tally, os.getloadavg()[0])
     base = best[args.workers[0]][1].fps
     for n, (wall, tally, load) in best.items():
-        busy = tally.frames / tally.fps       # seconds from the first task to the last
-        print(f"{n:7d} {wall:7.1f} {60 * len(videos) / wall:10.1f} {tally.fps:9.1f} "
-              f"{tally.fps / base:7.2f}x {load:5.1f} {1000 * tally.cpu / tally.frames:12.1f} "
-              f"{tally.cpu / busy:9.2f}", flush=True)
+        busy = tally.frames / tally.fps  # seconds from the first task to the last
+        print(
+            f"{n:7d} {wall:7.1f} {60 * len(videos) / wall:10.1f} {tally.fps:9.1f} "
+            f"{tally.fps / base:7.2f}x {load:5.1f} {1000 * tally.cpu / tally.frames:12.1f} "
+            f"{tally.cpu / busy:9.2f}",
+            flush=True,
+        )
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     with tempfile.TemporaryDirectory() as tmp:
         clip = CLIPS / args.clip / "video.mp4"
         long = looped(clip, Path(tmp) / f"{args.clip}_x{args.loops}.mp4", args.loops)
         print(f"\n{'video':>24s} {'frames':>7s} {'worker peak MB':>15s}")
-        rows = [(name, *peak_memory(v, Path(tmp) / name)) for name, v in
-                ((args.clip, clip), (long.stem, long))]
+        rows = [(name, *peak_memory(v, Path(tmp) / name)) for name, v in ((args.clip, clip), (long.stem, long))]
         for name, frames, peak in rows:
             print(f"{name:>24s} {frames:7d} {peak:15.1f}")
         print(f"{'long / short':>24s} {'':7s} {rows[1][2] / rows[0][2]:14.2f}x")

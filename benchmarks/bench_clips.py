@@ -51,15 +51,14 @@ CLIPS = SHARED / "data" / "clips"
 SCORER = SHARED / "bench" / "score.py"
 
 VARIANTS = ("product", "classical", "mediapipe")
-PERSON = {"product": "mediapipe", "classical": NONE}    # the person model of each `mocap fit` variant
-MOTION_FILE = {"auto": "auto.json", "oracle": "oracle.out.json", "peer": "peer_mp.json"}   # the scorer's OUTPUTS
-COLUMNS = ("fail%", "2d_med%", "2d_mean%", "pa-mpjpe", "signs%", "iou", "fps")   # of the scorer's table
+PERSON = {"product": "mediapipe", "classical": NONE}  # the person model of each `mocap fit` variant
+MOTION_FILE = {"auto": "auto.json", "oracle": "oracle.out.json", "peer": "peer_mp.json"}  # the scorer's OUTPUTS
+COLUMNS = ("fail%", "2d_med%", "2d_mean%", "pa-mpjpe", "signs%", "iou", "fps")  # of the scorer's table
 
 
 def clip_names() -> list[str]:
     """The static-camera clips (the track_* ones belong to the tracking method)."""
-    return sorted(p.name for p in CLIPS.iterdir()
-                  if (p / "truth.json").is_file() and not p.name.startswith("track_"))
+    return sorted(p.name for p in CLIPS.iterdir() if (p / "truth.json").is_file() and not p.name.startswith("track_"))
 
 
 def clip_folder(name: str, out_dir: Path, masks: bool = True) -> Path:
@@ -76,8 +75,17 @@ def fit_clip(name: str, out_dir: Path, mode: str, plate: bool, person: str = "me
     """Fit one clip with `mocap fit --person-model person` into out_dir/<name>/ as the
     scorer expects; the wall time in seconds."""
     clip, folder = CLIPS / name, clip_folder(name, out_dir)
-    argv = ["fit", str(clip / "video.mp4"), "--out", str(folder / MOTION_FILE[mode]),
-            "--masks", str(folder / f"{mode}_masks"), "--person-model", person, "--quiet"]
+    argv = [
+        "fit",
+        str(clip / "video.mp4"),
+        "--out",
+        str(folder / MOTION_FILE[mode]),
+        "--masks",
+        str(folder / f"{mode}_masks"),
+        "--person-model",
+        person,
+        "--quiet",
+    ]
     if mode == "oracle":
         argv += ["--annotations", str(clip / "oracle.json")]
     if plate:
@@ -116,12 +124,17 @@ def true_mask_session(name: str, mode: str = "auto", grow: int = 0, person: str 
     clip = CLIPS / name
     info, scale, silhouettes = mask_silhouettes(clip, clip / "masks", grow, person)
     stream, fits = FitStream(scale, info.fps), []
-    for silhouette in silhouettes:          # the pipeline's own pass two
+    for silhouette in silhouettes:  # the pipeline's own pass two
         fits += stream.push(silhouette)
     fits += stream.finish()
     notes = load_annotations(clip / "oracle.json", info.frame_count) if mode == "oracle" else Annotations()
-    return SilhouetteSession(info, fits, notes, silhouettes=silhouettes,   # their grey levels: the heads' look
-                             person=person)
+    return SilhouetteSession(
+        info,
+        fits,
+        notes,
+        silhouettes=silhouettes,  # their grey levels: the heads' look
+        person=person,
+    )
 
 
 def mask_silhouettes(clip: Path, masks: Path, grow: int = 0, person: str = NONE):
@@ -187,10 +200,16 @@ def mediapipe_motion(video: Path, out: Path, masks: Path | None = None) -> int:
         while (frame := capture.read()[1]) is not None:
             view, index = model.observe(frame), len(frames)
             seen = view is not None
-            frames.append({"index": index, "keyframe": True, "person": seen,
-                           "joints2d": view.landmarks.joints2d.tolist() if seen else None,
-                           "joints3d": view.landmarks.world.tolist() if seen else None,
-                           "confidence": view.landmarks.confidence.tolist() if seen else None})
+            frames.append(
+                {
+                    "index": index,
+                    "keyframe": True,
+                    "person": seen,
+                    "joints2d": view.landmarks.joints2d.tolist() if seen else None,
+                    "joints3d": view.landmarks.world.tolist() if seen else None,
+                    "confidence": view.landmarks.confidence.tolist() if seen else None,
+                }
+            )
             if masks is not None:
                 mask = (view.mask > 0.5) if seen else np.zeros(frame.shape[:2], bool)
                 cv2.imwrite(str(masks / f"{index:06d}.png"), mask.astype(np.uint8) * 255)
@@ -198,10 +217,13 @@ def mediapipe_motion(video: Path, out: Path, masks: Path | None = None) -> int:
     finally:
         model.close()
         capture.release()
-    motion = {"format": "mocap-motion", "version": 1,
-              "video": {"path": str(video), "width": size[0], "height": size[1], "fps": fps,
-                        "frame_count": len(frames)},
-              "joints": list(JOINTS), "frames": frames}
+    motion = {
+        "format": "mocap-motion",
+        "version": 1,
+        "video": {"path": str(video), "width": size[0], "height": size[1], "fps": fps, "frame_count": len(frames)},
+        "joints": list(JOINTS),
+        "frames": frames,
+    }
     if masks is not None:
         motion["masks"] = os.path.relpath(masks, out.parent)
     out.write_text(json.dumps(motion))
@@ -213,6 +235,7 @@ def background_photo(clip: Path) -> Path:
     first frame (the clips' folders do not name it)."""
     import cv2
     import numpy as np
+
     ok, frame = cv2.VideoCapture(str(clip / "video.mp4")).read()
     photos = sorted((CLIPS / "backgrounds").glob("*.jpg"))
     return min(photos, key=lambda p: float(np.median(cv2.absdiff(cv2.imread(str(p)), frame))))
@@ -224,8 +247,9 @@ def warm_up() -> None:
     import numpy as np
 
     from mocap.person import open_person_model
+
     model = open_person_model("mediapipe")
-    model.observe(np.zeros((256, 256, 3), np.uint8))    # a graph closed unused logs to stderr
+    model.observe(np.zeros((256, 256, 3), np.uint8))  # a graph closed unused logs to stderr
     model.close()
 
 
@@ -250,13 +274,19 @@ def run_variant(variant: str, names: list[str], root: Path, args) -> str:
 def scored_rows(root: Path, mode: str) -> tuple[dict[str, dict[str, str]], str]:
     """The scorer's verdict on one variant's folder: each clip's row as {column: cell}
     (its table's header names the columns) and its devset line."""
-    result = subprocess.run([sys.executable, str(SCORER), "--clips", str(root), "--modes", mode,
-                             "--timings", str(root / "timings.txt")],
-                            capture_output=True, text=True, check=True)
+    result = subprocess.run(
+        [sys.executable, str(SCORER), "--clips", str(root), "--modes", mode, "--timings", str(root / "timings.txt")],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     lines = result.stdout.splitlines()
     header = next(line.split() for line in lines if line.startswith("clip "))
-    rows = {cells[0]: dict(zip(header, cells)) for cells in map(str.split, lines)
-            if len(cells) == len(header) and cells[1] == mode}
+    rows = {
+        cells[0]: dict(zip(header, cells))
+        for cells in map(str.split, lines)
+        if len(cells) == len(header) and cells[1] == mode
+    }
     return rows, next(line for line in lines if line.startswith("devset:"))
 
 
@@ -277,8 +307,9 @@ def main() -> int:
     parser.add_argument("--plate", action="store_true", help="give each clip its background photo")
     parser.add_argument("--true-masks", action="store_true", help="fit each clip's true masks")
     parser.add_argument("--clips", nargs="+", metavar="NAME", help="only these clips")
-    parser.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS),
-                        help="which to run (default: all three)")
+    parser.add_argument(
+        "--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS), help="which to run (default: all three)"
+    )
     parser.add_argument("--keep", type=Path, metavar="DIR", help="write the outputs here (default: a temp dir)")
     args = parser.parse_args()
     if not (CLIPS.is_dir() and SCORER.is_file()):

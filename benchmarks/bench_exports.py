@@ -33,22 +33,25 @@ def measure(folder: Path, yaw: float, focal: float) -> dict:
     """Render, fit and compare one view."""
     video = folder / f"walk{int(yaw)}.mp4"
     motion = folder / f"walk{int(yaw)}.motion.json"
-    assert mocap(["synth", str(CMU_WALK), str(video), "--yaw", str(yaw),
-                  "--perspective", str(focal)]) == 0
+    assert mocap(["synth", str(CMU_WALK), str(video), "--yaw", str(yaw), "--perspective", str(focal)]) == 0
     assert mocap(["fit", str(video), "--quiet", "--out", str(motion)]) == 0
     truth = load_truth(video.with_suffix(".truth.json"))
     frames = json.loads(motion.read_text())["frames"]
     have = np.array(["root" in f for f in frames])
     depth = np.array([-f["root"][2] if "root" in f else np.nan for f in frames])
     true_depth = -truth.pelvis_camera[:, 2]
-    contacts = np.array([[f["contacts"][a] for a in ("ankle_l", "ankle_r")] if "contacts" in f
-                         else [False, False] for f in frames])
+    contacts = np.array(
+        [[f["contacts"][a] for a in ("ankle_l", "ankle_r")] if "contacts" in f else [False, False] for f in frames]
+    )
     true_contacts = foot_contacts(truth.joints3d + truth.pelvis_camera[:, None], truth.fps)
-    return {"frames": len(frames), "with root": int(have.sum()),
-            "corr": float(np.corrcoef(depth[have], true_depth[have])[0, 1]),
-            "depth": (np.nanmin(depth), np.nanmax(depth)),
-            "true": (true_depth.min(), true_depth.max()),
-            "agree": (contacts[have] == true_contacts[have]).mean(axis=0)}
+    return {
+        "frames": len(frames),
+        "with root": int(have.sum()),
+        "corr": float(np.corrcoef(depth[have], true_depth[have])[0, 1]),
+        "depth": (np.nanmin(depth), np.nanmax(depth)),
+        "true": (true_depth.min(), true_depth.max()),
+        "agree": (contacts[have] == true_contacts[have]).mean(axis=0),
+    }
 
 
 def main() -> int:
@@ -58,14 +61,15 @@ def main() -> int:
     if not CMU_WALK.exists():
         print(f"{CMU_WALK} absent", file=sys.stderr)
         return 1
-    print(f"{'view':24} {'frames':>6} {'depth r':>8} {'depth (m)':>12} {'true (m)':>12} "
-          f"{'contacts L/R agree':>19}")
+    print(f"{'view':24} {'frames':>6} {'depth r':>8} {'depth (m)':>12} {'true (m)':>12} {'contacts L/R agree':>19}")
     with tempfile.TemporaryDirectory() as tmp:
         for name, yaw in VIEWS.items():
             r = measure(Path(tmp), yaw, args.focal)
-            print(f"{name:24} {r['frames']:>6} {r['corr']:>8.3f} "
-                  f"{r['depth'][0]:>5.2f}-{r['depth'][1]:<5.2f}  {r['true'][0]:>5.2f}-{r['true'][1]:<5.2f} "
-                  f"{100 * r['agree'][0]:>8.1f}% {100 * r['agree'][1]:>6.1f}%")
+            print(
+                f"{name:24} {r['frames']:>6} {r['corr']:>8.3f} "
+                f"{r['depth'][0]:>5.2f}-{r['depth'][1]:<5.2f}  {r['true'][0]:>5.2f}-{r['true'][1]:<5.2f} "
+                f"{100 * r['agree'][0]:>8.1f}% {100 * r['agree'][1]:>6.1f}%"
+            )
     return 0
 
 

@@ -34,13 +34,18 @@ from mocap.pipeline import open_session
 from mocap.synth import RenderOptions, background, plan_scene, render_clip, resample_indices
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
-MOTIONS = (("cmu_16_15_walk.bvh", 10), ("cmu_02_04_jump_balance.bvh", 10), ("cmu_13_14_laugh.bvh", 1080),
-           ("cmu_60_05_salsa.bvh", 600))
+MOTIONS = (
+    ("cmu_16_15_walk.bvh", 10),
+    ("cmu_02_04_jump_balance.bvh", 10),
+    ("cmu_13_14_laugh.bvh", 1080),
+    ("cmu_60_05_salsa.bvh", 600),
+)
 YAWS = (90.0, 45.0, 135.0, 0.0, -45.0, -135.0, -90.0)
 
 
-def guess_clip(bvh: Path, start: int, yaw: float, hair: bool,
-               folder: Path) -> tuple[np.ndarray, list, tuple[float, float]]:
+def guess_clip(
+    bvh: Path, start: int, yaw: float, hair: bool, folder: Path
+) -> tuple[np.ndarray, list, tuple[float, float]]:
     """Render one clip, fit it against its empty scene; (F,) truly turned away, the
     guessed orientations and the 2D error as named and the naming's share of it
     (bench_naming.naming_errors)."""
@@ -63,8 +68,10 @@ def main() -> int:
     if not BVH.is_dir():
         print(f"skipped: {BVH} is absent (the shared data sits beside the checkout)")
         return 0
-    print(f"{'clip':34s} {'frames':>6s} {'away':>5s} {'fwd':>4s} {'back':>5s} {'prof':>5s} {'right%':>7s} "
-          f"{'2d%':>6s} {'naming%':>7s}")
+    print(
+        f"{'clip':34s} {'frames':>6s} {'away':>5s} {'fwd':>4s} {'back':>5s} {'prof':>5s} {'right%':>7s} "
+        f"{'2d%':>6s} {'naming%':>7s}"
+    )
     right = named = 0
     errors = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -77,11 +84,16 @@ def main() -> int:
                 hits = int((back & away).sum() + (fwd & ~away).sum())
                 right, named = right + hits, named + int(back.sum() + fwd.sum())
                 share = f"{100 * hits / max(back.sum() + fwd.sum(), 1):7.1f}" if (back | fwd).any() else "      -"
-                print(f"{Path(name).stem + f' yaw {yaw:.0f}':34s} {len(names):6d} {int(away.sum()):5d} "
-                      f"{int(fwd.sum()):4d} {int(back.sum()):5d} {len(names) - int(back.sum() + fwd.sum()):5d} {share} "
-                      f"{error[0]:6.2f} {error[1]:7.2f}", flush=True)
-    print(f"all: {named} frames named forward or backward, {100 * right / max(named, 1):.1f}% the right way; "
-          f"2D error {np.mean([e[0] for e in errors]):.2f}%, the naming's share summed {sum(e[1] for e in errors):.2f}")
+                print(
+                    f"{Path(name).stem + f' yaw {yaw:.0f}':34s} {len(names):6d} {int(away.sum()):5d} "
+                    f"{int(fwd.sum()):4d} {int(back.sum()):5d} {len(names) - int(back.sum() + fwd.sum()):5d} {share} "
+                    f"{error[0]:6.2f} {error[1]:7.2f}",
+                    flush=True,
+                )
+    print(
+        f"all: {named} frames named forward or backward, {100 * right / max(named, 1):.1f}% the right way; "
+        f"2D error {np.mean([e[0] for e in errors]):.2f}%, the naming's share summed {sum(e[1] for e in errors):.2f}"
+    )
     return 0
 
 

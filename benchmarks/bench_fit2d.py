@@ -36,10 +36,14 @@ from mocap.synth.metrics import side_matched_errors  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 CLIPS = [  # (bvh, view, source frame range)
-    ("cmu_walk.bvh", "side", None), ("cmu_walk.bvh", "three-quarter", None),
-    ("cmu_run.bvh", "side", None), ("cmu_run.bvh", "three-quarter", None),
-    ("cmu_01_01_jumps.bvh", "side", (0, 1200)), ("cmu_01_01_jumps.bvh", "three-quarter", (0, 1200)),
-    ("walk01.bvh", "side", None), ("walk01.bvh", "three-quarter", None),
+    ("cmu_walk.bvh", "side", None),
+    ("cmu_walk.bvh", "three-quarter", None),
+    ("cmu_run.bvh", "side", None),
+    ("cmu_run.bvh", "three-quarter", None),
+    ("cmu_01_01_jumps.bvh", "side", (0, 1200)),
+    ("cmu_01_01_jumps.bvh", "three-quarter", (0, 1200)),
+    ("walk01.bvh", "side", None),
+    ("walk01.bvh", "three-quarter", None),
 ]
 
 
@@ -90,17 +94,23 @@ def main() -> int:
             err, ms, size = run_clip(bvh, view, frames, Path(tmp))
             all_err.append(err)
             all_ms.append(ms)
-            print(f"{Path(bvh).stem + ' ' + view:34s} {len(err):6d} {np.nanmedian(err):8.2f} "
-                  f"{np.nanmean(err):6.2f} {np.nanpercentile(err, 90):6.2f} {np.median(ms):7.2f}  {size[0]}x{size[1]}")
+            print(
+                f"{Path(bvh).stem + ' ' + view:34s} {len(err):6d} {np.nanmedian(err):8.2f} "
+                f"{np.nanmean(err):6.2f} {np.nanpercentile(err, 90):6.2f} {np.median(ms):7.2f}  {size[0]}x{size[1]}"
+            )
     err = np.concatenate(all_err)
-    print(f"{'all':34s} {len(err):6d} {np.nanmedian(err):8.2f} {np.nanmean(err):6.2f} {np.nanpercentile(err, 90):6.2f} "
-          f"{np.median(np.concatenate(all_ms)):7.2f}")
+    print(
+        f"{'all':34s} {len(err):6d} {np.nanmedian(err):8.2f} {np.nanmean(err):6.2f} {np.nanpercentile(err, 90):6.2f} "
+        f"{np.median(np.concatenate(all_ms)):7.2f}"
+    )
     print("\nper joint, median % of body height:")
     print("  ".join(f"{n}={np.nanmedian(err[:, i]):.1f}" for i, n in enumerate(JOINTS)))
     print(f"frames with a result: {np.isfinite(err).all(axis=1).mean() * 100:.1f}%")
     ms = np.median(np.concatenate(all_ms))
-    print(f"2D fit: {ms:.2f} ms per frame (median, one thread, CPU time); the paper: about "
-          f"1000 ms (2.7 GHz Celeron), {1000 / ms:.0f} times slower")
+    print(
+        f"2D fit: {ms:.2f} ms per frame (median, one thread, CPU time); the paper: about "
+        f"1000 ms (2.7 GHz Celeron), {1000 / ms:.0f} times slower"
+    )
     return 0
 
 

@@ -65,8 +65,11 @@ def report(names: list[str], kept: Path | None) -> None:
         err, seconds = clip_errors(name, CLIPS / name / "masks" if kept is None else kept / name / "auto_masks")
         frame = np.nanmean(err, axis=1)
         means.append(np.nanmean(err))
-        print(f"{name:18s} {means[-1]:6.2f} {np.nanmedian(frame):6.2f} {np.nanpercentile(frame, 90):6.2f} "
-              f"{np.nanmean(err[:, ARMS]):6.2f} {np.nanmean(err[:, LEGS]):6.2f} {seconds * 1000:8.1f}", flush=True)
+        print(
+            f"{name:18s} {means[-1]:6.2f} {np.nanmedian(frame):6.2f} {np.nanpercentile(frame, 90):6.2f} "
+            f"{np.nanmean(err[:, ARMS]):6.2f} {np.nanmean(err[:, LEGS]):6.2f} {seconds * 1000:8.1f}",
+            flush=True,
+        )
     print(f"devset: side-matched 2d_err={np.mean(means):.2f}% over {len(means)} clips")
 
 

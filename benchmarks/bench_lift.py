@@ -55,8 +55,7 @@ from mocap.synth.metrics import pa_mpjpe
 from mocap.synth.oracle import annotations_for_poses
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
-CLIPS = (("walk", "cmu_walk.bvh"), ("walk", "walk01.bvh"), ("run", "cmu_run.bvh"),
-         ("jumps", "cmu_01_01_jumps.bvh"))
+CLIPS = (("walk", "cmu_walk.bvh"), ("walk", "walk01.bvh"), ("run", "cmu_run.bvh"), ("jumps", "cmu_01_01_jumps.bvh"))
 VIEWS = ("side", "three-quarter")
 TAYLOR_CLICKS, TAYLOR_KEY_EVERY = 14, 5
 LIMBS = {"arms": ("elbow", "wrist"), "legs": ("knee", "ankle")}
@@ -65,9 +64,12 @@ LIMBS = {"arms": ("elbow", "wrist"), "legs": ("knee", "ankle")}
 def truth_of(truth) -> dict:
     """Per-frame true orientation, yaw, signs and non-negligible mask."""
     yaw = np.array([yaw_of(p) for p in truth.joints3d])
-    return {"yaw": yaw, "orientation": [orientation_of_yaw(y) for y in yaw],
-            "signs": np.array([signs_of(p) for p in truth.joints3d]),
-            "visible": np.array([depth_fractions(p) for p in truth.joints3d]) > NEGLIGIBLE}
+    return {
+        "yaw": yaw,
+        "orientation": [orientation_of_yaw(y) for y in yaw],
+        "signs": np.array([signs_of(p) for p in truth.joints3d]),
+        "visible": np.array([depth_fractions(p) for p in truth.joints3d]) > NEGLIGIBLE,
+    }
 
 
 def lift_true_2d(truth, t: dict) -> float:
@@ -124,8 +126,14 @@ def wrong_sides(session: Session, truth, frame: int) -> list[str]:
     for pair, names in LIMBS.items():
         left = [JOINT_INDEX[f"{n}_l"] for n in names]
         right = [JOINT_INDEX[f"{n}_r"] for n in names]
-        keep = np.linalg.norm(got[left] - want[left], axis=-1).sum() + np.linalg.norm(got[right] - want[right], axis=-1).sum()
-        swap = np.linalg.norm(got[left] - want[right], axis=-1).sum() + np.linalg.norm(got[right] - want[left], axis=-1).sum()
+        keep = (
+            np.linalg.norm(got[left] - want[left], axis=-1).sum()
+            + np.linalg.norm(got[right] - want[right], axis=-1).sum()
+        )
+        swap = (
+            np.linalg.norm(got[left] - want[right], axis=-1).sum()
+            + np.linalg.norm(got[right] - want[left], axis=-1).sum()
+        )
         if swap < 0.7 * keep:
             out.append(pair)
     return out
@@ -209,29 +217,42 @@ def run_clip(bvh: Path, view: str, seconds: float, folder: Path) -> dict:
 
 def print_table(rows: list[tuple[str, dict]]) -> None:
     print("PA-MPJPE in mm (body height 1.75 m); signs on segments with |dZ| > 0.25 length\n")
-    print(f"{'clip':22s} {'frames':>6s} {'(a) true2D':>10s} {'(b) annot':>9s} {'2D floor':>8s} "
-          f"{'exact 2D':>8s} {'(c) signs':>9s} {'true2D':>6s} {'orient':>6s} {'n':>5s}")
+    print(
+        f"{'clip':22s} {'frames':>6s} {'(a) true2D':>10s} {'(b) annot':>9s} {'2D floor':>8s} "
+        f"{'exact 2D':>8s} {'(c) signs':>9s} {'true2D':>6s} {'orient':>6s} {'n':>5s}"
+    )
     for name, r in rows:
-        print(f"{name:22s} {r['frames']:6d} {1000 * r['a']:10.1f} {1000 * r['b']:9.1f} {1000 * r['floor']:8.1f} "
-              f"{1000 * r['b_exact']:8.1f} {100 * r['c_signs']:8.1f}% {100 * r['c_true2d']:5.1f}% "
-              f"{100 * r['c_orient']:5.0f}% {r['c_visible']:5d}")
-    mean = {k: np.mean([r[k] for _, r in rows])
-            for k in ("a", "b", "floor", "b_exact", "c_signs", "c_true2d", "c_orient")}
-    print(f"{'mean':22s} {'':6s} {1000 * mean['a']:10.1f} {1000 * mean['b']:9.1f} {1000 * mean['floor']:8.1f} "
-          f"{1000 * mean['b_exact']:8.1f} {100 * mean['c_signs']:8.1f}% {100 * mean['c_true2d']:5.1f}% "
-          f"{100 * mean['c_orient']:5.0f}%")
+        print(
+            f"{name:22s} {r['frames']:6d} {1000 * r['a']:10.1f} {1000 * r['b']:9.1f} {1000 * r['floor']:8.1f} "
+            f"{1000 * r['b_exact']:8.1f} {100 * r['c_signs']:8.1f}% {100 * r['c_true2d']:5.1f}% "
+            f"{100 * r['c_orient']:5.0f}% {r['c_visible']:5d}"
+        )
+    mean = {
+        k: np.mean([r[k] for _, r in rows]) for k in ("a", "b", "floor", "b_exact", "c_signs", "c_true2d", "c_orient")
+    }
+    print(
+        f"{'mean':22s} {'':6s} {1000 * mean['a']:10.1f} {1000 * mean['b']:9.1f} {1000 * mean['floor']:8.1f} "
+        f"{1000 * mean['b_exact']:8.1f} {100 * mean['c_signs']:8.1f}% {100 * mean['c_true2d']:5.1f}% "
+        f"{100 * mean['c_orient']:5.0f}%"
+    )
     n = sum(r["c_visible"] for _, r in rows)
     pooled = {k: sum(r[k] * r["c_visible"] for _, r in rows) / n for k in ("c_signs", "c_true2d")}
-    print(f"{'all segments pooled':22s} {'':6s} {'':10s} {'':9s} {'':8s} {'':8s} "
-          f"{100 * pooled['c_signs']:8.1f}% {100 * pooled['c_true2d']:5.1f}% {'':6s} {n:5d}")
+    print(
+        f"{'all segments pooled':22s} {'':6s} {'':10s} {'':9s} {'':8s} {'':8s} "
+        f"{100 * pooled['c_signs']:8.1f}% {100 * pooled['c_true2d']:5.1f}% {'':6s} {n:5d}"
+    )
     print("\nUser inputs still needed without annotations (simulated user) vs the paper's accounting")
-    print(f"{'clip':22s} {'orient':>6s} {'sides':>5s} {'signs':>5s} {'ours':>5s} {'paper':>5s} "
-          f"{'Taylor':>6s} {'ours/Taylor':>11s} {'paper/Taylor':>12s}")
+    print(
+        f"{'clip':22s} {'orient':>6s} {'sides':>5s} {'signs':>5s} {'ours':>5s} {'paper':>5s} "
+        f"{'Taylor':>6s} {'ours/Taylor':>11s} {'paper/Taylor':>12s}"
+    )
     for name, r in rows:
         ours = sum(r["inputs"].values())
-        print(f"{name:22s} {r['inputs']['orientation']:6d} {r['inputs']['sides']:5d} {r['inputs']['signs']:5d} "
-              f"{ours:5d} {r['paper']:5d} {r['taylor']:6d} {100 * ours / r['taylor']:10.1f}% "
-              f"{100 * r['paper'] / r['taylor']:11.1f}%")
+        print(
+            f"{name:22s} {r['inputs']['orientation']:6d} {r['inputs']['sides']:5d} {r['inputs']['signs']:5d} "
+            f"{ours:5d} {r['paper']:5d} {r['taylor']:6d} {100 * ours / r['taylor']:10.1f}% "
+            f"{100 * r['paper'] / r['taylor']:11.1f}%"
+        )
     print("paper (section 4): walking 60/290 = 21%, dancing 59/506 = 12%")
 
 
@@ -247,8 +268,9 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for kind, name in CLIPS:
             for view in VIEWS:
-                rows.append((f"{kind} {Path(name).stem[:8]} {view[:5]}",
-                             run_clip(BVH / name, view, args.seconds, Path(tmp))))
+                rows.append(
+                    (f"{kind} {Path(name).stem[:8]} {view[:5]}", run_clip(BVH / name, view, args.seconds, Path(tmp)))
+                )
     print_table(rows)
     print(f"\n{len(rows)} clips in {time.perf_counter() - start:.0f} s")
     return 0

@@ -24,8 +24,8 @@ from bench_clips import CLIPS, clip_names, true_mask_session
 from mocap.body import JOINT_INDEX, LIMB_JOINTS
 from mocap.synth.metrics import side_matched_errors
 
-GROWS = (0, 1, -1)           # pixels the true masks are dilated by (eroded where negative)
-CLEAR = 0.1                  # of the body height between the two namings of a frame's legs: it matters
+GROWS = (0, 1, -1)  # pixels the true masks are dilated by (eroded where negative)
+CLEAR = 0.1  # of the body height between the two namings of a frame's legs: it matters
 _LEGS = [[JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["leg"][1:]] for s in "lr"]
 
 

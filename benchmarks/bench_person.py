@@ -89,26 +89,32 @@ def main() -> int:
     if not args.video.is_file():
         print(f"skipped: {args.video} is absent")
         return 0
-    cv2.setNumThreads(1)           # what `mocap fit` sets, so that every variant runs with it
+    cv2.setNumThreads(1)  # what `mocap fit` sets, so that every variant runs with it
     warm_up()
     with tempfile.TemporaryDirectory() as tmp:
         video = looped_video(args.video, args.loops, Path(tmp) / "looped.mp4")
         frames, out = open_video(video).frame_count, Path(tmp) / "motion.json"
-        runs = {"mediapipe": lambda: mediapipe_alone(video),
-                "product": lambda: mocap_fit(video, "mediapipe", out),
-                "classical": lambda: mocap_fit(video, "none", out)}
+        runs = {
+            "mediapipe": lambda: mediapipe_alone(video),
+            "product": lambda: mocap_fit(video, "mediapipe", out),
+            "classical": lambda: mocap_fit(video, "none", out),
+        }
         times = {v: [] for v in VARIANTS}
         for _ in range(args.repeats):
             for variant in VARIANTS:
                 times[variant].append(timed(runs[variant]))
     best = {v: (min(c for c, _ in t), min(w for _, w in t)) for v, t in times.items()}
-    print(f"{args.video} x{max(args.loops, 1)} back and forth: {frames} frames; in-process, "
-          f"minimum of {args.repeats} runs")
+    print(
+        f"{args.video} x{max(args.loops, 1)} back and forth: {frames} frames; in-process, "
+        f"minimum of {args.repeats} runs"
+    )
     print(f"{'':14s} {'cpu_s':>7s} {'wall_s':>7s} {'fps':>7s} {'cpu/a':>6s} {'wall/a':>6s}")
     for label, variant in zip(("(a)", "(b)", "(c)"), VARIANTS):
         cpu, wall = best[variant]
-        print(f"{label} {variant:10s} {cpu:7.2f} {wall:7.2f} {frames / wall:7.1f} "
-              f"{cpu / best['mediapipe'][0]:6.2f} {wall / best['mediapipe'][1]:6.2f}")
+        print(
+            f"{label} {variant:10s} {cpu:7.2f} {wall:7.2f} {frames / wall:7.1f} "
+            f"{cpu / best['mediapipe'][0]:6.2f} {wall / best['mediapipe'][1]:6.2f}"
+        )
     return 0
 
 

@@ -49,8 +49,7 @@ def stage_times(video: Path, out: Path) -> np.ndarray:
     with contextlib.redirect_stdout(io.StringIO()):
         fit_video_to_file(video, {"json": out}, progress=mark)
     end = (time.perf_counter(), time.process_time())
-    points = [start, marks[f"first {SILHOUETTES}"], marks[f"last {SILHOUETTES}"],
-              marks[f"last {FITTING}"], end]
+    points = [start, marks[f"first {SILHOUETTES}"], marks[f"last {SILHOUETTES}"], marks[f"last {FITTING}"], end]
     return np.diff(np.array(points), axis=0)
 
 
@@ -103,8 +102,10 @@ def main() -> int:
         out = Path(tmp) / "clip.motion.json"
         runs = [stage_times(video, out) for _ in range(args.repeats)]
         best = min(runs, key=lambda r: r[:, 0].sum())
-        commands = [min((command_time(video, out, env) for _ in range(args.repeats)), key=lambda t: t[0])
-                    for env in (dict(os.environ), installed_env(video, out, Path(tmp) / "pycache"))]
+        commands = [
+            min((command_time(video, out, env) for _ in range(args.repeats)), key=lambda t: t[0])
+            for env in (dict(os.environ), installed_env(video, out, Path(tmp) / "pycache"))
+        ]
     print(f"{'stage':32s} {'ms/frame':>9s} {'CPU ms/frame':>13s} {'frames/s':>9s}")
     for name, (wall, cpu) in zip(STAGES, best):
         print(f"{name:32s} {1000 * wall / n:9.2f} {1000 * cpu / n:13.2f} {n / wall:9.1f}")

@@ -27,8 +27,8 @@ from bench_clips import CLIPS, clip_names, true_mask_session
 from mocap.body import JOINT_INDEX
 from mocap.pipeline import open_session
 
-APART = 0.05        # of the body height between the true distal joints: limbs told apart
-PROFILE = 0.5       # true |cos yaw| below which the truth is a profile
+APART = 0.05  # of the body height between the true distal joints: limbs told apart
+PROFILE = 0.5  # true |cos yaw| below which the truth is a profile
 _PAIRS = {"arm": ("shoulder", "elbow", "wrist"), "leg": ("hip", "knee", "ankle")}
 
 
@@ -54,8 +54,11 @@ def clip_row(name: str, true_masks: bool) -> list[float]:
     frames, height = truth["frames"], truth["body_height_px"]
     true2d = np.array([f["joints2d"] for f in frames])
     cos = np.abs(np.cos(np.radians([f["facing_deg"] for f in frames])))
-    row = [100 * np.mean([n == f["orientation"] for n, f in zip(named, frames)]),
-           100 * np.mean([n in ("left", "right") for n in named]), 100 * np.mean(cos < PROFILE)]
+    row = [
+        100 * np.mean([n == f["orientation"] for n, f in zip(named, frames)]),
+        100 * np.mean([n in ("left", "right") for n in named]),
+        100 * np.mean(cos < PROFILE),
+    ]
 
     def error(j: np.ndarray) -> np.ndarray:
         return np.linalg.norm(j - true2d, axis=-1).mean(axis=1) / height * 100
@@ -79,16 +82,25 @@ def main() -> int:
     if not CLIPS.is_dir():
         print(f"skipped: {CLIPS} is absent (the shared data sits beside the checkout)")
         return 0
-    print(f"{'clip':18s} {'orient%':>7s} {'profile%':>8s} {'true%':>6s} {'legs_x%':>7s} {'arms_x%':>7s} "
-          f"{'2d%':>6s} {'best%':>6s}")
+    print(
+        f"{'clip':18s} {'orient%':>7s} {'profile%':>8s} {'true%':>6s} {'legs_x%':>7s} {'arms_x%':>7s} "
+        f"{'2d%':>6s} {'best%':>6s}"
+    )
     rows = []
     for name in args.clips or clip_names():
         rows.append(clip_row(name, args.true_masks))
-        print(f"{name:18s} " + " ".join(f"{v:{w}.1f}" for v, w in zip(rows[-1][:5], (7, 8, 6, 7, 7)))
-              + f" {rows[-1][5]:6.2f} {rows[-1][6]:6.2f}", flush=True)
+        print(
+            f"{name:18s} "
+            + " ".join(f"{v:{w}.1f}" for v, w in zip(rows[-1][:5], (7, 8, 6, 7, 7)))
+            + f" {rows[-1][5]:6.2f} {rows[-1][6]:6.2f}",
+            flush=True,
+        )
     mean = np.nanmean(rows, axis=0)
-    print(f"{'mean':18s} " + " ".join(f"{v:{w}.1f}" for v, w in zip(mean[:5], (7, 8, 6, 7, 7)))
-          + f" {mean[5]:6.2f} {mean[6]:6.2f}")
+    print(
+        f"{'mean':18s} "
+        + " ".join(f"{v:{w}.1f}" for v, w in zip(mean[:5], (7, 8, 6, 7, 7)))
+        + f" {mean[5]:6.2f} {mean[6]:6.2f}"
+    )
     return 0
 
 

@@ -54,8 +54,7 @@ def measure(frames: list[np.ndarray]) -> tuple[float, np.ndarray]:
     return setup, 1e3 * np.array(times)
 
 
-def contact_sheet(frames: list[np.ndarray], masks: list[np.ndarray], columns: int = 6,
-                  zoom: int = 2) -> np.ndarray:
+def contact_sheet(frames: list[np.ndarray], masks: list[np.ndarray], columns: int = 6, zoom: int = 2) -> np.ndarray:
     """Tiles of (person zoomed with the mask outline, whole mask), in frame order."""
     height, width = frames[0].shape[:2]
     box = (width * 2 // 5, height * 3 // 4)  # the crop around the person
@@ -64,10 +63,8 @@ def contact_sheet(frames: list[np.ndarray], masks: list[np.ndarray], columns: in
         xs = np.flatnonzero(mask.any(axis=0))
         x0 = int(np.clip((xs.mean() if len(xs) else width / 2) - box[0] / 2, 0, width - box[0]))
         y0 = height - box[1]
-        crop = cv2.resize(frame[y0:, x0:x0 + box[0]], None, fx=zoom, fy=zoom,
-                          interpolation=cv2.INTER_NEAREST)
-        outline = cv2.resize(mask[y0:, x0:x0 + box[0]], crop.shape[1::-1],
-                             interpolation=cv2.INTER_NEAREST)
+        crop = cv2.resize(frame[y0:, x0 : x0 + box[0]], None, fx=zoom, fy=zoom, interpolation=cv2.INTER_NEAREST)
+        outline = cv2.resize(mask[y0:, x0 : x0 + box[0]], crop.shape[1::-1], interpolation=cv2.INTER_NEAREST)
         contours, _ = cv2.findContours(outline, cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
         cv2.drawContours(crop, contours, -1, (0, 0, 255), 1)
         cv2.putText(crop, str(index), (3, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 255, 255))
@@ -75,7 +72,7 @@ def contact_sheet(frames: list[np.ndarray], masks: list[np.ndarray], columns: in
         whole[:height] = cv2.cvtColor(mask, cv2.COLOR_GRAY2BGR)
         tiles.append(np.hstack([crop, whole, np.full((crop.shape[0], 4, 3), 80, np.uint8)]))
     tiles += [np.zeros_like(tiles[0])] * (-len(tiles) % columns)
-    rows = [np.hstack(tiles[i:i + columns]) for i in range(0, len(tiles), columns)]
+    rows = [np.hstack(tiles[i : i + columns]) for i in range(0, len(tiles), columns)]
     return np.vstack(rows)
 
 
@@ -91,12 +88,10 @@ def main() -> None:
     parser.add_argument("--sheet", help="write a dog_walker contact sheet PNG here")
     args = parser.parse_args()
     cv2.setNumThreads(1)
-    print(f"{'clip':<22} {'frames':>6} {'background s':>12} "
-          f"{'ms/frame median':>15} {'p90':>6}")
+    print(f"{'clip':<22} {'frames':>6} {'background s':>12} {'ms/frame median':>15} {'p90':>6}")
     for name, frames in clips():
         setup, ms = measure(frames)
-        print(f"{name:<22} {len(frames):>6} {setup:>12.2f} "
-              f"{np.median(ms):>15.2f} {np.percentile(ms, 90):>6.2f}")
+        print(f"{name:<22} {len(frames):>6} {setup:>12.2f} {np.median(ms):>15.2f} {np.percentile(ms, 90):>6.2f}")
     if args.sheet:
         write_sheet(args.sheet)
 

@@ -68,17 +68,19 @@ from mocap.track.tracking import steady_reconstruction, track_clip, track_frames
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
 FOCAL = 800.0
 CLIPS = [  # (bvh, source frames, fps): at least 100 output frames each
-    ("walk01.bvh", None, 30.0), ("cmu_walk.bvh", (6, None), 42.0),
-    ("cmu_run.bvh", (6, None), 72.0), ("cmu_01_01_jumps.bvh", (1, 1200), 30.0)]
+    ("walk01.bvh", None, 30.0),
+    ("cmu_walk.bvh", (6, None), 42.0),
+    ("cmu_run.bvh", (6, None), 72.0),
+    ("cmu_01_01_jumps.bvh", (1, 1200), 30.0),
+]
 YAWS = (45.0, 135.0)
 
 
 def orientation_of(joints3d: np.ndarray) -> str:
     """The CONTRACT.md orientation a user would give for a pose (contract frame)."""
     j = JOINT_INDEX
-    left = (joints3d[j["hip_l"]] - joints3d[j["hip_r"]]
-            + joints3d[j["shoulder_l"]] - joints3d[j["shoulder_r"]])
-    facing = np.cross(left, [0.0, 1.0, 0.0])                # left x up: forward
+    left = joints3d[j["hip_l"]] - joints3d[j["hip_r"]] + joints3d[j["shoulder_l"]] - joints3d[j["shoulder_r"]]
+    facing = np.cross(left, [0.0, 1.0, 0.0])  # left x up: forward
     return f"{'forward' if facing[2] > 0 else 'backward'}_{'right' if facing[0] > 0 else 'left'}"
 
 
@@ -87,7 +89,7 @@ def silhouette_error(video: Path, truth) -> float:
     as missed; inf when it finds nobody at all."""
     try:
         _, fits = fit_video(video)
-    except Exception as exc:                                # noqa: BLE001 - reported, not hidden
+    except Exception as exc:  # noqa: BLE001 - reported, not hidden
         print(f"  silhouette method on {video.name}: {exc}")
         return float("inf")
     pred = np.array([np.full((16, 2), np.nan) if f.joints2d is None else f.joints2d for f in fits])
@@ -97,8 +99,7 @@ def silhouette_error(video: Path, truth) -> float:
 
 def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> dict:
     video = tmp / f"{Path(bvh).stem}_{yaw:.0f}.mp4"
-    truth = render_motion(DATA / bvh, video, frames=frames, fps=fps, yaw=yaw,
-                          perspective=FOCAL, moving_background=True)
+    truth = render_motion(DATA / bvh, video, frames=frames, fps=fps, yaw=yaw, perspective=FOCAL, moving_background=True)
     orientation = orientation_of(truth.joints3d[0])
     marks = check_marks(truth.joints2d[0], truth.width, truth.height)
     decoded = [frame for _, frame in iter_frames(open_video(video))]
@@ -110,43 +111,64 @@ def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> dict:
     result = track_clip(video, truth.joints2d[0], orientation=orientation)
     total = (time.process_time() - t) / len(truth.joints2d)
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px * 100
-    exact = to_contract(steady_reconstruction(truth.joints2d, default_camera(truth.width, truth.height),
-                                              turn_of(orientation), truth.fps))
+    exact = to_contract(
+        steady_reconstruction(
+            truth.joints2d, default_camera(truth.width, truth.height), turn_of(orientation), truth.fps
+        )
+    )
     twin = tmp / f"{Path(bvh).stem}_{yaw:.0f}_static.mp4"
     render_motion(DATA / bvh, twin, frames=frames, fps=fps, yaw=yaw, perspective=FOCAL)
-    return {"clip": f"{Path(bvh).stem} yaw {yaw:.0f}", "frames": len(err), "fps": fps,
-            "body": truth.body_height_px, "median": np.median(err), "p90": np.percentile(err, 90),
-            "pa": pa_mpjpe(result.joints3d, truth.joints3d) * 1000,
-            "pa_exact": pa_mpjpe(exact, truth.joints3d) * 1000, "ms": tracking * 1000,
-            "facing": facing_error(result.joints3d, truth.joints3d),
-            "facing_exact": facing_error(exact, truth.joints3d),
-            "total_ms": total * 1000, "sil_moving": silhouette_error(video, truth),
-            "sil_static": silhouette_error(twin, truth), "err": err}
+    return {
+        "clip": f"{Path(bvh).stem} yaw {yaw:.0f}",
+        "frames": len(err),
+        "fps": fps,
+        "body": truth.body_height_px,
+        "median": np.median(err),
+        "p90": np.percentile(err, 90),
+        "pa": pa_mpjpe(result.joints3d, truth.joints3d) * 1000,
+        "pa_exact": pa_mpjpe(exact, truth.joints3d) * 1000,
+        "ms": tracking * 1000,
+        "facing": facing_error(result.joints3d, truth.joints3d),
+        "facing_exact": facing_error(exact, truth.joints3d),
+        "total_ms": total * 1000,
+        "sil_moving": silhouette_error(video, truth),
+        "sil_static": silhouette_error(twin, truth),
+        "err": err,
+    }
 
 
 def print_table(rows: list[dict]) -> None:
-    print(f"{'clip':24s} {'frames':>6s} {'fps':>4s} {'body px':>7s} | {'2D med%':>7s} {'p90%':>6s} "
-          f"{'PA mm':>6s} {'exact 2D':>8s} {'facing°':>7s} {'exact':>5s} | "
-          f"{'CPU ms':>6s} {'frames/s':>8s} {'total':>6s} | "
-          f"{'silhouette med%: same clip':>26s} {'static twin':>11s}")
+    print(
+        f"{'clip':24s} {'frames':>6s} {'fps':>4s} {'body px':>7s} | {'2D med%':>7s} {'p90%':>6s} "
+        f"{'PA mm':>6s} {'exact 2D':>8s} {'facing°':>7s} {'exact':>5s} | "
+        f"{'CPU ms':>6s} {'frames/s':>8s} {'total':>6s} | "
+        f"{'silhouette med%: same clip':>26s} {'static twin':>11s}"
+    )
     for r in rows:
         moving = "no person"
         if np.isfinite(r["sil_moving"]):
             moving = f"{r['sil_moving']:.1f} (bg moves)"
-        print(f"{r['clip']:24s} {r['frames']:6d} {r['fps']:4.0f} {r['body']:7.0f} | "
-              f"{r['median']:7.2f} "
-              f"{r['p90']:6.1f} {r['pa']:6.0f} {r['pa_exact']:8.0f} {r['facing']:7.1f} "
-              f"{r['facing_exact']:5.1f} | {r['ms']:6.1f} "
-              f"{1000 / r['ms']:8.0f} {r['total_ms']:6.1f} | {moving:>26s} {r['sil_static']:11.1f}")
+        print(
+            f"{r['clip']:24s} {r['frames']:6d} {r['fps']:4.0f} {r['body']:7.0f} | "
+            f"{r['median']:7.2f} "
+            f"{r['p90']:6.1f} {r['pa']:6.0f} {r['pa_exact']:8.0f} {r['facing']:7.1f} "
+            f"{r['facing_exact']:5.1f} | {r['ms']:6.1f} "
+            f"{1000 / r['ms']:8.0f} {r['total_ms']:6.1f} | {moving:>26s} {r['sil_static']:11.1f}"
+        )
     err = np.concatenate([r["err"] for r in rows])
-    mean = {key: np.mean([r[key] for r in rows])
-            for key in ("pa", "pa_exact", "facing", "facing_exact", "ms", "total_ms")}
-    print(f"{'all':24s} {len(err):6d} {'':4s} {'':7s} | {np.median(err):7.2f} "
-          f"{np.percentile(err, 90):6.1f} {mean['pa']:6.0f} {mean['pa_exact']:8.0f} "
-          f"{mean['facing']:7.1f} {mean['facing_exact']:5.1f} | "
-          f"{mean['ms']:6.1f} {1000 / mean['ms']:8.0f} {mean['total_ms']:6.1f} |")
-    print("targets: 2D median <= 4% of body height, PA-MPJPE <= 60 mm, >= 25 frames/s "
-          "(640x480, one thread); PA mm of 'all' is the mean over clips")
+    mean = {
+        key: np.mean([r[key] for r in rows]) for key in ("pa", "pa_exact", "facing", "facing_exact", "ms", "total_ms")
+    }
+    print(
+        f"{'all':24s} {len(err):6d} {'':4s} {'':7s} | {np.median(err):7.2f} "
+        f"{np.percentile(err, 90):6.1f} {mean['pa']:6.0f} {mean['pa_exact']:8.0f} "
+        f"{mean['facing']:7.1f} {mean['facing_exact']:5.1f} | "
+        f"{mean['ms']:6.1f} {1000 / mean['ms']:8.0f} {mean['total_ms']:6.1f} |"
+    )
+    print(
+        "targets: 2D median <= 4% of body height, PA-MPJPE <= 60 mm, >= 25 frames/s "
+        "(640x480, one thread); PA mm of 'all' is the mean over clips"
+    )
 
 
 def bench_main(doc: str, run_clip: Callable, print_table: Callable[[list], None]) -> int:
@@ -155,17 +177,22 @@ def bench_main(doc: str, run_clip: Callable, print_table: Callable[[list], None]
     returned; skipped, said so, when the motion capture is absent."""
     parser = argparse.ArgumentParser(description=doc)
     parser.add_argument("--quick", action="store_true", help="one view per motion")
-    parser.add_argument("--yaws", type=float, nargs="+", default=YAWS, metavar="DEG",
-                        help=f"render yaws to view every motion from (default {YAWS}; other "
-                             "views check that a change is not made for these two)")
+    parser.add_argument(
+        "--yaws",
+        type=float,
+        nargs="+",
+        default=YAWS,
+        metavar="DEG",
+        help=f"render yaws to view every motion from (default {YAWS}; other "
+        "views check that a change is not made for these two)",
+    )
     args = parser.parse_args()
     yaws = args.yaws[:1] if args.quick else args.yaws
     if not DATA.is_dir():
         print(f"skipped: {DATA} is absent (real motion capture is needed to render the clips)")
         return 0
     with tempfile.TemporaryDirectory() as tmp:
-        print_table([run_clip(bvh, frames, fps, yaw, Path(tmp))
-                     for bvh, frames, fps in CLIPS for yaw in yaws])
+        print_table([run_clip(bvh, frames, fps, yaw, Path(tmp)) for bvh, frames, fps in CLIPS for yaw in yaws])
     return 0
 
 
@@ -179,18 +206,21 @@ def real_clip_errors(video: Path, marks: dict[str, dict[str, list[float]]]) -> N
     info, fits = fit_video(video)
     fitted = Session(info, fits).inputs
     t = time.process_time()
-    result = track_clip(info, shoulders_as_hips(fitted.joints2d[0]),
-                         orientation=fitted.orientation[0])
+    result = track_clip(info, shoulders_as_hips(fitted.joints2d[0]), orientation=fitted.orientation[0])
     seconds = time.process_time() - t
     body_px = labelled_body_height(marks)
     errors = [labelled_errors(joints, marks) for joints in (fitted.joints2d, result.joints2d)]
-    print(f"\n{video.name}, {info.width}x{info.height}, {info.frame_count} frames, body {body_px:.0f} px: "
-          f"error against hand marks on {len(marks)} frames, % of body height")
+    print(
+        f"\n{video.name}, {info.width}x{info.height}, {info.frame_count} frames, body {body_px:.0f} px: "
+        f"error against hand marks on {len(marks)} frames, % of body height"
+    )
     print(f"{'joint':10s} {'marks':>5s} | {'silhouette median':>17s} {'p90':>5s} | {'tracked median':>14s} {'p90':>5s}")
     for kind in (*errors[0], "all"):
         d = [np.concatenate(list(e.values())) if kind == "all" else e[kind] for e in errors]
-        cells = " | ".join(f"{np.median(x) / body_px * 100:{w}.1f} {np.percentile(x, 90) / body_px * 100:5.1f}"
-                           for x, w in zip(d, (17, 14)))
+        cells = " | ".join(
+            f"{np.median(x) / body_px * 100:{w}.1f} {np.percentile(x, 90) / body_px * 100:5.1f}"
+            for x, w in zip(d, (17, 14))
+        )
         print(f"{kind:10s} {len(d[0]):5d} | {cells}")
     print(f"track_clip end to end: {info.frame_count / seconds:.0f} frames/s")
 

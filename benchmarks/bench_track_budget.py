@@ -54,10 +54,13 @@ from mocap.synth.truth import Truth
 from mocap.track.perspective import to_contract
 from mocap.track.tracking import SPREAD_S, TrackResult, spread_corrections, steady_reconstruction, track_clip, turn_of
 
-LIMB_JOINTS = {(side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
-               for side in "lr" for kind, a, b in (("arm", "elbow", "wrist"), ("leg", "knee", "ankle"))}
-GROSS = (8.0, 4.0)      # % of body height: limb joints off by more are "gross failures"
-REVIEW_EVERY = 10       # frames: the simulated user corrects one frame in this many
+LIMB_JOINTS = {
+    (side, kind): [JOINT_INDEX[f"{a}_{side}"], JOINT_INDEX[f"{b}_{side}"]]
+    for side in "lr"
+    for kind, a, b in (("arm", "elbow", "wrist"), ("leg", "knee", "ankle"))
+}
+GROSS = (8.0, 4.0)  # % of body height: limb joints off by more are "gross failures"
+REVIEW_EVERY = 10  # frames: the simulated user corrects one frame in this many
 
 
 def far_side(joints3d: np.ndarray) -> np.ndarray:
@@ -91,13 +94,18 @@ def far_wrist_failures(tracked: np.ndarray, truth: Truth) -> dict[str, int]:
 
     def on_trunk(points: np.ndarray) -> np.ndarray:
         return segment_distance(points, t[:, j["neck"]], t[:, j["pelvis"]]) < trunk_reach
+
     twin = segment_distance(placed, t[frames, near_arm[:, 0]], t[frames, near_arm[:, 1]]) < (
-        WIDTH[SEGMENT_INDEX["lower_arm_l"]] * px)
+        WIDTH[SEGMENT_INDEX["lower_arm_l"]] * px
+    )
     trunk = on_trunk(placed) & ~twin
-    return {f"far wrist > {GROSS[0]:g}% off": int(gross.sum()), "... on the near forearm": int((gross & twin).sum()),
-            "... on the trunk": int((gross & trunk).sum()),
-            "... elsewhere": int((gross & ~twin & ~trunk).sum()),
-            "... truly on the trunk": int((gross & on_trunk(true)).sum())}
+    return {
+        f"far wrist > {GROSS[0]:g}% off": int(gross.sum()),
+        "... on the near forearm": int((gross & twin).sum()),
+        "... on the trunk": int((gross & trunk).sum()),
+        "... elsewhere": int((gross & ~twin & ~trunk).sum()),
+        "... truly on the trunk": int((gross & on_trunk(true)).sum()),
+    }
 
 
 def with_far(tracked: np.ndarray, truth: Truth, kind: str) -> np.ndarray:
@@ -119,14 +127,14 @@ def with_gross_fixed(tracked: np.ndarray, truth: Truth, percent: float) -> np.nd
     return np.where(gross[..., None], truth.joints2d, tracked)
 
 
-def user_corrections(tracked: np.ndarray, truth: Truth, visits,
-                     joints: list[int] | None = None) -> dict[int, dict[str, tuple]]:
+def user_corrections(
+    tracked: np.ndarray, truth: Truth, visits, joints: list[int] | None = None
+) -> dict[int, dict[str, tuple]]:
     """Joint overrides of a user who corrects, on each frame of ``visits``, every joint
     (of ``joints``, default all) more than GROSS[-1]% of body height off."""
     err = np.linalg.norm(tracked - truth.joints2d, axis=-1) / truth.body_height_px * 100
     looked = range(len(JOINTS)) if joints is None else joints
-    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in looked if err[f, j] > GROSS[-1]}
-            for f in visits}
+    return {f: {JOINTS[j]: tuple(truth.joints2d[f, j]) for j in looked if err[f, j] > GROSS[-1]} for f in visits}
 
 
 def review_plan(result: TrackResult, orientation: str) -> tuple[list[int], str | None]:
@@ -136,7 +144,7 @@ def review_plan(result: TrackResult, orientation: str) -> tuple[list[int], str |
     notes = Annotations().with_method("track").with_orientation(0, orientation)
     session = TrackSession(result.info, result, notes)
     stops = covering(review_queue(session), len(result.joints2d), session.review_spacing)
-    return [d.frame for d in stops][:len(result.joints2d) // REVIEW_EVERY], session.far_arm()
+    return [d.frame for d in stops][: len(result.joints2d) // REVIEW_EVERY], session.far_arm()
 
 
 def said_turns(truth: Truth) -> list[str]:
@@ -145,14 +153,14 @@ def said_turns(truth: Truth) -> list[str]:
     return [turn_of(orientation_of(truth.joints3d[f])) for f in visited]
 
 
-def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int],
-           far: str | None) -> dict[str, float]:
+def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int], far: str | None) -> dict[str, float]:
     """PA-MPJPE (mm) of every row of the table for one clip; ``stops`` and ``far``: the
     review's stops and the arm it says to check first."""
     camera = default_camera(truth.width, truth.height)
 
     def pinhole(joints2d: np.ndarray, turns=turn) -> np.ndarray:
         return steady_reconstruction(joints2d, camera, turns, truth.fps)
+
     mine, exact = pinhole(tracked), pinhole(truth.joints2d)
     rows = {
         "tracked": mine,
@@ -162,28 +170,41 @@ def budget(tracked: np.ndarray, truth: Truth, turn: str, stops: list[int],
         "far arm exact": pinhole(with_far(tracked, truth, "arm")),
         "far leg exact": pinhole(with_far(tracked, truth, "leg")),
         **{f"limbs exact where > {p:g}%": pinhole(with_gross_fixed(tracked, truth, p)) for p in GROSS},
-        **{f"pins 1 frame in {REVIEW_EVERY}, {name}": pinhole(spread_corrections(
-            tracked, user_corrections(tracked, truth, range(0, len(tracked), REVIEW_EVERY)),
-            truth.fps, spread_s)) for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))},
-        "pins on the review's stops": pinhole(spread_corrections(
-            tracked, user_corrections(tracked, truth, stops), truth.fps)),
-        "... on its far arm only": pinhole(spread_corrections(tracked, user_corrections(
-            tracked, truth, stops, LIMB_JOINTS[far, "arm"] if far else []), truth.fps)),
-        **{f"facing said 1 in {REVIEW_EVERY}, {name}": pinhole(joints2d, said_turns(truth))
-           for name, joints2d in (("exact 2D", truth.joints2d), ("tracked", tracked))}}
+        **{
+            f"pins 1 frame in {REVIEW_EVERY}, {name}": pinhole(
+                spread_corrections(
+                    tracked, user_corrections(tracked, truth, range(0, len(tracked), REVIEW_EVERY)), truth.fps, spread_s
+                )
+            )
+            for name, spread_s in (("own frame", 0.0), ("spread", SPREAD_S))
+        },
+        "pins on the review's stops": pinhole(
+            spread_corrections(tracked, user_corrections(tracked, truth, stops), truth.fps)
+        ),
+        "... on its far arm only": pinhole(
+            spread_corrections(
+                tracked, user_corrections(tracked, truth, stops, LIMB_JOINTS[far, "arm"] if far else []), truth.fps
+            )
+        ),
+        **{
+            f"facing said 1 in {REVIEW_EVERY}, {name}": pinhole(joints2d, said_turns(truth))
+            for name, joints2d in (("exact 2D", truth.joints2d), ("tracked", tracked))
+        },
+    }
     return {name: pa_mpjpe(to_contract(points), truth.joints3d) * 1000 for name, points in rows.items()}
 
 
 def run_clip(bvh: str, frames, fps: float, yaw: float, tmp: Path) -> tuple[str, dict[str, float]]:
     video = tmp / f"{Path(bvh).stem}_{yaw:.0f}.mp4"
-    truth = render_motion(DATA / bvh, video, frames=frames, fps=fps, yaw=yaw,
-                          perspective=FOCAL, moving_background=True)
+    truth = render_motion(DATA / bvh, video, frames=frames, fps=fps, yaw=yaw, perspective=FOCAL, moving_background=True)
     orientation = orientation_of(truth.joints3d[0])
     result = track_clip(video, truth.joints2d[0], orientation=orientation)
     name = Path(bvh).stem.replace("cmu_01_01_", "cmu_")
     stops, far = review_plan(result, orientation)
-    return f"{name} {yaw:.0f}", (budget(result.joints2d, truth, turn_of(orientation), stops, far),
-                                 far_wrist_failures(result.joints2d, truth))
+    return f"{name} {yaw:.0f}", (
+        budget(result.joints2d, truth, turn_of(orientation), stops, far),
+        far_wrist_failures(result.joints2d, truth),
+    )
 
 
 def print_rows(columns: list[tuple[str, dict]], title: str, total: str, summary) -> None:
@@ -196,11 +217,13 @@ def print_rows(columns: list[tuple[str, dict]], title: str, total: str, summary)
 
 
 def print_table(columns: list[tuple[str, tuple[dict[str, float], dict[str, int]]]]) -> None:
-    print_rows([(name, pa) for name, (pa, _) in columns], "PA-MPJPE mm", "mean",
-               lambda values: f"{np.mean(values):.1f}")
+    print_rows(
+        [(name, pa) for name, (pa, _) in columns], "PA-MPJPE mm", "mean", lambda values: f"{np.mean(values):.1f}"
+    )
     print("target: PA-MPJPE <= 60 mm from the tracked 2D\n")
-    print_rows([(name, failures) for name, (_, failures) in columns], "frames", "all",
-               lambda values: f"{np.sum(values):d}")
+    print_rows(
+        [(name, failures) for name, (_, failures) in columns], "frames", "all", lambda values: f"{np.sum(values):d}"
+    )
 
 
 if __name__ == "__main__":

@@ -52,8 +52,10 @@ from mocap.track.tracking import TrackResult  # noqa: E402
 
 SHARED = ("track_salsa", "track_walk")
 # name: (BVH, source frames A:B, render yaw, seed)
-RENDERED = {"laugh_arms_up": ("cmu_13_14_laugh.bvh", (1080, 1560), 30.0, 7),
-            "salsa_spin": ("cmu_60_05_salsa.bvh", (600, 840), 90.0, 11)}
+RENDERED = {
+    "laugh_arms_up": ("cmu_13_14_laugh.bvh", (1080, 1560), 30.0, 7),
+    "salsa_spin": ("cmu_60_05_salsa.bvh", (600, 840), 90.0, 11),
+}
 SIZE, FOCAL = (480, 360), 600.0
 # the joints' names in five characters: head_top -> head, shoulder_l -> shoL
 SHORT = tuple(j[:3] + j[-1].upper() if j[-2] == "_" else j.split("_")[0][:5] for j in JOINTS)
@@ -74,15 +76,21 @@ def render(name: str, folder: Path) -> tuple[Path, Path, Path]:
     bvh, frames, yaw, seed = RENDERED[name]
     video, truth_path = folder / f"{name}.mp4", folder / f"{name}.truth.json"
     if not video.exists():
-        opts = RenderOptions(yaw=yaw, size=SIZE, fps=25.0, perspective=FOCAL, moving_background=True,
-                             seed=seed)
+        opts = RenderOptions(yaw=yaw, size=SIZE, fps=25.0, perspective=FOCAL, moving_background=True, seed=seed)
         render_motion(DATA / "bvh" / bvh, video, opts, frames=frames, truth_path=truth_path)
     truth = scored_truth(json.loads(truth_path.read_text()))
     truth_path.write_text(json.dumps(truth))
     first = truth["frames"][0]
-    marks = {"format": "mocap-annotations", "version": 1, "frames": {"0": {
-        "orientation": orientation_of_yaw(yaw_of(np.array(first["joints3d"]))),
-        "joints2d": dict(zip(JOINTS, first["joints2d"]))}}}
+    marks = {
+        "format": "mocap-annotations",
+        "version": 1,
+        "frames": {
+            "0": {
+                "orientation": orientation_of_yaw(yaw_of(np.array(first["joints3d"]))),
+                "joints2d": dict(zip(JOINTS, first["joints2d"])),
+            }
+        },
+    }
     marks_path = folder / f"{name}.marks.json"
     marks_path.write_text(json.dumps(marks))
     return video, truth_path, marks_path
@@ -103,8 +111,15 @@ def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> np.ndarray:
     frames = json.loads(truth.read_text())["frames"]
     joints2d = np.array([f["joints2d"] for f in frames])
     ones = np.ones(joints2d.shape[:2])
-    tracked = TrackResult(info, joints2d, ones, np.zeros((*joints2d.shape[:2], 3)),
-                          default_camera(info.width, info.height).focal, ones, np.zeros(len(frames), bool))
+    tracked = TrackResult(
+        info,
+        joints2d,
+        ones,
+        np.zeros((*joints2d.shape[:2], 3)),
+        default_camera(info.width, info.height).focal,
+        ones,
+        np.zeros(len(frames), bool),
+    )
     session = TrackSession(info, tracked, load_annotations(marks, info.frame_count))
     joints3d = np.array([session.pose3d(f) for f in range(len(frames))])
     truth3d = np.array([f["joints3d"] for f in frames])
@@ -139,19 +154,24 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", nargs="+", default=[*SHARED, *RENDERED])
     parser.add_argument("--keep", type=Path, help="folder for the renders and motion files")
-    parser.add_argument("--joints", action="store_true",
-                        help="each joint's PA-MPJPE from the tracked and from the exact 2D")
+    parser.add_argument(
+        "--joints", action="store_true", help="each joint's PA-MPJPE from the tracked and from the exact 2D"
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.keep or Path(tmp)
         folder.mkdir(parents=True, exist_ok=True)
-        print(f"{'clip':<15} {'frames':>6} {'failed':>6} {'lost':>5} {'2D med %':>8} {'2D mean %':>9} "
-              f"{'PA-MPJPE mm':>11} {'exact 2D':>8} {'s':>5}")
+        print(
+            f"{'clip':<15} {'frames':>6} {'failed':>6} {'lost':>5} {'2D med %':>8} {'2D mean %':>9} "
+            f"{'PA-MPJPE mm':>11} {'exact 2D':>8} {'s':>5}"
+        )
         for name in args.clips:
             r = run(name, folder)
-            print(f"{name:<15} {r['frames']:>6} {r['failed']:>6} {r['lost']:>5} {r['err2d_median_pct']:>8.2f} "
-                  f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['exact'].mean():>8.1f} {r['seconds']:>5.0f}",
-                  flush=True)
+            print(
+                f"{name:<15} {r['frames']:>6} {r['failed']:>6} {r['lost']:>5} {r['err2d_median_pct']:>8.2f} "
+                f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['exact'].mean():>8.1f} {r['seconds']:>5.0f}",
+                flush=True,
+            )
             if args.joints:
                 print_joints(r)
 

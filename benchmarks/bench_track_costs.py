@@ -34,7 +34,7 @@ from mocap.track.parts import PART_JOINTS, PARTS
 from mocap.track.tracker import BodyTracker
 from mocap.track.tracking import turn_of
 
-OFF_PCT = 5.0      # % of the body's height: a part's far joint this far from the truth is off
+OFF_PCT = 5.0  # % of the body's height: a part's far joint this far from the truth is off
 
 
 def part_costs(video: Path, truth: Path, marks: Path) -> dict[str, np.ndarray]:
@@ -45,7 +45,7 @@ def part_costs(video: Path, truth: Path, marks: Path) -> dict[str, np.ndarray]:
     scale = processing_scale(info)
     known = json.loads(truth.read_text())
     true2d = (np.array([f["joints2d"] for f in known["frames"]]) + 0.5) * scale - 0.5
-    height = known["body_height_px"] * scale           # as the scorer reads it
+    height = known["body_height_px"] * scale  # as the scorer reads it
     first = json.loads(marks.read_text())["frames"]["0"]
     marked = (np.array([first["joints2d"][j] for j in JOINTS], float) + 0.5) * scale - 0.5
     camera = default_camera(info.width, info.height).scaled(scale)
@@ -53,7 +53,7 @@ def part_costs(video: Path, truth: Path, marks: Path) -> dict[str, np.ndarray]:
     tracker = BodyTracker(next(images), marked, camera, turn_of(first.get("orientation")), info.fps)
     out: dict[str, list] = {"tracked": [], "true": [], "error": [], "lost": []}
     for i, image in enumerate(images, start=1):
-        models = [tracker._model(k) for k in range(len(PARTS))]     # as matched, before the update
+        models = [tracker._model(k) for k in range(len(PARTS))]  # as matched, before the update
         joints, _ = tracker.step(image)
         placed = tracker.blocks
         truths = blocks.between(true2d[i, PART_JOINTS[:, 0]], true2d[i, PART_JOINTS[:, 1]], placed[:, blocks.N])
@@ -77,10 +77,10 @@ def summary(costs: dict[str, np.ndarray], off: float) -> None:
     for k, part in enumerate(PARTS):
         bad = (costs["error"][:, k] > off) & ~costs["lost"]
         preferred = bad & (costs["tracked"][:, k] < costs["true"][:, k])
-        tracked, true = (f"{costs[c][bad, k].mean():>6.1f}" if bad.any() else f"{'-':>6}"
-                         for c in ("tracked", "true"))
-        print(f"{part.segment:<13} {bad.sum():>4} {preferred.sum():>9} {(bad & ~preferred).sum():>6} "
-              f"{tracked:>7} {true}")
+        tracked, true = (f"{costs[c][bad, k].mean():>6.1f}" if bad.any() else f"{'-':>6}" for c in ("tracked", "true"))
+        print(
+            f"{part.segment:<13} {bad.sum():>4} {preferred.sum():>9} {(bad & ~preferred).sum():>6} {tracked:>7} {true}"
+        )
 
 
 def frames_of(costs: dict[str, np.ndarray], segment: str) -> None:
@@ -101,8 +101,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.clips:
             costs = part_costs(*clip_files(name, Path(tmp)))
-            print(f"{name}: parts off by more than {args.off:g}% of the body's height on frames 1.."
-                  f"{len(costs['error'])}, {int(costs['lost'].sum())} marked lost aside")
+            print(
+                f"{name}: parts off by more than {args.off:g}% of the body's height on frames 1.."
+                f"{len(costs['error'])}, {int(costs['lost'].sum())} marked lost aside"
+            )
             summary(costs, args.off)
             if args.part:
                 frames_of(costs, args.part)

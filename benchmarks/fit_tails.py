@@ -31,8 +31,8 @@ from mocap.body import JOINTS
 from mocap.synth.metrics import side_matched_errors
 
 CLIPS = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "clips"
-TAIL_SHARE = 0.1                 # the worst tenth of the frames: the mean's tail
-TRUTH_COLOUR = (60, 220, 60)     # BGR
+TAIL_SHARE = 0.1  # the worst tenth of the frames: the mean's tail
+TRUTH_COLOUR = (60, 220, 60)  # BGR
 MASK_COLOUR = (0, 220, 255)
 ZOOM = 3
 
@@ -55,19 +55,22 @@ def tail_report(name: str, named: np.ndarray, matched: np.ndarray, worst: int) -
     ok = np.isfinite(named).all(1)
     per_frame = np.where(ok, np.nan_to_num(matched).mean(1), -np.inf)
     order = [int(i) for i in np.argsort(-per_frame) if ok[i]]
-    tail = order[:max(1, int(round(TAIL_SHARE * ok.sum())))]
+    tail = order[: max(1, int(round(TAIL_SHARE * ok.sum())))]
     mean_named, mean_matched = named[ok].mean(), matched[ok].mean()
     share = matched[tail].sum() / max(matched[ok].sum(), 1e-9)
     joints = matched[ok].mean(0)
-    lines = [f"{name}: mean {mean_named:.2f}% as named, {mean_matched:.2f}% side-matched "
-             f"(swaps add {mean_named - mean_matched:.2f}); median {np.median(matched[ok]):.2f}%; "
-             f"worst {TAIL_SHARE:.0%} of frames carry {share:.0%} of the side-matched error",
-             "  joints (side-matched mean %): " + " ".join(
-                 f"{JOINTS[k]} {joints[k]:.1f}" for k in np.argsort(-joints)[:6])]
+    lines = [
+        f"{name}: mean {mean_named:.2f}% as named, {mean_matched:.2f}% side-matched "
+        f"(swaps add {mean_named - mean_matched:.2f}); median {np.median(matched[ok]):.2f}%; "
+        f"worst {TAIL_SHARE:.0%} of frames carry {share:.0%} of the side-matched error",
+        "  joints (side-matched mean %): " + " ".join(f"{JOINTS[k]} {joints[k]:.1f}" for k in np.argsort(-joints)[:6]),
+    ]
     for i in order[:worst]:
         top = np.argsort(-matched[i])[:4]
-        lines.append(f"  frame {i:4d}: {matched[i].mean():5.2f}% (named {named[i].mean():5.2f})  "
-                     + "  ".join(f"{JOINTS[k]} {matched[i, k]:.1f}" for k in top))
+        lines.append(
+            f"  frame {i:4d}: {matched[i].mean():5.2f}% (named {named[i].mean():5.2f})  "
+            + "  ".join(f"{JOINTS[k]} {matched[i, k]:.1f}" for k in top)
+        )
     return "\n".join(lines), order[:worst]
 
 
@@ -77,6 +80,7 @@ def draw_frame(clip: Path, truth: dict, motion: dict, index: int) -> np.ndarray:
     import cv2
 
     from mocap.image.draw import draw_skeleton
+
     video = cv2.VideoCapture(str(clip / "video.mp4"))
     video.set(cv2.CAP_PROP_POS_FRAMES, index)
     ok, image = video.read()
@@ -90,6 +94,7 @@ def draw_frame(clip: Path, truth: dict, motion: dict, index: int) -> np.ndarray:
 
     def placed(points: np.ndarray) -> np.ndarray:
         return (points - [x0, y0]) * ZOOM
+
     mask = cv2.imread(str(clip / truth["frames"][index]["mask"]), cv2.IMREAD_GRAYSCALE)
     if mask is not None:
         outline, _ = cv2.findContours((mask > 127).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
@@ -115,10 +120,14 @@ def change_report(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndarray
     ok = np.isfinite(before[0]).all(1) & np.isfinite(after[0]).all(1)
     (named0, matched0), (named1, matched1) = ((n[ok], m[ok]) for n, m in (before, after))
     moved = matched1.mean(0) - matched0.mean(0)
-    return (f"  against the base: {named0.mean():.2f} -> {named1.mean():.2f}% as named, "
-            f"{matched0.mean():.2f} -> {matched1.mean():.2f}% side-matched; most moved: " + " ".join(
-                f"{JOINTS[k]} {matched0[:, k].mean():.1f}->{matched1[:, k].mean():.1f}"
-                for k in np.argsort(-np.abs(moved))[:4]))
+    return (
+        f"  against the base: {named0.mean():.2f} -> {named1.mean():.2f}% as named, "
+        f"{matched0.mean():.2f} -> {matched1.mean():.2f}% side-matched; most moved: "
+        + " ".join(
+            f"{JOINTS[k]} {matched0[:, k].mean():.1f}->{matched1[:, k].mean():.1f}"
+            for k in np.argsort(-np.abs(moved))[:4]
+        )
+    )
 
 
 def main() -> int:
@@ -150,6 +159,7 @@ def main() -> int:
         totals.append((named[ok].mean(), matched[ok].mean()))
         if args.draw:
             import cv2
+
             args.draw.mkdir(parents=True, exist_ok=True)
             for i in frames:
                 cv2.imwrite(str(args.draw / f"{name}_{i:04d}.png"), draw_frame(CLIPS / name, truth, motion, i))

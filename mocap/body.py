@@ -8,15 +8,27 @@ In the 2D fit "left" is image left (section 3.3); anatomical sides are decided i
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
 
 JOINTS: tuple[str, ...] = (
-    "head_top", "neck", "chest", "pelvis",
-    "shoulder_l", "elbow_l", "wrist_l", "shoulder_r", "elbow_r", "wrist_r",
-    "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r",
+    "head_top",
+    "neck",
+    "chest",
+    "pelvis",
+    "shoulder_l",
+    "elbow_l",
+    "wrist_l",
+    "shoulder_r",
+    "elbow_r",
+    "wrist_r",
+    "hip_l",
+    "knee_l",
+    "ankle_l",
+    "hip_r",
+    "knee_r",
+    "ankle_r",
 )
 JOINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(JOINTS)}
 
@@ -37,15 +49,13 @@ SEGMENT_NAMES: tuple[str, ...] = tuple(SEGMENTS)
 SEGMENT_INDEX: dict[str, int] = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 
 BODY_HEIGHT = 175.0
-STANDING_PERCENTILE = 90    # of a clip's head-to-feet heights: its standing height (bends are shorter)
+STANDING_PERCENTILE = 90  # of a clip's head-to-feet heights: its standing height (bends are shorter)
 BODY_HEIGHT_M = 1.75
 
 # Table 1's lengths, but the arm is 31 + 27 (Table 1: 25 + 35, its lower arm reaching into
 # the hand): people's elbows sit lower and their arms end at the wrist.
-_KIND_LENGTH = {"head": 25.0, "torso": 52.0, "upper_arm": 31.0, "lower_arm": 27.0,
-                "upper_leg": 46.0, "lower_leg": 52.0}
-_KIND_WIDTH = {"head": 20.0, "torso": 40.0, "upper_arm": 10.0, "lower_arm": 10.0,
-               "upper_leg": 20.0, "lower_leg": 20.0}
+_KIND_LENGTH = {"head": 25.0, "torso": 52.0, "upper_arm": 31.0, "lower_arm": 27.0, "upper_leg": 46.0, "lower_leg": 52.0}
+_KIND_WIDTH = {"head": 20.0, "torso": 40.0, "upper_arm": 10.0, "lower_arm": 10.0, "upper_leg": 20.0, "lower_leg": 20.0}
 
 
 def segment_kind(segment: str) -> str:
@@ -83,8 +93,8 @@ CHEST_FRACTION = 0.6
 
 # Table 1 (c): joint limits as absolute image angles in degrees.
 ANGLE_LIMITS: dict[str, tuple[float, float]] = {
-    "torso": (45.0, 135.0),   # waist
-    "head": (45.0, 135.0),    # neck
+    "torso": (45.0, 135.0),  # waist
+    "head": (45.0, 135.0),  # neck
     "upper_leg_l": (240.0, 300.0),
     "upper_leg_r": (240.0, 300.0),
 }
@@ -93,20 +103,30 @@ ANGLE_LIMITS: dict[str, tuple[float, float]] = {
 
 # Every joint's parent (the contract's joints; the pelvis is the root).
 JOINT_PARENT: dict[str, str | None] = {
-    "head_top": "neck", "neck": "chest", "chest": "pelvis", "pelvis": None,
-    "shoulder_l": "chest", "elbow_l": "shoulder_l", "wrist_l": "elbow_l",
-    "shoulder_r": "chest", "elbow_r": "shoulder_r", "wrist_r": "elbow_r",
-    "hip_l": "pelvis", "knee_l": "hip_l", "ankle_l": "knee_l",
-    "hip_r": "pelvis", "knee_r": "hip_r", "ankle_r": "knee_r",
+    "head_top": "neck",
+    "neck": "chest",
+    "chest": "pelvis",
+    "pelvis": None,
+    "shoulder_l": "chest",
+    "elbow_l": "shoulder_l",
+    "wrist_l": "elbow_l",
+    "shoulder_r": "chest",
+    "elbow_r": "shoulder_r",
+    "wrist_r": "elbow_r",
+    "hip_l": "pelvis",
+    "knee_l": "hip_l",
+    "ankle_l": "knee_l",
+    "hip_r": "pelvis",
+    "knee_r": "hip_r",
+    "ankle_r": "knee_r",
 }
 JOINT_PARENTS = np.array([JOINT_INDEX[JOINT_PARENT[j]] if JOINT_PARENT[j] else -1 for j in JOINTS])
 SIDES = ("l", "r")
-SIDE_SIGN = {"l": 1.0, "r": -1.0}       # the performer's left is +x in the body frame
+SIDE_SIGN = {"l": 1.0, "r": -1.0}  # the performer's left is +x in the body frame
 JOINTS_LEFT: tuple[int, ...] = tuple(i for i, j in enumerate(JOINTS) if j.endswith("_l"))
 JOINTS_RIGHT: tuple[int, ...] = tuple(i for i, j in enumerate(JOINTS) if j.endswith("_r"))
 # Anatomical pairs swapped when mirroring left and right.
-LEFT_RIGHT_PAIRS: tuple[tuple[str, str], ...] = tuple(
-    (JOINTS[i], JOINTS[i][:-1] + "r") for i in JOINTS_LEFT)
+LEFT_RIGHT_PAIRS: tuple[tuple[str, str], ...] = tuple((JOINTS[i], JOINTS[i][:-1] + "r") for i in JOINTS_LEFT)
 MIRROR_JOINTS = np.arange(len(JOINTS))
 MIRROR_JOINTS[list(JOINTS_LEFT)], MIRROR_JOINTS[list(JOINTS_RIGHT)] = JOINTS_RIGHT, JOINTS_LEFT
 SEGMENT_OF_BONE: dict[tuple[str, str], str] = {ends: s for s, ends in SEGMENTS.items()}
@@ -115,8 +135,8 @@ SEGMENT_OF_BONE: dict[tuple[str, str], str] = {ends: s for s, ends in SEGMENTS.i
 class Limb(NamedTuple):
     """An arm or a leg: three joints, root (shoulder or hip) to end, and its two segments."""
 
-    kind: str                           # "arm" or "leg"
-    side: str                           # "l" or "r"
+    kind: str  # "arm" or "leg"
+    side: str  # "l" or "r"
     joints: tuple[str, str, str]
     segments: tuple[str, str]
 
@@ -140,7 +160,8 @@ LIMBS = _limbs()
 
 # each kind of limb's joints, root to end, without their side: "arm" -> (shoulder, elbow, wrist)
 LIMB_JOINTS: dict[str, tuple[str, ...]] = {
-    one.kind: tuple(j.removesuffix("_" + one.side) for j in one.joints) for one in LIMBS}
+    one.kind: tuple(j.removesuffix("_" + one.side) for j in one.joints) for one in LIMBS
+}
 
 
 def limb(kind: str, side: str) -> Limb:
@@ -162,6 +183,7 @@ def bones_from(known: tuple[str, ...]) -> tuple[tuple[str, str], ...]:
                 placed.add(other)
                 out.append((joint, other))
                 visit(other)
+
     for joint in known:
         visit(joint)
     for one in sorted(LIMBS, key=lambda one: JOINT_INDEX[one.joints[0]]):
@@ -195,13 +217,13 @@ def _hips_moved(joints: np.ndarray, pixels: float) -> np.ndarray:
 def torso_width(spread):
     """Seen torso width (model units) for a seen span fraction: W frontal, TORSO_DEPTH in profile."""
     w = WIDTH[SEGMENT_NAMES.index("torso")]
-    return np.sqrt(TORSO_DEPTH ** 2 + (w ** 2 - TORSO_DEPTH ** 2) * np.asarray(spread) ** 2)
+    return np.sqrt(TORSO_DEPTH**2 + (w**2 - TORSO_DEPTH**2) * np.asarray(spread) ** 2)
 
 
 def spread_for_width(width):
     """The inverse of torso_width: the seen span fraction for a seen torso width."""
     w = WIDTH[SEGMENT_NAMES.index("torso")]
-    return np.sqrt(np.clip((np.asarray(width) ** 2 - TORSO_DEPTH ** 2) / (w ** 2 - TORSO_DEPTH ** 2), 0, 1))
+    return np.sqrt(np.clip((np.asarray(width) ** 2 - TORSO_DEPTH**2) / (w**2 - TORSO_DEPTH**2), 0, 1))
 
 
 def semi_axes(body_height: float) -> np.ndarray:
@@ -215,93 +237,6 @@ def direction(angle_deg):
     """Unit image vector(s) (x right, y down) for angle(s) measured with y up."""
     a = np.radians(angle_deg)
     return np.stack([np.cos(a), -np.sin(a)], axis=-1)
-
-
-def image_angle(d: np.ndarray) -> float:
-    """The angle (degrees, y up) of an image vector ``d`` (x right, y down): inverse of ``direction``."""
-    return float(np.degrees(np.arctan2(-d[1], d[0])))
-
-
-@dataclass(frozen=True)
-class Pose2D:
-    """The 2D model. ``angle``, ``ratio`` are indexed like SEGMENT_NAMES; ``ratio`` is
-    Algorithm 6's foreshortening ratio (projected / model length); ``spread`` in [0, 1]
-    is the seen share of the shoulder and hip span (1 facing the camera, 0 in profile)."""
-
-    pelvis: np.ndarray                     # (2,) pixels
-    scale: float                           # pixels per model unit
-    angle: np.ndarray = field(default_factory=lambda: default_angles())
-    ratio: np.ndarray = field(default_factory=lambda: np.ones(len(SEGMENT_NAMES)))
-    spread: float = 1.0
-
-
-def default_angles() -> np.ndarray:
-    """Standing upright, arms and legs hanging straight down."""
-    return np.array([90.0 if s in ("torso", "head") else 270.0 for s in SEGMENT_NAMES])
-
-
-def forward_kinematics_2d(pose: Pose2D) -> np.ndarray:
-    """Joint positions (16, 2) in pixels from a 2D pose (image-side left/right)."""
-    return forward_kinematics_2d_batch(np.asarray(pose.pelvis, float)[None], pose.scale,
-                                       pose.angle[None], pose.ratio[None],
-                                       np.array([pose.spread]))[0]
-
-
-def _kinematic_matrix() -> np.ndarray:
-    """(16, 12) weights giving each joint from [pelvis, 10 segment vectors, span]."""
-    m = np.zeros((len(JOINTS), 12))
-    m[JOINT_INDEX["pelvis"], 0] = 1.0
-    m[JOINT_INDEX["neck"]] = m[JOINT_INDEX["pelvis"]]
-    m[JOINT_INDEX["neck"], 1 + SEGMENT_INDEX["torso"]] = 1.0
-    m[JOINT_INDEX["chest"]] = m[JOINT_INDEX["pelvis"]]
-    m[JOINT_INDEX["chest"], 1 + SEGMENT_INDEX["torso"]] = CHEST_FRACTION
-    m[JOINT_INDEX["head_top"]] = m[JOINT_INDEX["neck"]]
-    m[JOINT_INDEX["head_top"], 1 + SEGMENT_INDEX["head"]] = 1.0
-    for side, sign in SIDE_SIGN.items():
-        m[JOINT_INDEX[f"shoulder_{side}"]] = m[JOINT_INDEX["neck"]]
-        m[JOINT_INDEX[f"shoulder_{side}"], 1 + SEGMENT_INDEX["torso"]] -= SHOULDER_DROP / LENGTH[SEGMENT_INDEX["torso"]]
-        m[JOINT_INDEX[f"shoulder_{side}"], 11] = sign * SHOULDER_HALF_SPAN
-        m[JOINT_INDEX[f"hip_{side}"]] = m[JOINT_INDEX["pelvis"]]
-        m[JOINT_INDEX[f"hip_{side}"], 11] = sign * HIP_HALF_SPAN
-    for seg, (a, b) in list(SEGMENTS.items())[2:]:
-        m[JOINT_INDEX[b]] = m[JOINT_INDEX[a]]
-        m[JOINT_INDEX[b], 1 + SEGMENT_INDEX[seg]] = 1.0
-    return m
-
-
-KINEMATIC_MATRIX = _kinematic_matrix()
-
-
-def forward_kinematics_2d_batch(pelvis: np.ndarray, scale: float, angle: np.ndarray,
-                                ratio: np.ndarray, spread: np.ndarray) -> np.ndarray:
-    """Joints (B, 16, 2) of B poses (B, 2), (B, 10), (B, 10), (B,) (pelvis (2,), spread a
-    float where shared): KINEMATIC_MATRIX times ``kinematic_basis``'s vectors."""
-    return joints_of_basis(kinematic_basis(pelvis, scale, angle, ratio, spread)[0])
-
-
-def kinematic_basis(pelvis: np.ndarray, scale: float, angle: np.ndarray, ratio: np.ndarray,
-                    spread, rows: int = 12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pelvis, the 10 segment vectors and the image-left unit vector scaled by the
-    seen span of B poses: the first 12 of ``rows`` vectors (rows, B, 2), the rest left
-    to the caller; and the cosines and sines (10, B) of the segments' angles."""
-    a = np.radians(angle).T                                   # (10, B)
-    cos, sin = np.cos(a), np.sin(a)
-    length = LENGTH[:, None] * ratio.T * scale
-    basis = np.empty((rows, len(angle), 2))
-    basis[0] = pelvis
-    basis[1:11, :, 0] = cos * length
-    basis[1:11, :, 1] = -sin * length
-    sin_t, cos_t = sin[SEGMENT_INDEX["torso"]], cos[SEGMENT_INDEX["torso"]]
-    span = spread * scale
-    # image-left normal of the torso axis: (-sin t, -cos t), flipped if the torso points down
-    basis[11, :, 0] = -np.abs(sin_t) * span
-    basis[11, :, 1] = -np.copysign(cos_t, sin_t) * span
-    return basis, cos, sin
-
-
-def joints_of_basis(basis: np.ndarray) -> np.ndarray:
-    """Joints (B, 16, 2) of ``kinematic_basis``'s vectors."""
-    return (KINEMATIC_MATRIX @ basis[:12].reshape(12, -1)).reshape(len(JOINTS), -1, 2).transpose(1, 0, 2)
 
 
 SEGMENT_JOINTS = np.array([[JOINT_INDEX[a], JOINT_INDEX[b]] for a, b in SEGMENTS.values()])
@@ -323,22 +258,23 @@ def body_height(joints3d_rest: np.ndarray) -> float:
 
 # -- geometry of a body that both methods read --------------------------------------
 
-ORIENTATIONS: tuple[str, ...] = ("left", "right", "forward_left", "forward_right",
-                                 "backward_left", "backward_right")
+ORIENTATIONS: tuple[str, ...] = ("left", "right", "forward_left", "forward_right", "backward_left", "backward_right")
 FORESHORTENING: tuple[str, ...] = ("toward", "away")
 TOWARD, AWAY = 1, -1
-ARM_REST = 0.15            # sine of the upper arms' rest angle out from the sagittal plane
+ARM_REST = 0.15  # sine of the upper arms' rest angle out from the sagittal plane
 
 
 def left_direction(joints: np.ndarray) -> np.ndarray:
     """(..., D) the body's right-to-left direction of joints (..., 16, D): the limbs'
     roots (shoulders, hips), each pair's left minus right, summed."""
-    return sum(joints[..., JOINT_INDEX[f"{names[0]}_l"], :] - joints[..., JOINT_INDEX[f"{names[0]}_r"], :]
-               for names in LIMB_JOINTS.values())
+    return sum(
+        joints[..., JOINT_INDEX[f"{names[0]}_l"], :] - joints[..., JOINT_INDEX[f"{names[0]}_r"], :]
+        for names in LIMB_JOINTS.values()
+    )
 
 
 def knee_facing(joints2d: np.ndarray) -> str:
-    """"right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward (forward)."""
+    """ "right" or "left": the image side the knees of 2D joints (F, 16, 2) bend toward (forward)."""
     return "right" if sum(knee_bend(joints2d, side) for side in SIDES).sum() >= 0 else "left"
 
 
@@ -346,7 +282,7 @@ def knee_bend(joints2d: np.ndarray, side: str) -> np.ndarray:
     """(F,) image-x offset of a knee from its hip-ankle line (knees point forward)."""
     hip, knee, ankle = (joints2d[:, JOINT_INDEX[j]] for j in limb("leg", side).joints)
     along = ankle - hip
-    t = np.clip(((knee - hip) * along).sum(-1) / np.maximum((along ** 2).sum(-1), 1e-9), 0, 1)
+    t = np.clip(((knee - hip) * along).sum(-1) / np.maximum((along**2).sum(-1), 1e-9), 0, 1)
     return (knee - hip - t[:, None] * along)[:, 0]
 
 
@@ -354,8 +290,9 @@ def unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-9)
 
 
-def limb_penalty(upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left: np.ndarray,
-                 side: float, leg: bool) -> np.ndarray:
+def limb_penalty(
+    upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left: np.ndarray, side: float, leg: bool
+) -> np.ndarray:
     """Joint-limit violation (>= 0) of limbs given as 3D upper/lower vectors (..., 3).
 
     Legs: thigh at most 30 degrees back, not across the midline, knee bending backward.
@@ -367,9 +304,20 @@ def limb_penalty(upper: np.ndarray, lower: np.ndarray, facing: np.ndarray, left:
     bf, bl = (bend * facing).sum(-1), side * (bend * left).sum(-1)
     if leg:
         ll = side * (l * left).sum(-1)
-        return (np.maximum(0, -uf - 0.5) + np.maximum(0, -ul - 0.25) + 0.3 * np.maximum(0, ul - 0.5)
-                + np.maximum(0, bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - 0.3)
-                + np.abs(ul) + np.abs(ll))
-    return (np.maximum(0, -ul) + 0.5 * np.maximum(0, ul - 0.3) + np.maximum(0, -uf - 0.87)
-            + 0.5 * np.maximum(0, -bf - 0.1) + 0.5 * np.maximum(0, np.abs(bl) - np.maximum(bf, 0))
-            + np.abs(ul - ARM_REST))
+        return (
+            np.maximum(0, -uf - 0.5)
+            + np.maximum(0, -ul - 0.25)
+            + 0.3 * np.maximum(0, ul - 0.5)
+            + np.maximum(0, bf - 0.1)
+            + 0.5 * np.maximum(0, np.abs(bl) - 0.3)
+            + np.abs(ul)
+            + np.abs(ll)
+        )
+    return (
+        np.maximum(0, -ul)
+        + 0.5 * np.maximum(0, ul - 0.3)
+        + np.maximum(0, -uf - 0.87)
+        + 0.5 * np.maximum(0, -bf - 0.1)
+        + 0.5 * np.maximum(0, np.abs(bl) - np.maximum(bf, 0))
+        + np.abs(ul - ARM_REST)
+    )

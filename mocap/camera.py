@@ -19,8 +19,9 @@ class Pinhole:
     def rays(self, pixels: np.ndarray) -> np.ndarray:
         """(..., 3) viewing rays (x, y, 1) of pixels (..., 2): the point at depth Z is Z times the ray (Eq. 10)."""
         p = np.asarray(pixels, float)
-        return np.stack([(p[..., 0] - self.cx) / self.focal, (p[..., 1] - self.cy) / self.focal,
-                         np.ones(p.shape[:-1])], axis=-1)
+        return np.stack(
+            [(p[..., 0] - self.cx) / self.focal, (p[..., 1] - self.cy) / self.focal, np.ones(p.shape[:-1])], axis=-1
+        )
 
     def project(self, points: np.ndarray) -> np.ndarray:
         """(..., 2) pixels of pinhole-frame points (..., 3)."""

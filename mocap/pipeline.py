@@ -40,7 +40,7 @@ class Progress:
     error: str | None = None
     frame: int | None = None
     product: Silhouette | FrameFit | None = None
-    final: bool = True      # False: a fit shown before its legs are chosen (not a step)
+    final: bool = True  # False: a fit shown before its legs are chosen (not a step)
 
     @property
     def ready(self) -> bool:
@@ -54,8 +54,9 @@ def _quiet(_: Progress) -> None:
     pass
 
 
-def silhouette_passes(info: VideoInfo, progress: Report | None = None, background: Background | None = None,
-                      person: str = NONE) -> tuple[list[Silhouette | None], list[FrameFit]]:
+def silhouette_passes(
+    info: VideoInfo, progress: Report | None = None, background: Background | None = None, person: str = NONE
+) -> tuple[list[Silhouette | None], list[FrameFit]]:
     """The silhouette method over a video, also seen by the ``person`` model named ("none":
     background subtraction alone); each silhouette and fit reported as it comes."""
     report, total, done = progress or _quiet, 2 * info.frame_count, [0]
@@ -64,6 +65,7 @@ def silhouette_passes(info: VideoInfo, progress: Report | None = None, backgroun
         done[0] += final
         stage = FITTING if isinstance(product, FrameFit) else SILHOUETTES
         report(Progress(done[0], total, stage, frame=frame, product=product, final=final))
+
     model = open_person_model(person)
     try:
         return fit_clip(info, background, model, shown)
@@ -72,8 +74,7 @@ def silhouette_passes(info: VideoInfo, progress: Report | None = None, backgroun
             model.close()
 
 
-def fit_video(video: str | os.PathLike | VideoInfo,
-              progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:
+def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:
     """Silhouettes and 2D fits for every frame of a video (a path or an opened one)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     return info, silhouette_passes(info, progress)[1]
@@ -85,8 +86,7 @@ def person_model(name: str | None) -> str:
     name = check_name(name or os.environ.get("MOCAP_PERSON_MODEL") or DEFAULT_MODEL, " (MOCAP_PERSON_MODEL)")
     if name == NONE or available(name):
         return name
-    warnings.warn(f"no person model, fitting by silhouettes alone: {install_hint(name)}", MocapWarning,
-                  stacklevel=2)
+    warnings.warn(f"no person model, fitting by silhouettes alone: {install_hint(name)}", MocapWarning, stacklevel=2)
     return NONE
 
 
@@ -101,10 +101,16 @@ def takes_tracking(method: str | None, notes: Annotations) -> bool:
     return (method or notes.method) == "track"
 
 
-def open_session(video: str | os.PathLike | VideoInfo, notes: Annotations | None = None, *,
-                 method: str | None = None, smooth: float = 0.0,
-                 background: str | os.PathLike | tuple[int, int] | None = None,
-                 progress: Report | None = None, person: str = NONE) -> Session:
+def open_session(
+    video: str | os.PathLike | VideoInfo,
+    notes: Annotations | None = None,
+    *,
+    method: str | None = None,
+    smooth: float = 0.0,
+    background: str | os.PathLike | tuple[int, int] | None = None,
+    progress: Report | None = None,
+    person: str = NONE,
+) -> Session:
     """Run a method (None: the annotations', else silhouette) over a video; its session.
     ``background``: the empty scene (a photo or video, or first and last frames; None:
     estimated); ``person``: the silhouette method's person model."""
@@ -126,11 +132,19 @@ class Written:
     n_frames: int
 
 
-def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.PathLike], *,
-                      annotations: str | os.PathLike | None = None, method: str | None = None,
-                      smooth: float = 0.0, background: str | os.PathLike | None = None,
-                      masks: str | os.PathLike | None = None, foot_lock: bool = False,
-                      progress: Report | None = None, person: str | None = None) -> Written:
+def fit_video_to_file(
+    video: str | os.PathLike,
+    exports: dict[str, str | os.PathLike],
+    *,
+    annotations: str | os.PathLike | None = None,
+    method: str | None = None,
+    smooth: float = 0.0,
+    background: str | os.PathLike | None = None,
+    masks: str | os.PathLike | None = None,
+    foot_lock: bool = False,
+    progress: Report | None = None,
+    person: str | None = None,
+) -> Written:
     """`mocap fit`: fit or track, lift, and write ``exports`` ({format key: path}; "json" always,
     VIDEO.motion.json unless given). ``background``: the empty scene (else the annotations');
     ``masks``: a folder for the silhouettes; ``foot_lock``: planted feet kept in place; ``person``:
@@ -149,8 +163,9 @@ def fit_video_to_file(video: str | os.PathLike, exports: dict[str, str | os.Path
         check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
     person = NONE if takes_tracking(method, notes) else person_model(person)
-    session = open_session(info, notes, method=method, smooth=smooth, background=plate, progress=progress,
-                           person=person)
+    session = open_session(
+        info, notes, method=method, smooth=smooth, background=plate, progress=progress, person=person
+    )
     if session.background_warning:
         warnings.warn(session.background_warning, MocapWarning, stacklevel=2)
     clip = session.clip(foot_lock)

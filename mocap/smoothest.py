@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-DEPTH_SMOOTH_S = 0.1       # seconds: Gaussian sigma of the lifted depths over time (Inputs.smooth_depths)
+DEPTH_SMOOTH_S = 0.1  # seconds: Gaussian sigma of the lifted depths over time (Inputs.smooth_depths)
 
 
-def smoothest_states(values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None,
-                     squared: bool = False) -> np.ndarray:
+def smoothest_states(
+    values: np.ndarray, emission: np.ndarray, allowed: np.ndarray | None = None, squared: bool = False
+) -> np.ndarray:
     """(F,) state per frame minimising sum(emission) + sum ||x[t+1] - 2 x[t] + x[t-1]||
     (squared with ``squared``). ``values`` (F, S, D): each state's position; ``emission``
     (F, S): state costs; ``allowed`` (F, S): hard mask, one allowed state per frame."""
@@ -19,13 +20,13 @@ def smoothest_states(values: np.ndarray, emission: np.ndarray, allowed: np.ndarr
         return np.array([int(np.argmin(cost[0]))])
     # acc[t, a, b, c]: the acceleration of states a, b, c at frames t, t+1, t+2
     jerk = values[2:, None, None, :] - 2 * values[1:-1, None, :, None] + values[:-2, :, None, None]
-    acc = (jerk ** 2).sum(-1) if squared else np.linalg.norm(jerk, axis=-1)
+    acc = (jerk**2).sum(-1) if squared else np.linalg.norm(jerk, axis=-1)
     # best[a, b]: the cheapest path whose last two states are a (t-1), b (t)
     best = cost[0][:, None] + cost[1][None, :]
     back = []
     for t in range(2, n):
         total = best[:, :, None] + acc[t - 2]
-        back.append(total.argmin(axis=0))                                       # (b, c)
+        back.append(total.argmin(axis=0))  # (b, c)
         best = total.min(axis=0) + cost[t][None, :]
     a, b = np.unravel_index(int(np.argmin(best)), best.shape)
     path = [b, a]

@@ -13,8 +13,8 @@ from helpers import CLIP, render_walk
 from mocap.body import SEGMENT_NAMES
 from mocap.lift.taylor import depth_fractions
 
-TINY_FRAMES = 20            # 320x240 at 15 fps: fitted in about half a second
-SHAPES = {"4x3": (320, 240), "16x9": (384, 216), "9x16": (216, 384)}     # the usual videos'
+TINY_FRAMES = 20  # 320x240 at 15 fps: fitted in about half a second
+SHAPES = {"4x3": (320, 240), "16x9": (384, 216), "9x16": (216, 384)}  # the usual videos'
 
 
 @pytest.fixture(scope="module")
@@ -51,8 +51,9 @@ def fresh_copy(video: Path, folder: Path) -> Path:
 
 
 def started_app(video: Path, timeout: float = 60.0):
-    """``app.main.create`` on port 0, preprocessed; the caller stops ``app.server``."""
-    from app.main import create
+    """``app.serve.create`` on port 0, preprocessed; the caller stops ``app.server``."""
+    from app.serve import create
+
     app = create(video, port=0)
     app.state.start()
     assert app.state.ready.wait(timeout), "preprocessing did not finish"
@@ -83,8 +84,9 @@ def panning_clip(tmp_path_factory):
     """(path, truth): the walk turned toward the camera, through a perspective camera
     over a panning cluttered background (the tracking method's case), TINY_FRAMES long."""
     path = tmp_path_factory.mktemp("panning") / "walk.mp4"
-    truth = render_walk(path, yaw=45.0, perspective=400.0, moving_background=True,
-                        seed=3, seconds=TINY_FRAMES / CLIP["fps"])
+    truth = render_walk(
+        path, yaw=45.0, perspective=400.0, moving_background=True, seed=3, seconds=TINY_FRAMES / CLIP["fps"]
+    )
     return path, truth
 
 
@@ -107,4 +109,5 @@ def hold_fitting(monkeypatch, at: int, gate, held=None) -> None:
 
         def finish(self):
             return hold(super().finish())
+
     monkeypatch.setattr("mocap.silhouette.FitStream", Held)

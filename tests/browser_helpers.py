@@ -16,17 +16,26 @@ from scipy.spatial.transform import Rotation
 from app.layout import GAP
 
 CHROMIUM = Path("/usr/bin/chromium")
-SKIP_WITHOUT_CHROMIUM = pytest.mark.skipif(not CHROMIUM.exists(),
-                                       reason="Debian's chromium is not installed (apt-get install chromium)")
+SKIP_WITHOUT_CHROMIUM = pytest.mark.skipif(
+    not CHROMIUM.exists(), reason="Debian's chromium is not installed (apt-get install chromium)"
+)
 
 try:
     from playwright import sync_api
-except ImportError:         # the tests that need it are skipped
+except ImportError:  # the tests that need it are skipped
     sync_api = None
 
 ARTIFACTS = Path(__file__).resolve().parents[1] / "artifacts" / "browser"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 VIEWPORT = {"width": 1280, "height": 800}
 TIMEOUT_MS = 20_000
 PANELS = ("video", "silhouette", "front", "side")
@@ -63,7 +72,7 @@ def open_page(browser, port: int):
 def shot(page, name: str) -> None:
     """Save a screenshot of the page as a test artifact."""
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    page.wait_for_timeout(400)          # let the canvas draw the last update
+    page.wait_for_timeout(400)  # let the canvas draw the last update
     page.screenshot(path=str(ARTIFACTS / f"{name}.png"))
 
 
@@ -81,8 +90,10 @@ def screen_point(page, app, world) -> tuple[float, float]:
     camera = next(iter(app.server.get_clients().values())).camera
     local = Rotation.from_quat(camera.wxyz, scalar_first=True).inv().apply(np.asarray(world) - camera.position)
     focal = box["height"] / 2 / np.tan(camera.fov / 2)
-    return (box["x"] + box["width"] / 2 + focal * local[0] / local[2],
-            box["y"] + box["height"] / 2 + focal * local[1] / local[2])
+    return (
+        box["x"] + box["width"] / 2 + focal * local[0] / local[2],
+        box["y"] + box["height"] / 2 + focal * local[1] / local[2],
+    )
 
 
 def panel_boxes(page, app, caption: bool = True) -> dict[str, tuple[float, float, float, float]]:
@@ -92,8 +103,11 @@ def panel_boxes(page, app, caption: bool = True) -> dict[str, tuple[float, float
     top = layout.height / 2 + (GAP if caption else 0.0)
     for name in PANELS:
         x, y = getattr(layout, name)
-        corners = [screen_point(page, app, (x + dx * layout.width / 2, y + dy, 0.0))
-                   for dx in (-1, 1) for dy in (-layout.height / 2, top)]
+        corners = [
+            screen_point(page, app, (x + dx * layout.width / 2, y + dy, 0.0))
+            for dx in (-1, 1)
+            for dy in (-layout.height / 2, top)
+        ]
         xs, ys = zip(*corners)
         boxes[name] = (min(xs), min(ys), max(xs), max(ys))
     return boxes
@@ -114,9 +128,12 @@ def fitted_camera(app, page, before: set[int]) -> None:
         canvas = page.locator("canvas[data-engine]").bounding_box()
         size = (camera.image_width, camera.image_height)
         position, look_at = app.layout.camera(*size, camera.fov)
-        return (np.allclose(size, (canvas["width"], canvas["height"]), atol=1.0)
-                and np.allclose(camera.position, position, atol=1e-3)
-                and np.allclose(camera.look_at, look_at, atol=1e-3))
+        return (
+            np.allclose(size, (canvas["width"], canvas["height"]), atol=1.0)
+            and np.allclose(camera.position, position, atol=1e-3)
+            and np.allclose(camera.look_at, look_at, atol=1e-3)
+        )
+
     wait_until(fitted)
 
 
@@ -127,11 +144,12 @@ def scene_meshes(app) -> tuple[trimesh.Trimesh, np.ndarray, dict]:
     (view, segment index) for a cylinder or (view, -1 - mark number) for a mark; and
     each owner's 4x4 placing of its unit shape."""
     from app.views import CONE, SIDE
+
     cylinder = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=20)
     meshes, owners, placings = [], [], {}
-    for view, (body, marks, at, frame) in enumerate(zip(app.scene.bodies, app.scene.marks,
-                                                        (app.layout.front, app.layout.side),
-                                                        ((1.0, 0.0, 0.0, 0.0), SIDE))):
+    for view, (body, marks, at, frame) in enumerate(
+        zip(app.scene.bodies, app.scene.marks, (app.layout.front, app.layout.side), ((1.0, 0.0, 0.0, 0.0), SIDE))
+    ):
         panel = _transform(frame, at + (0.0,), (1.0, 1.0, 1.0))
         for shape, handles, first in ((cylinder, body, 0), (CONE, marks, -1)):
             for i, h in enumerate(handles):
@@ -166,11 +184,12 @@ def visible_point(app, segment: str | None = None, mark: int | None = None) -> n
     and rays a canvas pixel around it (where a click lands, rounded to the pixel),
     must each hit that mesh before any other of the scene's; None where there is none."""
     from mocap.body import SEGMENT_INDEX
+
     camera = next(iter(app.server.get_clients().values())).camera
     eye = np.asarray(camera.position, float)
     mesh, owners, placings = scene_meshes(app)
     want = SEGMENT_INDEX[segment] if mark is None else -1 - mark
-    pixel = 2 * np.tan(camera.fov / 2) / camera.image_height       # a canvas pixel per unit of depth
+    pixel = 2 * np.tan(camera.fov / 2) / camera.image_height  # a canvas pixel per unit of depth
     along = (0.0, -0.2, 0.2, -0.35, 0.35) if mark is None else (0.5, 0.3)
     for view in range(len(app.scene.bodies)):
         if (view, want) not in placings:
@@ -188,6 +207,6 @@ def _rays_around(eye: np.ndarray, point: np.ndarray, spread: float) -> np.ndarra
     """Unit rays from ``eye`` through ``point`` and through four points ``spread`` per unit
     of depth beside it, across the ray."""
     ray = (point - eye) / np.linalg.norm(point - eye)
-    across = np.linalg.svd(ray[None])[2][1:]                        # two unit vectors normal to it
+    across = np.linalg.svd(ray[None])[2][1:]  # two unit vectors normal to it
     rays = ray + spread * np.concatenate([np.zeros((1, 3)), across, -across])
     return rays / np.linalg.norm(rays, axis=1, keepdims=True)

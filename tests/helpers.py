@@ -23,7 +23,7 @@ from mocap.synth.walk import walk_cycle
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DOG_WALKER = SHARED_DATA / "video" / "dog_walker.avi"
-DEV_CLIPS = SHARED_DATA / "clips"   # rendered CMU motion capture with exact masks (README there)
+DEV_CLIPS = SHARED_DATA / "clips"  # rendered CMU motion capture with exact masks (README there)
 # joints marked by hand on every third frame of dog_walker (see the file's own notes)
 DOG_WALKER_LABELS = Path(__file__).resolve().parent / "data" / "dog_walker.labels.json"
 CLIP = dict(size=(320, 240), fps=15.0, seconds=2.0)
@@ -36,8 +36,7 @@ def render_walk(path: str | Path, view: str = "side", seed: int = 1, **overrides
     return synth.render_clip(joints, path, view=view, seed=seed, **opts)
 
 
-def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, regraded: bool = False,
-                          **overrides) -> Truth:
+def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, regraded: bool = False, **overrides) -> Truth:
     """The walk with the performer stepped far out of the frame (20 m to the image
     right) on the frames of `gone`; the camera frames the walk as if they had stayed.
     ``regraded``: the frames after `gone` in other colours (red and blue swapped, as
@@ -54,6 +53,7 @@ def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, regraded
     def frame(i: int) -> np.ndarray:
         image = synth.draw_frame(scene, i)
         return np.ascontiguousarray(image[..., ::-1]) if regraded and i >= gone.stop else image
+
     write_video(path, (frame(i) for i in range(n)), fps, opts.size)
     return synth.scene_truth(scene, "walk-cycle with an exit", np.arange(n))
 
@@ -73,11 +73,15 @@ def render_walk_with_occluder(path: str | Path, hidden: slice, seed: int = 2, **
     def frame(i: int) -> np.ndarray:
         image = synth.draw_frame(scene, i)
         body = truth.joints2d[i, :, 0]
-        left = np.interp(i, [hidden.start - 2, hidden.start, hidden.stop - 1, hidden.stop + 1],
-                         [-board, body.min() - 8, body.max() + 8 - board, width])
+        left = np.interp(
+            i,
+            [hidden.start - 2, hidden.start, hidden.stop - 1, hidden.stop + 1],
+            [-board, body.min() - 8, body.max() + 8 - board, width],
+        )
         lo, hi = int(np.clip(left, 0, width)), int(np.clip(left + board, 0, width))
         image[:, lo:hi] = (90, 95, 100)
         return image
+
     write_video(path, (frame(i) for i in range(len(truth.joints2d))), fps, opts.size)
     return truth
 
@@ -99,8 +103,7 @@ def write_empty_scene(path: str | Path, n: int = 20) -> None:
     opts = RenderOptions(size=CLIP["size"], fps=CLIP["fps"])
     scene = synth.plan_scene(walk_cycle(1.0, opts.fps), opts)
     room, rng = synth.background(scene, 0), np.random.default_rng(0)
-    frames = (np.clip(room + rng.normal(0, 2, room.shape), 0, 255).astype(np.uint8)
-              for _ in range(n))
+    frames = (np.clip(room + rng.normal(0, 2, room.shape), 0, 255).astype(np.uint8) for _ in range(n))
     write_video(path, frames, opts.fps, opts.size)
 
 
@@ -111,8 +114,9 @@ def dog_walker_marks() -> dict[str, dict[str, list[float]]]:
 
 def frame_joints(motion: dict) -> np.ndarray:
     """(F, 16, 2) joints2d of a motion file, NaN where no person was found."""
-    return np.array([f["joints2d"] if f.get("person", True) else np.full((16, 2), np.nan)
-                     for f in motion["frames"]], dtype=float)
+    return np.array(
+        [f["joints2d"] if f.get("person", True) else np.full((16, 2), np.nan) for f in motion["frames"]], dtype=float
+    )
 
 
 def text_mp4(folder: Path) -> Path:
@@ -131,12 +135,13 @@ def png_avi(folder: Path) -> Path:
 def page_data(text: str) -> dict:
     """The clip a playback page carries (the JSON of its `const DATA = ...;` line)."""
     line = next(line for line in text.splitlines() if line.startswith("const DATA = "))
-    return json.loads(line[len("const DATA = "):].rstrip(";"))
+    return json.loads(line[len("const DATA = ") :].rstrip(";"))
 
 
 def run_cli(capsys, *argv) -> tuple[int, list[str]]:
     """Exit code and stderr lines of `mocap ARGV` run in this process."""
     from mocap.cli import main
+
     code = main([str(a) for a in argv])
     return code, capsys.readouterr().err.splitlines()
 

@@ -18,7 +18,9 @@ from mocap.synth.oracle import annotations_for_poses
 from mocap.synth.walk import walk_cycle
 
 CONTRACT_EXAMPLE = {
-    "format": "mocap-annotations", "version": 1, "keyframes": [0, 5, 10],
+    "format": "mocap-annotations",
+    "version": 1,
+    "keyframes": [0, 5, 10],
     "frames": {
         "0": {"orientation": "right", "foreshortening": {"upper_arm_l": "away", "lower_leg_r": "toward"}},
         "10": {"foreshortening": {"upper_arm_l": "toward"}, "joints2d": {"wrist_r": [312.5, 140.0]}},
@@ -67,8 +69,13 @@ def test_the_background_is_kept_through_a_save(tmp_path):
 
 
 def test_keyframes_default_to_every_frame_and_orientation_holds_until_changed():
-    notes = parse({"format": "mocap-annotations", "version": 1,
-                   "frames": {"3": {"orientation": "left"}, "7": {"orientation": "backward_right"}}})
+    notes = parse(
+        {
+            "format": "mocap-annotations",
+            "version": 1,
+            "frames": {"3": {"orientation": "left"}, "7": {"orientation": "backward_right"}},
+        }
+    )
     assert notes.keyframes is None and notes.keyframe_indices(4) == [0, 1, 2, 3]
     assert notes.orientations(9) == [None] * 3 + ["left"] * 4 + ["backward_right"] * 2
 
@@ -82,54 +89,89 @@ def test_a_held_sign_ends_where_its_segment_passes_the_image_plane():
     assert held_user_signs(values, since, negligible)[:, 0].tolist() == [0, 0, 1, 1, 1, 0, 0, 0]
 
 
-@pytest.mark.parametrize("doc, message", [
-    ({"format": "mocap-motion", "version": 1}, 'A.json: format: expected "mocap-annotations"'),
-    ({"format": "mocap-annotations", "version": 2}, "A.json: version: expected 1, got 2"),
-    ({"format": "mocap-annotations", "version": True}, "A.json: version: expected 1, got true"),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"12": {"foreshortening": {"upper_leg": "away"}}}},
-     'A.json: frames["12"].foreshortening: unknown segment "upper_leg"'),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"1": {"joints2d": {"hand_l": [1, 2]}}}},
-     'A.json: frames["1"].joints2d: unknown joint "hand_l"'),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"1": {"orientation": "up"}}},
-     'A.json: frames["1"].orientation: unknown orientation "up"'),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"20": {"orientation": "left"}}},
-     'A.json: frames["20"]: frame 20 is out of range (the video has 20 frames)'),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"-1": {}}},
-     'A.json: frames["-1"]: frame key "-1" is not a frame index'),
-    ({"format": "mocap-annotations", "version": 1, "keyframes": [0, 25]},
-     "A.json: keyframes[1]: frame 25 is out of range"),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"2": {"joints2d": {"knee_l": [1, "x"]}}}},
-     'A.json: frames["2"].joints2d.knee_l: expected [x, y] in pixels'),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"2": {"foreshortening": {"head": "near"}}}},
-     'A.json: frames["2"].foreshortening.head: expected "toward" or "away"'),
-    ({"format": "mocap-annotations", "version": 1, "frames": {"2": {"joint2d": {}}}},
-     'A.json: frames["2"]: unknown key "joint2d"'),
-    ([1, 2], "A.json: expected a JSON object, got a list"),
-    ({"format": "mocap-annotations", "version": 1, "method": "optical"},
-     "A.json: method: expected one of silhouette, track, got \"optical\""),
-    ({"format": "mocap-annotations", "version": 1, "background": [3, 25]},
-     "A.json: background: frame 25 is out of range (the video has 20 frames)"),
-    ({"format": "mocap-annotations", "version": 1, "background": [5, 2]},
-     "A.json: background: frames 5..2 are not a range"),
-    ({"format": "mocap-annotations", "version": 1, "background": ""},
-     "A.json: background: empty file name"),
-    ({"format": "mocap-annotations", "version": 1, "background": {"file": "a.png"}},
-     "A.json: background: expected a file name or [first, last] frames, got an object"),
-])
+@pytest.mark.parametrize(
+    "doc, message",
+    [
+        ({"format": "mocap-motion", "version": 1}, 'A.json: format: expected "mocap-annotations"'),
+        ({"format": "mocap-annotations", "version": 2}, "A.json: version: expected 1, got 2"),
+        ({"format": "mocap-annotations", "version": True}, "A.json: version: expected 1, got true"),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"12": {"foreshortening": {"upper_leg": "away"}}}},
+            'A.json: frames["12"].foreshortening: unknown segment "upper_leg"',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"1": {"joints2d": {"hand_l": [1, 2]}}}},
+            'A.json: frames["1"].joints2d: unknown joint "hand_l"',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"1": {"orientation": "up"}}},
+            'A.json: frames["1"].orientation: unknown orientation "up"',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"20": {"orientation": "left"}}},
+            'A.json: frames["20"]: frame 20 is out of range (the video has 20 frames)',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"-1": {}}},
+            'A.json: frames["-1"]: frame key "-1" is not a frame index',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "keyframes": [0, 25]},
+            "A.json: keyframes[1]: frame 25 is out of range",
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"2": {"joints2d": {"knee_l": [1, "x"]}}}},
+            'A.json: frames["2"].joints2d.knee_l: expected [x, y] in pixels',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"2": {"foreshortening": {"head": "near"}}}},
+            'A.json: frames["2"].foreshortening.head: expected "toward" or "away"',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "frames": {"2": {"joint2d": {}}}},
+            'A.json: frames["2"]: unknown key "joint2d"',
+        ),
+        ([1, 2], "A.json: expected a JSON object, got a list"),
+        (
+            {"format": "mocap-annotations", "version": 1, "method": "optical"},
+            'A.json: method: expected one of silhouette, track, got "optical"',
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "background": [3, 25]},
+            "A.json: background: frame 25 is out of range (the video has 20 frames)",
+        ),
+        (
+            {"format": "mocap-annotations", "version": 1, "background": [5, 2]},
+            "A.json: background: frames 5..2 are not a range",
+        ),
+        ({"format": "mocap-annotations", "version": 1, "background": ""}, "A.json: background: empty file name"),
+        (
+            {"format": "mocap-annotations", "version": 1, "background": {"file": "a.png"}},
+            "A.json: background: expected a file name or [first, last] frames, got an object",
+        ),
+    ],
+)
 def test_bad_annotations_name_the_place(doc, message):
     with pytest.raises(MocapError) as err:
         parse(doc)
     assert str(err.value).startswith(message), str(err.value)
 
 
-@pytest.mark.parametrize("text, message", [
-    ("{", "A.json: not valid JSON"),
-    ('{"format": "mocap-annotations", "version": 1, "frames": {"1": {}, "1": {}}}', 'duplicate key "1"'),
-    ('{"format": "mocap-annotations", "version": 1, "frames": {"1": {"joints2d": {"neck": [NaN, 1]}}}}',
-     "NaN is not a JSON number"),
-    ('{"format": "mocap-annotations", "version": 1, "frames": {"1": {"joints2d": {"neck": [1e999, 1]}}}}',
-     'frames["1"].joints2d.neck: expected [x, y]'),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("{", "A.json: not valid JSON"),
+        ('{"format": "mocap-annotations", "version": 1, "frames": {"1": {}, "1": {}}}', 'duplicate key "1"'),
+        (
+            '{"format": "mocap-annotations", "version": 1, "frames": {"1": {"joints2d": {"neck": [NaN, 1]}}}}',
+            "NaN is not a JSON number",
+        ),
+        (
+            '{"format": "mocap-annotations", "version": 1, "frames": {"1": {"joints2d": {"neck": [1e999, 1]}}}}',
+            'frames["1"].joints2d.neck: expected [x, y]',
+        ),
+    ],
+)
 def test_bad_json_is_refused(text, message):
     with pytest.raises(MocapError, match="^A.json: ") as err:
         annotations_from_text(text, 20, "A.json")
@@ -138,8 +180,12 @@ def test_bad_json_is_refused(text, message):
 
 def test_save_and_load_round_trip_atomically(tmp_path):
     path = tmp_path / "a.json"
-    notes = (parse(CONTRACT_EXAMPLE).with_orientation(4, "forward_left")
-             .with_foreshortening(4, "head", "away").with_joint(6, "ankle_l", (10.0, 20.5)))
+    notes = (
+        parse(CONTRACT_EXAMPLE)
+        .with_orientation(4, "forward_left")
+        .with_foreshortening(4, "head", "away")
+        .with_joint(6, "ankle_l", (10.0, 20.5))
+    )
     save_annotations(path, notes)
     assert load_annotations(path, 20) == notes
     assert [p.name for p in tmp_path.iterdir()] == ["a.json"]
@@ -168,7 +214,7 @@ def test_editing_refuses_unknown_names():
 
 
 def test_annotations_written_for_known_poses_say_what_they_show():
-    joints = walk_cycle(1.0, 15.0)          # faces +z: the camera, turned neither way
+    joints = walk_cycle(1.0, 15.0)  # faces +z: the camera, turned neither way
     notes = annotations_for_poses(joints)
     assert notes.orientations(len(joints))[0].startswith("forward_")
     values, _ = notes.held_signs(len(joints))
@@ -178,14 +224,57 @@ def test_annotations_written_for_known_poses_say_what_they_show():
 # -- fuzzing: whatever the input, the loader answers with Annotations or one MocapError --
 
 _json = st.recursive(
-    st.none() | st.booleans() | st.integers(-3, 40) | st.floats(allow_nan=False) | st.text(max_size=12)
-    | st.sampled_from(["format", "version", "frames", "keyframes", "mocap-annotations", "left", "toward",
-                       "upper_arm_l", "wrist_r", "orientation", "foreshortening", "joints2d", "0", "12"]),
-    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(
-        st.sampled_from(["format", "version", "frames", "keyframes", "0", "3", "12", "orientation",
-                         "foreshortening", "joints2d", "upper_arm_l", "head", "wrist_r", "x"]) | st.text(max_size=6),
-        inner, max_size=4),
-    max_leaves=20)
+    st.none()
+    | st.booleans()
+    | st.integers(-3, 40)
+    | st.floats(allow_nan=False)
+    | st.text(max_size=12)
+    | st.sampled_from(
+        [
+            "format",
+            "version",
+            "frames",
+            "keyframes",
+            "mocap-annotations",
+            "left",
+            "toward",
+            "upper_arm_l",
+            "wrist_r",
+            "orientation",
+            "foreshortening",
+            "joints2d",
+            "0",
+            "12",
+        ]
+    ),
+    lambda inner: (
+        st.lists(inner, max_size=4)
+        | st.dictionaries(
+            st.sampled_from(
+                [
+                    "format",
+                    "version",
+                    "frames",
+                    "keyframes",
+                    "0",
+                    "3",
+                    "12",
+                    "orientation",
+                    "foreshortening",
+                    "joints2d",
+                    "upper_arm_l",
+                    "head",
+                    "wrist_r",
+                    "x",
+                ]
+            )
+            | st.text(max_size=6),
+            inner,
+            max_size=4,
+        )
+    ),
+    max_leaves=20,
+)
 
 
 def _nested(frame: dict) -> dict:
@@ -193,8 +282,13 @@ def _nested(frame: dict) -> dict:
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.one_of(_json, _json.map(_nested), st.dictionaries(st.sampled_from([
-    "orientation", "foreshortening", "joints2d"]), _json, max_size=3).map(_nested)))
+@given(
+    st.one_of(
+        _json,
+        _json.map(_nested),
+        st.dictionaries(st.sampled_from(["orientation", "foreshortening", "joints2d"]), _json, max_size=3).map(_nested),
+    )
+)
 def test_the_loader_only_ever_raises_mocap_errors(doc):
     try:
         result = annotations_from_text(json.dumps(doc), 20, "A.json")

@@ -15,11 +15,11 @@ import pytest
 from app_helpers import TINY_FRAMES, app, deepest_segment, fresh_copy, hold_fitting, tiny_video  # noqa: F401
 from helpers import render_walk, write_empty_scene
 
-from app.controls import REVIEW_LINES, review_text
 from app.edits import toggled_keyframe
 from app.layout import Layout
 from app.saving import annotations_path
 from app.state import AppState
+from app.texts import REVIEW_LINES, review_text
 from app.views import DISPLAY_HEIGHT, segment_transforms, video_image
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
@@ -37,6 +37,7 @@ def saved(state: AppState) -> Annotations:
 
 
 # -- preprocessing --------------------------------------------------------------------
+
 
 def test_streamed_preprocessing_equals_fit_video(tiny_video):
     info, fits = fit_video(tiny_video)
@@ -57,6 +58,7 @@ def test_fits_stream_out_while_silhouettes_are_found_and_equal_the_whole_clips(t
     from mocap.pipeline import FITTING, SILHOUETTES, silhouette_passes
     from mocap.silhouette.legchain import LAG_S
     from mocap.silhouette.passes import SCALE_WINDOW_S, SPREAD_WINDOW_S
+
     render_walk(tmp_path / "walk.mp4", seconds=4.0)
     info = open_video(tmp_path / "walk.mp4")
     reports = []
@@ -71,7 +73,7 @@ def test_fits_stream_out_while_silhouettes_are_found_and_equal_the_whole_clips(t
         found = [p.stage for p in kind[:first_fit]].count(SILHOUETTES)
         assert found == needed < info.frame_count, (found, needed)
     first_looks = [p.frame for p in reports if not p.final]
-    assert first_looks == list(range(info.frame_count - windows))    # the frames fitted before the end
+    assert first_looks == list(range(info.frame_count - windows))  # the frames fitted before the end
     whole = whole_clip_fits(silhouettes, processing_scale(info), info.fps)
     assert [f.index for f in fits] == [f.index for f in whole] == list(range(info.frame_count))
     for a, b in zip(fits, whole):
@@ -92,6 +94,7 @@ def whole_clip_fits(silhouettes: list, scale: float, fps: float) -> list:
         rolling_percentile,
         torso_reads,
     )
+
     heights = body_heights(silhouettes, fps)
     reads = [(np.nan, np.nan, False) if s is None else torso_reads(s, h) for s, h in zip(silhouettes, heights)]
     raw, lift_raw, readable = (np.array(values) for values in zip(*reads))
@@ -117,13 +120,14 @@ def test_page_state_while_preprocessing(tiny_video, tmp_path, monkeypatch):
     assert not state.progress.ready and 0 < state.progress.done < state.progress.total
     with pytest.raises(MocapError, match="still being fitted"):
         state.flip_sign(0, "torso")
-    assert state.set_orientation(0, "right")           # saved now, lifted when ready
+    assert state.set_orientation(0, "right")  # saved now, lifted when ready
     gate.set()
     assert state.ready.wait(30) and state.progress.ready
     assert state.view(0).orientation == "right" and state.view(0).pose3d is not None
 
 
 # -- edits ----------------------------------------------------------------------------
+
 
 def test_flip_changes_the_pose_and_is_saved_and_restored(app):
     state = app.state
@@ -144,13 +148,13 @@ def test_edits_undo_redo_and_the_file_follows(app):
     state = app.state
     assert state.set_override(3, "wrist_r", (100.0, 120.0))
     assert state.set_orientation(6, "left")
-    assert not state.set_orientation(6, "left")         # no change, no history entry
+    assert not state.set_orientation(6, "left")  # no change, no history entry
     assert state.undo() == 6 and state.frame == 6
     assert saved(state).frames[3].joints2d == {"wrist_r": (100.0, 120.0)} and 6 not in saved(state).frames
     assert state.undo() == 3 and saved(state) == Annotations()
     assert state.undo() is None
     assert state.redo() == 3 and saved(state).frames[3].joints2d["wrist_r"] == (100.0, 120.0)
-    assert state.toggle_keyframe(2)                      # a new edit drops the redo stack
+    assert state.toggle_keyframe(2)  # a new edit drops the redo stack
     assert state.redo() is None
     np.testing.assert_allclose(state.view(3).joints2d[JOINT_INDEX["wrist_r"]], (100.0, 120.0))
 
@@ -177,6 +181,7 @@ def test_keyframes_marked_and_unmarked():
 def test_unsaveable_edit_is_refused_and_not_applied(app, monkeypatch):
     def refuse(*_args):
         raise PermissionError(13, "Permission denied")
+
     monkeypatch.setattr("app.saving.save_annotations", refuse)
     with pytest.raises(MocapError, match="cannot save annotations"):
         app.state.set_orientation(0, "left")
@@ -194,6 +199,7 @@ def test_concurrent_edits_never_corrupt_the_state(app):
             state.set_override(frame, "ankle_l", (float(t), float(i)))
             state.flip_sign(frame, "torso")
             state.go_to(frame)
+
     threads = [threading.Thread(target=work, args=(t,)) for t in range(8)]
     for thread in threads:
         thread.start()
@@ -212,16 +218,17 @@ def test_annotation_file_lives_beside_the_video():
 
 # -- review ---------------------------------------------------------------------------
 
+
 def test_doubt_signs_on_made_up_joints():
     joints = np.zeros((3, 16, 2))
-    joints[:, JOINT_INDEX["neck"]] = (0.0, -50.0)                       # torso and head upright
+    joints[:, JOINT_INDEX["neck"]] = (0.0, -50.0)  # torso and head upright
     joints[:, JOINT_INDEX["head_top"]] = (0.0, -75.0)
     joints[:, JOINT_INDEX["knee_l"]] = joints[:, JOINT_INDEX["knee_r"]] = (0.0, 40.0)
-    joints[2, JOINT_INDEX["knee_l"]] = (40.0, 0.0)                      # a thigh sideways
+    joints[2, JOINT_INDEX["knee_l"]] = (40.0, 0.0)  # a thigh sideways
     assert broken_limits(joints).tolist() == [[False] * 4, [False] * 4, [False, False, True, False]]
     hands = np.zeros((3, 16, 2))
     hands[:, JOINT_INDEX["wrist_l"]] = [(0, 0), (10, 0), (100, 0)]
-    hands[:, JOINT_INDEX["wrist_r"]] = [(100, 0), (90, 0), (10, 0)]   # frame 2: swapped
+    hands[:, JOINT_INDEX["wrist_r"]] = [(100, 0), (90, 0), (10, 0)]  # frame 2: swapped
     swaps = likely_swaps(hands, np.ones(3))
     assert swaps[:, 0].tolist() == [False, False, True]
 
@@ -229,9 +236,12 @@ def test_doubt_signs_on_made_up_joints():
 def test_doubts_name_segments_as_the_body_tab_does():
     end_on = np.zeros(10, bool)
     end_on[SEGMENT_INDEX["upper_arm_l"]] = True
-    limits = np.array([True, False, False, True])                    # waist, and the right hip
+    limits = np.array([True, False, False, True])  # waist, and the right hip
     assert review._reasons("S 0.9", False, end_on, limits, np.zeros(2, bool)) == (
-        "upper arm L seen end-on", "torso outside its joint limit", "upper leg R outside its joint limit")
+        "upper arm L seen end-on",
+        "torso outside its joint limit",
+        "upper leg R outside its joint limit",
+    )
 
 
 def test_a_covering_review_stops_in_the_middle_of_every_stretch_worst_first():
@@ -261,14 +271,14 @@ def test_review_queue_ranks_and_cycles(every_fit_doubtful, app):
     assert len(frames) == TINY_FRAMES
     visits = [app.state.next_doubtful() for _ in range(len(frames) + 1)]
     assert visits == frames + frames[:1]
-    assert app.controls.status.content.endswith("Next: check the doubtful frames (Review tab, key N), "
-                                                "then Export.")
-    text = review_text(app.state)          # the page lists the head of the queue, and says so
+    assert app.controls.status.content.endswith("Next: check the doubtful frames (Review tab, key N), then Export.")
+    text = review_text(app.state)  # the page lists the head of the queue, and says so
     assert f"{TINY_FRAMES} frames to review; the {REVIEW_LINES} most doubtful" in text
     assert text.count("\n- **") == REVIEW_LINES
 
 
 # -- scene geometry and the views a server pushes ---------------------------------------
+
 
 def test_click_ray_to_video_pixel():
     layout = Layout.for_video(320, 240)
@@ -277,7 +287,7 @@ def test_click_ray_to_video_pixel():
     origin = np.array([0.3, -0.2, 9.0])
     at = layout.video_pixel(origin, np.array([x, y, 0.0]) - origin, (320, 240))
     np.testing.assert_allclose(at, (100, 60), atol=1e-9)
-    assert layout.video_pixel(origin, (0.0, 0.0, -1.0), (320, 240)) is None     # between panels
+    assert layout.video_pixel(origin, (0.0, 0.0, -1.0), (320, 240)) is None  # between panels
 
 
 def test_a_small_frame_is_shown_enlarged_with_its_marks_in_place():
@@ -285,16 +295,17 @@ def test_a_small_frame_is_shown_enlarged_with_its_marks_in_place():
     image = video_image(frame, {"wrist_l": (60.0, 100.0)}, 1.0)
     factor = DISPLAY_HEIGHT / 144
     assert image.shape == (DISPLAY_HEIGHT, round(180 * factor), 3)
-    drawn = np.argwhere((image != 90).any(axis=-1))            # the ring and its name
+    drawn = np.argwhere((image != 90).any(axis=-1))  # the ring and its name
     ring = drawn[np.hypot(*(drawn - (100 * factor, 60 * factor)).T) < 0.03 * DISPLAY_HEIGHT]
     assert len(ring) and np.abs(ring.mean(axis=0) - (100 * factor, 60 * factor)).max() < 1
-    assert np.ptp(ring, axis=0).max() < 0.05 * DISPLAY_HEIGHT   # small against the frame
+    assert np.ptp(ring, axis=0).max() < 0.05 * DISPLAY_HEIGHT  # small against the frame
     big = np.full((480, 640, 3), 90, np.uint8)
     assert video_image(big, {}, 1.0).shape == big.shape
 
 
 def test_cylinders_join_the_joints(app):
     from scipy.spatial.transform import Rotation
+
     pose = app.state.view(5).pose3d
     centres, wxyz, lengths = segment_transforms(pose)
     axis = Rotation.from_quat(wxyz, scalar_first=True).apply([0.0, 0.0, 1.0])
@@ -315,7 +326,7 @@ def test_server_views_follow_edits_and_frames(app):
     assert not np.allclose(np.concatenate(before), np.concatenate([handle.position, handle.wxyz]))
     button = app.controls.segments[segment]
     assert "set here" in button.label
-    np.testing.assert_array_equal(app.scene.video.image, image)      # untouched by a flip
+    np.testing.assert_array_equal(app.scene.video.image, image)  # untouched by a flip
     state.go_to(8)
     assert not np.array_equal(app.scene.video.image, image)
     assert "set here" not in button.label
@@ -339,7 +350,8 @@ def test_serve_command_line(capsys):
 def test_a_failed_preprocessing_stops_the_bar_and_says_why(tmp_path):
     """Nobody in the video: the progress bar stops animating, turns red and the status
     line names the problem (the bar no longer pretends to work)."""
-    from app.main import create
+    from app.serve import create
+
     write_empty_scene(tmp_path / "empty.mp4")
     app = create(tmp_path / "empty.mp4", port=0)
     try:
@@ -356,20 +368,20 @@ def test_a_failed_preprocessing_stops_the_bar_and_says_why(tmp_path):
 
 def test_controls_enabled_only_when_they_can_act(app):
     c, state = app.controls, app.state
-    assert c.clear_override.disabled                        # no override on the frame
+    assert c.clear_override.disabled  # no override on the frame
     state.set_override(3, "wrist_r", (100.0, 100.0))
     assert not c.clear_override.disabled
-    c.joint.value = "elbow_l"                               # chosen, but not placed here
+    c.joint.value = "elbow_l"  # chosen, but not placed here
     app.refresh()
     assert c.clear_override.disabled
     c.joint.value = "wrist_r"
     app.refresh()
     assert not c.clear_override.disabled
-    assert not c.mark.disabled and c.track.disabled         # marks missing: nothing to track
+    assert not c.mark.disabled and c.track.disabled  # marks missing: nothing to track
     state.marks_from_fit()
-    assert c.mark.disabled and not c.track.disabled         # all 16 marked
+    assert c.mark.disabled and not c.track.disabled  # all 16 marked
     state.set_method("track")
-    assert all(b.disabled for b in c.downloads.values())    # nothing tracked yet
+    assert all(b.disabled for b in c.downloads.values())  # nothing tracked yet
     assert all(b.disabled for b in c.segments.values()) and c.keyframe.disabled
 
 
@@ -385,19 +397,19 @@ def test_play_follows_the_clock_from_a_moved_frame_and_stops_at_the_end(app):
         before, frame, after = time.monotonic(), state.frame, time.monotonic()
         assert origin + (before - since[1]) * fps - 0.5 * fps <= frame, (frame, origin)
         assert frame <= origin + (after - since[0]) * fps + 1, (frame, origin)
+
     started = time.monotonic()
     app.player.toggle()
     since = (started, time.monotonic())
     assert app.player.playing
     time.sleep(0.4)
     on_the_clock(0, since)
-    slider = app.controls.frame.value       # read first: the player may step in between
+    slider = app.controls.frame.value  # read first: the player may step in between
     assert 0 < slider <= state.frame, (slider, state.frame)
-    shown = np.array([h.position for h in app.scene.bodies[0]])     # the 3D: the animation's
+    shown = np.array([h.position for h in app.scene.bodies[0]])  # the 3D: the animation's
     now = state.frame
     poses = [app.player.pose(f) for f in range(max(now - 2, 0), now + 1)]
-    assert any(np.allclose(shown, segment_transforms(p - p[JOINT_INDEX["pelvis"]])[0], atol=1e-6)
-               for p in poses)
+    assert any(np.allclose(shown, segment_transforms(p - p[JOINT_INDEX["pelvis"]])[0], atol=1e-6) for p in poses)
     moved = time.monotonic()
     state.go_to(2)
     since = (moved, time.monotonic())
@@ -418,7 +430,7 @@ def test_play_follows_the_clock_from_a_moved_frame_and_stops_at_the_end(app):
 
 
 def test_the_empty_stage_in_use_is_not_refitted(app):
-    """"Use as the empty stage" with the stage in use refuses, and keeps every fit shown."""
+    """ "Use as the empty stage" with the stage in use refuses, and keeps every fit shown."""
     with pytest.raises(MocapError, match="already estimated from the clip: nothing to refit"):
         app.state.set_background("")
     app.state.set_background("0-3")

@@ -12,8 +12,8 @@ import pytest
 from app_helpers import TINY_FRAMES, fresh_copy, panning_clip, tiny_video  # noqa: F401
 from helpers import DOG_WALKER, dog_walker_marks
 
-from app.controls import frame_text, review_text
 from app.state import AppState
+from app.texts import frame_text, review_text
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.io.annotations import load_annotations
@@ -63,8 +63,7 @@ def test_tracking_needs_every_mark_and_names_the_missing_one(panning_clip, tmp_p
 
 def test_the_page_shows_the_tracked_joints_and_their_3d(tracked):
     state, truth = tracked
-    errors = [np.linalg.norm(state.view(i).joints2d - truth.joints2d[i], axis=-1)
-              for i in range(TINY_FRAMES)]
+    errors = [np.linalg.norm(state.view(i).joints2d - truth.joints2d[i], axis=-1) for i in range(TINY_FRAMES)]
     assert np.median(errors) < 0.04 * truth.body_height_px
     view = state.view(TINY_FRAMES // 2)
     assert view.method == "track" and view.fitted and view.pose3d.shape == (16, 3)
@@ -212,8 +211,7 @@ def test_a_pin_moves_the_frames_around_it_and_says_so(tracked):
     before = {i: state.view(i).joints2d[ankle].copy() for i in range(6, 15)}
     state.set_override(10, "ankle_l", tuple(before[10] + [9.0, -6.0]))
     moved = {i: state.view(i).joints2d[ankle] - before[i] for i in before}
-    assert np.allclose([moved[i] for i in range(7, 14)],
-                       np.outer([0, 1, 2, 3, 2, 1, 0], [9.0, -6.0]) / 3)
+    assert np.allclose([moved[i] for i in range(7, 14)], np.outer([0, 1, 2, 3, 2, 1, 0], [9.0, -6.0]) / 3)
     assert state.view(11).carried == {"ankle_l": 10} and state.view(10).carried == {}
     assert state.view(13).carried == {}
     assert "ankle_l moved by the pin on frame 10" in frame_text(state.view(9))

@@ -33,8 +33,9 @@ def true_mask_fits(name: str, frames: int = FRAMES) -> tuple[np.ndarray, np.ndar
         if index == frames:
             break
         mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
-        silhouettes.append(Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST),
-                                                frame))
+        silhouettes.append(
+            Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST), frame)
+        )
     fits = list(iter_fits(silhouettes, scale, info.fps))
     truth = json.loads((clip / "truth.json").read_text())
     true_joints = np.array([f["joints2d"] for f in truth["frames"][:frames]])

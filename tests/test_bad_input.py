@@ -28,6 +28,7 @@ def walk(tmp_path_factory):
 
 # -- mocap serve ----------------------------------------------------------------------
 
+
 def test_serve_on_a_taken_port_is_an_error_naming_it(walk, capsys):
     pytest.importorskip("viser")
     with socket.socket() as other:
@@ -40,7 +41,7 @@ def test_serve_on_a_taken_port_is_an_error_naming_it(walk, capsys):
 
 
 def test_serve_on_port_0_takes_any_free_one(walk):
-    create = pytest.importorskip("app.main").create
+    create = pytest.importorskip("app.serve").create
     app = create(walk, port=0)
     try:
         assert app.server.get_port() > 0
@@ -50,13 +51,16 @@ def test_serve_on_port_0_takes_any_free_one(walk):
 
 # -- outputs that cannot be written: refused before the fit --------------------------
 
+
 def _unwritable(tmp_path: Path, name: str) -> tuple[Path, str]:
     """Paths whose folder takes no file, even for root (who ignores permission bits)."""
     regular = tmp_path / "notes.txt"
     regular.write_text("a file, not a folder")
-    return {"missing": (tmp_path / "no" / "such" / name, "does not exist"),
-            "under a file": (regular / name, "is a file, not a folder"),
-            "/proc": (Path("/proc") / name, "cannot write in folder /proc")}
+    return {
+        "missing": (tmp_path / "no" / "such" / name, "does not exist"),
+        "under a file": (regular / name, "is a file, not a folder"),
+        "/proc": (Path("/proc") / name, "cannot write in folder /proc"),
+    }
 
 
 @pytest.mark.parametrize("case", ["missing", "under a file", "/proc"])
@@ -112,11 +116,14 @@ def test_masks_with_the_tracking_method_are_refused_before_tracking(walk, tmp_pa
     assert_one_line_error(err, "--masks needs the silhouette method")
 
 
-@pytest.mark.parametrize("option, name, problem", [
-    ("--glb", "walk.bvh", "the GLB would go into a file named like a BVH (.bvh); name it .glb"),
-    ("--bvh", "walk.glb", "the BVH would go into a file named like a GLB (.glb); name it .bvh"),
-    ("--out", "walk.csv", "the motion JSON would go into a file named like a CSV (.csv)"),
-])
+@pytest.mark.parametrize(
+    "option, name, problem",
+    [
+        ("--glb", "walk.bvh", "the GLB would go into a file named like a BVH (.bvh); name it .glb"),
+        ("--bvh", "walk.glb", "the BVH would go into a file named like a GLB (.glb); name it .bvh"),
+        ("--out", "walk.csv", "the motion JSON would go into a file named like a CSV (.csv)"),
+    ],
+)
 def test_fit_refuses_an_output_named_like_another_format(walk, tmp_path, capsys, option, name, problem):
     out = tmp_path / name
     code, err = run(capsys, "fit", walk, option, out, "--quiet")
@@ -125,10 +132,13 @@ def test_fit_refuses_an_output_named_like_another_format(walk, tmp_path, capsys,
     assert not out.exists()
 
 
-@pytest.mark.parametrize("option, problem", [
-    ("--annotations", "is a folder, not an annotation file"),
-    ("--background", "is a folder, not a background image or video"),
-])
+@pytest.mark.parametrize(
+    "option, problem",
+    [
+        ("--annotations", "is a folder, not an annotation file"),
+        ("--background", "is a folder, not a background image or video"),
+    ],
+)
 def test_fit_refuses_a_folder_for_an_input_file(walk, tmp_path, capsys, option, problem):
     code, err = run(capsys, "fit", walk, option, tmp_path, "--out", tmp_path / "m.json", "--quiet")
     assert code == 2
@@ -144,12 +154,14 @@ def test_a_motion_file_given_as_annotations_is_told_by_its_format(fitted_walk, w
 
 # -- Ctrl+C: one line, exit 130, nothing written and the annotations as they were ----
 
+
 def test_ctrl_c_while_starting_up_is_one_line(monkeypatch, capsys):
     """The parser imports the commands' modules: a Ctrl+C there is no traceback either."""
     import mocap.cli
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
+
     monkeypatch.setattr(mocap.cli, "build_parser", interrupted)
     assert run(capsys, "fit", "any.mp4") == (130, ["mocap: interrupted"])
 
@@ -159,9 +171,11 @@ def test_ctrl_c_during_a_fit_writes_nothing_and_keeps_the_annotations(walk, tmp_
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
+
     notes = tmp_path / "walk.annotations.json"
-    notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1,
-                                 "frames": {"3": {"orientation": "left"}}}))
+    notes.write_text(
+        json.dumps({"format": "mocap-annotations", "version": 1, "frames": {"3": {"orientation": "left"}}})
+    )
     before = notes.read_bytes()
     monkeypatch.setattr(mocap.pipeline, "silhouette_passes", interrupted)
     out = tmp_path / "m.json"
@@ -173,12 +187,20 @@ def test_ctrl_c_during_a_fit_writes_nothing_and_keeps_the_annotations(walk, tmp_
 
 # -- broken motion files --------------------------------------------------------------
 
-@pytest.mark.parametrize("key, damage, place, problem", [
-    ("joints3d", lambda j: j[:3], "frames[4].joints3d", "expected 16 joints, got a list of 3"),
-    ("joints3d", lambda j: [j[0], [0.1, "oops", 0.2]] + j[2:], "frames[4].joints3d[1][1]",
-     'expected a number, got the string "oops"'),
-    ("joints2d", lambda j: j[:-1], "frames[4].joints2d", "expected 16 joints, got a list of 15"),
-])
+
+@pytest.mark.parametrize(
+    "key, damage, place, problem",
+    [
+        ("joints3d", lambda j: j[:3], "frames[4].joints3d", "expected 16 joints, got a list of 3"),
+        (
+            "joints3d",
+            lambda j: [j[0], [0.1, "oops", 0.2]] + j[2:],
+            "frames[4].joints3d[1][1]",
+            'expected a number, got the string "oops"',
+        ),
+        ("joints2d", lambda j: j[:-1], "frames[4].joints2d", "expected 16 joints, got a list of 15"),
+    ],
+)
 def test_export_refuses_a_damaged_motion_file(fitted_walk, tmp_path, capsys, key, damage, place, problem):
     doc = json.loads(fitted_walk("side").motion.read_text())
     doc["frames"][4][key] = damage(doc["frames"][4][key])
@@ -192,13 +214,18 @@ def test_export_refuses_a_damaged_motion_file(fitted_walk, tmp_path, capsys, key
 
 # -- annotations ----------------------------------------------------------------------
 
+
 def test_frames_that_are_no_object_are_explained(walk, tmp_path, capsys):
     notes = tmp_path / "walk.annotations.json"
     notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "frames": "oops"}))
     code, err = run(capsys, "fit", walk, "--annotations", notes, "--out", tmp_path / "m.json")
     assert code == 2
-    assert_one_line_error(err, f"{notes}: frames: expected an object of notes by frame index",
-                          '{"12": {"orientation": "left"}}', 'got the string "oops"')
+    assert_one_line_error(
+        err,
+        f"{notes}: frames: expected an object of notes by frame index",
+        '{"12": {"orientation": "left"}}',
+        'got the string "oops"',
+    )
 
 
 # -- fuzzing the motion loader: a motion file or one MocapError, and a page from it ----
@@ -206,7 +233,8 @@ def test_frames_that_are_no_object_are_explained(walk, tmp_path, capsys):
 _value = st.recursive(
     st.none() | st.booleans() | st.integers(-2, 20) | st.floats() | st.text(max_size=6),
     lambda inner: st.lists(inner, max_size=17) | st.dictionaries(st.text(max_size=6), inner, max_size=3),
-    max_leaves=40)
+    max_leaves=40,
+)
 _FIELDS = ["index", "keyframe", "person", "score", "joints2d", "joints3d", "root", "confidence"]
 
 
@@ -237,8 +265,9 @@ def valid_motion(fitted_walk) -> dict:
     return doc
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                 HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(data=st.data())
 def test_the_motion_loader_only_ever_raises_mocap_errors(valid_motion, tmp_path_factory, data):
     path = tmp_path_factory.getbasetemp() / "fuzzed.motion.json"

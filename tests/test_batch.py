@@ -32,7 +32,7 @@ from mocap.io.annotations import Annotations, save_annotations
 
 pytest.importorskip("dask.distributed")
 GOOD = ("walk_a", "walk_b", "walk_c")
-DEADLINE_S = 120            # for the cluster's processes to start and a video to finish
+DEADLINE_S = 120  # for the cluster's processes to start and a video to finish
 
 
 @pytest.fixture(scope="module")
@@ -68,8 +68,7 @@ def assert_library(out: Path, failed: str = "notes") -> None:
         assert record is not None, name
         motion = json.loads((out / name / "motion.json").read_text())
         assert [f["mask"] for f in motion["frames"]] == [f"masks/{i:06d}.png" for i in range(30)]
-        assert sorted(record["files"]) == ["bvh", "csv", "glb", "masks", "motion", "playback",
-                                           "sheet", "thumb"]
+        assert sorted(record["files"]) == ["bvh", "csv", "glb", "masks", "motion", "playback", "sheet", "thumb"]
         assert all((out / name / f).exists() for f in record["files"].values())
         assert record["summary"]["frames"] == 30 and 0.5 < record["summary"]["mean_score"] <= 1
     error = json.loads((out / failed / FAILED).read_text())["error"]
@@ -79,7 +78,7 @@ def assert_library(out: Path, failed: str = "notes") -> None:
 
 def test_local_cluster_does_the_good_videos_and_reports_the_broken_one(library, fitted_walk):
     out, code, said = library
-    assert code == 1                                   # some failed
+    assert code == 1  # some failed
     assert "FAILED notes:" in said and "not a video file" in said
     assert "dashboard: " in said and "4 videos, 0 already done, 4 to do" in said
     assert_library(out)
@@ -97,7 +96,7 @@ def test_masks_are_the_silhouettes_at_video_size(library):
     for frame, path in zip(motion["frames"], masks):
         mask = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
         assert mask.shape == (240, 320) and set(np.unique(mask)) <= {0, 255}
-        x, y = np.round(frame["joints2d"][3]).astype(int)   # the pelvis lies on the performer
+        x, y = np.round(frame["joints2d"][3]).astype(int)  # the pelvis lies on the performer
         assert mask[y, x] == 255
 
 
@@ -113,7 +112,7 @@ def test_index_lists_every_video(library):
 
 def test_second_run_skips_and_a_review_redoes_only_its_video(library, videos, tmp_path):
     out = tmp_path / "lib"
-    shutil.copytree(library[0], out)                   # the times kept: still finished
+    shutil.copytree(library[0], out)  # the times kept: still finished
     before = {n: (out / n / RECORD).stat().st_mtime_ns for n in GOOD}
     code, said = run_cli(["batch", str(videos), "--out", str(out), "--workers", "1"])
     assert code == 1 and "4 videos, 3 already done, 1 to do" in said and "FAILED notes" in said
@@ -123,14 +122,14 @@ def test_second_run_skips_and_a_review_redoes_only_its_video(library, videos, tm
     assert video == str(videos / "walk_b.mp4") and notes_path == out / "walk_b" / "annotations.json"
     save_annotations(notes_path, Annotations(keyframes=(0, 10, 20, 29)))
     good = [str(videos / f"{n}.mp4") for n in GOOD]
-    code, said = run_cli(["batch", *good, "--out", str(out), "--workers", "1",
-                          "--annotations-from", str(out)])
+    code, said = run_cli(["batch", *good, "--out", str(out), "--workers", "1", "--annotations-from", str(out)])
     assert code == 0 and "3 videos, 2 already done, 1 to do" in said and "done walk_b" in said
     frames = json.loads((out / "walk_b" / "motion.json").read_text())["frames"]
     assert [f["index"] for f in frames if f["keyframe"]] == [0, 10, 20, 29]
     assert read_record(out / "walk_b")["annotations"] == str(notes_path)
-    assert {n: (out / n / RECORD).stat().st_mtime_ns for n in ("walk_a", "walk_c")} == \
-        {n: before[n] for n in ("walk_a", "walk_c")}
+    assert {n: (out / n / RECORD).stat().st_mtime_ns for n in ("walk_a", "walk_c")} == {
+        n: before[n] for n in ("walk_a", "walk_c")
+    }
 
 
 def test_a_finished_folder_is_done_again_when_its_video_or_settings_change(library, videos):
@@ -141,7 +140,7 @@ def test_a_finished_folder_is_done_again_when_its_video_or_settings_change(libra
     assert not is_finished(folder, video, {**record["settings"], "exports": ["bvh"]})
     assert not is_finished(folder, str(videos / "walk_b.mp4"), record["settings"])
     stamp = (folder / RECORD).stat().st_mtime
-    os.utime(video, (stamp + 10, stamp + 10))          # the video replaced after the run
+    os.utime(video, (stamp + 10, stamp + 10))  # the video replaced after the run
     try:
         assert not is_finished(folder, video, record["settings"])
     finally:
@@ -177,12 +176,28 @@ def dask_cluster(tmp_path):
     """A `dask scheduler` and one `dask worker` (one thread) on 127.0.0.1, each a
     process of its own; yields the scheduler's address."""
     from dask.distributed import Client
+
     address = f"tcp://127.0.0.1:{free_port()}"
     dask = [sys.executable, "-m", "dask"]
-    scheduler = start([*dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                       "--no-dashboard"], tmp_path / "scheduler.log")
-    worker = start([*dask, "worker", address, "--nthreads", "1", "--nworkers", "1", "--no-dashboard",
-                    "--local-directory", str(tmp_path / "worker")], tmp_path / "worker.log")
+    scheduler = start(
+        [*dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1], "--no-dashboard"],
+        tmp_path / "scheduler.log",
+    )
+    worker = start(
+        [
+            *dask,
+            "worker",
+            address,
+            "--nthreads",
+            "1",
+            "--nworkers",
+            "1",
+            "--no-dashboard",
+            "--local-directory",
+            str(tmp_path / "worker"),
+        ],
+        tmp_path / "worker.log",
+    )
     try:
         with Client(address, timeout=f"{DEADLINE_S}s") as client:
             client.wait_for_workers(1, timeout=DEADLINE_S)
@@ -202,19 +217,20 @@ def test_existing_cluster_by_scheduler_address(dask_cluster, videos, tmp_path):
 def test_a_killed_batch_is_finished_by_the_next_run(videos, tmp_path):
     out = tmp_path / "lib"
     good = [str(videos / f"{n}.mp4") for n in GOOD]
-    batch = start([sys.executable, "-m", "mocap.cli", "batch", *good, "--out", str(out), "--workers", "1"],
-                  tmp_path / "batch.log")
+    batch = start(
+        [sys.executable, "-m", "mocap.cli", "batch", *good, "--out", str(out), "--workers", "1"], tmp_path / "batch.log"
+    )
     try:
         deadline = time.monotonic() + DEADLINE_S
         while not any((out / n / RECORD).exists() for n in GOOD):
             assert batch.poll() is None and time.monotonic() < deadline, (tmp_path / "batch.log").read_text()
             time.sleep(0.05)
     finally:
-        stop(batch, signal.SIGKILL)                     # no chance to clean up
+        stop(batch, signal.SIGKILL)  # no chance to clean up
     first = [n for n in GOOD if (out / n / RECORD).exists()]
     assert len(first) == 1
     stamp = (out / first[0] / RECORD).stat().st_mtime_ns
-    for name in set(GOOD) - set(first):                 # nothing half-written looks finished
+    for name in set(GOOD) - set(first):  # nothing half-written looks finished
         assert read_record(out / name) is None
         for path in (out / name).glob("*.json") if (out / name).exists() else ():
             json.loads(path.read_text())
@@ -230,21 +246,30 @@ def test_inputs_and_names(tmp_path):
         for suffix in (".mp4", ".avi", ".txt"):
             (tmp_path / sub / f"video{suffix}").write_bytes(b"x")
     found = find_videos([str(tmp_path)])
-    assert [p.relative_to(tmp_path).as_posix() for p in found] == \
-        ["a/video.avi", "a/video.mp4", "b/video.avi", "b/video.mp4"]
-    assert find_videos([str(tmp_path / "*" / "*.mp4"), str(tmp_path / "a" / "video.mp4")]) == \
-        [tmp_path / "a" / "video.mp4", tmp_path / "b" / "video.mp4"]
+    assert [p.relative_to(tmp_path).as_posix() for p in found] == [
+        "a/video.avi",
+        "a/video.mp4",
+        "b/video.avi",
+        "b/video.mp4",
+    ]
+    assert find_videos([str(tmp_path / "*" / "*.mp4"), str(tmp_path / "a" / "video.mp4")]) == [
+        tmp_path / "a" / "video.mp4",
+        tmp_path / "b" / "video.mp4",
+    ]
     assert library_names(found) == ["a-video.avi", "a-video.mp4", "b-video.avi", "b-video.mp4"]
     assert library_names([tmp_path / "a" / "x.mp4", tmp_path / "b" / "y.mp4"]) == ["x", "y"]
 
 
-@pytest.mark.parametrize("args, message", [
-    (["nowhere/*.mp4"], "nowhere/*.mp4: no file matches"),
-    (["missing.mp4"], "missing.mp4: no such file or folder"),
-    (["{videos}", "--exports", "bvh,obj"], "--exports: unknown format 'obj'"),
-    (["{videos}", "--workers", "0"], "--workers must be 1 or more"),
-    (["{videos}", "--annotations-from", "nowhere"], "--annotations-from nowhere: no such folder"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["nowhere/*.mp4"], "nowhere/*.mp4: no file matches"),
+        (["missing.mp4"], "missing.mp4: no such file or folder"),
+        (["{videos}", "--exports", "bvh,obj"], "--exports: unknown format 'obj'"),
+        (["{videos}", "--workers", "0"], "--workers must be 1 or more"),
+        (["{videos}", "--annotations-from", "nowhere"], "--annotations-from nowhere: no such folder"),
+    ],
+)
 def test_bad_input_is_one_line(args, message, videos, tmp_path, capsys):
     argv = ["batch", *(a.format(videos=videos) for a in args), "--out", str(tmp_path / "lib")]
     assert main(argv) == 2
@@ -256,6 +281,7 @@ def test_bad_input_is_one_line(args, message, videos, tmp_path, capsys):
 def test_index_page_opens_in_chromium_and_its_links_resolve(library):
     sync_api = pytest.importorskip("playwright.sync_api")
     from browser_helpers import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS
+
     if not CHROMIUM.exists():
         pytest.skip("Debian's chromium is not installed (apt-get install chromium)")
     out = library[0]
@@ -264,9 +290,9 @@ def test_index_page_opens_in_chromium_and_its_links_resolve(library):
         try:
             page = browser.new_page()
             page.goto((out / "index.html").as_uri())
-            assert page.locator("tbody tr, table tr").count() == 5       # the header and 4 videos
+            assert page.locator("tbody tr, table tr").count() == 5  # the header and 4 videos
             images = page.eval_on_selector_all("img", "els => els.map(e => e.naturalWidth)")
-            assert len(images) == 3 and min(images) == 480              # every thumbnail decoded
+            assert len(images) == 3 and min(images) == 480  # every thumbnail decoded
             ARTIFACTS.mkdir(parents=True, exist_ok=True)
             page.screenshot(path=str(ARTIFACTS / "library.png"), full_page=True)
             links = page.eval_on_selector_all("a", "els => els.map(e => e.href)")
@@ -283,6 +309,7 @@ def test_index_page_opens_in_chromium_and_its_links_resolve(library):
 def sync_api_path(url: str) -> str:
     """The file a file:// link points at."""
     from urllib.parse import unquote, urlparse
+
     assert url.startswith("file://"), url
     return unquote(urlparse(url).path)
 
@@ -298,25 +325,35 @@ def test_tracking_annotations_beside_the_videos_make_a_tracked_video(tmp_path):
     (tmp_path / "notes").mkdir()
     save_annotations(tmp_path / "notes" / "walk_c.annotations.json", notes)
     out = tmp_path / "lib"
-    code, said = run_cli(["batch", str(tmp_path / "walk_c.mp4"), "--out", str(out), "--workers", "1",
-                          "--annotations-from", str(tmp_path / "notes")])
+    code, said = run_cli(
+        [
+            "batch",
+            str(tmp_path / "walk_c.mp4"),
+            "--out",
+            str(out),
+            "--workers",
+            "1",
+            "--annotations-from",
+            str(tmp_path / "notes"),
+        ]
+    )
     assert code == 0, said
     record = read_record(out / "walk_c")
     assert record["summary"]["method"] == "track" and record["summary"]["fitted"] == 30
     motion = json.loads((out / "walk_c" / "motion.json").read_text())
     err = np.linalg.norm(frame_joints(motion) - truth.joints2d, axis=-1) / truth.body_height_px
-    assert np.median(err) < 0.05                        # followed, as `mocap fit --method track`
+    assert np.median(err) < 0.05  # followed, as `mocap fit --method track`
     assert len(list((out / "walk_c" / "masks").glob("*.png"))) == 30
 
 
 def test_frames_per_second_counts_running_videos_until_they_end():
     tally = Tally(2)
-    tally.start -= 10.0                                  # ten seconds in
+    tally.start -= 10.0  # ten seconds in
     tally.running_frames((0.0, {"name": "a", "frames": 40}))
     tally.running_frames((0.0, {"name": "b", "frames": 20}))
     assert tally.fps == pytest.approx(6.0, rel=0.01)
     tally.add(Outcome("a", frames=100, seconds=9.0))
-    tally.running_frames((0.0, {"name": "a", "frames": 90}))    # a late report of a done video
+    tally.running_frames((0.0, {"name": "a", "frames": 90}))  # a late report of a done video
     assert tally.fps == pytest.approx(12.0, rel=0.01) and tally.running == {"b": 20}
 
 
@@ -324,7 +361,6 @@ def test_serve_takes_a_library_folder_or_a_file_in_it(library, videos, tmp_path,
     out = library[0]
     video, notes = review_target(out / "walk_a" / "motion.json")
     assert video == str(videos / "walk_a.mp4") and notes == out / "walk_a" / ANNOTATIONS
-    assert review_target(videos / "walk_a.mp4") is None          # a video: served as before
-    assert main(["serve", str(tmp_path)]) == 2                   # a folder of something else
-    assert f"{tmp_path}: is a folder, not a video nor a video's folder of a `mocap batch`" in (
-        capsys.readouterr().err)
+    assert review_target(videos / "walk_a.mp4") is None  # a video: served as before
+    assert main(["serve", str(tmp_path)]) == 2  # a folder of something else
+    assert f"{tmp_path}: is a folder, not a video nor a video's folder of a `mocap batch`" in (capsys.readouterr().err)

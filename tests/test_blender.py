@@ -30,8 +30,19 @@ def written(tiny_video, tmp_path_factory):
     """{format: path} of one `mocap fit` run: the motion file, BVH, GLB and FBX."""
     folder = tmp_path_factory.mktemp("blender")
     paths = {key: folder / f"walk.{key}" for key in ("json", "bvh", "glb", "fbx")}
-    assert main(["fit", str(tiny_video), "--quiet", "--out", str(paths["json"]),
-                 *(a for key in ("bvh", "glb", "fbx") for a in (f"--{key}", str(paths[key])))]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                str(tiny_video),
+                "--quiet",
+                "--out",
+                str(paths["json"]),
+                *(a for key in ("bvh", "glb", "fbx") for a in (f"--{key}", str(paths[key]))),
+            ]
+        )
+        == 0
+    )
     return paths
 
 
@@ -52,8 +63,13 @@ def load(key: str, path, fps: float = 15.0) -> None:
     clip's frame rate (the tiny clip's: 15 fps; glTF keys are seconds)."""
     empty_scene(fps)
     if key == "bvh":
-        bpy.ops.import_anim.bvh(filepath=str(path), global_scale=0.01, use_fps_scale=False,
-                                update_scene_fps=False, update_scene_duration=True)
+        bpy.ops.import_anim.bvh(
+            filepath=str(path),
+            global_scale=0.01,
+            use_fps_scale=False,
+            update_scene_fps=False,
+            update_scene_duration=True,
+        )
     elif key == "glb":
         bpy.ops.import_scene.gltf(filepath=str(path))
     else:
@@ -107,12 +123,12 @@ def test_one_armature_one_action_one_skinned_mesh(key, written):
 def test_the_bvh_rests_in_a_t_pose(written):
     load("bvh", written["bvh"])
     bones = armature().data.bones
-    up = np.array([0.0, 0.0, 1.0])                       # Blender's z is up
+    up = np.array([0.0, 0.0, 1.0])  # Blender's z is up
     for side, sign in (("Left", 1.0), ("Right", -1.0)):
-        for name in ("Arm", "ForeArm", "Hand"):          # arms straight out sideways
+        for name in ("Arm", "ForeArm", "Hand"):  # arms straight out sideways
             axis = np.array(bones[side + name].tail_local - bones[side + name].head_local)
             assert np.dot(axis / np.linalg.norm(axis), [sign, 0.0, 0.0]) > 0.999, side + name
-        for name in ("UpLeg", "Leg"):                    # legs straight down
+        for name in ("UpLeg", "Leg"):  # legs straight down
             axis = np.array(bones[side + name].tail_local - bones[side + name].head_local)
             assert np.dot(axis / np.linalg.norm(axis), -up) > 0.999, side + name
     spine = np.array(bones["Head"].tail_local - bones["Hips"].head_local)

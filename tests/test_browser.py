@@ -85,13 +85,13 @@ def test_step_frames_with_buttons_slider_and_keys(browser, app):
     page = open_page(browser, app.server.get_port())
     page.get_by_role("button", name="frame ▶", exact=True).click()
     wait_until(lambda: app.state.frame == 1)
-    page.mouse.click(5, VIEWPORT["height"] - 5)            # focus the page, not a control
+    page.mouse.click(5, VIEWPORT["height"] - 5)  # focus the page, not a control
     page.keyboard.press("l")
     page.keyboard.press("l")
     wait_until(lambda: app.state.frame == 3)
     page.keyboard.press("j")
     wait_until(lambda: app.state.frame == 2)
-    box = page.locator(".mantine-NumberInput-input")         # the slider's number box
+    box = page.locator(".mantine-NumberInput-input")  # the slider's number box
     # the page shows frame 2 before typing: a late update would overwrite what is typed
     sync_api.expect(box).to_have_value("2", timeout=TIMEOUT_MS)
     box.fill("9")
@@ -100,7 +100,7 @@ def test_step_frames_with_buttons_slider_and_keys(browser, app):
     page.get_by_role("button", name="◀ keyframe").click()  # every frame is a keyframe by default
     wait_until(lambda: app.state.frame == 8)
     page.mouse.click(5, VIEWPORT["height"] - 5)
-    for frame in range(7, 2, -1):                # one keyframe back per press, each seen through
+    for frame in range(7, 2, -1):  # one keyframe back per press, each seen through
         page.keyboard.press("Shift+J")
         wait_until(lambda want=frame: app.state.frame == want)
     page.get_by_role("button", name="Unmark keyframe").click()
@@ -114,7 +114,7 @@ def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
     page = open_page(browser, app.server.get_port())
     shot(page, "flip_before")
     segment = deepest_segment(app.state)
-    handle = app.scene.bodies[1][SEGMENT_INDEX[segment]]     # the side view, where it shows
+    handle = app.scene.bodies[1][SEGMENT_INDEX[segment]]  # the side view, where it shows
     pose, placed = app.state.view().pose3d, np.concatenate([handle.position, handle.wxyz])
     segment_button(page, segment).click()
     segment_button(page, segment).filter(has_text="set here").wait_for()
@@ -125,7 +125,7 @@ def test_flip_foreshortening_by_button_and_by_3d_click(browser, app):
     shot(page, "flip_after")
 
     x, y = screen_point(page, app, unhidden_point(app, segment))
-    page.mouse.click(x, y)                                 # the same segment in 3D flips it back
+    page.mouse.click(x, y)  # the same segment in 3D flips it back
     wait_until(lambda: np.allclose(placed, np.concatenate([handle.position, handle.wxyz])))
     assert load_annotations(app.state.path).frames[6].foreshortening != note
     np.testing.assert_allclose(app.state.view().pose3d, pose, atol=1e-9)
@@ -157,7 +157,7 @@ def test_download_bvh_that_parses(browser, app, tmp_path):
     assert path.name == "walk.bvh"
     bvh = bvhio.readAsBvh(str(path))
     assert bvh.FrameCount == len(bvh.Root.Keyframes) == TINY_FRAMES
-    page.get_by_role("button", name="Play").click()     # plays to the last frame and stops
+    page.get_by_role("button", name="Play").click()  # plays to the last frame and stops
     wait_until(lambda: app.state.frame == TINY_FRAMES - 1 and not app.player.playing)
     page.get_by_role("button", name="Play").wait_for()
     shot(page, "played")
@@ -200,10 +200,10 @@ def test_two_tabs_one_truth(browser, app):
     segment_button(second, segment).filter(has_text="set here").wait_for()
     second.get_by_role("button", name="frame ▶", exact=True).click()
     first.get_by_text("Frame 1 of").wait_for()
-    for _ in range(3):                                     # clicks from both tabs at once
+    for _ in range(3):  # clicks from both tabs at once
         segment_button(first, "torso").click(no_wait_after=True)
         segment_button(second, "torso").click(no_wait_after=True)
-    wait_until(lambda: app.state.undo_depth == 7)          # each click one edit, none lost
+    wait_until(lambda: app.state.undo_depth == 7)  # each click one edit, none lost
     label = sign_button("torso", app.state.view())["label"]
     for page in (first, second):
         page.get_by_role("button", name=label, exact=True).wait_for()
@@ -215,7 +215,8 @@ def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypa
     """Fitted frames show at once; the others say they are not fitted yet."""
     import threading
 
-    from app.main import create
+    from app.serve import create
+
     gate = threading.Event()
     hold_fitting(monkeypatch, TINY_FRAMES // 2, gate)
     app = create(fresh_copy(tiny_video, tmp_path), port=0)
@@ -223,7 +224,7 @@ def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypa
         app.state.start()
         page = open_page(browser, app.server.get_port())
         page.get_by_text("Preprocessing: fitting the body model").wait_for()
-        page.get_by_text("Similarity S =").wait_for()            # frame 0 is fitted
+        page.get_by_text("Similarity S =").wait_for()  # frame 0 is fitted
         shot(page, "preprocessing")
         app.state.go_to(TINY_FRAMES - 1)
         page.get_by_text("Not fitted yet.").wait_for()
@@ -236,9 +237,13 @@ def test_page_usable_while_preprocessing(browser, tiny_video, tmp_path, monkeypa
 
 def test_killing_the_server_loses_no_shown_edit(browser, tiny_video, tmp_path):
     video = fresh_copy(tiny_video, tmp_path)
-    server = subprocess.Popen([sys.executable, "-m", "mocap.cli", "serve", str(video), "--port", "0"],
-                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
-                              env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    server = subprocess.Popen(
+        [sys.executable, "-m", "mocap.cli", "serve", str(video), "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
     try:
         line = next(line for line in server.stdout if line.startswith("mocap: serving"))
         page = open_page(browser, int(re.search(r":(\d+)/$", line.strip()).group(1)))
@@ -248,7 +253,7 @@ def test_killing_the_server_loses_no_shown_edit(browser, tiny_video, tmp_path):
             segment_button(page, segment).click()
             segment_button(page, segment).filter(has_text="set here").wait_for()
             shown.append(segment)
-        segment_button(page, "torso").click()                  # in flight when killed
+        segment_button(page, "torso").click()  # in flight when killed
     finally:
         server.send_signal(signal.SIGKILL)
         server.wait(10)

@@ -58,13 +58,13 @@ def test_panels_visible_apart_and_of_one_size(chromium, shaped_app, window):  # 
             assert canvas[1] <= box[1] and box[3] <= canvas[3], f"{name} cut off at the top or bottom"
         names = list(boxes)
         for i, a in enumerate(names):
-            for b in names[i + 1:]:
+            for b in names[i + 1 :]:
                 assert not overlap(boxes[a], boxes[b]), f"{a} and {b} overlap"
         sizes = np.array([(b[2] - b[0], b[3] - b[1]) for b in boxes.values()])
         np.testing.assert_allclose(sizes, np.broadcast_to(sizes[0], sizes.shape), rtol=0.02)
         assert sizes[0].min() > 0.15 * min(window), f"panels of {sizes[0]} px are too small"
         captions = [c.text for c in app.scene.captions.values()]
-        assert max(map(len, captions)) <= CAPTION_CHARS, captions    # each fits its panel
+        assert max(map(len, captions)) <= CAPTION_CHARS, captions  # each fits its panel
         # once the panel has settled (it may be narrower for a moment while it docks)
         wait_until(lambda: len({round(box_of(t)[1]) for t in page.get_by_role("tab").all()}) == 1)
         shown = refusal_box(page, boxes["video"])

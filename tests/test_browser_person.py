@@ -30,7 +30,7 @@ def panel_pixels(page, box) -> np.ndarray:
     image = cv2.imdecode(np.frombuffer(page.screenshot(), np.uint8), cv2.IMREAD_COLOR)
     x0, y0, x1, y1 = box
     dx, dy = 0.02 * (x1 - x0), 0.02 * (y1 - y0)
-    return image[round(y0 + dy):round(y1 - dy), round(x0 + dx):round(x1 - dx)].astype(int)
+    return image[round(y0 + dy) : round(y1 - dy), round(x0 + dx) : round(x1 - dx)].astype(int)
 
 
 def magenta(pixels: np.ndarray) -> np.ndarray:
@@ -65,18 +65,18 @@ def test_status_names_the_eyes_and_the_joints_checkbox_shows_them(browser, app):
     shown = settled(page, box, lambda p: magenta(p).sum() > 30)
     shot(page, "person_joints_shown")
 
-    joints.click()                          # off: the magenta dots and bones go
+    joints.click()  # off: the magenta dots and bones go
     wait_until(lambda: app.controls.show_landmarks.value is False)
     hidden = settled(page, box, lambda p: magenta(p).sum() < 0.2 * magenta(shown).sum())
     differ = np.abs(shown - hidden).max(axis=2) > 60
     assert differ.sum() > 30 and magenta(shown)[differ].mean() > 0.3
-    joints.click()                          # on again: back as they were
+    joints.click()  # on again: back as they were
     wait_until(lambda: app.controls.show_landmarks.value is True)
     settled(page, box, lambda p: magenta(p).sum() > 0.8 * magenta(shown).sum())
 
     eyes = page.get_by_label("Learned eyes (person model)")
     assert eyes.is_checked() and eyes.is_enabled()
-    eyes.click()                            # off: refitted by the silhouettes alone
+    eyes.click()  # off: refitted by the silhouettes alone
     page.get_by_text("Eyes: silhouettes only").wait_for(timeout=60_000)
     wait_until(lambda: state.ready.is_set() and state.progress.ready, timeout=60)
     assert state._fitted.person_model == "none" and not eyes.is_checked()

@@ -26,7 +26,7 @@ from helpers import render_walk
 from app.views import video_image
 
 pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
-FPS, FRAMES = 10.0, 30          # a 3 s clip: frames 100 ms apart, screenshots in between
+FPS, FRAMES = 10.0, 30  # a 3 s clip: frames 100 ms apart, screenshots in between
 WINDOW = {"width": 1280, "height": 720}
 # frames the canvas may show behind the slider read just before the screenshot: a
 # loaded machine's software WebGL redraws the panels later than the page's controls
@@ -51,8 +51,9 @@ def crop(image: np.ndarray, box) -> np.ndarray:
     """The grey pixels inside ``box`` (page pixels), a little inset from its edges."""
     x0, y0, x1, y1 = box
     dx, dy = 0.03 * (x1 - x0), 0.03 * (y1 - y0)
-    return cv2.cvtColor(image[round(y0 + dy):round(y1 - dy), round(x0 + dx):round(x1 - dx)],
-                        cv2.COLOR_BGR2GRAY).astype(np.float32)
+    return cv2.cvtColor(
+        image[round(y0 + dy) : round(y1 - dy), round(x0 + dx) : round(x1 - dx)], cv2.COLOR_BGR2GRAY
+    ).astype(np.float32)
 
 
 def references(app, panel: str, box) -> np.ndarray:
@@ -60,10 +61,14 @@ def references(app, panel: str, box) -> np.ndarray:
     x0, y0, x1, y1 = box
     images = []
     for k in range(app.state.n_frames):
-        rgb = (video_image(app.frames.get(k), {}, app.state.scale) if panel == "video"
-               else app._silhouette_image(app.state.view(k)))
-        page = cv2.resize(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), (round(x1 - x0), round(y1 - y0)),
-                          interpolation=cv2.INTER_AREA)
+        rgb = (
+            video_image(app.frames.get(k), {}, app.state.scale)
+            if panel == "video"
+            else app._silhouette_image(app.state.view(k))
+        )
+        page = cv2.resize(
+            cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), (round(x1 - x0), round(y1 - y0)), interpolation=cv2.INTER_AREA
+        )
         images.append(crop(page, (0, 0, x1 - x0, y1 - y0)))
     return np.stack(images)
 
@@ -74,7 +79,7 @@ def shown_frame(image: np.ndarray, box, refs: np.ndarray) -> tuple[int, float]:
     seen = crop(image, box)
     h, w = min(seen.shape[0], refs.shape[1]), min(seen.shape[1], refs.shape[2])
     refs, seen = refs[:, :h, :w], seen[:h, :w]
-    moving = refs.std(axis=0) > 8.0      # where the performer passes: the rest is alike
+    moving = refs.std(axis=0) > 8.0  # where the performer passes: the rest is alike
     errors = np.abs(refs[:, moving] - seen[None, moving]).mean(axis=1)
     best, second = np.sort(errors)[:2]
     return int(np.argmin(errors)), float(second - best)
@@ -128,7 +133,7 @@ def test_play_moves_every_panel_and_the_slider_together(chromium, shaped_app):  
             shown.append(min(frame for frame, _ in frames.values()))
         (_, first, _, _), (_, second, high, t2) = samples
         assert shown[1] > shown[0], f"{shape}: the panels did not advance ({shown})"
-        for name in ("front", "side"):      # the 3D bodies moved with them
+        for name in ("front", "side"):  # the 3D bodies moved with them
             change = np.abs(crop(first, boxes[name]) - crop(second, boxes[name])).mean()
             assert change > 0.2, f"{shape}: the {name} 3D panel did not move ({change:.2f})"
         # paced by the clock: never far behind it (frames are dropped, not slowed)

@@ -49,7 +49,7 @@ def sign_of(page, segment: str):
 def check_list(page, view) -> None:
     """Every segment's button under its group's heading, above the next, saying the
     frame's sign (word, icon, colour) and its source."""
-    page.mouse.move(1, 1)                   # off the buttons: a hovered one is darker
+    page.mouse.move(1, 1)  # off the buttons: a hovered one is darker
     groups = []
     for heading, segments in sign_groups():
         top = page.get_by_text(heading, exact=True).first.bounding_box()["y"]
@@ -112,15 +112,15 @@ def test_sign_list_and_clicks(chromium, shaped_app):  # noqa: F811
         assert flipped.signs[k] == -sign and flipped.sign_notes[k] == "set here"
         assert load_annotations(app.state.path).frames[FRAME].foreshortening == {segment: SIGN_LOOK[-sign][0]}
         assert np.abs(flipped.pose3d - view.pose3d).max() > 0.05
-        wait_until(lambda: not np.allclose(placed(handle), at))        # the 3D body turned
-        check_list(page, flipped)                    # the word, icon and colour followed
+        wait_until(lambda: not np.allclose(placed(handle), at))  # the 3D body turned
+        check_list(page, flipped)  # the word, icon and colour followed
         shot(page, f"signs_{shape}_set")
 
         point = visible_point(app, segment)
-        if point is None:                            # flipped behind the body in both views
-            sign_of(page, segment).click()           # back from the list (the nose below: in 3D)
+        if point is None:  # flipped behind the body in both views
+            sign_of(page, segment).click()  # back from the list (the nose below: in 3D)
         else:
-            page.mouse.click(*screen_point(page, app, point))                  # in 3D: back
+            page.mouse.click(*screen_point(page, app, point))  # in 3D: back
         wait_until(lambda: app.state.view().signs[k] == sign)
         wait_until(lambda: np.allclose(placed(handle), at))
         sign_of(page, segment).filter(has_text=SIGN_LOOK[sign][0]).wait_for()
@@ -137,7 +137,8 @@ def test_sign_list_and_clicks(chromium, shaped_app):  # noqa: F811
 def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch):  # noqa: F811
     """Before the fit: no sign, keyframe, download or review; a frame where nobody is:
     no sign nor keyframe; each enabled again when it can act."""
-    from app.main import create
+    from app.serve import create
+
     render_walk_with_exit(tmp_path / "exit.mp4", gone=slice(12, 18))
     gate = threading.Event()
     hold_fitting(monkeypatch, 20, gate)
@@ -146,24 +147,43 @@ def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch): 
         app.state.start()
         page = open_page(browser, app.server.get_port())
         wait_until(lambda: app.state.view(0).fitted)
-        for segment in SEGMENT_NAMES:                      # fitted in 2D, not yet lifted
+        for segment in SEGMENT_NAMES:  # fitted in 2D, not yet lifted
             sync_api.expect(sign_of(page, segment)).to_be_disabled()
         sync_api.expect(button(page, "Unmark keyframe")).to_be_enabled()
-        expect_enabled(page, False, "Play", "BVH", "GLB", "CSV", "HTML page", ("Review", "Next doubtful frame"),
-                       ("Tracking", "Marks from the silhouette fit"), ("Joints", "Clear override"))
-        app.state.go_to(25)                                 # not fitted yet
+        expect_enabled(
+            page,
+            False,
+            "Play",
+            "BVH",
+            "GLB",
+            "CSV",
+            "HTML page",
+            ("Review", "Next doubtful frame"),
+            ("Tracking", "Marks from the silhouette fit"),
+            ("Joints", "Clear override"),
+        )
+        app.state.go_to(25)  # not fitted yet
         sync_api.expect(button(page, "Unmark keyframe")).to_be_disabled()
         shot(page, "signs_disabled_preprocessing")
         gate.set()
         assert app.state.ready.wait(60)
         sync_api.expect(button(page, "Unmark keyframe")).to_be_enabled()
-        expect_enabled(page, True, "Play", "BVH", "GLB", "CSV", "HTML page", ("Review", "Next doubtful frame"),
-                       ("Tracking", "Marks from the silhouette fit"))
-        fbx = sync_api.expect(button(page, "FBX"))          # only with Blender installed (the fbx extra)
+        expect_enabled(
+            page,
+            True,
+            "Play",
+            "BVH",
+            "GLB",
+            "CSV",
+            "HTML page",
+            ("Review", "Next doubtful frame"),
+            ("Tracking", "Marks from the silhouette fit"),
+        )
+        fbx = sync_api.expect(button(page, "FBX"))  # only with Blender installed (the fbx extra)
         fbx.to_be_enabled() if FORMATS["fbx"].available() else fbx.to_be_disabled()
         page.get_by_role("tab", name="Body").click()
         check_list(page, app.state.view())
-        app.state.go_to(14)                                 # the performer is out of the frame
+        app.state.go_to(14)  # the performer is out of the frame
         assert app.state.view().fitted and app.state.view().joints2d is None
         for segment in SEGMENT_NAMES:
             sync_api.expect(sign_of(page, segment)).to_be_disabled()

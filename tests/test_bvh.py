@@ -49,14 +49,17 @@ def test_small_file_positions():
     np.testing.assert_allclose(pos[1], [[1, 0, 0], [1, 0, -5], [1, 0, 0]], atol=1e-9)
 
 
-@pytest.mark.parametrize("text, words", [
-    ("hello", "not a BVH file"),
-    (SMALL.replace("OFFSET 0 10 0", "OFFSET 0 ten 0"), "garbled HIERARCHY"),
-    (SMALL.replace("Zrotation\n  JOINT", "Wrotation\n  JOINT"), "bad CHANNELS"),
-    (SMALL.replace("1 0 0 90 0 0  5 0 0 90 90 0", "1 0 0 90"), "expected 2 frames x 12 channels"),
-    (SMALL.replace("Frame Time: 0.5", "Frame Time: x"), "non-number"),
-    (SMALL.replace("    }\n  }\n}", "    }\n  }\n"), "incomplete HIERARCHY"),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("hello", "not a BVH file"),
+        (SMALL.replace("OFFSET 0 10 0", "OFFSET 0 ten 0"), "garbled HIERARCHY"),
+        (SMALL.replace("Zrotation\n  JOINT", "Wrotation\n  JOINT"), "bad CHANNELS"),
+        (SMALL.replace("1 0 0 90 0 0  5 0 0 90 90 0", "1 0 0 90"), "expected 2 frames x 12 channels"),
+        (SMALL.replace("Frame Time: 0.5", "Frame Time: x"), "non-number"),
+        (SMALL.replace("    }\n  }\n}", "    }\n  }\n"), "incomplete HIERARCHY"),
+    ],
+)
 def test_garbled_text_gives_one_line_error(text, words):
     with pytest.raises(MocapError, match=words) as info:
         bvh.parse_bvh(text, source="x.bvh")
@@ -91,12 +94,15 @@ def test_contract_joints_of_real_files(name):
     assert np.cross([0.0, 1.0, 0.0], forward) @ left > 0
 
 
-@pytest.mark.parametrize("name, shoulder, wrist", [
-    ("cmu_walk.bvh", "LeftShoulder", "LeftWrist"),      # DAZ: LeftShoulder is the upper arm
-    ("cmu_run.bvh", "lShldr", "lHand"),
-    ("cmu_01_01_jumps.bvh", "LeftArm", "LeftHand"),     # CMU: LeftShoulder is the collar
-    ("walk01.bvh", "LeftArm", "LeftHand"),
-])
+@pytest.mark.parametrize(
+    "name, shoulder, wrist",
+    [
+        ("cmu_walk.bvh", "LeftShoulder", "LeftWrist"),  # DAZ: LeftShoulder is the upper arm
+        ("cmu_run.bvh", "lShldr", "lHand"),
+        ("cmu_01_01_jumps.bvh", "LeftArm", "LeftHand"),  # CMU: LeftShoulder is the collar
+        ("walk01.bvh", "LeftArm", "LeftHand"),
+    ],
+)
 def test_joint_names_per_style(name, shoulder, wrist):
     motion = _data(name)
     found = bvh.joint_map(motion)

@@ -25,6 +25,7 @@ from mocap.synth.walk import walk_cycle
 
 # -- bad input ----------------------------------------------------------------------
 
+
 def _header_only_avi(tmp_path):
     path = tmp_path / "zero.avi"
     cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (160, 120)).release()
@@ -44,16 +45,22 @@ def _one_frame_avi(tmp_path):
     return path
 
 
-@pytest.mark.parametrize("make, problem", [
-    (lambda p: p / "missing.mp4", "no such file"),
-    (lambda p: p, "is a directory"),
-    (text_mp4, "not a video file"),
-    (png_avi, "still image"),
-    (_header_only_avi, "no frames"),
-    (_nobody_avi, "no person found in any of its 20 frames"),
-    (_one_frame_avi, "no person found in its only frame (one who never moves shows only against a photo "
-                     "of the empty scene: --background"),
-])
+@pytest.mark.parametrize(
+    "make, problem",
+    [
+        (lambda p: p / "missing.mp4", "no such file"),
+        (lambda p: p, "is a directory"),
+        (text_mp4, "not a video file"),
+        (png_avi, "still image"),
+        (_header_only_avi, "no frames"),
+        (_nobody_avi, "no person found in any of its 20 frames"),
+        (
+            _one_frame_avi,
+            "no person found in its only frame (one who never moves shows only against a photo "
+            "of the empty scene: --background",
+        ),
+    ],
+)
 def test_fit_refuses_bad_input_in_one_line(tmp_path, capsys, make, problem):
     video, out = make(tmp_path), tmp_path / "out.motion.json"
     code, err = run(capsys, "fit", video, "--out", out, "--quiet")
@@ -72,8 +79,10 @@ def test_truncated_video_is_fitted_on_the_frames_that_decode(tmp_path, capsys):
     motion = read_motion(out)
     n = motion["video"]["frame_count"]
     # the first warning; the half walk may also be told its planted feet hide the scene
-    assert code == 0 and err[0] == (f"mocap: warning: {cut}: only {n} of the 30 frames the file "
-                                    "announces decode (truncated or damaged); using those")
+    assert code == 0 and err[0] == (
+        f"mocap: warning: {cut}: only {n} of the 30 frames the file "
+        "announces decode (truncated or damaged); using those"
+    )
     assert all(line.startswith("mocap: warning: ") for line in err)
     assert 10 <= n < 30 and [f["index"] for f in motion["frames"]] == list(range(n))
     assert all(f["person"] for f in motion["frames"])
@@ -85,8 +94,12 @@ def test_4k_video_gives_joints_in_full_resolution_pixels(tmp_path, capsys):
     # 5 frames far apart, drawn at 960x540 and enlarged 4x (drawing at 4K takes seconds)
     small, video, out = tmp_path / "small.avi", tmp_path / "big.avi", tmp_path / "big.motion.json"
     truth = render_clip(walk_cycle(2.0, 30.0)[::12], small, size=(960, 540))
-    write_video(video, (cv2.resize(f, (3840, 2160), interpolation=cv2.INTER_LINEAR)
-                        for _, f in iter_frames(small)), 30.0, (3840, 2160))
+    write_video(
+        video,
+        (cv2.resize(f, (3840, 2160), interpolation=cv2.INTER_LINEAR) for _, f in iter_frames(small)),
+        30.0,
+        (3840, 2160),
+    )
     code, err = run(capsys, "fit", video, "--out", out, "--quiet")
     assert code == 0, err
     motion = read_motion(out)
@@ -109,19 +122,20 @@ def mocap_command():
 
 def test_the_installed_command_reports_in_one_line(tmp_path, mocap_command):
     missing = tmp_path / "missing.mp4"
-    done = subprocess.run([mocap_command, "fit", str(missing)], capture_output=True,
-                          text=True, stdin=subprocess.DEVNULL, timeout=60)
+    done = subprocess.run(
+        [mocap_command, "fit", str(missing)], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60
+    )
     assert done.returncode == 2
     assert done.stderr.splitlines() == [f"mocap: error: {missing}: no such file"]
 
 
 def test_ffmpeg_messages_stay_off_stderr(tmp_path, mocap_command):
     video = text_mp4(tmp_path)
-    done = subprocess.run([mocap_command, "fit", str(video)], capture_output=True,
-                          text=True, stdin=subprocess.DEVNULL, timeout=60)
+    done = subprocess.run(
+        [mocap_command, "fit", str(video)], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60
+    )
     assert done.returncode == 2
-    assert done.stderr.splitlines() == [
-        f"mocap: error: {video}: not a video file (unrecognised format)"]
+    assert done.stderr.splitlines() == [f"mocap: error: {video}: not a video file (unrecognised format)"]
 
 
 def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
@@ -130,33 +144,50 @@ def test_fit_starts_without_the_export_and_smoothing_libraries(tmp_path):
     the other commands' modules (the renderer, the contact sheet, the batch runner) nor,
     with no bar to draw, tqdm."""
     code = "import sys; from mocap.cli import main; main(['fit', sys.argv[1]]); print(*sys.modules)"
-    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "missing.mp4")],
-                          capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path / "missing.mp4")],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=60,
+    )
     imported = set(done.stdout.split())
     assert "mocap.pipeline" in imported
-    assert not imported & {"trimesh", "pygltflib", "scipy.interpolate", "tqdm", "mocap.synth",
-                           "mocap.batch.sheet", "mocap.batch"}
+    assert not imported & {
+        "trimesh",
+        "pygltflib",
+        "scipy.interpolate",
+        "tqdm",
+        "mocap.synth",
+        "mocap.batch.sheet",
+        "mocap.batch",
+    }
 
 
 def test_fit_names_the_frames_the_review_would_show(tmp_path, capsys, monkeypatch):
     """After what it wrote, `mocap fit` says how many frames are doubtful (the app's
     review queue, most doubtful first) and names the first ones."""
     from mocap.session import review
+
     video = tmp_path / "walk.avi"
     render_walk(video, seconds=0.6)
-    monkeypatch.setattr(review, "LOW_SCORE", 1.1)         # every fit doubtful, ranked by S
+    monkeypatch.setattr(review, "LOW_SCORE", 1.1)  # every fit doubtful, ranked by S
     assert main(["fit", str(video), "--quiet"]) == 0
     lines = capsys.readouterr().out.splitlines()
     n = len(read_motion(video.with_suffix(".motion.json"))["frames"])
     assert lines[0] == f"wrote {video.with_suffix('.motion.json')}"
-    said = re.fullmatch(rf"{n} of {n} frames doubtful, most first: ([0-9, ]+), \.\.\. "
-                        rf"\(`mocap serve {re.escape(str(video))}` shows why, on its Review tab\)", lines[1])
+    said = re.fullmatch(
+        rf"{n} of {n} frames doubtful, most first: ([0-9, ]+), \.\.\. "
+        rf"\(`mocap serve {re.escape(str(video))}` shows why, on its Review tab\)",
+        lines[1],
+    )
     named = [int(f) for f in said.group(1).split(", ")]
     assert len(set(named)) == 5 and all(0 <= f < n for f in named)
 
 
 def test_version_and_help_say_what_the_command_is(capsys):
     from importlib.metadata import version
+
     with pytest.raises(SystemExit) as exit_:
         main(["--version"])
     assert exit_.value.code == 0 and capsys.readouterr().out == f"mocap {version('mocap')}\n"
@@ -167,13 +198,17 @@ def test_version_and_help_say_what_the_command_is(capsys):
 
 # -- mocap synth ----------------------------------------------------------------------
 
-@pytest.mark.parametrize("args, problem", [
-    (["walk-cycle", "{tmp}/a.mkv"], "video must end in .mp4 or .avi"),
-    (["walk-cycle", "{tmp}/a.mp4", "--size", "big"], "--size expects AxB"),
-    (["walk-cycle", "{tmp}/a.mp4", "--fps", "0"], "--fps"),
-    (["walk-cycle", "{tmp}/no/such/folder/a.mp4"], "does not exist"),
-    (["{tmp}/missing.bvh", "{tmp}/a.mp4"], "missing.bvh"),
-])
+
+@pytest.mark.parametrize(
+    "args, problem",
+    [
+        (["walk-cycle", "{tmp}/a.mkv"], "video must end in .mp4 or .avi"),
+        (["walk-cycle", "{tmp}/a.mp4", "--size", "big"], "--size expects AxB"),
+        (["walk-cycle", "{tmp}/a.mp4", "--fps", "0"], "--fps"),
+        (["walk-cycle", "{tmp}/no/such/folder/a.mp4"], "does not exist"),
+        (["{tmp}/missing.bvh", "{tmp}/a.mp4"], "missing.bvh"),
+    ],
+)
 def test_synth_refuses_bad_arguments(tmp_path, capsys, args, problem):
     code, err = run(capsys, "synth", *[a.format(tmp=tmp_path) for a in args])
     assert code == 2
@@ -189,6 +224,7 @@ def test_synth_refuses_an_unknown_view(tmp_path):
 
 # -- mocap sheet ----------------------------------------------------------------------
 
+
 def test_sheet_tiles_frames_beside_their_silhouettes(fitted_walk, tmp_path, capsys):
     clip = fitted_walk("side")
     motion = json.loads(clip.motion.read_text())
@@ -200,7 +236,7 @@ def test_sheet_tiles_frames_beside_their_silhouettes(fitted_walk, tmp_path, caps
     image = cv2.imread(str(sheet))
     # 4 tiles in rows of 3; a tile is the 320x240 frame and its silhouette, 240 px tall
     assert image.shape == (2 * 240, 3 * 2 * 320, 3)
-    assert image[240:, 2 * 640:].max() == 0        # the empty place after the 4th tile
+    assert image[240:, 2 * 640 :].max() == 0  # the empty place after the 4th tile
 
 
 def test_small_videos_are_upscaled_on_the_sheet(tmp_path, capsys):
@@ -212,12 +248,15 @@ def test_small_videos_are_upscaled_on_the_sheet(tmp_path, capsys):
     assert cv2.imread(str(tmp_path / "s.png")).shape == (240, 2 * 2 * 300, 3)
 
 
-@pytest.mark.parametrize("edit, args, problem", [
-    (lambda m: m["video"].update(frame_count=31), [], "fitted on a video of 320x240, 31 frames"),
-    (lambda m: m.update(format="other"), [], "not a mocap-motion version 1 file"),
-    (lambda m: None, ["--frames", "0"], "--frames must be at least 1"),
-    (lambda m: None, ["--out", "{tmp}/sheet.gif"], "must end in .png or .jpg"),
-])
+@pytest.mark.parametrize(
+    "edit, args, problem",
+    [
+        (lambda m: m["video"].update(frame_count=31), [], "fitted on a video of 320x240, 31 frames"),
+        (lambda m: m.update(format="other"), [], "not a mocap-motion version 1 file"),
+        (lambda m: None, ["--frames", "0"], "--frames must be at least 1"),
+        (lambda m: None, ["--out", "{tmp}/sheet.gif"], "must end in .png or .jpg"),
+    ],
+)
 def test_sheet_refuses_bad_input_in_one_line(fitted_walk, tmp_path, capsys, edit, args, problem):
     clip = fitted_walk("side")
     motion = json.loads(clip.motion.read_text())

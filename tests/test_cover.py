@@ -11,13 +11,14 @@ from test_silhouette import iou, synthetic_scene
 from mocap.silhouette.background import estimate_background, extract_silhouette
 from mocap.silhouette.blend import silhouette_and_cover
 
-SUPER = 8   # subpixels per pixel side of the drawn coverage
+SUPER = 8  # subpixels per pixel side of the drawn coverage
 
 
 def _model(scene: np.ndarray, rng: np.random.Generator):
     """The background estimated from five noisy views of ``scene`` (float BGR)."""
-    return estimate_background([np.clip(scene + rng.normal(0, 2, scene.shape), 0, 255).astype(np.uint8)
-                                for _ in range(5)])
+    return estimate_background(
+        [np.clip(scene + rng.normal(0, 2, scene.shape), 0, 255).astype(np.uint8) for _ in range(5)]
+    )
 
 
 def _composite(scene: np.ndarray, cover: np.ndarray, colour, rng: np.random.Generator) -> np.ndarray:
@@ -45,14 +46,13 @@ def test_the_cover_keeps_the_pixels_the_body_covers_half_of():
     closing bridges the slit between the legs; the cover is the pixels covered at
     least half (the masks' own definition), the thin arm whole."""
     rng = np.random.default_rng(4)
-    scene = cv2.resize(rng.uniform(60, 220, (16, 21, 3)).astype(np.float32), (320, 240),
-                       interpolation=cv2.INTER_CUBIC)
+    scene = cv2.resize(rng.uniform(60, 220, (16, 21, 3)).astype(np.float32), (320, 240), interpolation=cv2.INTER_CUBIC)
     coverage = _figure_coverage()
     frame = _composite(scene, coverage, (150, 60, 40), rng)
     truth = coverage >= 0.5
     model = _model(scene, rng)
     fit, cover = silhouette_and_cover(frame, model)
-    assert np.array_equal(fit, extract_silhouette(frame, model))      # what the 2D fit reads
+    assert np.array_equal(fit, extract_silhouette(frame, model))  # what the 2D fit reads
     assert iou(fit, truth) < 0.95
     assert iou(cover, truth) > 0.98
     slit = truth[150:215, 159:162] == 0
@@ -78,7 +78,7 @@ def test_dark_cloth_of_the_scenes_hue_is_body_and_its_shadow_is_not():
     lit[shadow > 0] *= 0.6
     frame = _composite(lit, (legs > 0).astype(np.float32), (84, 56, 32), rng)
     fit, cover = silhouette_and_cover(frame, _model(scene, rng))
-    assert iou(fit, legs) < 0.5                          # the one-pixel tests take them for a shadow
+    assert iou(fit, legs) < 0.5  # the one-pixel tests take them for a shadow
     assert iou(cover, legs) > 0.9
     assert not cover[shadow > 0].any()
 

@@ -8,7 +8,7 @@ from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS, WIDTH
 from mocap.image.edges import Edges
 from mocap.silhouette.raster import Canvas, segment_quads, sweep_scorer
 
-BAR = 6.0      # px: the width of the bar drawn over the trunk
+BAR = 6.0  # px: the width of the bar drawn over the trunk
 
 
 def trunk_with_bar() -> tuple[np.ndarray, np.ndarray]:
@@ -43,11 +43,14 @@ def test_an_arm_over_the_fitted_trunk_is_placed_by_the_edges_not_by_its_length()
     the frame's edges pick the one on the bar's outline."""
     sil, grey = trunk_with_bar()
     canvas = Canvas(sil, grey)
-    canvas.commit(segment_quads(np.array([[41.0, 20.0], [62.0, 20.0]]), np.array([[41.0, 80.0], [62.0, 80.0]]),
-                                np.array([22.0, 16.0])))
+    canvas.commit(
+        segment_quads(
+            np.array([[41.0, 20.0], [62.0, 20.0]]), np.array([[41.0, 80.0], [62.0, 80.0]]), np.array([22.0, 16.0])
+        )
+    )
     following = canvas.fork(by_edges=True)
     tops, bottoms = np.array([40.0, 25.0, 25.0, 25.0]), np.array([60.0, 75.0, 75.0, 75.0])
-    xs = np.array([47.0, 47.0, 60.0, 53.0])         # on the bar short and long, beside it, on the strip
+    xs = np.array([47.0, 47.0, 60.0, 53.0])  # on the bar short and long, beside it, on the strip
     starts, ends = np.column_stack([xs, tops]), np.column_stack([xs, bottoms])
     scores, _ = sweep_scorer(following, segment_quads(starts, ends, np.full(4, BAR))[:, None])
     assert np.ptp(scores[:3]) < 1e-9 and scores[3] > scores[0]
@@ -56,4 +59,4 @@ def test_an_arm_over_the_fitted_trunk_is_placed_by_the_edges_not_by_its_length()
     joints[:, SEGMENT_JOINTS[lower, 0]], joints[:, SEGMENT_JOINTS[lower, 1]] = starts, ends
     edges = following.edge_scores(joints, [lower], BAR / WIDTH[lower])
     assert edges[1] > edges[2] + 0.1
-    assert not Canvas(sil).fork(by_edges=True).by_edges          # no frame, no edges to follow
+    assert not Canvas(sil).fork(by_edges=True).by_edges  # no frame, no edges to follow

@@ -27,16 +27,14 @@ from mocap.synth.walk import walk_cycle
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 FPS = 30.0
 _COMPONENTS = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}
-_DTYPES = {pygltflib.FLOAT: np.float32, pygltflib.UNSIGNED_SHORT: np.uint16,
-           pygltflib.UNSIGNED_INT: np.uint32}
+_DTYPES = {pygltflib.FLOAT: np.float32, pygltflib.UNSIGNED_SHORT: np.uint16, pygltflib.UNSIGNED_INT: np.uint32}
 
 
 @pytest.fixture(scope="module")
 def walk_motion():
     """The procedural walk from every third frame, smoothed."""
     joints = walk_cycle(2.0, FPS)
-    return build_motion({i: joints[i] for i in range(0, len(joints), 3)}, len(joints), FPS,
-                        smooth=1.0)
+    return build_motion({i: joints[i] for i in range(0, len(joints), 3)}, len(joints), FPS, smooth=1.0)
 
 
 @pytest.fixture(scope="module")
@@ -48,8 +46,7 @@ def cmu_motion():
     joints = contract_joints(capture)
     joints = joints[resample_indices(len(joints), capture.frame_time, FPS, None, 2.0)]
     pelvis = joints[:, body.JOINT_INDEX["pelvis"]]
-    return build_motion({i: joints[i] - pelvis[i] for i in range(0, len(joints), 4)},
-                        len(joints), FPS, root=pelvis)
+    return build_motion({i: joints[i] - pelvis[i] for i in range(0, len(joints), 4)}, len(joints), FPS, root=pelvis)
 
 
 def bvhio_joints(path: Path) -> tuple[np.ndarray, float]:
@@ -62,9 +59,11 @@ def bvhio_joints(path: Path) -> tuple[np.ndarray, float]:
     for f in range(frames.FrameCount):
         root.loadPose(f)
         # bvhio keeps End Sites apart: the head top is the Head's, in the Head's frame
-        out[f] = [by_name["Head"].pointToWorld(head_end) if BONES[b] == "Head_End"
-                  else by_name[BONES[b]].PositionWorld for b in JOINT_BONES]
-    return out / 100.0, frames.FrameTime          # the file is in centimetres
+        out[f] = [
+            by_name["Head"].pointToWorld(head_end) if BONES[b] == "Head_End" else by_name[BONES[b]].PositionWorld
+            for b in JOINT_BONES
+        ]
+    return out / 100.0, frames.FrameTime  # the file is in centimetres
 
 
 def _tree(joint):
@@ -101,16 +100,16 @@ class Gltf:
         acc = self.doc.accessors[index]
         view = self.doc.bufferViews[acc.bufferView]
         width = _COMPONENTS[acc.type]
-        flat = np.frombuffer(self.blob, _DTYPES[acc.componentType], acc.count * width,
-                             view.byteOffset + (acc.byteOffset or 0))
+        flat = np.frombuffer(
+            self.blob, _DTYPES[acc.componentType], acc.count * width, view.byteOffset + (acc.byteOffset or 0)
+        )
         return flat.reshape(acc.count, width).astype(float)
 
     def world_matrices(self, sample: int | None) -> dict[int, np.ndarray]:
         """4x4 world transform of every node at one animation sample (None: at rest)."""
         local = {}
         for i, node in enumerate(self.doc.nodes):
-            local[i] = {"translation": node.translation or [0, 0, 0],
-                        "rotation": node.rotation or [0, 0, 0, 1]}
+            local[i] = {"translation": node.translation or [0, 0, 0], "rotation": node.rotation or [0, 0, 0, 1]}
         animation = self.doc.animations[0]
         for channel in animation.channels if sample is not None else ():
             sampler = animation.samplers[channel.sampler]
@@ -158,8 +157,7 @@ def test_glb_is_one_skinned_character(walk_motion, tmp_path):
         at = {doc.nodes[j].name: matrices[j][:3, 3] for j in skin.joints}
         assert np.abs([at[BONES[b]] - world[sample, k] for k, b in enumerate(JOINT_BONES)]).max() < 1e-5
         skinning = np.array([matrices[j] for j in skin.joints]) @ inverse_bind
-        moved = np.einsum("vk,vkij,vj->vi", weights, skinning[joints],
-                          np.c_[vertices, np.ones(len(vertices))])[:, :3]
+        moved = np.einsum("vk,vkij,vj->vi", weights, skinning[joints], np.c_[vertices, np.ones(len(vertices))])[:, :3]
         for k, (start, end) in enumerate(body.SEGMENTS.values()):
             part = slice(k * per_segment, (k + 1) * per_segment)
             ends = world[sample, [body.JOINT_INDEX[start], body.JOINT_INDEX[end]]]
@@ -167,14 +165,13 @@ def test_glb_is_one_skinned_character(walk_motion, tmp_path):
             for end_at, joint in ((0.0, ends[0]), (1.0, ends[1])):
                 ring = moved[part][np.abs(along - end_at) < 1e-4]
                 assert np.abs(ring.mean(0) - joint).max() < 1e-5, (start, end)
-        marks = moved[per_segment * len(body.SEGMENTS):].reshape(len(FACING_MARKS), per_mark, 3)
-        for (segment, *_), (_, out, _), mark in zip(FACING_MARKS.values(),
-                                                       facing_marks(world[sample]), marks):
+        marks = moved[per_segment * len(body.SEGMENTS) :].reshape(len(FACING_MARKS), per_mark, 3)
+        for (segment, *_), (_, out, _), mark in zip(FACING_MARKS.values(), facing_marks(world[sample]), marks):
             start, end = world[sample, [body.JOINT_INDEX[j] for j in body.SEGMENTS[segment]]]
             axis = (end - start) / np.linalg.norm(end - start)
-            offset = mark - start - np.outer((mark - start) @ axis, axis)   # off the axis
+            offset = mark - start - np.outer((mark - start) @ axis, axis)  # off the axis
             tip = offset[np.argmax(np.linalg.norm(offset, axis=1))]
-            assert tip @ out > 0.9 * np.linalg.norm(tip), (segment, sample)    # in front
+            assert tip @ out > 0.9 * np.linalg.norm(tip), (segment, sample)  # in front
 
 
 def _along(vertices, rest, skin, start: str, end: str) -> np.ndarray:
@@ -194,13 +191,12 @@ def test_glb_loads_in_trimesh(walk_motion, tmp_path):
 def test_csv_round_trip(walk_motion, tmp_path):
     joints2d = np.random.default_rng(0).uniform(0, 640, (walk_motion.n_frames, 16, 2))
     frames = [{"index": i, "joints2d": joints2d[i], "score": 0.5} for i in range(walk_motion.n_frames)]
-    del frames[3]["joints2d"], frames[3]["score"]                   # nobody on frame 3
+    del frames[3]["joints2d"], frames[3]["score"]  # nobody on frame 3
     path = write_format("csv", tmp_path / "m.csv", Clip("m", {}, frames, walk_motion))
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     head = rows[0]
-    assert head[:6] == ["frame", "time_s", "keyframe", "score", "head_top_u_right_px",
-                        "head_top_v_down_px"]
+    assert head[:6] == ["frame", "time_s", "keyframe", "score", "head_top_u_right_px", "head_top_v_down_px"]
     assert head[36:39] == ["head_top_x_right_m", "head_top_y_up_m", "head_top_z_toward_camera_m"]
     assert head[-2:] == ["ankle_l_contact", "ankle_r_contact"]
     assert len(head) == 4 + 5 * 16 + 2 and len(rows) == 1 + walk_motion.n_frames
@@ -223,7 +219,7 @@ def test_unwritable_path_is_refused(key, walk_motion, tmp_path):
     with pytest.raises(MocapError, match="cannot write"):
         write_format(key, tmp_path / "missing" / "out", clip)
     with pytest.raises(MocapError, match="cannot write"):
-        write_format(key, tmp_path, clip)                   # a directory
+        write_format(key, tmp_path, clip)  # a directory
     assert list(tmp_path.iterdir()) == []
 
 
@@ -231,8 +227,7 @@ def test_fit_without_blender_refuses_fbx_in_one_line(tmp_path, monkeypatch, caps
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None)
     assert main(["fit", str(tmp_path / "walk.mp4"), "--fbx", str(tmp_path / "m.fbx")]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == "mocap: error: FBX export needs Blender as a Python module: pip install " \
-                  "'mocap[fbx]' (Python 3.11)"
+    assert err == "mocap: error: FBX export needs Blender as a Python module: pip install 'mocap[fbx]' (Python 3.11)"
 
 
 def test_unknown_format_is_refused(walk_motion, tmp_path):

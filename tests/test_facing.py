@@ -21,17 +21,17 @@ CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 
 
 def test_facing_marks_stand_out_of_the_front_and_turn_with_the_body():
-    pose = walk_cycle(0.5, 30.0, in_place=True)[0]            # faces +z, the camera
+    pose = walk_cycle(0.5, 30.0, in_place=True)[0]  # faces +z, the camera
     marks = facing_marks(pose)
     for (segment, *_), (base, out, size) in zip(FACING_MARKS.values(), marks):
-        assert out[2] > 0.9, segment                               # toward the camera
+        assert out[2] > 0.9, segment  # toward the camera
         start, end = pose[[body.JOINT_INDEX[j] for j in body.SEGMENTS[segment]]]
         axis = (end - start) / np.linalg.norm(end - start)
         off = base - start - ((base - start) @ axis) * axis
         front = body.semi_axes(body.BODY_HEIGHT_M)[body.SEGMENT_INDEX[segment], 1]
-        assert abs(np.linalg.norm(off) - front) < 1e-9 and off @ out > 0   # on the front surface
-        assert 0.02 < size[0] < 0.2 and 0.02 < size[1] < 0.2                 # metres
-    turned = pose * [-1.0, 1.0, -1.0]                          # half a turn about y: faces away
+        assert abs(np.linalg.norm(off) - front) < 1e-9 and off @ out > 0  # on the front surface
+        assert 0.02 < size[0] < 0.2 and 0.02 < size[1] < 0.2  # metres
+    turned = pose * [-1.0, 1.0, -1.0]  # half a turn about y: faces away
     np.testing.assert_allclose(facing_marks(turned)[:, :2], marks[:, :2] * [-1.0, 1.0, -1.0], atol=1e-9)
 
 
@@ -48,7 +48,7 @@ def test_a_performer_seen_from_behind_is_named_facing_away(tmp_path, yaw, away):
     assert all((abs(lift.yaw_of(p)) > 90) == away for p in truth.joints3d)
     session = open_session(video)
     evidence = facing_away(session.silhouettes, fit_arrays(session.fits)[0], 1.0)
-    assert np.mean(evidence > 0 if away else evidence < 0) >= 0.7       # frame by frame
+    assert np.mean(evidence > 0 if away else evidence < 0) >= 0.7  # frame by frame
     names = session.inputs.orientation
     assert sum(str(n).startswith("backward" if away else "forward") for n in names) >= 0.9 * len(names)
 
@@ -65,12 +65,13 @@ def test_the_near_limbs_outlines_name_the_limbs_of_a_profile_walk(tmp_path, yaw)
     truth = render_clip(walk_cycle(1.5, 15.0), video, RenderOptions(yaw=yaw, size=(480, 360), fps=15.0))
     session = open_session(video)
     joints, body_px, _ = fit_arrays(session.fits)
-    near_side = "r" if lift.yaw_of(truth.joints3d[0]) > 0 else "l"       # facing image right: the right
+    near_side = "r" if lift.yaw_of(truth.joints3d[0]) > 0 else "l"  # facing image right: the right
     evidence = near_limbs(session.silhouettes, joints, body_px, 1.0)
     for k, tip in enumerate(("wrist", "ankle")):
         ends = [JOINT_INDEX[f"{tip}_{s}"] for s in ("l", "r", near_side)]
-        image_left_near = (np.linalg.norm(joints[:, ends[0]] - truth.joints2d[:, ends[2]], axis=-1)
-                           < np.linalg.norm(joints[:, ends[1]] - truth.joints2d[:, ends[2]], axis=-1))
+        image_left_near = np.linalg.norm(joints[:, ends[0]] - truth.joints2d[:, ends[2]], axis=-1) < np.linalg.norm(
+            joints[:, ends[1]] - truth.joints2d[:, ends[2]], axis=-1
+        )
         assert np.sum(evidence[:, k] * np.where(image_left_near, 1.0, -1.0)) > 0, tip
     named, true = session.inputs.joints2d, truth.joints2d
     for kind in (("knee", "ankle"), ("elbow", "wrist")):
@@ -87,13 +88,13 @@ def test_the_heads_look_is_not_read_where_an_arm_lies_over_the_head():
     hair_share reads), not for arms hanging down or stretched out to the sides, nor
     for a hand held beside the neck, below the band."""
     stand = walk_cycle(0.5, 30.0, in_place=True)[0]
-    joints = stand[:, :2] * [1.0, -1.0] * 200 + [320.0, 240.0]              # image pixels, y down
+    joints = stand[:, :2] * [1.0, -1.0] * 200 + [320.0, 240.0]  # image pixels, y down
     j = {name: JOINT_INDEX[name] for name in ("neck", "head_top", "shoulder_r", "elbow_r", "wrist_r")}
     assert not arm_over_head(joints)
     head = joints[j["head_top"]] - joints[j["neck"]]
     raised = joints.copy()
     raised[j["elbow_r"]] = joints[j["neck"]] + [-0.6 * np.linalg.norm(head), 0.0] + 0.5 * head
-    raised[j["wrist_r"]] = joints[j["neck"]] + 0.8 * head                 # the hand on the crown's side
+    raised[j["wrist_r"]] = joints[j["neck"]] + 0.8 * head  # the hand on the crown's side
     assert arm_over_head(raised)
     out = joints.copy()
     out[j["elbow_r"]] = joints[j["shoulder_r"]] + [-40.0, 0.0]

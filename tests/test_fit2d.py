@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from helpers import SHARED_DATA
 
-from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, Pose2D, default_angles, forward_kinematics_2d
+from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 from mocap.io.video import open_video
 from mocap.pipeline import silhouette_passes
 from mocap.silhouette.arms import elbow_bends_back, two_link_angles
@@ -19,6 +19,7 @@ from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_c
 from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.legchain import LegChain
 from mocap.silhouette.legs import ends_in_foot, raised_leg
+from mocap.silhouette.model2d import Pose2D, default_angles, forward_kinematics_2d
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
 from mocap.silhouette.search import coarse_to_fine
 from mocap.silhouette.torso import head_top_row, torso_spread
@@ -31,8 +32,8 @@ CMU_WALK = SHARED_DATA / "bvh" / "cmu_walk.bvh"
 def test_similarity_is_eq_3():
     a = np.zeros((10, 10), np.uint8)
     b = np.zeros((10, 10), np.uint8)
-    a[:, :6] = 1          # 60 silhouette pixels
-    b[:, 4:] = 1          # 60 model pixels, 20 shared, union 100
+    a[:, :6] = 1  # 60 silhouette pixels
+    b[:, 4:] = 1  # 60 model pixels, 20 shared, union 100
     p, n = 40 / 100, 40 / 100
     assert similarity(a, b) == pytest.approx(np.exp(-p - n) * (1 - p))
     assert similarity(a, a) == pytest.approx(1.0)
@@ -52,7 +53,7 @@ def test_candidates_swept_wholly_outside_the_frame_explain_nothing():
 
 
 def test_coarse_to_fine_finds_the_peak_and_keeps_a_flat_start():
-    values = np.maximum(0.0, 1.0 - np.abs(np.arange(101) - 63) / 6)   # between divisions
+    values = np.maximum(0.0, 1.0 - np.abs(np.arange(101) - 63) / 6)  # between divisions
     opening = list(range(0, 101, 5))
     best = coarse_to_fine(lambda i: values[i], 101, opening + [40], values[opening + [40]], 40, 10)
     assert best == 63
@@ -61,11 +62,11 @@ def test_coarse_to_fine_finds_the_peak_and_keeps_a_flat_start():
 
 
 def test_elbow_corner_and_line_angles():
-    upper = np.c_[np.zeros(10), np.arange(10.0)]                 # straight down
-    lower = np.c_[np.arange(1, 8.0), np.full(7, 9.0)]            # then to the right
+    upper = np.c_[np.zeros(10), np.arange(10.0)]  # straight down
+    lower = np.c_[np.arange(1, 8.0), np.full(7, 9.0)]  # then to the right
     arm = np.vstack([upper, lower])
     assert find_elbow_corner(arm) in (8, 9, 10)
-    assert find_angle(upper, 0.0) == pytest.approx(-90.0)        # y down is -90 (270)
+    assert find_angle(upper, 0.0) == pytest.approx(-90.0)  # y down is -90 (270)
     assert find_elbow_corner(upper) == -1
 
 
@@ -85,9 +86,17 @@ def test_two_link_angles_reach_the_point():
 
 def test_fit_recovers_the_model_from_its_own_mask():
     angle = default_angles()
-    for name, a in (("torso", 95), ("upper_leg_l", 250), ("lower_leg_l", 260), ("upper_leg_r", 290),
-                    ("lower_leg_r", 300), ("upper_arm_l", 240), ("lower_arm_l", 200),
-                    ("upper_arm_r", 300), ("lower_arm_r", 330)):
+    for name, a in (
+        ("torso", 95),
+        ("upper_leg_l", 250),
+        ("lower_leg_l", 260),
+        ("upper_leg_r", 290),
+        ("lower_leg_r", 300),
+        ("upper_arm_l", 240),
+        ("lower_arm_l", 200),
+        ("upper_arm_r", 300),
+        ("lower_arm_r", 330),
+    ):
         angle[SEGMENT_INDEX[name]] = a
     truth = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.8)
     fit = fit_frame(draw_model(truth, (160, 200)) * 255, FIT_SCALE)
@@ -100,9 +109,17 @@ def kicking_pose(thigh: float, shin: float, spread: float) -> Pose2D:
     """The model standing on its image-left leg, the right thigh raised to ``thigh``
     and its lower leg at ``shin`` degrees."""
     angle = default_angles()
-    for name, a in (("torso", 95), ("upper_leg_l", 265), ("lower_leg_l", 260), ("upper_leg_r", thigh),
-                    ("lower_leg_r", shin), ("upper_arm_l", 240), ("lower_arm_l", 200),
-                    ("upper_arm_r", 290), ("lower_arm_r", 300)):
+    for name, a in (
+        ("torso", 95),
+        ("upper_leg_l", 265),
+        ("lower_leg_l", 260),
+        ("upper_leg_r", thigh),
+        ("lower_leg_r", shin),
+        ("upper_arm_l", 240),
+        ("lower_arm_l", 200),
+        ("upper_arm_r", 290),
+        ("lower_arm_r", 300),
+    ):
         angle[SEGMENT_INDEX[name]] = a
     return Pose2D(pelvis=np.array([90.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=spread)
 
@@ -209,15 +226,25 @@ def test_profile_elbow_bends_the_way_the_knees_point():
     height (the upper arm over the trunk, which the silhouette cannot place, may lean
     back a little; the folded-back arm puts it 20% off)."""
     angle = default_angles()
-    for name, a in (("upper_leg_l", 290), ("lower_leg_l", 255), ("upper_leg_r", 285), ("lower_leg_r", 250),
-                    ("upper_arm_l", 260), ("lower_arm_l", 265), ("upper_arm_r", 272), ("lower_arm_r", 5)):
+    for name, a in (
+        ("upper_leg_l", 290),
+        ("lower_leg_l", 255),
+        ("upper_leg_r", 285),
+        ("lower_leg_r", 250),
+        ("upper_arm_l", 260),
+        ("lower_arm_l", 265),
+        ("upper_arm_r", 272),
+        ("lower_arm_r", 5),
+    ):
         angle[SEGMENT_INDEX[name]] = a
     truth = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.2)
     silhouette = draw_model(truth, (160, 200)) * 255
     fit = fit_frame(silhouette, FIT_SCALE, spread=torso_spread(silhouette, FIT_SCALE))
     want = forward_kinematics_2d(truth)
-    err = {j: np.linalg.norm(fit.joints[JOINT_INDEX[j]] - want[JOINT_INDEX[j]]) / (175 * FIT_SCALE)
-           for j in ("elbow_r", "wrist_r")}
+    err = {
+        j: np.linalg.norm(fit.joints[JOINT_INDEX[j]] - want[JOINT_INDEX[j]]) / (175 * FIT_SCALE)
+        for j in ("elbow_r", "wrist_r")
+    }
     assert max(err.values()) < 0.05, err
     upper, lower = (fit.pose.angle[SEGMENT_INDEX[s]] for s in ("upper_arm_r", "lower_arm_r"))
     assert not elbow_bends_back(upper, lower, 0.0, facing=1)
@@ -225,8 +252,9 @@ def test_profile_elbow_bends_the_way_the_knees_point():
 
 def test_reported_hips_lie_below_where_the_thighs_attach_along_the_trunk():
     from mocap.body import HIP_BELOW_THIGH_TOPS, reported_joints
+
     angle = default_angles()
-    angle[SEGMENT_INDEX["torso"]] = 60.0                       # leaning toward image right
+    angle[SEGMENT_INDEX["torso"]] = 60.0  # leaning toward image right
     pose = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.8)
     model = forward_kinematics_2d(pose)
     out = reported_joints(model, FIT_SCALE)
@@ -245,6 +273,7 @@ def true_mask_fits(clip: Path) -> tuple[np.ndarray, np.ndarray, float]:
 
     from mocap.io.video import iter_frames, processing_scale
     from mocap.silhouette.passes import Silhouette, iter_fits
+
     info = open_video(clip / "video.mp4")
     scale = processing_scale(info)
     sils = []
@@ -253,8 +282,11 @@ def true_mask_fits(clip: Path) -> tuple[np.ndarray, np.ndarray, float]:
         sils.append(Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST), frame))
     fits = list(iter_fits(sils, scale, info.fps))
     truth = json.loads((clip / "truth.json").read_text())
-    return (np.array([f.joints2d for f in fits], float),
-            np.array([f["joints2d"] for f in truth["frames"]], float), float(truth["body_height_px"]))
+    return (
+        np.array([f.joints2d for f in fits], float),
+        np.array([f["joints2d"] for f in truth["frames"]], float),
+        float(truth["body_height_px"]),
+    )
 
 
 def test_ankles_of_a_real_capture_are_fitted_above_the_feet():
@@ -270,7 +302,7 @@ def test_ankles_of_a_real_capture_are_fitted_above_the_feet():
     ankles = [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]
     assert err[:, ankles].mean() < 6.0
     assert abs(np.mean(joints[:, ankles, 1] - truth[:, ankles, 1])) / body_px * 100 < 3.5
-    assert err[:, JOINT_INDEX["hip_l"]:].mean() < 4.0
+    assert err[:, JOINT_INDEX["hip_l"] :].mean() < 4.0
 
 
 def test_a_trunk_under_raised_arms_is_fitted_from_the_head_not_the_hands():
@@ -287,7 +319,7 @@ def test_a_trunk_under_raised_arms_is_fitted_from_the_head_not_the_hands():
     assert err[:, JOINT_INDEX["head_top"]].mean() < 5.0
     assert err[:, JOINT_INDEX["neck"]].mean() < 4.0
     assert err[:, JOINT_INDEX["pelvis"]].mean() < 4.0
-    assert err[:, JOINT_INDEX["hip_l"]:].mean() < 5.0
+    assert err[:, JOINT_INDEX["hip_l"] :].mean() < 5.0
 
 
 def test_the_head_top_row_skips_a_raised_forearm():
@@ -297,7 +329,7 @@ def test_the_head_top_row_skips_a_raised_forearm():
     silhouette = draw_model(pose, (180, 200))
     head_top = forward_kinematics_2d(pose)[JOINT_INDEX["head_top"]][1]
     assert np.flatnonzero(silhouette.any(axis=1))[0] < head_top - 10
-    assert abs(head_top_row(silhouette, FIT_SCALE) - head_top) <= 3   # a drawn head has no round crown
+    assert abs(head_top_row(silhouette, FIT_SCALE) - head_top) <= 3  # a drawn head has no round crown
 
 
 def test_a_deep_squat_is_fitted_with_level_thighs_under_a_leaning_trunk():

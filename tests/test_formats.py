@@ -37,7 +37,8 @@ def both(tiny_video, tmp_path_factory):
     state.start()
     assert state.ready.wait(60) and state.progress.error is None
     return {key: (paths[key], state.export(key)) for key in paths} | {
-        "foot lock": (locked, state.export("json", foot_lock=True))}
+        "foot lock": (locked, state.export("json", foot_lock=True))
+    }
 
 
 def read_back(key: str, data: bytes, path) -> int:
@@ -49,11 +50,11 @@ def read_back(key: str, data: bytes, path) -> int:
     if key == "glb":
         scene = trimesh.load(io.BytesIO(data), file_type="glb")
         assert list(scene.geometry) == ["body"]
-        return TINY_FRAMES          # the frame count is the animation's, which trimesh skips
+        return TINY_FRAMES  # the frame count is the animation's, which trimesh skips
     if key == "csv":
         return len(list(csv.reader(io.StringIO(data.decode())))) - 1
     if key == "fbx":
-        return TINY_FRAMES          # Blender reads it back: test_blender.py
+        return TINY_FRAMES  # Blender reads it back: test_blender.py
     return page_data(data.decode())["n_frames"]
 
 
@@ -62,7 +63,7 @@ def test_every_format_from_the_command_line_and_the_app(both, key):
     if key not in both:
         pytest.skip(f"{key}: not available here ({FORMATS[key].holds})")
     path, (name, data) = both[key]
-    if key == "fbx":        # Blender stamps the FBX with the time it wrote it
+    if key == "fbx":  # Blender stamps the FBX with the time it wrote it
         assert data[:18] == path.read_bytes()[:18] == b"Kaydara FBX Binary"
     else:
         assert data == path.read_bytes(), f"{key}: the app's file differs from the command line's"
@@ -88,7 +89,7 @@ def test_the_page_of_the_motion_file_is_the_fits_page(both):
     motion_path, html_path = both["json"][0], both["html"][0]
     mine = page_data(motion_file_html(motion_path))["frames"]
     fits = page_data(html_path.read_text(encoding="utf-8"))["frames"]
-    assert np.abs(np.array(mine, float) - np.array(fits, float)).max() < 1.5e-3   # pages keep mm
+    assert np.abs(np.array(mine, float) - np.array(fits, float)).max() < 1.5e-3  # pages keep mm
 
 
 def test_the_app_offers_every_format():
@@ -99,6 +100,6 @@ def test_the_csv_holds_the_world_joints_of_the_motion_file(both):
     data = json.loads(both["json"][1][1])
     rows = list(csv.reader(io.StringIO(both["csv"][1][1].decode())))
     first = rows[0].index("head_top_x_right_m")
-    values = np.array([row[first:first + 48] for row in rows[1:]], float)
+    values = np.array([row[first : first + 48] for row in rows[1:]], float)
     world = np.array([np.add(f["joints3d"], f["root"]) - data["origin"] for f in data["frames"]])
     assert np.abs(values.reshape(world.shape) - world).max() < 2e-4

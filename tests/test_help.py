@@ -19,8 +19,16 @@ from mocap.body import ORIENTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 ARTIFACTS = ROOT / "artifacts" / "help"
 
 
@@ -49,8 +57,9 @@ def registered_shortcuts() -> list[str]:
     combos = []
     for kwargs in gui.commands:
         if kwargs.get("hotkey"):
-            mods = [{"cmd/ctrl": "Cmd/Ctrl"}.get(m, m.capitalize())
-                    for m in (kwargs.get("modifier") or "").split("+") if m]
+            mods = [
+                {"cmd/ctrl": "Cmd/Ctrl"}.get(m, m.capitalize()) for m in (kwargs.get("modifier") or "").split("+") if m
+            ]
             combos.append("+".join([*mods, kwargs["hotkey"].upper()]))
     return combos
 
@@ -72,8 +81,18 @@ def test_help_mentions_every_shortcut_the_app_registers():
 
 def test_help_explains_the_topics_with_a_picture():
     text = HELP_FILE.read_text(encoding="utf-8").lower()
-    for topic in ("the four panels", "orange", "blue", "green", "foreshortening", "toward", "away",
-                  "occluded", "review", "keyboard shortcuts"):
+    for topic in (
+        "the four panels",
+        "orange",
+        "blue",
+        "green",
+        "foreshortening",
+        "toward",
+        "away",
+        "occluded",
+        "review",
+        "keyboard shortcuts",
+    ):
         assert topic in text, topic
     for orientation in ORIENTATIONS:
         assert orientation.replace("_", " ") in text, orientation
@@ -89,8 +108,7 @@ def test_help_folder_and_playback_download_in_chromium(app, tmp_path):
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
         try:
-            context = browser.new_context(viewport={"width": 1280, "height": 800},
-                                          accept_downloads=True)
+            context = browser.new_context(viewport={"width": 1280, "height": 800}, accept_downloads=True)
             page = context.new_page()
             page.set_default_timeout(20_000)
             page.goto(f"http://127.0.0.1:{app.server.get_port()}/")
@@ -103,8 +121,7 @@ def test_help_folder_and_playback_download_in_chromium(app, tmp_path):
             page.get_by_text("Keyboard shortcuts").wait_for()
             picture = page.locator("img[src^='data:image/svg']").first
             picture.scroll_into_view_if_needed()
-            page.wait_for_function("img => img.complete && img.naturalWidth > 0",
-                                   arg=picture.element_handle())
+            page.wait_for_function("img => img.complete && img.naturalWidth > 0", arg=picture.element_handle())
             ARTIFACTS.mkdir(parents=True, exist_ok=True)
             page.wait_for_timeout(300)
             page.screenshot(path=str(ARTIFACTS / "help_folder.png"))

@@ -40,22 +40,31 @@ def lift_truth(truth, lengths=LENGTH, use_orientation: bool = True) -> np.ndarra
 def test_lifting_the_models_own_walk_is_exact(view):
     truth = seen(walk_cycle(1.2, 15.0), view)
     pred = lift_truth(truth, use_orientation=False)
-    assert np.abs(pred - truth.joints3d).max() < 1e-3        # metres
+    assert np.abs(pred - truth.joints3d).max() < 1e-3  # metres
 
 
 def test_eq5_depth_and_sign():
     joints = np.zeros((16, 2))
     joints[JOINT_INDEX["hip_l"]] = [0, 0]
-    joints[JOINT_INDEX["knee_l"]] = [30, 0]                  # 30 px at 1 px/unit; thigh is 46 long
+    joints[JOINT_INDEX["knee_l"]] = [30, 0]  # 30 px at 1 px/unit; thigh is 46 long
     dz = lift.relative_depths(joints, 1.0, np.array([1] * 6 + [-1] + [1] * 3))
-    assert dz[SEGMENT_INDEX["upper_leg_l"]] == pytest.approx(-np.sqrt(46 ** 2 - 30 ** 2))
+    assert dz[SEGMENT_INDEX["upper_leg_l"]] == pytest.approx(-np.sqrt(46**2 - 30**2))
     longer = joints.copy()
-    longer[JOINT_INDEX["knee_l"]] = [60, 0]                  # longer than the model: in the image plane
+    longer[JOINT_INDEX["knee_l"]] = [60, 0]  # longer than the model: in the image plane
     assert lift.relative_depths(longer, 1.0, np.ones(10))[SEGMENT_INDEX["upper_leg_l"]] == 0.0
 
 
-@pytest.mark.parametrize("name, yaw", [("forward_right", 30.0), ("forward_left", -50.0), ("right", 90.0),
-                                       ("left", -90.0), ("backward_right", 135.0), ("backward_left", -170.0)])
+@pytest.mark.parametrize(
+    "name, yaw",
+    [
+        ("forward_right", 30.0),
+        ("forward_left", -50.0),
+        ("right", 90.0),
+        ("left", -90.0),
+        ("backward_right", 135.0),
+        ("backward_left", -170.0),
+    ],
+)
 def test_the_six_orientations(name, yaw):
     assert lift.orientation_of_yaw(yaw) == name
     spread = abs(np.cos(np.radians(yaw)))
@@ -107,19 +116,20 @@ def test_lifting_real_motion_capture_from_true_2d_within_30_mm(view):
 
 def test_a_wrist_that_slips_on_one_frame_is_steadied_and_a_swing_is_kept():
     from mocap.lift.inputs import steadied_arms
+
     n, fps = 30, 30.0
     joints = np.zeros((n, 16, 2))
-    joints[:, JOINT_INDEX["wrist_l"], 0] = np.linspace(100.0, 160.0, n)       # a steady swing
-    joints[12, JOINT_INDEX["wrist_l"]] = (40.0, 300.0)                         # one frame's slip
-    joints[20:, JOINT_INDEX["knee_l"], 1] = 50.0                                # legs are left alone
+    joints[:, JOINT_INDEX["wrist_l"], 0] = np.linspace(100.0, 160.0, n)  # a steady swing
+    joints[12, JOINT_INDEX["wrist_l"]] = (40.0, 300.0)  # one frame's slip
+    joints[20:, JOINT_INDEX["knee_l"], 1] = 50.0  # legs are left alone
     person = np.ones(n, bool)
-    person[25] = False                                                          # nobody on one frame
+    person[25] = False  # nobody on one frame
     joints[25] = np.nan
     out = steadied_arms(joints, person, fps)
     wrist = out[:, JOINT_INDEX["wrist_l"]]
     swing = np.linspace(100.0, 160.0, n)
     assert np.abs(wrist[12] - [swing[12], 0.0]).max() < 5.0
-    keep = np.r_[3:9, 16:22]                                 # windows clear of the slip, the gap and the ends
+    keep = np.r_[3:9, 16:22]  # windows clear of the slip, the gap and the ends
     assert np.abs(wrist[keep, 0] - swing[keep]).max() < 1e-9
     assert np.array_equal(out[:, JOINT_INDEX["knee_l"]], joints[:, JOINT_INDEX["knee_l"]], equal_nan=True)
     assert np.isnan(out[25]).all()

@@ -44,14 +44,28 @@ def walk():
 def test_bones_are_depth_first_tree():
     assert PARENTS[0] == -1 and all(0 <= p < b for b, p in enumerate(PARENTS) if b)
     assert len(set(JOINT_BONES)) == len(body.JOINTS)
-    assert {"Hips", "Spine", "Spine1", "Neck", "Head", "LeftShoulder", "RightShoulder", "LeftArm",
-            "LeftForeArm", "LeftHand", "LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToeBase"} <= set(BONES)
+    assert {
+        "Hips",
+        "Spine",
+        "Spine1",
+        "Neck",
+        "Head",
+        "LeftShoulder",
+        "RightShoulder",
+        "LeftArm",
+        "LeftForeArm",
+        "LeftHand",
+        "LeftUpLeg",
+        "LeftLeg",
+        "LeftFoot",
+        "LeftToeBase",
+    } <= set(BONES)
 
 
 def test_one_symmetric_body_in_a_t_pose():
     """Left and right bones are mirror images; at rest the arms stretch out sideways."""
     joints = walk_cycle(1.0, FPS)
-    joints[:, body.JOINT_INDEX["elbow_l"]] *= 1.1            # a longer left arm in the input
+    joints[:, body.JOINT_INDEX["elbow_l"]] *= 1.1  # a longer left arm in the input
     motion = build_motion(keyframes_of(joints, 2), len(joints), FPS)
     lengths = np.linalg.norm(motion.offsets, axis=-1)
     for b, name in enumerate(BONES):
@@ -81,8 +95,7 @@ def test_random_contract_poses_are_reproduced():
     # the lower spine only twists (the contract body's pelvis, Spine and chest lie on
     # one line); the clavicles tilt together in the chest's frontal plane; the head
     # continues the neck (the contract's head is one segment)
-    rot[:, BONES.index("Spine")] = Rotation.from_euler("y", rng.uniform(-90, 90, (40, 1)),
-                                                       degrees=True).as_quat()
+    rot[:, BONES.index("Spine")] = Rotation.from_euler("y", rng.uniform(-90, 90, (40, 1)), degrees=True).as_quat()
     tilt = Rotation.from_euler("z", rng.uniform(-30, 30, (40, 1)), degrees=True).as_quat()
     rot[:, BONES.index("LeftShoulder")] = rot[:, BONES.index("RightShoulder")] = tilt
     rot[:, BONES.index("Head")] = [0.0, 0.0, 0.0, 1.0]
@@ -94,11 +107,11 @@ def test_random_contract_poses_are_reproduced():
 def test_sparse_keyframes(walk):
     keys = keyframes_of(walk, 3)
     motion = build_motion(keys, len(walk), FPS)
-    err = np.linalg.norm(motion.rooted_joints - walk, axis=-1)[:max(keys) + 1]
+    err = np.linalg.norm(motion.rooted_joints - walk, axis=-1)[: max(keys) + 1]
     assert motion.keyframes.sum() == len(keys) and err[list(keys)].max() < 1e-9
     lengths = segment_lengths(motion.joints3d)
-    assert np.ptp(lengths, axis=0).max() < 1e-9          # interpolated bones keep length
-    assert err.mean() < 0.005 and err.max() < 0.06       # slerp follows the walk
+    assert np.ptp(lengths, axis=0).max() < 1e-9  # interpolated bones keep length
+    assert err.mean() < 0.005 and err.max() < 0.06  # slerp follows the walk
     assert np.allclose(np.linalg.norm(motion.rotations, axis=-1), 1.0)
     assert (np.sum(motion.rotations[1:] * motion.rotations[:-1], axis=-1) >= 0).all()
 
@@ -136,7 +149,7 @@ def test_smoothing_keeps_keyframes_and_smooths(walk):
         return np.sum(np.diff(m.joints3d, 2, axis=0) ** 2)
 
     def error(m):
-        return np.linalg.norm(m.rooted_joints - walk, axis=-1)[:max(keys) + 1].mean()
+        return np.linalg.norm(m.rooted_joints - walk, axis=-1)[: max(keys) + 1].mean()
 
     assert acceleration(smooth) < 0.6 * acceleration(plain)
     assert error(smooth) < 0.8 * error(plain)
@@ -145,8 +158,8 @@ def test_smoothing_keeps_keyframes_and_smooths(walk):
 def test_degenerate_bones():
     pose = walk_cycle(0.1, FPS)[0]
     flat = pose.copy()
-    flat[body.JOINT_INDEX["wrist_l"]] = flat[body.JOINT_INDEX["elbow_l"]]      # zero length
-    up = pose.copy()   # an arm straight up: opposite its rest direction
+    flat[body.JOINT_INDEX["wrist_l"]] = flat[body.JOINT_INDEX["elbow_l"]]  # zero length
+    up = pose.copy()  # an arm straight up: opposite its rest direction
     shoulder = up[body.JOINT_INDEX["shoulder_r"]]
     upper, lower = (body.LENGTH[body.SEGMENT_INDEX[s]] / 100.0 for s in ("upper_arm_r", "lower_arm_r"))
     up[body.JOINT_INDEX["elbow_r"]] = shoulder + [0.0, upper, 0.0]
@@ -156,15 +169,18 @@ def test_degenerate_bones():
     assert np.abs(motion.rooted_joints[4] - up).max() < 1e-9
 
 
-@pytest.mark.parametrize("keys, n, fps, kwargs", [
-    ({}, 5, FPS, {}),
-    ({7: np.zeros((16, 3))}, 5, FPS, {}),
-    ({0: np.zeros((15, 3))}, 5, FPS, {}),
-    ({0: np.full((16, 3), np.nan)}, 5, FPS, {}),
-    ({0: np.zeros((16, 3))}, 5, 0.0, {}),
-    ({0: np.zeros((16, 3))}, 5, FPS, {"root": np.zeros((4, 3))}),
-    ({0: np.zeros((16, 3))}, 5, FPS, {"smooth": -1.0}),
-])
+@pytest.mark.parametrize(
+    "keys, n, fps, kwargs",
+    [
+        ({}, 5, FPS, {}),
+        ({7: np.zeros((16, 3))}, 5, FPS, {}),
+        ({0: np.zeros((15, 3))}, 5, FPS, {}),
+        ({0: np.full((16, 3), np.nan)}, 5, FPS, {}),
+        ({0: np.zeros((16, 3))}, 5, 0.0, {}),
+        ({0: np.zeros((16, 3))}, 5, FPS, {"root": np.zeros((4, 3))}),
+        ({0: np.zeros((16, 3))}, 5, FPS, {"smooth": -1.0}),
+    ],
+)
 def test_bad_requests_are_refused(keys, n, fps, kwargs):
     with pytest.raises(MocapError):
         build_motion(keys, n, fps, **kwargs)

@@ -51,9 +51,9 @@ def true_inputs(truth):
 
 def test_second_order_viterbi_keeps_crossing_tracks_apart():
     t = np.arange(11.0)
-    a, b = t - 5, 5 - t                                   # two tracks crossing at t = 5
-    low, high = np.minimum(a, b), np.maximum(a, b)        # what a sorting observer sees
-    states = np.stack([np.stack([low, high], -1), np.stack([high, low], -1)], axis=1)   # (F, 2, 2)
+    a, b = t - 5, 5 - t  # two tracks crossing at t = 5
+    low, high = np.minimum(a, b), np.maximum(a, b)  # what a sorting observer sees
+    states = np.stack([np.stack([low, high], -1), np.stack([high, low], -1)], axis=1)  # (F, 2, 2)
     allowed = np.ones((11, 2), bool)
     allowed[0, 1] = False
     path = smoothest_states(states, np.zeros((11, 2)), allowed)
@@ -74,15 +74,15 @@ def test_signs_of_the_models_walk_are_guessed(view):
 def test_a_users_sign_holds_until_its_segment_passes_the_image_plane():
     truth = seen(walk_cycle(2.2, 15.0), "three-quarter")
     ppu, yaw, _, signs, visible = true_inputs(truth)
-    k = int(np.argmax(visible.sum(axis=0)))               # the segment most out of the image plane
+    k = int(np.argmax(visible.sum(axis=0)))  # the segment most out of the image plane
     stretch = runs(visible[:, k])[0]
     values, since = np.zeros_like(signs), np.full(signs.shape, -1)
-    values[stretch.start:, k], since[stretch.start:, k] = -signs[stretch.start, k], stretch.start
-    fixed = held_user_signs(values, since, ~visible)      # the user insists on the other sign
+    values[stretch.start :, k], since[stretch.start :, k] = -signs[stretch.start, k], stretch.start
+    fixed = held_user_signs(values, since, ~visible)  # the user insists on the other sign
     guess = guess_signs(truth.joints2d, ppu, yaw, fixed=fixed, fps=15.0)
     assert (guess[stretch, k] == -signs[stretch, k]).all()
-    after = np.flatnonzero(visible[stretch.stop:, k]) + stretch.stop
-    assert (guess[after, k] == signs[after, k]).mean() >= 0.9     # the guess resumes after it
+    after = np.flatnonzero(visible[stretch.stop :, k]) + stretch.stop
+    assert (guess[after, k] == signs[after, k]).mean() >= 0.9  # the guess resumes after it
 
 
 def test_real_walk_signs_from_true_2d():
@@ -94,14 +94,20 @@ def test_real_walk_signs_from_true_2d():
     assert (guess == signs)[visible].mean() >= 0.9
 
 
-@pytest.mark.parametrize("view, mirror, expected", [
-    ("three-quarter", False, "forward_right"), ("side", False, "right"),
-    ("three-quarter", True, "forward_left"), ("side", True, "left")])
+@pytest.mark.parametrize(
+    "view, mirror, expected",
+    [
+        ("three-quarter", False, "forward_right"),
+        ("side", False, "right"),
+        ("three-quarter", True, "forward_left"),
+        ("side", True, "left"),
+    ],
+)
 def test_orientation_from_the_walking_direction(view, mirror, expected):
     truth = seen(walk_cycle(2.2, 15.0), view)
-    joints = truth.joints2d[:, MIRROR_JOINTS]              # the fit's image sides, facing the camera
+    joints = truth.joints2d[:, MIRROR_JOINTS]  # the fit's image sides, facing the camera
     spread = np.abs(np.cos(np.radians([lift.yaw_of(p) for p in truth.joints3d])))
-    if mirror:                                            # the same walk seen in a mirror: to the left
+    if mirror:  # the same walk seen in a mirror: to the left
         joints = joints.copy()
         joints[..., 0] = truth.width - joints[..., 0]
         joints = joints[:, MIRROR_JOINTS]
@@ -112,7 +118,7 @@ def test_orientation_from_the_walking_direction(view, mirror, expected):
 
 def test_sides_follow_the_orientation_rule_where_it_is_known():
     truth = seen(walk_cycle(1.0, 15.0), "three-quarter")
-    image_side = truth.joints2d[:, MIRROR_JOINTS]          # forward: image-left limbs are the right ones
+    image_side = truth.joints2d[:, MIRROR_JOINTS]  # forward: image-left limbs are the right ones
     known = known_sides(["forward_right"] * len(image_side), {}, image_side)
     swap = track_sides(image_side, known, np.ones(len(image_side)), 15.0)
     assert swap[:, :2].all() and not swap[:, 2].any()
@@ -122,8 +128,8 @@ def test_sides_follow_the_orientation_rule_where_it_is_known():
 
 def test_a_joint_override_decides_the_sides_in_a_profile():
     truth = seen(walk_cycle(1.0, 15.0), "side")
-    joints = truth.joints2d.copy()                          # anatomical: image-left is left, no swap
-    frame = int(np.argmax(np.abs(joints[:, 12, 0] - joints[:, 15, 0])))   # ankles widest apart
+    joints = truth.joints2d.copy()  # anatomical: image-left is left, no swap
+    frame = int(np.argmax(np.abs(joints[:, 12, 0] - joints[:, 15, 0])))  # ankles widest apart
     says = {frame: {"ankle_l": tuple(joints[frame, 12]), "wrist_l": tuple(joints[frame, 6])}}
     known = known_sides(["right"] * len(joints), says, joints)
     assert (known[frame] == 0).all() and (np.delete(known, frame, axis=0) == -1).all()
@@ -152,13 +158,13 @@ def test_limbs_keep_their_sides_through_every_crossing_of_a_profile_walk():
     wherever the hands are apart."""
     truth, image_side, swapped = profile_walk_by_image_side()
     for kind in ("leg", "arm"):
-        assert 0.2 < swapped[kind].mean() < 0.8                # the image order changes
+        assert 0.2 < swapped[kind].mean() < 0.8  # the image order changes
     ankles = truth.joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]]
-    frame = int(np.argmax(np.abs(ankles[:, 0, 0] - ankles[:, 1, 0])))     # widest apart
+    frame = int(np.argmax(np.abs(ankles[:, 0, 0] - ankles[:, 1, 0])))  # widest apart
     says = {frame: {"ankle_l": tuple(ankles[frame, 0])}}
     known = known_sides(["right"] * len(image_side), says, image_side)
     swap = track_sides(image_side, known, np.ones(len(image_side)), 30.0)
-    assert np.mean(swap[:, 1] == swapped["leg"]) > 0.9      # the rest: legs level, either order
+    assert np.mean(swap[:, 1] == swapped["leg"]) > 0.9  # the rest: legs level, either order
     arm = sum(body.LENGTH[body.SEGMENT_INDEX[s]] for s in ("upper_arm_l", "lower_arm_l"))
     wrists = truth.joints2d[:, [JOINT_INDEX["wrist_l"], JOINT_INDEX["wrist_r"]], 0]
     apart = np.abs(wrists[:, 0] - wrists[:, 1]) > SEPARATED * arm * truth.body_height_px / BODY_HEIGHT
@@ -174,11 +180,11 @@ def test_a_kicking_leg_keeps_its_name_through_the_crossing_its_thigh_swings_thro
     data = json.loads((Path(__file__).parent / "data" / "kick_crossing.json").read_text())
     joints, truth = np.array(data["joints2d"]), np.array(data["right_is_image_left"], bool)
     known = np.full((len(joints), 2), -1, np.int8)
-    known[:6] = 1                                           # turned toward the camera: the rule holds
+    known[:6] = 1  # turned toward the camera: the rule holds
     swap = track_sides(joints, known, np.ones(len(joints)), 25.0)[:, 1]
-    assert truth[6:19].all() and not truth[19:].any()       # the fit exchanges the names at frame 59
+    assert truth[6:19].all() and not truth[19:].any()  # the fit exchanges the names at frame 59
     assert np.mean(swap[6:] == truth[6:]) > 0.9
-    assert not swap[25:].any()                              # named right after the crossing
+    assert not swap[25:].any()  # named right after the crossing
 
 
 def test_a_crossing_one_following_barely_tells_gives_way_to_the_evidence():
@@ -193,9 +199,9 @@ def test_a_crossing_one_following_barely_tells_gives_way_to_the_evidence():
     joints, truth = np.array(data["joints2d"]), np.array(data["right_is_image_left"], bool)
     known = np.full((len(joints), 2), -1, np.int8)
     swap = track_sides(joints, known, np.ones(len(joints)), 25.0, rule=np.array(data["rule"]))[:, 1]
-    assert truth[5:19].all() and not truth[19:].any()       # the legs pass each other at frame 59
-    assert swap[5:19].all()                                 # turned toward the camera: the rule
-    assert not swap[27:].any()                              # named right from the next stretch apart on
+    assert truth[5:19].all() and not truth[19:].any()  # the legs pass each other at frame 59
+    assert swap[5:19].all()  # turned toward the camera: the rule
+    assert not swap[27:].any()  # named right from the next stretch apart on
 
 
 def test_legs_the_fit_draws_with_crossed_thighs_are_named_by_where_they_lie():
@@ -208,15 +214,16 @@ def test_legs_the_fit_draws_with_crossed_thighs_are_named_by_where_they_lie():
     data = json.loads((Path(__file__).parent / "data" / "salsa_crossed_thighs.json").read_text())
     joints = np.array(data["joints2d"])
     known = np.full((len(joints), 2), -1, np.int8)
-    names = track_sides(joints, known, np.array(data["facing_x"]), 25.0, np.array(data["away"]),
-                        rule=np.array(data["rule"]))
+    names = track_sides(
+        joints, known, np.array(data["facing_x"]), 25.0, np.array(data["away"]), rule=np.array(data["rule"])
+    )
     named = lift.exchange_legs(lift.anatomical_joints(joints, names[:, :2]), names[:, 2])
     kinds = ("knee_l", "ankle_l", "knee_r", "ankle_r")
     legs = named[:, [JOINT_INDEX[k] for k in kinds]]
     truth = np.stack([np.array(data["true_legs"][k]) for k in kinds], axis=1)
     error = np.linalg.norm(legs - truth, axis=-1).sum(1)
     other = np.linalg.norm(legs[:, [2, 3, 0, 1]] - truth, axis=-1).sum(1)
-    assert (error[13:22] < other[13:22]).all()              # the thighs drawn crossed
+    assert (error[13:22] < other[13:22]).all()  # the thighs drawn crossed
     assert np.mean(error < other) > 0.9
 
 
@@ -227,7 +234,7 @@ def waving_in_place(seconds: float, fps: float) -> np.ndarray:
     frames = np.repeat(stand[None], max(1, int(round(seconds * fps))), axis=0)
     t = np.arange(len(frames)) / fps
     arm = np.linalg.norm(stand[JOINT_INDEX["elbow_l"]] - stand[JOINT_INDEX["shoulder_l"]])
-    for side, out in (("l", 1.0), ("r", -1.0)):                  # the performer's left is +x
+    for side, out in (("l", 1.0), ("r", -1.0)):  # the performer's left is +x
         frames[:, [JOINT_INDEX[f"knee_{side}"], JOINT_INDEX[f"ankle_{side}"]], 0] += out * 0.15
         lift = np.radians(20.0 + 40.0 * np.sin(2 * np.pi * t + (0.0 if side == "l" else np.pi)))
         reach = np.stack([out * np.cos(lift), np.sin(lift), np.zeros_like(lift)], axis=-1) * arm
@@ -244,7 +251,7 @@ def test_arms_take_the_legs_sides_where_the_performer_does_not_step():
     side's hip, so the arms take the legs' sides (swung opposite to the legs, as in a
     walk, each arm was named the other)."""
     truth = seen(waving_in_place(2.0, 30.0), "front", fps=30.0)
-    image_side = truth.joints2d[:, MIRROR_JOINTS]           # facing the camera: image-left is right
+    image_side = truth.joints2d[:, MIRROR_JOINTS]  # facing the camera: image-left is right
     known = np.full((len(image_side), 2), -1, np.int8)
     known[:, 1] = 1
     assert track_sides(image_side, known, np.ones(len(image_side)), 30.0)[:, 0].all()
@@ -257,7 +264,7 @@ def test_the_heads_look_names_the_limbs_of_a_profile_where_nothing_else_does():
     without it, the forward-facing convention names each the other."""
     behind = synth.RenderOptions(yaw=-90.0, size=(640, 480), fps=30.0)
     scene = synth.plan_scene(waving_in_place(2.0, 30.0), behind)
-    joints = synth.scene_truth(scene, "test", np.arange(60)).joints2d     # anatomical names
+    joints = synth.scene_truth(scene, "test", np.arange(60)).joints2d  # anatomical names
     assert (joints[:, JOINT_INDEX["ankle_l"], 0] < joints[:, JOINT_INDEX["ankle_r"], 0]).all()  # image-left
     known = np.full((len(joints), 2), -1, np.int8)
     assert not track_sides(joints, known, np.ones(len(joints)), 30.0, np.ones(len(joints), bool)).any()
@@ -317,8 +324,16 @@ def test_users_leg_signs_tell_which_leg_is_which_where_the_legs_cross():
     assert not legs_crossed(by_image_side, np.zeros_like(signs), yaw, ppu, body.LENGTH, none).any()
 
 
-LIFT_SPREAD_CLIPS = ("jump_balance_34b", "kick_34", "laugh_back", "punch_front", "run_across",
-                     "salsa_spin_left", "scoop_34", "walk_toward")
+LIFT_SPREAD_CLIPS = (
+    "jump_balance_34b",
+    "kick_34",
+    "laugh_back",
+    "punch_front",
+    "run_across",
+    "salsa_spin_left",
+    "scoop_34",
+    "walk_toward",
+)
 
 
 def lift_spreads_and_truth(name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -329,6 +344,7 @@ def lift_spreads_and_truth(name: str) -> tuple[np.ndarray, np.ndarray]:
 
     from mocap.io.video import iter_frames, open_video, processing_scale
     from mocap.silhouette.passes import SPREAD_WINDOW_S, Silhouette, body_heights, half_window, lift_spread, torso_reads
+
     clip = DEV_CLIPS / name
     if not (clip / "truth.json").is_file():
         pytest.skip(f"real data absent: {clip} (../shared/data beside the checkout)")
@@ -336,13 +352,14 @@ def lift_spreads_and_truth(name: str) -> tuple[np.ndarray, np.ndarray]:
     silhouettes = []
     for index, frame in iter_frames(info, scale=processing_scale(info)):
         mask = cv2.imread(str(clip / "masks" / f"{index:06d}.png"), cv2.IMREAD_GRAYSCALE)
-        silhouettes.append(Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1],
-                                                           interpolation=cv2.INTER_NEAREST)))
+        silhouettes.append(Silhouette.from_mask(cv2.resize(mask, frame.shape[1::-1], interpolation=cv2.INTER_NEAREST)))
     _, raw, readable = zip(*(torso_reads(s, h) for s, h in zip(silhouettes, body_heights(silhouettes, info.fps))))
     half = half_window(SPREAD_WINDOW_S, info.fps)
     truth = json.loads((clip / "truth.json").read_text())["frames"]
-    return (np.array([lift_spread(raw, readable, i, half) for i in range(len(raw))]),
-            np.abs(np.cos(np.radians([f["facing_deg"] for f in truth]))))
+    return (
+        np.array([lift_spread(raw, readable, i, half) for i in range(len(raw))]),
+        np.abs(np.cos(np.radians([f["facing_deg"] for f in truth]))),
+    )
 
 
 def test_lift_spread_follows_the_true_yaw_on_the_development_clips():
@@ -373,11 +390,11 @@ def test_a_naming_holds_where_the_legs_are_followed_surely_and_gives_way_where_n
     links = np.full(49, 2.0)
     links[29] = 0.3
     costs = np.zeros((50, 2))
-    costs[:10, 1] = 5.0                                     # keep
-    costs[10:15, 1] = 0.1                                   # weakly against the crossing's swap
+    costs[:10, 1] = 5.0  # keep
+    costs[10:15, 1] = 0.1  # weakly against the crossing's swap
     swap = naming_path(costs, parity, links)
-    assert not swap[:10].any() and swap[10:30].all() and not swap[30:].any()     # followed
-    costs[30:, 0] = 0.1                                     # twenty frames against the crossing at 30
+    assert not swap[:10].any() and swap[10:30].all() and not swap[30:].any()  # followed
+    costs[30:, 0] = 0.1  # twenty frames against the crossing at 30
     swap = naming_path(costs, parity, links)
     assert not swap[:10].any() and swap[10:].all()
 
@@ -387,8 +404,15 @@ def stored_fit_named_right(file: str) -> tuple[np.ndarray, np.ndarray]:
     heights, spreads, heads' look and near limbs) resolved with no input: whether its
     legs are named as the truth names them, and whether that matters there."""
     data = json.loads((Path(__file__).parent / "data" / file).read_text())
-    inputs = resolve_inputs(np.array(data["joints2d"]), np.array(data["body_px"]), np.array(data["spread"]),
-                            data["fps"], Said.nothing(len(data["joints2d"])), away=np.array(data["away"]), near=np.array(data["near"]))
+    inputs = resolve_inputs(
+        np.array(data["joints2d"]),
+        np.array(data["body_px"]),
+        np.array(data["spread"]),
+        data["fps"],
+        Said.nothing(len(data["joints2d"])),
+        away=np.array(data["away"]),
+        near=np.array(data["near"]),
+    )
     return inputs.swap[:, 1] == np.array(data["right_is_image_left"]), np.array(data["clear"])
 
 

@@ -33,8 +33,11 @@ def test_nanpercentile_equals_numpys():
 def test_row_medians_equal_numpys(dtype):
     rng = np.random.default_rng(3)
     for n in (1, 2, 3, 8, 101, 1000):
-        for values in (rng.normal(size=(3, n)), rng.integers(0, 9, size=(3, n)).astype(float),
-                       rng.uniform(0.5, 2.0, size=(3, n))):
+        for values in (
+            rng.normal(size=(3, n)),
+            rng.integers(0, 9, size=(3, n)).astype(float),
+            rng.uniform(0.5, 2.0, size=(3, n)),
+        ):
             values = values.astype(dtype)
             expected = np.median(values, axis=1)
             got = row_medians(values)

@@ -29,8 +29,10 @@ from mocap.synth.metrics import side_matched_errors
 from mocap.synth.walk import walk_cycle
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"
-NOT_INSTALLED = ("the person model 'mediapipe' needs mediapipe, not installed here: "
-                 ".venv/bin/pip install --no-deps mediapipe==0.10.14")
+NOT_INSTALLED = (
+    "the person model 'mediapipe' needs mediapipe, not installed here: "
+    ".venv/bin/pip install --no-deps mediapipe==0.10.14"
+)
 # The renderer's body as MediaPipe finds it on every frame: slim (the default widths
 # make it lose the walker on some frames), with hair (a head it takes for one), seen
 # from the front.
@@ -62,6 +64,7 @@ def without_mediapipe(monkeypatch):
         if name == "mediapipe" or name.startswith("mediapipe."):
             return None
         return find_spec(name, *args, **kwargs)
+
     monkeypatch.setattr(importlib.util, "find_spec", missing)
     for name in ["mediapipe", *(m for m in sys.modules if m.startswith("mediapipe."))]:
         monkeypatch.setitem(sys.modules, name, None)
@@ -77,6 +80,7 @@ def walk_video(tmp_path_factory):
 
 
 # -- MediaPipe, offline -------------------------------------------------------------------
+
 
 @pytest.mark.filterwarnings("ignore:SymbolDatabase.GetPrototype:UserWarning")  # mediapipe on protobuf 4.25
 def test_mediapipe_loads_offline_and_sees_the_performer(offline):
@@ -122,8 +126,8 @@ def test_mediapipe_loads_offline_and_sees_the_performer(offline):
 
 # -- without mediapipe ----------------------------------------------------------------------
 
-def test_fit_without_mediapipe_warns_once_and_fits_by_silhouettes(without_mediapipe, walk_video,
-                                                                 tmp_path, capsys):
+
+def test_fit_without_mediapipe_warns_once_and_fits_by_silhouettes(without_mediapipe, walk_video, tmp_path, capsys):
     """`mocap fit` without mediapipe (the default person model): one warning line
     that says how to install it, then the classical path writes the motion file."""
     out = tmp_path / "walk.motion.json"
@@ -131,7 +135,8 @@ def test_fit_without_mediapipe_warns_once_and_fits_by_silhouettes(without_mediap
     assert code == 0, err
     assert len(read_motion(out)["frames"]) == 30
     assert [line for line in err if INSTALL in line] == [
-        f"mocap: warning: no person model, fitting by silhouettes alone: {NOT_INSTALLED}"], err
+        f"mocap: warning: no person model, fitting by silhouettes alone: {NOT_INSTALLED}"
+    ], err
     assert all(line.startswith("mocap: warning: ") for line in err), err
 
 
@@ -152,6 +157,7 @@ def test_opening_mediapipe_without_it_says_how_to_install_in_one_line(without_me
 
 # -- unknown names ----------------------------------------------------------------------------
 
+
 def test_an_unknown_person_model_is_refused(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["fit", str(tmp_path / "walk.avi"), "--person-model", "bogus"])
@@ -167,8 +173,10 @@ def test_an_unknown_person_model_is_refused(tmp_path, capsys):
 CLIPS = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "clips"
 
 
-@pytest.mark.skipif(not (CLIPS / "wash_front" / "truth.json").is_file(),
-                    reason="needs ../shared/data/clips (the development clips) beside the checkout")
+@pytest.mark.skipif(
+    not (CLIPS / "wash_front" / "truth.json").is_file(),
+    reason="needs ../shared/data/clips (the development clips) beside the checkout",
+)
 def test_a_performer_who_stays_is_fitted_with_the_person_model(tmp_path):
     """wash_front: the body stays, only the arms move (real motion capture over grass).
     Background subtraction sees only the arms (the classical path's joints lie a fifth
@@ -181,8 +189,22 @@ def test_a_performer_who_stays_is_fitted_with_the_person_model(tmp_path):
     errors = {}
     for model in ("none", "mediapipe"):
         out, masks = tmp_path / f"{model}.json", tmp_path / f"{model}_masks"
-        assert main(["fit", str(clip / "video.mp4"), "--out", str(out), "--masks", str(masks), "--quiet",
-                     "--person-model", model]) == 0
+        assert (
+            main(
+                [
+                    "fit",
+                    str(clip / "video.mp4"),
+                    "--out",
+                    str(out),
+                    "--masks",
+                    str(masks),
+                    "--quiet",
+                    "--person-model",
+                    model,
+                ]
+            )
+            == 0
+        )
         frames = json.loads(out.read_text())["frames"]
         joints = np.array([f["joints2d"] for f in frames], float)
         errors[model] = np.linalg.norm(joints - true_joints, axis=-1).mean() / truth["body_height_px"]

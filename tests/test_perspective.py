@@ -41,7 +41,7 @@ def test_calibration_recovers_a_known_camera(yaw, span, chest):
     assert np.abs(found.translation - truth.translation).max() < 1e-4
     assert found.span == pytest.approx(span, abs=1e-5)
     assert found.chest == pytest.approx(chest, abs=1e-5)
-    assert found.yaw == pytest.approx(yaw, abs=0.2)          # the slight tilt moves it a little
+    assert found.yaw == pytest.approx(yaw, abs=0.2)  # the slight tilt moves it a little
     assert np.abs(C.line_distances(found.params, CAMERA, marks)).max() < 1e-6
 
 
@@ -84,7 +84,7 @@ def test_a_body_seen_nearly_from_the_side_calibrates_despite_marks_a_few_pixels_
 def test_marks_that_fit_no_view_are_refused():
     truth = known_pose(30.0)
     marks = CAMERA.project(truth.to_camera(truth.model()))
-    marks[JOINT_INDEX["chest"]] += (60.0, 0.0)            # the chest beside the body
+    marks[JOINT_INDEX["chest"]] += (60.0, 0.0)  # the chest beside the body
     with pytest.raises(MocapError, match="cannot calibrate"):
         C.calibrate(marks, CAMERA)
 
@@ -101,8 +101,9 @@ def test_shoulders_marked_against_the_hips_are_refused_with_the_fix(yaw):
     with pytest.raises(MocapError, match="turned opposite ways: swap shoulder_l and shoulder_r"):
         C.calibrate(swapped, CAMERA)
     assert np.array_equal(shoulders_as_hips(swapped), marks)
-    assert C.calibrate(shoulders_as_hips(swapped), CAMERA, "right" if yaw > 0 else "left").yaw \
-        == pytest.approx(yaw, abs=0.2)
+    assert C.calibrate(shoulders_as_hips(swapped), CAMERA, "right" if yaw > 0 else "left").yaw == pytest.approx(
+        yaw, abs=0.2
+    )
 
 
 def test_key_depths_follow_the_moving_triangle():
@@ -119,8 +120,7 @@ def test_key_depths_follow_the_moving_triangle():
 def test_key_joints_solve_again_only_the_frames_that_moved(monkeypatch):
     """After a joint override the key joints equal a full solve, with only the
     moved frames solved again."""
-    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
-                                                           yaw=50.0))
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0, yaw=50.0))
     joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
     camera = default_camera(320, 240)
     first = K.key_joints(joints2d, camera, "right")
@@ -138,8 +138,7 @@ def test_key_joints_followed_turned_the_wrong_way_are_turned_back_by_the_limbs()
     """The model's walk seen from yaw 50: its key joints followed on the wrong side
     (every frame's mirror image, turned about -40 degrees instead of 40) come back on
     every frame, where the knees and elbows bend the way they can."""
-    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
-                                                           yaw=50.0))
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0, yaw=50.0))
     joints2d = scene_truth(scene, "walk", np.arange(len(scene.joints_cam))).joints2d
     camera = default_camera(320, 240)
     right = K.key_joints(joints2d, camera, "right")
@@ -176,11 +175,11 @@ def test_a_trunk_turning_through_the_frontal_view_follows_the_held_side():
     rays, sides = turning_trunk(yaws, 0.36 * 1.07)
     start = known_pose(yaws[0]).to_camera(known_pose(yaws[0]).model()[C.KEY])[:, 2]
     alone = followed_yaws(rays, sides, start, [None] * len(yaws))
-    assert alone[-1] > 40.0                                  # turned back
+    assert alone[-1] > 40.0  # turned back
     held = followed_yaws(rays, sides, start, ["right" if y > 0 else "left" for y in yaws])
     clear = np.abs(yaws) > 20.0
     assert np.array_equal(np.sign(held[clear]), np.sign(yaws[clear]))
-    assert np.abs(held - yaws)[yaws < -20.0].max() < 10.0      # the long sides read more turn
+    assert np.abs(held - yaws)[yaws < -20.0].max() < 10.0  # the long sides read more turn
     assert np.allclose(followed_yaws(rays, sides, start, ["right"] * len(yaws)), alone)
 
 
@@ -196,7 +195,7 @@ def test_ray_roots_lie_on_the_ray_at_the_bone_length():
     assert np.allclose(np.linalg.norm(roots - known, axis=-1), 0.4)
     assert np.allclose(np.cross(roots, ray), 0.0, atol=1e-12)
     assert roots[0, 2] < roots[1, 2]
-    miss = ray_roots(known, ray, 0.01)                      # the ray passes farther away
+    miss = ray_roots(known, ray, 0.01)  # the ray passes farther away
     assert np.allclose(miss[0], miss[1])
     assert np.allclose(np.cross(miss[0] - known, ray) @ ray, 0.0)
 
@@ -212,9 +211,10 @@ def test_the_limb_choice_goes_on_through_the_image_plane():
     assert np.allclose(cands[np.arange(len(t)), picked, 0], true)
 
 
-@pytest.mark.parametrize("yaw, bound_mm, pulled_mm", [(30.0, 4.0, 7.0), (60.0, 4.0, 10.0),
-                                                      (120.0, 3.0, 10.0), (140.0, 2.5, 7.0),
-                                                      (20.0, 7.0, 8.0), (40.0, 5.5, 8.0)])
+@pytest.mark.parametrize(
+    "yaw, bound_mm, pulled_mm",
+    [(30.0, 4.0, 7.0), (60.0, 4.0, 10.0), (120.0, 3.0, 10.0), (140.0, 2.5, 7.0), (20.0, 7.0, 8.0), (40.0, 5.5, 8.0)],
+)
 def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm, pulled_mm, monkeypatch):
     """The walk of the model's own proportions seen at its true bone lengths. The
     joint limits (limbs near the sagittal plane) tell a leg from its mirror image
@@ -226,17 +226,17 @@ def test_exact_projections_of_the_models_walk_are_reconstructed(yaw, bound_mm, p
     2D, costs exact 2D a few millimetres: this walk's limbs swing a little out of
     their planes (5.3 to 8.2 mm with the pull). At 120 degrees 2.6 mm since the camera
     frames the feet too (a little farther off)."""
-    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
-                                                           yaw=yaw))
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0, yaw=yaw))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
     camera = Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     turn = "right" if yaw < 90 else "left"
-    monkeypatch.setattr(P, "GUIDE", C.MODEL)               # the model walk's head is upright
+    monkeypatch.setattr(P, "GUIDE", C.MODEL)  # the model walk's head is upright
     pulled = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
     monkeypatch.setattr(P, "SWING_PLANE_WEIGHT", {False: 0.0, True: 0.0})
     found = P.reconstruct(truth.joints2d, camera, turn, P.bone_lengths(truth.joints3d[0]))
-    trunk = [JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis", "shoulder_l",
-                                         "shoulder_r", "hip_l", "hip_r")]
+    trunk = [
+        JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis", "shoulder_l", "shoulder_r", "hip_l", "hip_r")
+    ]
     assert np.abs(found[:, trunk] - scene.joints_cam[:, trunk] * [1, -1, -1]).max() < 1e-6
     assert pa_mpjpe(P.to_contract(found), truth.joints3d) * 1000 < bound_mm
     assert pa_mpjpe(P.to_contract(pulled), truth.joints3d) * 1000 < pulled_mm
@@ -273,7 +273,7 @@ def swing_case(yaw: float, pixel_error: float, across: bool = False) -> tuple:
     pose = known_pose(yaw)
     body = pose.model()
     hip, knee = JOINT_INDEX["hip_l"], JOINT_INDEX["knee_l"]
-    body[knee] = body[hip] + np.array([0.0, -np.cos(0.6), np.sin(0.6)]) * 0.45   # z forward
+    body[knee] = body[hip] + np.array([0.0, -np.cos(0.6), np.sin(0.6)]) * 0.45  # z forward
     true = pose.to_camera(body)
     seen = CAMERA.project(true)
     along = (seen[knee] - seen[hip]) / np.linalg.norm(seen[knee] - seen[hip])
@@ -315,8 +315,7 @@ def test_a_body_facing_the_camera_sees_its_swing_planes_edge_on():
 
 
 def test_measured_lengths_read_bones_seen_side_on():
-    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
-                                                           yaw=90.0))
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0, yaw=90.0))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
     camera = Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     depth = -truth.pelvis_camera[:, 2]
@@ -361,8 +360,7 @@ def test_frames_where_the_body_was_lost_measure_no_bones():
     """The walk seen side-on, the blocks of a third of its frames left on clutter (the
     joints there spread to twice their distance from the pelvis): the bones measured
     over the frames seen are those of the walk alone; over every frame, longer."""
-    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0,
-                                                           yaw=90.0))
+    scene = plan_scene(walk_cycle(1.2, 30.0), RenderOptions(size=(320, 240), perspective=400.0, yaw=90.0))
     truth = scene_truth(scene, "walk-cycle", np.arange(len(scene.joints_cam)))
     camera = Pinhole(truth.camera.scale, truth.camera.cx, truth.camera.cy)
     depth = -truth.pelvis_camera[:, 2]
@@ -378,12 +376,12 @@ def test_frames_where_the_body_was_lost_measure_no_bones():
 
 def test_steady_depths_keep_joints_on_their_rays_and_take_out_jitter():
     n, fps = 60, 30.0
-    depth = -4.0 + 0.01 * np.arange(n)                          # walking away slowly
-    jitter = 0.05 * (-1.0) ** np.arange(n)                      # the ray roots' frame-to-frame noise
+    depth = -4.0 + 0.01 * np.arange(n)  # walking away slowly
+    jitter = 0.05 * (-1.0) ** np.arange(n)  # the ray roots' frame-to-frame noise
     points = np.zeros((n, 16, 3))
     points[..., 0], points[..., 1] = 0.3, -0.2
     points[..., 2] = (depth + jitter)[:, None]
-    points[..., :2] *= -points[..., 2:] / 4.0                   # on fixed rays through the centre
+    points[..., :2] *= -points[..., 2:] / 4.0  # on fixed rays through the centre
     out = P.steady_depths(points, fps)
     rays = points / np.linalg.norm(points, axis=-1, keepdims=True)
     assert np.allclose(np.cross(out, rays), 0.0, atol=1e-12)

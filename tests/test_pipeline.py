@@ -67,9 +67,11 @@ def test_dog_walker_is_fitted_upright_on_every_frame(tmp_path):
     assert missing == [], f"no person found on frames {missing}"
     y = frame_joints({"frames": frames})[..., 1]
     j = JOINT_INDEX
-    upright = ((y[:, j["head_top"]] < y[:, j["pelvis"]])
-               & (y[:, j["pelvis"]] < y[:, j["ankle_l"]])
-               & (y[:, j["pelvis"]] < y[:, j["ankle_r"]]))
+    upright = (
+        (y[:, j["head_top"]] < y[:, j["pelvis"]])
+        & (y[:, j["pelvis"]] < y[:, j["ankle_l"]])
+        & (y[:, j["pelvis"]] < y[:, j["ankle_r"]])
+    )
     assert upright.mean() >= 0.9, f"not upright on frames {np.flatnonzero(~upright).tolist()}"
 
 

@@ -49,8 +49,7 @@ def in_place(tmp_path_factory):
     video, photo = folder / "in_place.mp4", folder / "empty.png"
     write_video(video, frames, OPTIONS.fps, OPTIONS.size)
     cv2.imwrite(str(photo), empty)
-    return dict(folder=folder, video=video, photo=photo, frames=frames, masks=masks, covered=covered,
-                empty=empty)
+    return dict(folder=folder, video=video, photo=photo, frames=frames, masks=masks, covered=covered, empty=empty)
 
 
 def mean_iou(frames, masks, background) -> float:
@@ -61,7 +60,7 @@ def test_the_median_holds_the_performer_and_the_plate_does_not(in_place):
     frames, masks = in_place["frames"], in_place["masks"]
     median = estimate_background(frames)
     free = performer_free(median, frames)
-    assert np.mean(masks, axis=0).max() == 1.0    # some pixels are never uncovered
+    assert np.mean(masks, axis=0).max() == 1.0  # some pixels are never uncovered
     assert mean_iou(frames, masks, median) < 0.1
     assert mean_iou(frames, masks, free) > 0.45
     covered = np.mean(masks, axis=0) > 0
@@ -78,9 +77,14 @@ def test_a_boxer_whose_legs_stay_put_keeps_them(tmp_path):
         pytest.skip(f"real data absent: {clip}")
     info = open_video(clip / "video.mp4")
     background = clip_background(info, 1.0)
-    scores = [iou(extract_silhouette(frame, background),
-                  cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE))
-              for i, frame in iter_frames(info) if i % 5 == 0]
+    scores = [
+        iou(
+            extract_silhouette(frame, background),
+            cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE),
+        )
+        for i, frame in iter_frames(info)
+        if i % 5 == 0
+    ]
     assert np.mean(scores) > 0.85 and min(scores) > 0.75
     legs = cv2.imread(str(clip / "masks" / "000000.png"), cv2.IMREAD_GRAYSCALE)[200:] > 0
     assert background.held is not None and background.held[200:][legs].mean() > 0.5
@@ -102,9 +106,14 @@ def test_beside_a_performer_who_stays_the_plate_is_the_scene_not_the_medians_mix
     photo = clean_plate(DEV_CLIPS / "backgrounds" / "rocket.jpg", info, 1.0).image
     wrong = cv2.absdiff(background.image, photo).max(axis=2) > noise_floor(background.sigma)
     assert (wrong & ~background.held).sum() < 900
-    scores = [iou(extract_silhouette(frame, background),
-                  cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE))
-              for i, frame in iter_frames(info) if i % 5 == 0]
+    scores = [
+        iou(
+            extract_silhouette(frame, background),
+            cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE),
+        )
+        for i, frame in iter_frames(info)
+        if i % 5 == 0
+    ]
     assert np.mean(scores) > 0.855
 
 
@@ -146,7 +155,7 @@ def test_a_still_object_of_the_performers_colour_beside_them_stays_scene(in_plac
     staged = []
     for frame, mask in zip(frames, masks):
         frame = frame.copy()
-        frame[bar & ~mask] = frames[0][150, 160]        # the trousers' colour
+        frame[bar & ~mask] = frames[0][150, 160]  # the trousers' colour
         staged.append(frame)
     free = performer_free(estimate_background(staged), staged)
     silhouettes = [extract_silhouette(f, free) > 0 for f in staged]
@@ -176,7 +185,7 @@ def test_clean_plate_from_a_photo_and_from_empty_frames(in_place, tmp_path):
     write_video(video, frames, OPTIONS.fps, OPTIONS.size)
     stage = clean_plate((0, 4), open_video(video), 1.0)
     assert mean_iou(in_place["frames"], in_place["masks"], stage) > 0.9
-    empty_video = tmp_path / "empty_stage.mp4"     # a short video of the empty stage
+    empty_video = tmp_path / "empty_stage.mp4"  # a short video of the empty stage
     write_video(empty_video, [in_place["empty"]] * 5, OPTIONS.fps, OPTIONS.size)
     filmed = clean_plate(empty_video, info, 1.0)
     assert mean_iou(in_place["frames"], in_place["masks"], filmed) > 0.9
@@ -218,10 +227,11 @@ def test_fit_writes_masks_confidence_and_warns(in_place, capsys):
     assert code == 0 and "--background" in err and "never seen under" in err
     motion = json.loads(out.read_text())
     assert motion["masks"] == "auto_masks"
-    written = [cv2.imread(str(folder / motion["masks"] / f"{i:06d}.png"), cv2.IMREAD_UNCHANGED)
-               for i in range(len(motion["frames"]))]
-    assert all(m.dtype == np.uint8 and m.shape == (240, 320) and set(np.unique(m)) <= {0, 255}
-               for m in written)
+    written = [
+        cv2.imread(str(folder / motion["masks"] / f"{i:06d}.png"), cv2.IMREAD_UNCHANGED)
+        for i in range(len(motion["frames"]))
+    ]
+    assert all(m.dtype == np.uint8 and m.shape == (240, 320) and set(np.unique(m)) <= {0, 255} for m in written)
     assert np.mean([iou(w, m) for w, m in zip(written, in_place["covered"])]) > 0.45
     confidence = [f["silhouette_confidence"] for f in motion["frames"] if f["person"]]
     assert all(0.0 <= c < 1.0 for c in confidence)
@@ -230,12 +240,24 @@ def test_fit_writes_masks_confidence_and_warns(in_place, capsys):
 def test_fit_with_the_plate_is_confident_and_silent(in_place, capsys):
     folder = in_place["folder"]
     out = folder / "plate.json"
-    code, err = _fit([str(in_place["video"]), "--out", str(out), "--masks", str(folder / "plate_masks"),
-                      "--background", str(in_place["photo"])], capsys)
+    code, err = _fit(
+        [
+            str(in_place["video"]),
+            "--out",
+            str(out),
+            "--masks",
+            str(folder / "plate_masks"),
+            "--background",
+            str(in_place["photo"]),
+        ],
+        capsys,
+    )
     assert code == 0 and "warning" not in err
     motion = json.loads(out.read_text())
-    written = [cv2.imread(str(folder / "plate_masks" / f"{i:06d}.png"), cv2.IMREAD_UNCHANGED)
-               for i in range(len(motion["frames"]))]
+    written = [
+        cv2.imread(str(folder / "plate_masks" / f"{i:06d}.png"), cv2.IMREAD_UNCHANGED)
+        for i in range(len(motion["frames"]))
+    ]
     assert np.mean([iou(w, m) for w, m in zip(written, in_place["covered"])]) > 0.9
     assert all(f["silhouette_confidence"] == 1.0 for f in motion["frames"] if f["person"])
 
@@ -244,12 +266,10 @@ def test_fit_reads_the_plate_from_the_annotations(in_place, tmp_path, capsys):
     notes = tmp_path / "notes.json"
     (tmp_path / "empty.png").write_bytes(in_place["photo"].read_bytes())
     notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "background": "empty.png"}))
-    code, err = _fit([str(in_place["video"]), "--out", str(tmp_path / "m.json"), "--annotations", str(notes)],
-                     capsys)
+    code, err = _fit([str(in_place["video"]), "--out", str(tmp_path / "m.json"), "--annotations", str(notes)], capsys)
     assert code == 0 and "warning" not in err
     notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "background": "gone.png"}))
-    code, err = _fit([str(in_place["video"]), "--out", str(tmp_path / "m.json"), "--annotations", str(notes)],
-                     capsys)
+    code, err = _fit([str(in_place["video"]), "--out", str(tmp_path / "m.json"), "--annotations", str(notes)], capsys)
     assert code == 2 and "gone.png: no such background" in err
 
 
@@ -261,6 +281,7 @@ def test_held_warning_needs_a_good_part_of_the_silhouettes():
 
 def test_the_app_takes_an_empty_stage_and_reviews_guessed_frames(in_place, tmp_path):
     from app.state import AppState
+
     video = tmp_path / "in_place.mp4"
     video.write_bytes(in_place["video"].read_bytes())
     (tmp_path / "empty.png").write_bytes(in_place["photo"].read_bytes())

@@ -19,10 +19,18 @@ from mocap.lift.motion import build_motion
 from mocap.synth.walk import walk_cycle
 
 N_FRAMES, FPS = 100, 25.0
-GONE = 50                                   # a frame without a pose
+GONE = 50  # a frame without a pose
 CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 ARTIFACTS = Path(__file__).resolve().parents[1] / "artifacts" / "playback"
 
 
@@ -31,11 +39,9 @@ def page_file(tmp_path_factory) -> Path:
     """A 100-frame walk's motion file exported as a page by the command line."""
     folder = tmp_path_factory.mktemp("playback")
     joints = walk_cycle(N_FRAMES / FPS, FPS)
-    frames = [{"index": i, "keyframe": True, "person": True, "joints3d": joints[i]}
-              for i in range(N_FRAMES)]
+    frames = [{"index": i, "keyframe": True, "person": True, "joints3d": joints[i]} for i in range(N_FRAMES)]
     frames[GONE] = {"index": GONE, "keyframe": False, "person": False}
-    video = {"path": "clips/walk <side>.mp4", "width": 320, "height": 240, "fps": FPS,
-             "frame_count": N_FRAMES}
+    video = {"path": "clips/walk <side>.mp4", "width": 320, "height": 240, "fps": FPS, "frame_count": N_FRAMES}
     write_motion(folder / "walk.motion.json", video, frames)
     out = folder / "walk.html"
     assert cli(["export", str(folder / "walk.motion.json"), "--html", str(out)]) in (0, None)
@@ -49,7 +55,7 @@ def test_page_is_small_self_contained_and_counts_the_frames(page_file):
     assert data["n_frames"] == N_FRAMES == len(data["frames"])
     assert data["fps"] == FPS and data["name"] == "walk <side>"
     assert [i for i, f in enumerate(data["frames"]) if f is None] == [GONE]
-    assert "walk &lt;side&gt;" in text and "<side>" not in text   # escaped in the HTML and the JSON
+    assert "walk &lt;side&gt;" in text and "<side>" not in text  # escaped in the HTML and the JSON
     # nothing fetched: no external script, stylesheet, image or fetch call
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//|fetch\(|import\s""", text)
     assert DATA_SLOT in TEMPLATE.read_text()
@@ -57,8 +63,7 @@ def test_page_is_small_self_contained_and_counts_the_frames(page_file):
 
 def test_page_of_a_motion_uses_the_world_joints():
     joints = walk_cycle(1.0, FPS)
-    motion = build_motion(dict(enumerate(joints)), len(joints), FPS,
-                          root=np.tile([0.5, 0.0, 0.0], (len(joints), 1)))
+    motion = build_motion(dict(enumerate(joints)), len(joints), FPS, root=np.tile([0.5, 0.0, 0.0], (len(joints), 1)))
     data = page_data(motion_html(motion, "clip"))
     assert data["n_frames"] == motion.n_frames
     np.testing.assert_allclose(data["frames"][3], motion.world_joints[3], atol=1e-3)
@@ -92,8 +97,7 @@ def test_page_plays_from_disk_in_chromium(page_file):
             counter.wait_for()
             page.wait_for_function("document.getElementById('counter').textContent.length > 0")
             first = counter.text_content()
-            page.wait_for_function(f"document.getElementById('counter').textContent !== {first!r}",
-                                   timeout=5000)
+            page.wait_for_function(f"document.getElementById('counter').textContent !== {first!r}", timeout=5000)
             assert re.fullmatch(rf"frame \d+ of 0–{N_FRAMES - 1}", counter.text_content())
             assert page.get_by_text(f"{N_FRAMES} frames · 25 fps").is_visible()
             assert page.locator("h1").text_content() == "walk <side>"
@@ -112,7 +116,7 @@ def test_page_plays_from_disk_in_chromium(page_file):
                 return body / (body + other);
             }""")
             assert 0.005 < shown < 0.5, f"{shown:.3%} of the canvas drawn"
-            assert counter.text_content() == f"frame 10 of 0–{N_FRAMES - 1}"   # 0-based, as the files
+            assert counter.text_content() == f"frame 10 of 0–{N_FRAMES - 1}"  # 0-based, as the files
             # the nose and the chest's mark drawn where mocap.body puts them (facing shows)
             pose = page.evaluate("() => DATA.frames[10]")
             drawn = np.array(page.evaluate("() => facingMarks(DATA.frames[10]).map(m => [m[0], m[1]])"))

@@ -42,15 +42,17 @@ def test_fit_draws_a_bar_on_a_terminal_only(fitted, tmp_path, monkeypatch):
     drawn = _stderr_of(monkeypatch, fit, terminal=True)
     assert "finding the performer's silhouette" in drawn
     assert "fitting the body model: 100%" in drawn and "30/30" in drawn
-    for quiet in (_stderr_of(monkeypatch, fit + ["--quiet"], terminal=True),
-                  _stderr_of(monkeypatch, fit, terminal=False)):
-        assert all(line.startswith("mocap: warning: ") for line in quiet.splitlines())   # no bar
+    for quiet in (
+        _stderr_of(monkeypatch, fit + ["--quiet"], terminal=True),
+        _stderr_of(monkeypatch, fit, terminal=False),
+    ):
+        assert all(line.startswith("mocap: warning: ") for line in quiet.splitlines())  # no bar
 
 
 def test_sheet_draws_a_bar_on_a_terminal_only(fitted, tmp_path, monkeypatch):
     video, motion = fitted
     sheet = ["sheet", video, motion, "--out", tmp_path / "s.png", "--frames", "6"]
     drawn = _stderr_of(monkeypatch, sheet, terminal=True)
-    assert "tiles: 100%" in drawn and "7/7" in drawn       # the background, then 6 tiles
+    assert "tiles: 100%" in drawn and "7/7" in drawn  # the background, then 6 tiles
     assert _stderr_of(monkeypatch, sheet + ["--quiet"], terminal=True) == ""
     assert _stderr_of(monkeypatch, sheet, terminal=False) == ""

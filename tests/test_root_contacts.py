@@ -19,7 +19,7 @@ from mocap.synth.walk import walk_cycle
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
 SIZE = (320, 240)
-FOCAL = 250.0                    # px at 320 wide: the performer walks from 6.6 to 3.6 m
+FOCAL = 250.0  # px at 320 wide: the performer walks from 6.6 to 3.6 m
 
 
 def fitted(tmp_path: Path, yaw: float):
@@ -42,7 +42,7 @@ def test_foot_contacts_agree_with_the_true_ankles(tmp_path):
     have = np.array(["contacts" in f for f in frames])
     found = np.array([[f["contacts"][foot] for foot in FEET] for f in frames if "contacts" in f])
     true = foot_contacts(truth.joints3d + truth.pelvis_camera[:, None], truth.fps)[have]
-    assert have.mean() > 0.9 and 0.3 < true.mean() < 0.7           # a walk: feet take turns
+    assert have.mean() > 0.9 and 0.3 < true.mean() < 0.7  # a walk: feet take turns
     assert (found == true).mean() >= 0.9
 
 
@@ -51,9 +51,8 @@ def test_foot_lock_keeps_planted_feet_still_and_bones_whole():
     move no more than the legs' reach forces (a tenth of that), the bones unchanged."""
     joints = walk_cycle(3.0, 30.0)
     pelvis = joints[:, JOINT_INDEX["pelvis"]]
-    wobble = 0.01 * np.sin(np.arange(len(joints)) * 2.1)[:, None]    # a fit's jitter
-    motion = build_motion(dict(enumerate(joints - pelvis[:, None] + wobble[:, None])),
-                          len(joints), 30.0, root=pelvis)
+    wobble = 0.01 * np.sin(np.arange(len(joints)) * 2.1)[:, None]  # a fit's jitter
+    motion = build_motion(dict(enumerate(joints - pelvis[:, None] + wobble[:, None])), len(joints), 30.0, root=pelvis)
     locked = motion.foot_locked()
     contacts = motion.contacts
     assert contacts.mean() > 0.3

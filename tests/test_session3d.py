@@ -38,8 +38,26 @@ def test_fit_with_annotations_writes_3d_and_every_export(walk, tmp_path):
     notes = tmp_path / "a.json"
     save_annotations(notes, annotations_for_poses(truth.joints3d, truth.joints2d))
     out = {k: tmp_path / f"m.{k}" for k in ("json", "bvh", "glb", "csv")}
-    assert main(["fit", str(video), "--annotations", str(notes), "--out", str(out["json"]),
-                 "--bvh", str(out["bvh"]), "--glb", str(out["glb"]), "--csv", str(out["csv"]), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                str(video),
+                "--annotations",
+                str(notes),
+                "--out",
+                str(out["json"]),
+                "--bvh",
+                str(out["bvh"]),
+                "--glb",
+                str(out["glb"]),
+                "--csv",
+                str(out["csv"]),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert all(p.stat().st_size > 0 for p in out.values())
     frames = read_motion(out["json"])["frames"]
     joints3d = np.array([f["joints3d"] for f in frames])
@@ -56,7 +74,7 @@ def test_without_annotations_the_first_guess_is_used(walk):
     session = Session(info, fits)
     inputs = session.inputs
     assert set(inputs.orientation) == {"forward_right"}
-    assert inputs.swap.all()                          # facing the camera: image-left is their right
+    assert inputs.swap.all()  # facing the camera: image-left is their right
     visible = np.array([lift.depth_fractions(p) for p in truth.joints3d]) > NEGLIGIBLE
     signs = np.array([lift.signs_of(p) for p in truth.joints3d])
     assert (inputs.signs == signs)[visible].mean() >= 0.6
@@ -72,14 +90,14 @@ def test_a_sign_click_moves_its_frame_and_leaves_frames_beyond_the_smoothing(wal
     before = np.array([session.pose3d(i) for i in range(len(fits))])
     signs_before = session.inputs.signs.copy()
     frame = 12
-    k = int(np.argmax(lift.depth_fractions(before[frame])))          # the segment most out of the image plane
+    k = int(np.argmax(lift.depth_fractions(before[frame])))  # the segment most out of the image plane
     segment = SEGMENT_NAMES[k]
     flipped = "away" if session.inputs.signs[frame, k] > 0 else "toward"
     session.annotate(session.annotations.with_foreshortening(frame, segment, flipped))
     after = np.array([session.pose3d(i) for i in range(len(fits))])
     assert session.inputs.signs[frame, k] == (1 if flipped == "toward" else -1)
     distal = SEGMENT_JOINTS[k][1]
-    assert abs(after[frame, distal, 2] - before[frame, distal, 2]) > 0.02          # metres
+    assert abs(after[frame, distal, 2] - before[frame, distal, 2]) > 0.02  # metres
     reach = int(np.ceil(4 * DEPTH_SMOOTH_S * info.fps))
     resigned = np.flatnonzero((session.inputs.signs != signs_before).any(axis=1))
     far = np.abs(np.arange(len(fits))[:, None] - resigned[None]).min(axis=1) > reach
@@ -113,8 +131,9 @@ def test_frames_without_a_person_are_interpolated_between_keyframes(tmp_path):
 def test_bad_annotations_stop_the_fit_before_it_starts(walk, tmp_path, capsys):
     video = walk[0]
     notes, out = tmp_path / "bad.json", tmp_path / "m.json"
-    notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1,
-                                 "frames": {"99": {"orientation": "left"}}}))
+    notes.write_text(
+        json.dumps({"format": "mocap-annotations", "version": 1, "frames": {"99": {"orientation": "left"}}})
+    )
     assert main(["fit", str(video), "--annotations", str(notes), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f'mocap: error: {notes}: frames["99"]: frame 99 is out of range') and err.count("\n") == 1
@@ -134,6 +153,7 @@ def test_a_sign_click_lifts_only_the_frames_it_changes(walk, monkeypatch):
     def counted(*args, **kwargs):
         calls.append(1)
         return real(*args, **kwargs)
+
     monkeypatch.setattr(mocap_inputs, "lift_pose", counted)
     before = session.inputs
     frame = 12
@@ -142,9 +162,10 @@ def test_a_sign_click_lifts_only_the_frames_it_changes(walk, monkeypatch):
     session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], flipped))
     after = session.lifted()
     touched = session.inputs.changed_frames(before)
-    assert touched[frame] and len(calls) == touched.sum() < len(fits)     # here 17 of 30
-    assert np.flatnonzero(touched).tolist() == np.flatnonzero(
-        (session.inputs.signs != before.signs).any(axis=1)).tolist()
+    assert touched[frame] and len(calls) == touched.sum() < len(fits)  # here 17 of 30
+    assert (
+        np.flatnonzero(touched).tolist() == np.flatnonzero((session.inputs.signs != before.signs).any(axis=1)).tolist()
+    )
     calls.clear()
     fresh = Session(info, fits, session.annotations).lifted()
     assert len(calls) == len(fits)

@@ -11,7 +11,8 @@ from helpers import DOG_WALKER
 from mocap.errors import MocapError
 from mocap.io.video import iter_frames, open_video
 from mocap.silhouette import background as background_module
-from mocap.silhouette.background import clean_mask, estimate_background, exposure_gain, extract_silhouette
+from mocap.silhouette.background import estimate_background, exposure_gain, extract_silhouette
+from mocap.silhouette.cleaning import clean_mask
 
 EXPOSURE = {4: 1.3, 9: 0.75}  # frame index -> global exposure factor of that frame
 
@@ -45,18 +46,26 @@ def _texture(height: int, width: int, rng: np.random.Generator) -> np.ndarray:
     for _ in range(10):
         x, y = int(rng.integers(0, width)), int(rng.integers(0, height))
         size = rng.integers(8, width // 5, 2)
-        cv2.rectangle(image, (x, y), (x + int(size[0]), y + int(size[1])),
-                      rng.uniform(40, 210, 3).tolist(), -1)
+        cv2.rectangle(image, (x, y), (x + int(size[0]), y + int(size[1])), rng.uniform(40, 210, 3).tolist(), -1)
     return np.clip(image, 10, 240)
 
 
 def _joints(height: int, width: int, t: float) -> dict[str, tuple[int, int]]:
     s = height / 240
     x, top, swing = width * (0.08 + 0.84 * t), 30 * s, np.sin(t * 9) * 20 * s
-    return {name: (int(x + dx), int(top + dy * s)) for name, (dx, dy) in {
-        "head": (0, 12), "neck": (0, 25), "hip": (0, 100), "shoulder": (0, 35),
-        "foot_a": (swing, 185), "foot_b": (-swing, 185),
-        "hand_a": (-swing - 24 * s, 95), "hand_b": (swing + 24 * s, 95)}.items()}
+    return {
+        name: (int(x + dx), int(top + dy * s))
+        for name, (dx, dy) in {
+            "head": (0, 12),
+            "neck": (0, 25),
+            "hip": (0, 100),
+            "shoulder": (0, 35),
+            "foot_a": (swing, 185),
+            "foot_b": (-swing, 185),
+            "hand_a": (-swing - 24 * s, 95),
+            "hand_b": (swing + 24 * s, 95),
+        }.items()
+    }
 
 
 def _figure(height: int, width: int, t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -65,12 +74,14 @@ def _figure(height: int, width: int, t: float) -> tuple[np.ndarray, np.ndarray]:
     j, s = _joints(height, width, t), height / 240
     mask = np.zeros((height, width), np.uint8)
     colour = np.zeros((height, width, 3), np.float32)
-    parts = [("circle", j["head"], None, int(11 * s), (140, 170, 230)),
-             ("line", j["neck"], j["hip"], int(30 * s), (40, 40, 200)),
-             ("line", j["hip"], j["foot_a"], int(14 * s), (150, 70, 20)),
-             ("line", j["hip"], j["foot_b"], int(14 * s), (150, 70, 20)),
-             ("line", j["shoulder"], j["hand_a"], int(8 * s), (60, 180, 60)),
-             ("line", j["shoulder"], j["hand_b"], int(8 * s), (60, 180, 60))]
+    parts = [
+        ("circle", j["head"], None, int(11 * s), (140, 170, 230)),
+        ("line", j["neck"], j["hip"], int(30 * s), (40, 40, 200)),
+        ("line", j["hip"], j["foot_a"], int(14 * s), (150, 70, 20)),
+        ("line", j["hip"], j["foot_b"], int(14 * s), (150, 70, 20)),
+        ("line", j["shoulder"], j["hand_a"], int(8 * s), (60, 180, 60)),
+        ("line", j["shoulder"], j["hand_b"], int(8 * s), (60, 180, 60)),
+    ]
     for kind, p, q, size, bgr in parts:
         for image, value in ((mask, 255), (colour, bgr)):
             if kind == "circle":
@@ -147,7 +158,7 @@ def test_grey_trousers_over_bricks_are_not_shadow_and_a_shadow_is():
     """Grey cloth as dark as a shadow, of the wall's own grey, over flat bricks passes
     every pixel test of a shadow; the mortar lines it hides tell them apart (bricks wider than the legs)."""
     legs, shadow, mask = _legs_and_shadow(_bricks(), 2, lambda cloth: np.full_like(cloth, 80), 0.6)
-    assert iou(mask, legs) > 0.9                   # the cloth about 0.55 as bright as the bricks
+    assert iou(mask, legs) > 0.9  # the cloth about 0.55 as bright as the bricks
     assert (mask[shadow > 0] > 0).mean() < 0.05
 
 
@@ -165,8 +176,9 @@ def _legs_and_shadow(scene: np.ndarray, seed: int, dress, shadow_level: float):
     shadow of ``shadow_level`` beside them, over ``scene`` (float BGR) with noise:
     (legs, shadow, the silhouette against the background of five noisy scenes)."""
     rng = np.random.default_rng(seed)
-    model = estimate_background([np.clip(scene + rng.normal(0, 2, scene.shape), 0, 255).astype(np.uint8)
-                                 for _ in range(5)])
+    model = estimate_background(
+        [np.clip(scene + rng.normal(0, 2, scene.shape), 0, 255).astype(np.uint8) for _ in range(5)]
+    )
     frame = scene.astype(np.float32)
     legs = np.zeros(scene.shape[:2], np.uint8)
     cv2.line(legs, (150, 50), (130, 200), 255, 22)
@@ -227,14 +239,14 @@ def test_no_frames_is_refused():
 
 def test_clean_mask_keeps_split_leg_and_drops_far_blobs():
     mask = np.zeros((240, 320), np.uint8)
-    cv2.rectangle(mask, (150, 40), (175, 150), 255, -1)     # head and body
-    cv2.rectangle(mask, (152, 154), (160, 200), 255, -1)    # a leg, 4 px below the body
-    cv2.rectangle(mask, (20, 20), (28, 28), 255, -1)        # a far small blob
-    cv2.rectangle(mask, (166, 120), (171, 124), 0, -1)      # a small hole
-    cv2.rectangle(mask, (260, 60), (290, 90), 255, -1)      # a large piece, far away
+    cv2.rectangle(mask, (150, 40), (175, 150), 255, -1)  # head and body
+    cv2.rectangle(mask, (152, 154), (160, 200), 255, -1)  # a leg, 4 px below the body
+    cv2.rectangle(mask, (20, 20), (28, 28), 255, -1)  # a far small blob
+    cv2.rectangle(mask, (166, 120), (171, 124), 0, -1)  # a small hole
+    cv2.rectangle(mask, (260, 60), (290, 90), 255, -1)  # a large piece, far away
     person = clean_mask(mask)
-    assert person[180, 156] and person[122, 168]          # leg kept, hole filled
-    assert not person[24, 24] and not person[75, 275]     # far pieces dropped
+    assert person[180, 156] and person[122, 168]  # leg kept, hole filled
+    assert not person[24, 24] and not person[75, 275]  # far pieces dropped
 
 
 def test_clean_mask_drops_a_piece_apart_where_the_median_showed_the_performer():
@@ -243,9 +255,9 @@ def test_clean_mask_drops_a_piece_apart_where_the_median_showed_the_performer():
     body. The median showed the performer there (``stood``), whose parts there joined
     their body: that piece goes; an arm cut off by a gap, outside it, stays."""
     mask = np.zeros((240, 320), np.uint8)
-    cv2.rectangle(mask, (150, 20), (175, 175), 255, -1)     # the body in the air
-    cv2.rectangle(mask, (180, 60), (186, 120), 255, -1)     # an arm, 4 px beside it
-    cv2.rectangle(mask, (145, 185), (180, 200), 255, -1)    # the floor where the feet stood
+    cv2.rectangle(mask, (150, 20), (175, 175), 255, -1)  # the body in the air
+    cv2.rectangle(mask, (180, 60), (186, 120), 255, -1)  # an arm, 4 px beside it
+    cv2.rectangle(mask, (145, 185), (180, 200), 255, -1)  # the floor where the feet stood
     stood = np.zeros(mask.shape, bool)
     stood[100:201, 140:179] = True
     assert clean_mask(mask)[192, 160]

@@ -47,7 +47,7 @@ def test_walk_cycle_has_model_proportions():
     assert joints.shape == (60, 16, 3)
     assert body.body_height(joints[0]) == pytest.approx(1.75)
     assert joints[:, [J["ankle_l"], J["ankle_r"]], 1].min(axis=1) == pytest.approx(np.zeros(60))
-    assert joints[-1, J["pelvis"], 2] > 2.0          # walks forward along +z
+    assert joints[-1, J["pelvis"], 2] > 2.0  # walks forward along +z
     in_place = walk_cycle(2.0, 30.0, in_place=True)
     assert np.ptp(in_place[:, J["pelvis"], 2]) == pytest.approx(0.0)
 
@@ -59,7 +59,7 @@ def test_orthographic_body_height_in_pixels(view):
     truth = synth.scene_truth(scene, "standing", np.arange(1))
     assert truth.body_height_px == pytest.approx(0.6 * 480)
     rows = np.flatnonzero(body_mask(scene, 0).any(axis=1))
-    feet = 1 + body.FOOT_LENGTH / body.BODY_HEIGHT       # the silhouette reaches the soles
+    feet = 1 + body.FOOT_LENGTH / body.BODY_HEIGHT  # the silhouette reaches the soles
     assert rows[-1] - rows[0] + 1 == pytest.approx(feet * truth.body_height_px, abs=2.0)
     head, ankle = truth.joints2d[0, J["head_top"], 1], truth.joints2d[0, J["ankle_l"], 1]
     assert ankle - head == pytest.approx(truth.body_height_px)
@@ -72,12 +72,12 @@ def test_feet_point_the_way_the_body_faces(yaw):
     unit = truth.body_height_px / body.BODY_HEIGHT
     ankle = truth.joints2d[0, J["ankle_l"]]
     mask = body_mask(scene, 0)
-    sole = mask[int(ankle[1] + 5 * unit)]                # a row through the feet
+    sole = mask[int(ankle[1] + 5 * unit)]  # a row through the feet
     cols = np.flatnonzero(sole) - ankle[0]
     ahead, behind = (cols.max(), -cols.min()) if yaw == 0.0 else (-cols.min(), cols.max())
-    assert ahead == pytest.approx(22 * unit, abs=2.0)      # toes: 22 units ahead of the ankle
-    assert behind == pytest.approx(6 * unit, abs=2.0)      # heel: 6 behind
-    assert not mask[int(ankle[1] + 8 * unit)].any()        # nothing under the soles
+    assert ahead == pytest.approx(22 * unit, abs=2.0)  # toes: 22 units ahead of the ankle
+    assert behind == pytest.approx(6 * unit, abs=2.0)  # heel: 6 behind
+    assert not mask[int(ankle[1] + 8 * unit)].any()  # nothing under the soles
 
 
 @pytest.mark.parametrize("perspective", [None, 700.0])
@@ -85,15 +85,14 @@ def test_every_segment_is_drawn_where_the_truth_says(perspective):
     opts = synth.RenderOptions(view="three-quarter", noise=0.0, perspective=perspective)
     scene = synth.plan_scene(walk_cycle(1.0, 15.0), opts)
     truth = synth.scene_truth(scene, "walk", np.arange(15))
-    ends = body.segment_endpoints(truth.joints2d)                 # (F, 10, 2, 2)
+    ends = body.segment_endpoints(truth.joints2d)  # (F, 10, 2, 2)
     for i in range(0, 15, 3):
         mask = body_mask(scene, i)
-        for w in (0.1, 0.5, 0.9):   # along each segment's axis, inside its cylinder
+        for w in (0.1, 0.5, 0.9):  # along each segment's axis, inside its cylinder
             x, y = np.round((1 - w) * ends[i, :, 0] + w * ends[i, :, 1]).astype(int).T
             assert mask[y, x].all(), (i, w)
         # the top of the head lies on the silhouette's edge; just inside it is body
-        x, y = np.round(0.95 * truth.joints2d[i, J["head_top"]]
-                        + 0.05 * truth.joints2d[i, J["neck"]]).astype(int)
+        x, y = np.round(0.95 * truth.joints2d[i, J["head_top"]] + 0.05 * truth.joints2d[i, J["neck"]]).astype(int)
         assert mask[y, x]
         assert (truth.joints2d[i] > 0).all() and (truth.joints2d[i] < [640, 480]).all()
 
@@ -104,8 +103,9 @@ def test_body_shapes_change_the_widths_not_the_joints():
     joints = walk_cycle(1.0, 10.0)[:3]
     masks, joints2d = {}, None
     for shape in ("slim", "model", "broad"):
-        scene = synth.plan_scene(joints, synth.RenderOptions(view="three-quarter", noise=0.0,
-                                                             antialias=False, shape=shape))
+        scene = synth.plan_scene(
+            joints, synth.RenderOptions(view="three-quarter", noise=0.0, antialias=False, shape=shape)
+        )
         truth = synth.scene_truth(scene, "walk-cycle", np.arange(3))
         masks[shape] = np.array([body_mask(scene, i) for i in range(3)])
         joints2d = truth.joints2d if joints2d is None else joints2d
@@ -119,8 +119,7 @@ def test_body_shapes_change_the_widths_not_the_joints():
 
 def test_video_and_truth_files(tmp_path):
     out = tmp_path / "clip.avi"
-    truth = synth.render_clip(walk_cycle(0.5, 30.0, in_place=True), out,
-                              size=(320, 240), view="side", seed=3)
+    truth = synth.render_clip(walk_cycle(0.5, 30.0, in_place=True), out, size=(320, 240), view="side", seed=3)
     cap = cv2.VideoCapture(str(out))
     frames = [cap.read()[1] for _ in range(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)))]
     assert len(frames) == 15 and frames[-1].shape == (240, 320, 3)
@@ -134,8 +133,7 @@ def test_video_and_truth_files(tmp_path):
 @pytest.mark.parametrize("perspective", [None, 900.0])
 def test_truth_reprojects(perspective, tmp_path):
     joints = walk_cycle(1.0, 10.0)
-    truth = synth.render_clip(joints, tmp_path / "a.mp4", view="three-quarter",
-                              pitch=10.0, perspective=perspective)
+    truth = synth.render_clip(joints, tmp_path / "a.mp4", view="three-quarter", pitch=10.0, perspective=perspective)
     cam = load_truth(tmp_path / "a.truth.json").camera
     reproj = cam.project_camera(truth.joints3d + truth.pelvis_camera[:, None])
     np.testing.assert_allclose(reproj, truth.joints2d, atol=1e-6)
@@ -147,11 +145,10 @@ def test_camera_frame_and_anatomical_sides():
     truth = synth.scene_truth(scene, "w", np.arange(10))
     j3 = truth.joints3d[0]
     assert np.allclose(j3[J["pelvis"]], 0.0)
-    assert j3[J["head_top"], 1] > 1.0 - 0.5           # y up
-    assert j3[J["hip_r"], 2] > j3[J["hip_l"], 2]       # side view from the performer's right
+    assert j3[J["head_top"], 1] > 1.0 - 0.5  # y up
+    assert j3[J["hip_r"], 2] > j3[J["hip_l"], 2]  # side view from the performer's right
     assert truth.joints2d[-1, J["pelvis"], 0] > truth.joints2d[0, J["pelvis"], 0]  # walks right
-    front = synth.scene_truth(synth.plan_scene(walk_cycle(1.0, 10.0),
-                                               synth.RenderOptions(view="front")), "w", [0])
+    front = synth.scene_truth(synth.plan_scene(walk_cycle(1.0, 10.0), synth.RenderOptions(view="front")), "w", [0])
     assert front.joints2d[0, J["hip_l"], 0] > front.joints2d[0, J["hip_r"], 0]  # mirror view
 
 
@@ -175,8 +172,26 @@ def test_resample_indices():
 
 def test_cli(tmp_path, capsys):
     out = tmp_path / "w.mp4"
-    assert main(["synth", "walk-cycle", str(out), "--seconds", "0.4", "--size", "160x120",
-                 "--view", "three-quarter", "--truth", str(tmp_path / "t.json"), "--shape", "slim"]) == 0
+    assert (
+        main(
+            [
+                "synth",
+                "walk-cycle",
+                str(out),
+                "--seconds",
+                "0.4",
+                "--size",
+                "160x120",
+                "--view",
+                "three-quarter",
+                "--truth",
+                str(tmp_path / "t.json"),
+                "--shape",
+                "slim",
+            ]
+        )
+        == 0
+    )
     assert out.exists() and (tmp_path / "t.json").exists()
     assert main(["synth", str(tmp_path / "absent.bvh"), str(out)]) == 2
     assert main(["synth", "walk-cycle", str(tmp_path / "w.mkv")]) == 2

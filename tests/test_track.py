@@ -53,12 +53,21 @@ from mocap.track.tracking import (
 def walk(tmp_path_factory):
     """A 320x240 three-quarter walk, pinhole camera, panning cluttered background."""
     video = tmp_path_factory.mktemp("track") / "walk.mp4"
-    truth = synth.render_clip(walk_cycle(1.6, 15.0), video, size=(320, 240), fps=15.0, yaw=45.0,
-                              perspective=400.0, moving_background=True, seed=3)
+    truth = synth.render_clip(
+        walk_cycle(1.6, 15.0),
+        video,
+        size=(320, 240),
+        fps=15.0,
+        yaw=45.0,
+        perspective=400.0,
+        moving_background=True,
+        seed=3,
+    )
     return video, truth
 
 
 # -- marks --------------------------------------------------------------------------------
+
 
 def test_good_marks_pass_as_array_or_mapping(walk):
     marks = walk[1].joints2d[0]
@@ -67,16 +76,20 @@ def test_good_marks_pass_as_array_or_mapping(walk):
     assert np.array_equal(check_marks(as_dict, 320, 240), marks)
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda m: m.pop("wrist_r"), "joint wrist_r is not marked"),
-    (lambda m: m.update(knee_l=(np.nan, 10.0)), "joint knee_l is not marked"),
-    (lambda m: m.update(ankle_l=(100.0, 240.0)),
-     r"joint ankle_l at \(100.0, 240.0\) is outside the 320x240"),
-    (lambda m: m.update(elbow_x=(1.0, 1.0)), "unknown joint 'elbow_x'"),
-    (lambda m: m.update(shoulder_l=m["shoulder_r"]), "shoulder_l and shoulder_r nearly coincide"),
-    (lambda m: m.update(chest=tuple((np.add(m["shoulder_l"], m["shoulder_r"])) / 2 + [0.5, 0.0])),
-     "chest is nearly on the line"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda m: m.pop("wrist_r"), "joint wrist_r is not marked"),
+        (lambda m: m.update(knee_l=(np.nan, 10.0)), "joint knee_l is not marked"),
+        (lambda m: m.update(ankle_l=(100.0, 240.0)), r"joint ankle_l at \(100.0, 240.0\) is outside the 320x240"),
+        (lambda m: m.update(elbow_x=(1.0, 1.0)), "unknown joint 'elbow_x'"),
+        (lambda m: m.update(shoulder_l=m["shoulder_r"]), "shoulder_l and shoulder_r nearly coincide"),
+        (
+            lambda m: m.update(chest=tuple((np.add(m["shoulder_l"], m["shoulder_r"])) / 2 + [0.5, 0.0])),
+            "chest is nearly on the line",
+        ),
+    ],
+)
 def test_bad_marks_name_the_joint(walk, change, message):
     marks = {name: tuple(xy) for name, xy in zip(JOINTS, walk[1].joints2d[0])}
     change(marks)
@@ -91,13 +104,14 @@ def test_marks_of_the_wrong_shape_are_refused():
 
 # -- morph blocks -------------------------------------------------------------------------
 
+
 def test_similarity_is_the_weighted_difference_of_eq_3_to_5():
-    grid = blocks.make_grid(8, 6)         # centre b1, the middle half: rows 2-5, columns 1-4
+    grid = blocks.make_grid(8, 6)  # centre b1, the middle half: rows 2-5, columns 1-4
     model = np.zeros((8, 6, 3), np.float32)
     seen = np.zeros((1, 8, 6, 3), np.float32)
-    seen[0, :, :, 0] = 30.0                                # one channel off by 30 everywhere
-    seen[0, 3, 3] = [30.0, 60.0, 90.0]                     # one centre sub-pixel off more
-    diff = np.full((8, 6), 10.0)                           # W_R = W_G = W_B = 1/3
+    seen[0, :, :, 0] = 30.0  # one channel off by 30 everywhere
+    seen[0, 3, 3] = [30.0, 60.0, 90.0]  # one centre sub-pixel off more
+    diff = np.full((8, 6), 10.0)  # W_R = W_G = W_B = 1/3
     diff[3, 3] = 60.0
     weights = np.full((8, 6), blocks.MARGIN_WEIGHT)
     weights[2:6, 1:5] = blocks.CENTRE_WEIGHT
@@ -122,10 +136,9 @@ def test_the_far_forearm_and_its_twins_mirrored_colours():
     assert far_forearm(np.array([6.3, 6.0, 6.1])) == part["lower_arm_l"]
     assert far_forearm(np.array([6.0, 6.3, 6.1])) == part["lower_arm_r"]
     assert far_forearm(np.array([6.0, 6.05, 6.1])) is None
-    assert [far_arm(np.array(d)) for d in ([6.3, 6.0, 6.1], [6.0, 6.3, 6.1], [6.0, 6.05, 6.1])] == [
-        "l", "r", None]
+    assert [far_arm(np.array(d)) for d in ([6.3, 6.0, 6.1], [6.0, 6.3, 6.1], [6.0, 6.05, 6.1])] == ["l", "r", None]
     twin = np.zeros((14, 7, 3), np.float32)
-    twin[:, 0] = 200.0                                       # lit on its first column
+    twin[:, 0] = 200.0  # lit on its first column
     mirrored = mirrored_model(twin, (10, 7, 3))
     assert mirrored.shape == (10, 7, 3)
     assert (mirrored[:, -1] == 200.0).all() and (mirrored[:, 0] == 0.0).all()
@@ -133,7 +146,7 @@ def test_the_far_forearm_and_its_twins_mirrored_colours():
 
 def test_sub_pixel_sampling_is_bilinear():
     y, x = np.mgrid[0:60, 0:80].astype(np.float32)
-    image = np.dstack([x, y, x + y]).astype(np.float32)   # a linear ramp: bilinear is exact
+    image = np.dstack([x, y, x + y]).astype(np.float32)  # a linear ramp: bilinear is exact
     block = np.array([20.3, 15.7, np.radians(33.0), 21.4, 6.6])
     grid = blocks.make_grid(block[blocks.M], block[blocks.N])
     xs, ys = blocks.block_points(block[None], grid)
@@ -155,23 +168,21 @@ def test_search_finds_a_moved_turned_block():
     true = np.array([50.0, 30.0, np.radians(70.0), 40.0, 12.0])
     along = np.array([np.cos(true[2]), np.sin(true[2])])
     across = np.array([-along[1], along[0]])
-    corners = [true[:2] + s * 6 * across + t * 40 * along
-               for s, t in ((1, 0), (1, 1), (-1, 1), (-1, 0))]
+    corners = [true[:2] + s * 6 * across + t * 40 * along for s, t in ((1, 0), (1, 1), (-1, 1), (-1, 0))]
     cv2.fillConvexPoly(image, np.round(corners).astype(np.int32), (40, 90, 200))
     grid = blocks.make_grid(40, 12, beyond=0.3)
     model = blocks.sample_blocks(image, true, grid)[0]
     start = true + [3.0, -2.0, np.radians(6.0), 0.0, 0.0]
-    found, s = blocks.search(image, model, grid, start, np.radians(np.arange(-8, 9, 2.0)),
-                             np.array([0.0]), max_ring=5)
+    found, s = blocks.search(image, model, grid, start, np.radians(np.arange(-8, 9, 2.0)), np.array([0.0]), max_ring=5)
     assert np.hypot(*(found[:2] - true[:2])) <= 1.0
     assert abs(np.degrees(found[2] - true[2])) <= 1.0
-    assert s == pytest.approx(1.0)                         # exact match: 1 / MIN_DIFF
+    assert s == pytest.approx(1.0)  # exact match: 1 / MIN_DIFF
 
 
 def test_a_penalty_moves_the_search_off_the_best_match():
     image = np.zeros((80, 80, 3), np.uint8)
     root = np.array([20.0, 10.0])
-    for angle, grey in ((45.0, 150), (90.0, 200)):           # two like bars from one root
+    for angle, grey in ((45.0, 150), (90.0, 200)):  # two like bars from one root
         end = root + 50 * np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle))])
         cv2.line(image, tuple(np.int32(root)), tuple(np.int32(end)), (grey,) * 3, 5)
     start = np.array([*root, np.radians(90.0), 40.0, 5.0])
@@ -186,16 +197,24 @@ def test_a_penalty_moves_the_search_off_the_best_match():
 
 
 def test_overlap_of_blocks_and_the_limbs_kept_off():
-    other = np.array([0.0, 0.0, 0.0, 40.0, 10.0])             # along x, 10 px wide
-    lowers = np.array([[0.0, 0.0, 0.0, 40.0, 10.0],          # on it
-                       [0.0, 5.0, 0.0, 40.0, 10.0],          # half a width beside it
-                       [0.0, 30.0, 0.0, 40.0, 10.0]])        # clear of it
+    other = np.array([0.0, 0.0, 0.0, 40.0, 10.0])  # along x, 10 px wide
+    lowers = np.array(
+        [
+            [0.0, 0.0, 0.0, 40.0, 10.0],  # on it
+            [0.0, 5.0, 0.0, 40.0, 10.0],  # half a width beside it
+            [0.0, 30.0, 0.0, 40.0, 10.0],
+        ]
+    )  # clear of it
     assert np.allclose(overlap(lowers, other), [1.0, 0.5, 0.0])
     assert twin_overlap(lowers[0], lowers[2]) == 0.0
-    folded = np.array([[40.0, 0.0, np.pi, 40.0, 10.0],      # back along its upper part
-                       [40.0, 0.0, np.pi / 2, 40.0, 10.0]])  # bent at a right angle
+    folded = np.array(
+        [
+            [40.0, 0.0, np.pi, 40.0, 10.0],  # back along its upper part
+            [40.0, 0.0, np.pi / 2, 40.0, 10.0],
+        ]
+    )  # bent at a right angle
     penalty = limb_penalty(np.zeros(2), 10.0, folded[0], 40.0, ((7.0, other),))
-    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)          # where it was
+    assert penalty(folded)[0] == pytest.approx(FOLD_COST + 7.0)  # where it was
     assert penalty(folded)[1] == pytest.approx((FOLD_COST + 7.0) / 8 + JUMP_COST * np.sqrt(2))
 
 
@@ -206,8 +225,8 @@ def arm_over_trunk() -> tuple[np.ndarray, np.ndarray]:
     image = np.full((120, 120, 3), 60, np.uint8)
     image[10:110, 30:90] = 150
     end = np.int32(np.array([60.0, 20.0]) + 60 * np.array([np.cos(np.radians(60)), np.sin(np.radians(60))]))
-    cv2.line(image, (60, 20), tuple(end), (90,) * 3, 15)                     # the shadow
-    cv2.line(image, (60, 20), tuple(end), (156,) * 3, 8)                     # the arm
+    cv2.line(image, (60, 20), tuple(end), (90,) * 3, 15)  # the shadow
+    cv2.line(image, (60, 20), tuple(end), (156,) * 3, 8)  # the arm
     return image, np.full((blocks.ROWS, 4, 3), 150.0, np.float32)
 
 
@@ -222,8 +241,9 @@ def test_an_arm_over_a_trunk_of_its_colour_follows_its_outline():
     by_outline = around_root(image, root, part, part, added(nothing, outline), outline)
     assert abs(np.degrees(by_colour[2]) - 60.0) > 10.0
     assert np.degrees(by_outline[2]) == pytest.approx(60.0)
-    on_arm, on_trunk = outline(np.array([[60.0, 20.0, np.radians(60), 50.0, 8.0],
-                                         [45.0, 20.0, np.radians(90), 50.0, 8.0]]))
+    on_arm, on_trunk = outline(
+        np.array([[60.0, 20.0, np.radians(60), 50.0, 8.0], [45.0, 20.0, np.radians(90), 50.0, 8.0]])
+    )
     assert on_arm < 0.2 * OUTLINE_COST
     assert on_trunk == pytest.approx(OUTLINE_COST)
 
@@ -253,8 +273,8 @@ def test_a_far_arm_is_found_by_its_forearm_where_its_sleeve_matches_the_trunk():
     by_sleeve = around_root(image, root, upper, lower, nothing, nothing)
     weighed = around_root(image, root, upper, lower, nothing, nothing, FAR_UPPER_WEIGHT)
     found = around_root(image, root, upper, lower, nothing, nothing, FAR_UPPER_WEIGHT, FAR_UPPER_SCALES)
-    assert np.linalg.norm(blocks.block_end(by_sleeve) - wrist) > 40.0          # the sleeve on the trunk
-    assert np.linalg.norm(weighed[:2] - elbow) > 3.0                      # at the usual length only
+    assert np.linalg.norm(blocks.block_end(by_sleeve) - wrist) > 40.0  # the sleeve on the trunk
+    assert np.linalg.norm(weighed[:2] - elbow) > 3.0  # at the usual length only
     assert np.linalg.norm(found[:2] - elbow) < 1.0
     assert np.linalg.norm(blocks.block_end(found) - wrist) < 1.0
 
@@ -264,8 +284,8 @@ def sleeve_scene(arm_x: int, sleeve: tuple) -> np.ndarray:
     part, skin at its end."""
     image = np.full((120, 200, 3), (110, 110, 110), np.uint8)
     image[10:110, 20:55] = (40, 40, 160)
-    image[20:65, arm_x - 5:arm_x + 5] = sleeve
-    image[65:80, arm_x - 4:arm_x + 4] = (150, 180, 220)
+    image[20:65, arm_x - 5 : arm_x + 5] = sleeve
+    image[65:80, arm_x - 4 : arm_x + 4] = (150, 180, 220)
     return image
 
 
@@ -294,9 +314,9 @@ def test_a_forearm_s_own_colour_leaves_out_the_sleeve_at_its_elbow():
     """A forearm marked with its elbow end in a sleeve of the shirt's colour: between
     the joints only its skin is its own colour; past the joints all of it counts."""
     image = np.full((120, 200, 3), (110, 110, 110), np.uint8)
-    image[10:110, 20:55] = (40, 40, 160)                       # the shirt
-    image[20:35, 55:65] = (40, 40, 160)                        # the sleeve over the elbow
-    image[35:80, 56:64] = (150, 180, 220)                      # the skin
+    image[10:110, 20:55] = (40, 40, 160)  # the shirt
+    image[20:35, 55:65] = (40, 40, 160)  # the sleeve over the elbow
+    image[35:80, 56:64] = (150, 180, 220)  # the skin
     block = np.array([60.0, 20.0, np.pi / 2, 60.0, 10.0])
     grid = blocks.make_grid(60, 10, 0.3)
     model = blocks.sample_blocks(image, block, grid)[0]
@@ -311,11 +331,15 @@ def test_a_forearm_s_own_colour_leaves_out_the_sleeve_at_its_elbow():
 
 
 LIMB_POSES = {  # limb -> (directions of its upper and lower bone: allowed poses, poses out of range)
-    "arm": ([((0, -1, 0), (0, -1, 0)), ((0, -1, 0), (0, 0, 1))],           # hanging, bent forward
-            [((-1, 0, 0), (-1, 0, 0))]),                                  # through the trunk
-    "leg": ([((0, -1, 0), (0, -1, 0)), ((0, -0.9, 0.44), (0, -0.7, -0.7))],  # standing, mid-stride
-            [((-0.7, -0.7, 0), (0, -1, 0)), ((0, -1, 0), (0.8, 0.6, 0))]),  # across the other leg,
-}                                                                         # a shin out sideways
+    "arm": (
+        [((0, -1, 0), (0, -1, 0)), ((0, -1, 0), (0, 0, 1))],  # hanging, bent forward
+        [((-1, 0, 0), (-1, 0, 0))],
+    ),  # through the trunk
+    "leg": (
+        [((0, -1, 0), (0, -1, 0)), ((0, -0.9, 0.44), (0, -0.7, -0.7))],  # standing, mid-stride
+        [((-0.7, -0.7, 0), (0, -1, 0)), ((0, -1, 0), (0.8, 0.6, 0))],
+    ),  # across the other leg,
+}  # a shin out sideways
 
 
 @pytest.mark.parametrize("kind", LIMB_POSES)
@@ -333,8 +357,10 @@ def test_a_limb_out_of_its_range_costs_more_than_one_in_it(kind):
     if kind == "arm":
         root, lengths, cost = model[JOINT_INDEX["shoulder_l"]], ARM_M, arm_limits_cost(camera, key, 0)
     else:
-        root, lengths = model[JOINT_INDEX["hip_l"]], marked_lengths(camera.project(pose.to_camera(model)),
-                                                                    camera, 6.0, "leg")
+        root, lengths = (
+            model[JOINT_INDEX["hip_l"]],
+            marked_lengths(camera.project(pose.to_camera(model)), camera, 6.0, "leg"),
+        )
         cost = leg_limits_cost(camera, key, camera.project(pose.to_camera(root)), 0, lengths)
 
     def limb_cost(upper_dir, lower_dir) -> float:
@@ -342,6 +368,7 @@ def test_a_limb_out_of_its_range_costs_more_than_one_in_it(kind):
         end = middle + lengths[1] * unit(np.asarray(lower_dir, float))
         pixels = camera.project(pose.to_camera(np.array([middle, end])))
         return float(cost(blocks.between(pixels[:1], pixels[1:], 5.0))[0])
+
     allowed, out_of_range = LIMB_POSES[kind]
     assert max(limb_cost(*p) for p in allowed) < 0.15 * LIMITS_COST
     assert min(limb_cost(*p) for p in out_of_range) > 0.8 * LIMITS_COST
@@ -355,7 +382,7 @@ def test_a_knee_slid_up_a_thigh_of_its_colour_settles_back():
     hip, knee, ankle = np.array([60.0, 20.0]), np.array([60.0, 70.0]), np.array([95.0, 110.0])
     cv2.line(image, (60, 20), (60, 70), (150,) * 3, 12)
     cv2.line(image, (60, 70), (95, 110), (150,) * 3, 12)
-    image[66:75, 55:66] = 150                                                   # the bend
+    image[66:75, 55:66] = 150  # the bend
     image = cv2.GaussianBlur(image, (5, 5), 1.0)
     parts = []
     for a, b in ((hip, knee), (knee, ankle)):
@@ -366,18 +393,19 @@ def test_a_knee_slid_up_a_thigh_of_its_colour_settles_back():
     for start in (knee + [0.0, -5.0], knee):
         shin = blocks.between(start[None], ankle[None], 12.0)[0]
         settled, s = settled_knee(image, hip, shin, (*parts[0], 12.0), parts[1], nothing, nothing)
-        assert np.hypot(*(settled[:2] - knee)) < KNEE_STEP * shin[3]              # within a step
+        assert np.hypot(*(settled[:2] - knee)) < KNEE_STEP * shin[3]  # within a step
         assert blocks.block_end(settled) == pytest.approx(ankle)
         assert s > 0
 
 
 # -- the head's image difference ------------------------------------------------------------
 
+
 def test_two_peaks_give_the_displacement_and_its_direction():
     t = np.arange(-40.0, 41.0)
     profile = np.zeros_like(t)
-    profile[(t >= -10) & (t < -4)] = 90.0                  # H uncovered: 6 px wide
-    profile[(t >= 10) & (t < 16)] = 90.0                   # H' covers: 6 px farther out
+    profile[(t >= -10) & (t < -4)] = 90.0  # H uncovered: 6 px wide
+    profile[(t >= 10) & (t < 16)] = 90.0  # H' covers: 6 px farther out
     assert two_peak_displacement(t, profile, 0.5) == pytest.approx(6.0)
     assert two_peak_displacement(-t[::-1], profile[::-1], 0.5) == pytest.approx(-6.0)
     assert adapt_threshold(0.5, 8.0, 6.0) > 0.5 > adapt_threshold(0.5, 4.0, 6.0)
@@ -387,20 +415,20 @@ def test_head_motion_by_image_difference_on_a_still_background():
     rng = np.random.default_rng(2)
     room = cv2.GaussianBlur(rng.integers(60, 200, (160, 160, 3)).astype(np.uint8), (0, 0), 3)
     frames = []
-    for centre in ((70, 80), (75, 77)):                    # the head moves (5, -3)
+    for centre in ((70, 80), (75, 77)):  # the head moves (5, -3)
         img = room.copy()
         cv2.circle(img, centre, 10, (140, 170, 220), -1)
         frames.append(img)
-    moved = head_displacement(frames[0], frames[1], np.array([70.0, 70.0]),
-                              np.array([70.0, 90.0]), 0.5)
+    moved = head_displacement(frames[0], frames[1], np.array([70.0, 70.0]), np.array([70.0, 90.0]), 0.5)
     assert np.hypot(*(moved.vector - [5.0, -3.0])) < 1.5
 
 
 # -- reliability and filling ------------------------------------------------------------------
 
+
 def test_unreliable_stretches_are_interpolated_between_reliable_frames():
     joints = np.zeros((6, 16, 2))
-    joints[:, :, 0] = np.array([0.0, 1.0, 50.0, 60.0, 4.0, 70.0])[:, None]   # 2, 3 lost; 5 the end
+    joints[:, :, 0] = np.array([0.0, 1.0, 50.0, 60.0, 4.0, 70.0])[:, None]  # 2, 3 lost; 5 the end
     reliability = np.ones((6, 16))
     reliability[[2, 3, 5]] = LOW_RELIABILITY / 2
     filled = fill_unreliable(joints, reliability)
@@ -415,11 +443,13 @@ def test_a_correction_carries_to_the_frames_around_it():
     ankle = JOINT_INDEX["ankle_l"]
     tracked[8:23, ankle, 0] = 10.0
     once = spread_corrections(tracked, {15: {"ankle_l": (0.0, 0.0)}}, 25.0)
-    assert np.allclose(once[:, ankle, 0], np.r_[np.zeros(8), 10, 10, 10, 8, 6, 4, 2, 0, 2, 4, 6,
-                                                  8, 10, 10, 10, np.zeros(7)])
+    assert np.allclose(
+        once[:, ankle, 0], np.r_[np.zeros(8), 10, 10, 10, 8, 6, 4, 2, 0, 2, 4, 6, 8, 10, 10, 10, np.zeros(7)]
+    )
     assert np.array_equal(np.delete(once, ankle, axis=1), np.delete(tracked, ankle, axis=1))
-    twice = spread_corrections(tracked, {15: {"ankle_l": (0.0, 0.0)}, 22: {"ankle_l": (4.0, 0.0)},
-                                         3: {"knee_l": (1.0, 2.0)}}, 25.0)
+    twice = spread_corrections(
+        tracked, {15: {"ankle_l": (0.0, 0.0)}, 22: {"ankle_l": (4.0, 0.0)}, 3: {"knee_l": (1.0, 2.0)}}, 25.0
+    )
     assert np.allclose(twice[15:23, ankle, 0], np.linspace(0.0, 4.0, 8))
     assert np.allclose(twice[23:28, ankle, 0], [-4.8, -3.6, -2.4, -1.2, 0])
     assert np.allclose(twice[3, JOINT_INDEX["knee_l"]], [1.0, 2.0])
@@ -439,14 +469,15 @@ def test_a_corrected_arm_moves_with_its_shoulder():
     tracked[:, :, 1] = 4.0 * np.sin(np.arange(30))[:, None]
     tracked[:, [j["elbow_l"], j["wrist_l"]]] = (300.0, 50.0)
     hanging = {"elbow_l": (0.0, 30.0), "wrist_l": (5.0, 55.0)}
-    pins = {f: {name: tuple(tracked[f, j["shoulder_l"]] + (dx, dy)) for name, (dx, dy) in hanging.items()}
-            for f in (12, 17)}
+    pins = {
+        f: {name: tuple(tracked[f, j["shoulder_l"]] + (dx, dy)) for name, (dx, dy) in hanging.items()} for f in (12, 17)
+    }
     spread = spread_corrections(tracked, pins, 25.0)
     for name, (dx, dy) in hanging.items():
         assert np.allclose(spread[12:18, j[name]], tracked[12:18, j["shoulder_l"]] + (dx, dy))
         assert np.allclose(spread[23:, j[name]], tracked[23:, j[name]])
     assert np.array_equal(spread[:, j["shoulder_l"]], tracked[:, j["shoulder_l"]])
-    where_tracked = {0: {"wrist_l": tuple(tracked[0, j["wrist_l"]])}}    # the marks
+    where_tracked = {0: {"wrist_l": tuple(tracked[0, j["wrist_l"]])}}  # the marks
     assert np.array_equal(spread_corrections(tracked, where_tracked, 25.0), tracked)
 
 
@@ -454,18 +485,18 @@ def test_the_frames_a_pin_moves_are_the_ones_it_is_said_to_move():
     """carried_pins names a pin on exactly the frames spread_corrections moves (and not
     on the pinned frame itself), also where two pins' stretches meet."""
     tracked = np.zeros((40, 16, 2))
-    for gap in (9, 10, 11):                              # 2 x 5 frames of fade at 25 fps
+    for gap in (9, 10, 11):  # 2 x 5 frames of fade at 25 fps
         pins = {10: {"knee_r": (3.0, 0.0)}, 10 + gap: {"knee_r": (0.0, 4.0)}}
         moved = spread_corrections(tracked, pins, 25.0)[:, JOINT_INDEX["knee_r"]].any(axis=1)
         said = [bool(carried_pins(pins, f, 25.0)) or f in pins for f in range(40)]
         assert moved.tolist() == said, gap
-    assert carried_pins({0: {"neck": (1.0, 1.0)}}, 1, 25.0) == {}     # the marks
+    assert carried_pins({0: {"neck": (1.0, 1.0)}}, 1, 25.0) == {}  # the marks
 
 
 def test_joint_reliability_follows_the_parts_that_placed_it():
     s = np.ones((5, 10)) * 0.2
-    s[0] = np.inf                                          # the marked frame
-    s[2, 3] = 0.05                                         # lower_arm_l matched 4x worse
+    s[0] = np.inf  # the marked frame
+    s[2, 3] = 0.05  # lower_arm_l matched 4x worse
     r = joint_reliability(s)
     assert np.all(r[0] == 1.0)
     assert r[2, JOINT_INDEX["wrist_l"]] == pytest.approx(0.25)
@@ -475,11 +506,11 @@ def test_joint_reliability_follows_the_parts_that_placed_it():
 
 # -- whole clips ---------------------------------------------------------------------------
 
+
 def test_tracking_a_rendered_walk_on_a_moving_background(walk):
     video, truth = walk
     done = []
-    result = track_clip(video, truth.joints2d[0], lambda d, t: done.append((d, t)),
-                         orientation="forward_right")
+    result = track_clip(video, truth.joints2d[0], lambda d, t: done.append((d, t)), orientation="forward_right")
     n = len(truth.joints2d)
     assert result.joints2d.shape == (n, 16, 2) and result.reliability.shape == (n, 16)
     assert result.joints3d.shape == (n, 16, 3) and np.isfinite(result.joints3d).all()
@@ -498,8 +529,17 @@ def test_a_slim_or_broad_body_is_tracked(shape, tmp_path):
     one 1.6% and 6.0%, its pelvis sliding up to 10% up the trunk over the last
     frames)."""
     video = tmp_path / f"{shape}.mp4"
-    truth = synth.render_clip(walk_cycle(1.6, 15.0), video, size=(320, 240), fps=15.0, yaw=45.0,
-                              perspective=400.0, moving_background=True, seed=3, shape=shape)
+    truth = synth.render_clip(
+        walk_cycle(1.6, 15.0),
+        video,
+        size=(320, 240),
+        fps=15.0,
+        yaw=45.0,
+        perspective=400.0,
+        moving_background=True,
+        seed=3,
+        shape=shape,
+    )
     result = track_clip(video, truth.joints2d[0], orientation="forward_right")
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     trunk = [JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis")]
@@ -512,8 +552,16 @@ def test_the_head_is_kept_where_the_image_difference_points_it_wrong(tmp_path):
     difference sends the head's start onto the shirt, where it matches as badly as
     at the last place; searched from both, the head stays on the head (lost before:
     1.8 body heights off by the end, the whole body with it)."""
-    truth = synth.render_clip(walk_cycle(2.0, 15.0), tmp_path / "side.mp4", size=(320, 240),
-                              fps=15.0, yaw=0.0, perspective=400.0, moving_background=True, seed=3)
+    truth = synth.render_clip(
+        walk_cycle(2.0, 15.0),
+        tmp_path / "side.mp4",
+        size=(320, 240),
+        fps=15.0,
+        yaw=0.0,
+        perspective=400.0,
+        moving_background=True,
+        seed=3,
+    )
     result = track_clip(tmp_path / "side.mp4", truth.joints2d[0])
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     head = [JOINT_INDEX[j] for j in ("head_top", "neck")]

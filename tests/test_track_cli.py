@@ -21,22 +21,37 @@ from mocap.session import TrackSession
 from mocap.synth.walk import walk_cycle
 from mocap.track.tracking import guessed_turn, track_clip
 
-IN_PLANE = 0.1      # |dZ| / length: a segment this flat shows no sign
+IN_PLANE = 0.1  # |dZ| / length: a segment this flat shows no sign
 
 
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory):
     folder = tmp_path_factory.mktemp("track")
     video = folder / "walk.avi"
-    truth = synth.render_clip(walk_cycle(1.6, 15.0), video, size=(320, 240), fps=15.0, yaw=45.0,
-                              perspective=400.0, moving_background=True, seed=3)
+    truth = synth.render_clip(
+        walk_cycle(1.6, 15.0),
+        video,
+        size=(320, 240),
+        fps=15.0,
+        yaw=45.0,
+        perspective=400.0,
+        moving_background=True,
+        seed=3,
+    )
     return video, truth
 
 
 def write_marks(path, truth, drop: str | None = None):
     marks = {j: truth.joints2d[0, i].tolist() for i, j in enumerate(JOINTS) if j != drop}
-    path.write_text(json.dumps({"format": "mocap-annotations", "version": 1,
-                                "frames": {"0": {"orientation": "forward_right", "joints2d": marks}}}))
+    path.write_text(
+        json.dumps(
+            {
+                "format": "mocap-annotations",
+                "version": 1,
+                "frames": {"0": {"orientation": "forward_right", "joints2d": marks}},
+            }
+        )
+    )
     return path
 
 
@@ -44,8 +59,24 @@ def test_tracking_writes_motion_and_bvh(clip, tmp_path):
     video, truth = clip
     notes = write_marks(tmp_path / "marks.json", truth)
     out, bvh = tmp_path / "walk.motion.json", tmp_path / "walk.bvh"
-    assert main(["fit", "--method", "track", str(video), "--annotations", str(notes),
-                 "--out", str(out), "--bvh", str(bvh), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                "--method",
+                "track",
+                str(video),
+                "--annotations",
+                str(notes),
+                "--out",
+                str(out),
+                "--bvh",
+                str(bvh),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     frames = read_motion(out)["frames"]
     assert len(frames) == len(truth.joints2d)
     joints2d = np.array([f["joints2d"] for f in frames])
@@ -83,7 +114,7 @@ def test_the_annotations_method_chooses_tracking(clip, tmp_path):
     out = tmp_path / "walk.motion.json"
     assert main(["fit", str(video), "--annotations", str(notes), "--out", str(out), "--quiet"]) == 0
     joints2d = np.array([f["joints2d"] for f in read_motion(out)["frames"]])
-    assert np.allclose(joints2d[0], truth.joints2d[0])      # the marks, not a silhouette fit
+    assert np.allclose(joints2d[0], truth.joints2d[0])  # the marks, not a silhouette fit
 
 
 def test_a_held_foreshortening_fixes_the_limb_depths(session):
@@ -96,8 +127,7 @@ def test_a_held_foreshortening_fixes_the_limb_depths(session):
     depth = lift.depth_fractions(pose_before)[:, k]
     frame = int(np.argmax(depth))
     wanted = -int(before.signs[frame, k])
-    tracked.annotate(tracked.annotations.with_foreshortening(
-        frame, "lower_leg_r", "toward" if wanted > 0 else "away"))
+    tracked.annotate(tracked.annotations.with_foreshortening(frame, "lower_leg_r", "toward" if wanted > 0 else "away"))
     after = tracked.inputs
     assert after.signs[frame, k] == wanted
     assert np.array_equal(after.joints2d, before.joints2d)
@@ -126,8 +156,8 @@ def test_a_joint_override_moves_the_tracked_joint(session):
     tracked.annotate(notes.with_joint(frame, "knee_l", moved))
     assert np.allclose(tracked.inputs.joints2d[frame, joint], moved)
     shift = tracked.inputs.joints2d[:, joint] - tracked.tracked.joints2d[:, joint]
-    assert np.allclose(shift[frame - 3:frame + 4], np.outer([0, 1, 2, 3, 2, 1, 0], offset) / 3)
-    assert not shift[:frame - 3].any() and not shift[frame + 4:].any()
+    assert np.allclose(shift[frame - 3 : frame + 4], np.outer([0, 1, 2, 3, 2, 1, 0], offset) / 3)
+    assert not shift[: frame - 3].any() and not shift[frame + 4 :].any()
     assert not np.allclose(tracked.pose3d(frame)[joint], tracked.tracked.joints3d[frame, joint])
     tracked.annotate(notes)
     assert np.allclose(tracked.inputs.joints2d, tracked.tracked.joints2d)
@@ -167,8 +197,9 @@ def test_the_root_keeps_the_perspective_depth(clip, session, tmp_path):
     video, truth = clip
     tracked, _ = session
     info = open_video(video)
-    exact = TrackSession(info, track_clip(info, truth.joints2d[0], focal_px=400.0,
-                                           orientation="forward_right"), tracked.annotations)
+    exact = TrackSession(
+        info, track_clip(info, truth.joints2d[0], focal_px=400.0, orientation="forward_right"), tracked.annotations
+    )
     for s, depth_scale in ((exact, 1.0), (tracked, 320.0 / 400.0)):
         root = s.root()
         assert np.abs(root[:, :2] - truth.pelvis_camera[:, :2]).max() < 0.06

@@ -23,8 +23,8 @@ from mocap.track.loss import DISTINCT, bridged, ramp, stretches
 from mocap.track.reacquire import distinctness
 from mocap.track.tracking import track_clip
 
-GONE = slice(10, 24)          # frames the performer is out of the picture
-HIDDEN = slice(10, 18)        # frames a board hides the performer whole
+GONE = slice(10, 24)  # frames the performer is out of the picture
+HIDDEN = slice(10, 18)  # frames a board hides the performer whole
 RENDER = dict(seed=3, yaw=45.0, perspective=400.0, moving_background=True)
 
 
@@ -37,16 +37,16 @@ def exit_clip(tmp_path_factory):
 
 
 def write_notes(path, truth, frames=(0,)):
-    entries = {str(f): {"joints2d": {j: truth.joints2d[f, i].tolist() for i, j in enumerate(JOINTS)}}
-               for f in frames}
+    entries = {str(f): {"joints2d": {j: truth.joints2d[f, i].tolist() for i, j in enumerate(JOINTS)}} for f in frames}
     entries["0"]["orientation"] = "forward_right"
     path.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "frames": entries}))
     return path
 
 
 def fit(video, notes, out):
-    assert main(["fit", "--method", "track", str(video), "--annotations", str(notes),
-                 "--out", str(out), "--quiet"]) == 0
+    assert (
+        main(["fit", "--method", "track", str(video), "--annotations", str(notes), "--out", str(out), "--quiet"]) == 0
+    )
     return read_motion(out)["frames"]
 
 
@@ -63,15 +63,15 @@ def test_a_body_that_leaves_is_reported_lost_not_answered(exit_clip, tmp_path):
     video, truth = exit_clip
     frames = fit(video, write_notes(tmp_path / "marks.json", truth), tmp_path / "exit.json")
     lost = np.array([bool(f.get("lost")) for f in frames])
-    assert lost[GONE].mean() >= 0.8                  # the tracker knows it has no body
-    assert not lost[:GONE.start].any()               # ... and had it before
+    assert lost[GONE].mean() >= 0.8  # the tracker knows it has no body
+    assert not lost[: GONE.start].any()  # ... and had it before
     for f in frames:
         assert ("joints2d" in f) == (not f.get("lost")) and ("joints3d" in f) == (not f.get("lost"))
         if "joints2d" in f:
             assert len(f["confidence"]) == 16 and all(0.0 <= c <= 1.0 for c in f["confidence"])
     err = errors(frames, truth)
-    assert np.nanmax(err[:GONE.start]) < 5.0
-    conf = np.array([f["confidence"] for f in frames[:GONE.start]])
+    assert np.nanmax(err[: GONE.start]) < 5.0
+    conf = np.array([f["confidence"] for f in frames[: GONE.start]])
     assert conf[1:3].mean() > 0.5
 
 
@@ -87,10 +87,10 @@ def test_the_body_is_found_again_without_a_remark(case, tmp_path):
         truth, gone = render_walk_with_exit(video, GONE, **RENDER), GONE
     frames = fit(video, write_notes(tmp_path / "marks.json", truth), tmp_path / "out.json")
     lost = np.array([bool(f.get("lost")) for f in frames])
-    assert lost[gone.start + 2:gone.stop - 1].all()
-    assert not lost[:gone.start].any() and not lost[gone.stop + 1:].any()
+    assert lost[gone.start + 2 : gone.stop - 1].all()
+    assert not lost[: gone.start].any() and not lost[gone.stop + 1 :].any()
     err = errors(frames, truth)
-    assert np.nanmax(err[gone.stop + 1:]) < 5.0 and np.nanmax(err[:gone.start]) < 5.0
+    assert np.nanmax(err[gone.stop + 1 :]) < 5.0 and np.nanmax(err[: gone.start]) < 5.0
 
 
 JUMPS = SHARED_DATA / "bvh" / "cmu_01_01_jumps.bvh"
@@ -106,8 +106,9 @@ def test_a_body_whose_match_falls_where_it_stands_out_is_held(tmp_path):
     joints held where they were); from 27 on the trunk stands out less and those
     frames are lost."""
     video = tmp_path / "jumps.mp4"
-    truth = render_motion(JUMPS, video, frames=(1, 161), fps=30.0, yaw=45.0, size=(320, 240),
-                          perspective=400.0, moving_background=True)
+    truth = render_motion(
+        JUMPS, video, frames=(1, 161), fps=30.0, yaw=45.0, size=(320, 240), perspective=400.0, moving_background=True
+    )
     result = track_clip(video, truth.joints2d[0], orientation="forward_right")
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     assert not result.lost[:20].any() and result.lost.mean() < 0.4
@@ -119,15 +120,16 @@ def test_a_block_stands_out_where_the_frame_shows_its_colours_once():
     on a noisy frame (sensor noise after the colour model was taken)."""
     rng = np.random.default_rng(0)
     frame = rng.integers(0, 256, (120, 160, 3)).astype(np.uint8)
-    frame[38:72, 48:62] = (30, 140, 220)                        # the part, wider than its block
+    frame[38:72, 48:62] = (30, 140, 220)  # the part, wider than its block
     block = np.array([55.0, 40.0, np.pi / 2, 30.0, 10.0])
     grid = blocks.make_grid(30.0, 10.0)
     model = blocks.sample_blocks(frame, block, grid)[0]
 
     def noisy(image):
         return np.clip(image + rng.normal(0.0, 4.0, image.shape), 0, 255).astype(np.uint8)
+
     assert distinctness(noisy(frame), model, grid, block) > 3 * DISTINCT
-    frame[38:72, 105:119] = (30, 140, 220)                      # its colours again, elsewhere
+    frame[38:72, 105:119] = (30, 140, 220)  # its colours again, elsewhere
     assert distinctness(noisy(frame), model, grid, block) == pytest.approx(1.0, abs=0.2)
 
 
@@ -139,8 +141,8 @@ def test_short_losses_are_bridged_long_ones_stay_lost():
     lost = np.zeros(12, bool)
     lost[3:5] = lost[7:] = True
     out, left = bridged(joints, lost, gap=2)
-    assert np.allclose(out[3:5, :, 0], [[30.0], [40.0]])          # between frames 2 and 5
-    assert left.tolist() == [False] * 7 + [True] * 5                # the end is not made up
+    assert np.allclose(out[3:5, :, 0], [[30.0], [40.0]])  # between frames 2 and 5
+    assert left.tolist() == [False] * 7 + [True] * 5  # the end is not made up
     assert stretches(left) == [(7, 12)]
 
 
@@ -155,18 +157,25 @@ def test_a_remark_after_the_loss_recovers_the_body(exit_clip, tmp_path):
     frames = fit(video, notes, tmp_path / "remarked.json.out")
     lost = np.array([bool(f.get("lost")) for f in frames])
     err = errors(frames, truth)
-    assert not lost[GONE.stop:].any()
-    assert np.nanmax(err[GONE.stop:]) < 5.0          # tracked forward and backward from the mark
-    assert lost[GONE].mean() >= 0.8                  # nobody to see there still
-    assert np.nanmax(err[:GONE.start]) < 5.0
+    assert not lost[GONE.stop :].any()
+    assert np.nanmax(err[GONE.stop :]) < 5.0  # tracked forward and backward from the mark
+    assert lost[GONE].mean() >= 0.8  # nobody to see there still
+    assert np.nanmax(err[: GONE.start]) < 5.0
 
 
 def test_the_review_lists_lost_stretches_first_and_a_remark_mends_them(exit_clip):
     video, truth = exit_clip
     info = open_video(video)
-    notes = parse_annotations({"format": "mocap-annotations", "version": 1, "frames": {
-        "0": {"orientation": "forward_right", "joints2d": dict(zip(JOINTS, truth.joints2d[0].tolist()))}}},
-        info.frame_count)
+    notes = parse_annotations(
+        {
+            "format": "mocap-annotations",
+            "version": 1,
+            "frames": {
+                "0": {"orientation": "forward_right", "joints2d": dict(zip(JOINTS, truth.joints2d[0].tolist()))}
+            },
+        },
+        info.frame_count,
+    )
     session = open_session(info, notes, method="track")
     stops = session.review_stops()
     first, stop = stretches(session.lost)[-1]
@@ -176,7 +185,7 @@ def test_the_review_lists_lost_stretches_first_and_a_remark_mends_them(exit_clip
     back = GONE.stop + 2
     entries["frames"][str(back)] = {"joints2d": dict(zip(JOINTS, truth.joints2d[back].tolist()))}
     session = open_session(info, parse_annotations(entries, info.frame_count), method="track")
-    assert not session.lost[GONE.stop:].any()
+    assert not session.lost[GONE.stop :].any()
     assert all(d.frame < GONE.stop for d in session.review_stops() if d.reasons[0].startswith("body lost"))
     err = np.linalg.norm(session.inputs.joints2d - truth.joints2d, axis=-1).mean(-1) / truth.body_height_px
-    assert err[GONE.stop:].max() < 0.05
+    assert err[GONE.stop :].max() < 0.05

@@ -16,8 +16,9 @@ from mocap.io.video import iter_frames, open_video, processing_scale, read_frame
 SIZE = (96, 64)  # width, height
 
 
-def write_clip(path, n: int = 20, fourcc: str = "MJPG", fps: float = 12.5,
-               size: tuple[int, int] = SIZE, texture: int = 12) -> str:
+def write_clip(
+    path, n: int = 20, fourcc: str = "MJPG", fps: float = 12.5, size: tuple[int, int] = SIZE, texture: int = 12
+) -> str:
     """A clip whose frame i has mean grey level 20 + 7 * i (frames identify
     themselves) plus a fixed noise texture of +-`texture` (which makes frames big)."""
     shape = (size[1], size[0], 3)
@@ -65,8 +66,7 @@ def test_bad_ranges_are_refused(tmp_path):
 
 
 def test_4k_clip_is_read_downscaled(tmp_path):
-    info = open_video(write_clip(tmp_path / "big.mp4", n=3, fourcc="mp4v", size=(3840, 2160),
-                                 texture=0))
+    info = open_video(write_clip(tmp_path / "big.mp4", n=3, fourcc="mp4v", size=(3840, 2160), texture=0))
     assert (info.width, info.height, info.frame_count) == (3840, 2160, 3)
     scale = processing_scale(info)
     assert scale == pytest.approx(1 / 3)
@@ -85,8 +85,8 @@ def test_truncated_avi_reads_the_frames_that_decode(tmp_path):
         info = open_video(cut)
     assert 5 <= info.frame_count < 30
     assert [str(w.message) for w in said] == [
-        f"{cut}: only {info.frame_count} of the 30 frames the file announces decode "
-        "(truncated or damaged); using those"]
+        f"{cut}: only {info.frame_count} of the 30 frames the file announces decode (truncated or damaged); using those"
+    ]
     frames = [f for _, f in iter_frames(info)]
     assert len(frames) == info.frame_count
     assert [level(f) for f in frames] == list(range(info.frame_count))
@@ -116,16 +116,19 @@ def _empty_file(tmp_path):
     return path
 
 
-@pytest.mark.parametrize("make, problem", [
-    (lambda p: p / "missing.mp4", "no such file"),
-    (lambda p: p, "is a directory"),
-    (_empty_file, "empty"),
-    (text_mp4, "not a video file"),
-    (png_avi, "still image"),
-    (_zero_frame_avi, "no frames"),
-    (_truncated_mp4, "truncated"),
-    (_unknown_codec_avi, "codec 'QZQZ'"),
-])
+@pytest.mark.parametrize(
+    "make, problem",
+    [
+        (lambda p: p / "missing.mp4", "no such file"),
+        (lambda p: p, "is a directory"),
+        (_empty_file, "empty"),
+        (text_mp4, "not a video file"),
+        (png_avi, "still image"),
+        (_zero_frame_avi, "no frames"),
+        (_truncated_mp4, "truncated"),
+        (_unknown_codec_avi, "codec 'QZQZ'"),
+    ],
+)
 def test_bad_inputs_are_refused_with_one_line(tmp_path, make, problem):
     path = str(make(tmp_path))
     with pytest.raises(MocapError) as caught:

@@ -29,11 +29,11 @@ from mocap.cli.options import add_smooth, smooth_of
 from mocap.errors import MocapError
 from mocap.io.export.formats import require
 
-VIDEO_SUFFIXES = {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv",
-                  ".ogv"}
+VIDEO_SUFFIXES = {".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".ogv"}
 # every BLAS/OpenMP pool in a worker to one thread, set before numpy loads
-SINGLE_THREADED = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                                          "MKL_NUM_THREADS", "OPENCV_FOR_THREADS_NUM")}
+SINGLE_THREADED = {
+    name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OPENCV_FOR_THREADS_NUM")
+}
 
 
 def find_videos(inputs: list[str]) -> list[Path]:
@@ -60,7 +60,7 @@ def find_videos(inputs: list[str]) -> list[Path]:
 def library_names(videos: list[Path]) -> list[str]:
     """A folder name per video: its name without suffix, with as many of its parent
     folders' names as make it unique (``clips/punch/video.mp4`` -> ``punch-video``)."""
-    for last in ("stem", "name"):        # x.mp4 beside x.avi: the suffix tells them apart
+    for last in ("stem", "name"):  # x.mp4 beside x.avi: the suffix tells them apart
         parts = [[*v.parent.parts[1:], getattr(v, last)] for v in videos]
         for depth in range(1, max(len(p) for p in parts) + 1):
             names = [re.sub(r"[^\w.-]+", "_", "-".join(p[-depth:])) for p in parts]
@@ -90,14 +90,19 @@ def annotations_for(source: Path | None, name: str) -> Path | None:
     return None
 
 
-def plan(videos: list[Path], out: Path, exports: list[str], smooth: float,
-         annotations_from: Path | None) -> list[Job]:
+def plan(videos: list[Path], out: Path, exports: list[str], smooth: float, annotations_from: Path | None) -> list[Job]:
     """A job per video, into ``out/<name>``."""
     jobs = []
     for video, name in zip(videos, library_names(videos)):
         notes = annotations_for(annotations_from, name)
-        jobs.append(Job(str(video), str((out / name).resolve()), settings_of(exports, smooth, notes),
-                        None if notes is None else str(notes)))
+        jobs.append(
+            Job(
+                str(video),
+                str((out / name).resolve()),
+                settings_of(exports, smooth, notes),
+                None if notes is None else str(notes),
+            )
+        )
     return jobs
 
 
@@ -109,7 +114,7 @@ def parse_exports(text: str) -> list[str]:
         raise MocapError(f"--exports: unknown format {unknown[0]!r} (choose from {', '.join(EXPORTS)})")
     missing = [n for n in names if n not in DEFAULT_EXPORTS]
     if missing:
-        require(missing[0])                     # says what that format needs
+        require(missing[0])  # says what that format needs
     return names
 
 
@@ -130,10 +135,15 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator:
         with client:
             yield client
         return
-    with warnings.catch_warnings():     # 8787 taken: the dashboard moves, and we print where
+    with warnings.catch_warnings():  # 8787 taken: the dashboard moves, and we print where
         warnings.filterwarnings("ignore", "Port .* is already in use")
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                               processes=True, env=SINGLE_THREADED, silence_logs=logging.ERROR)
+        cluster = LocalCluster(
+            n_workers=workers or os.cpu_count() or 1,
+            threads_per_worker=1,
+            processes=True,
+            env=SINGLE_THREADED,
+            silence_logs=logging.ERROR,
+        )
     with cluster, Client(cluster) as client:
         yield client
 
@@ -154,20 +164,19 @@ class Tally:
     skipped: int = 0
     done: int = 0
     frames: int = 0
-    cpu: float = 0.0              # the workers' CPU seconds on the videos done
+    cpu: float = 0.0  # the workers' CPU seconds on the videos done
     failed: list[Outcome] = field(default_factory=list)
     start: float = field(default_factory=time.perf_counter)
-    end: float | None = None      # when the last video came back
+    end: float | None = None  # when the last video came back
     bar: tqdm | None = None
-    running: dict[str, int] = field(default_factory=dict)    # frames done of running videos
-    ended: set[str] = field(default_factory=set)             # late reports of these are old
+    running: dict[str, int] = field(default_factory=dict)  # frames done of running videos
+    ended: set[str] = field(default_factory=set)  # late reports of these are old
 
     def begin(self) -> None:
         """Start the clock (and the bar, on a terminal) as the tasks go out."""
         self.start = time.perf_counter()
         if sys.stderr.isatty():
-            self.bar = tqdm(total=self.total, initial=self.skipped, unit="video", file=sys.stderr,
-                            dynamic_ncols=True)
+            self.bar = tqdm(total=self.total, initial=self.skipped, unit="video", file=sys.stderr, dynamic_ncols=True)
 
     def running_frames(self, event: tuple) -> None:
         """A worker's report of a running video's frames (Dask's event thread)."""
@@ -193,8 +202,7 @@ class Tally:
             text = f"done {outcome.name}: {outcome.frames} frames in {outcome.seconds:.1f} s"
         counts = self.counts()
         if self.bar is None:
-            print(f"{text} [{self.done + self.skipped}/{self.total} videos, {counts}]", file=sys.stderr,
-                  flush=True)
+            print(f"{text} [{self.done + self.skipped}/{self.total} videos, {counts}]", file=sys.stderr, flush=True)
             return
         self.bar.write(text, file=sys.stderr)
         self.bar.set_postfix_str(counts, refresh=False)
@@ -215,9 +223,9 @@ class Tally:
 def run_batch(jobs: list[Job], client, tally: Tally) -> None:
     """Run the jobs on the cluster, counting each outcome as it comes."""
     from dask.distributed import as_completed
+
     client.subscribe_topic(FRAMES_TOPIC, tally.running_frames)
-    futures = client.map(run_job, jobs, pure=False, key=[f"mocap-{j.name}-{i}" for i, j in
-                                                          enumerate(jobs)])
+    futures = client.map(run_job, jobs, pure=False, key=[f"mocap-{j.name}-{i}" for i, j in enumerate(jobs)])
     names = {f.key: j.name for f, j in zip(futures, jobs)}
     for future in as_completed(futures):
         try:
@@ -227,13 +235,22 @@ def run_batch(jobs: list[Job], client, tally: Tally) -> None:
         future.release()
 
 
-def batch(inputs: list[str], out: str, *, scheduler: str | None = None, workers: int | None = None,
-          exports: str = ",".join(DEFAULT_EXPORTS), annotations_from: str | None = None,
-          smooth: float = 0.0) -> Tally:
+def batch(
+    inputs: list[str],
+    out: str,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    exports: str = ",".join(DEFAULT_EXPORTS),
+    annotations_from: str | None = None,
+    smooth: float = 0.0,
+) -> Tally:
     """`mocap batch`: every video not already finished, then the library's index."""
     if workers is not None and (workers < 1 or scheduler):
-        raise MocapError("--workers must be 1 or more, and only sizes the local cluster "
-                         "(an existing one has the workers it was started with)")
+        raise MocapError(
+            "--workers must be 1 or more, and only sizes the local cluster "
+            "(an existing one has the workers it was started with)"
+        )
     source = Path(annotations_from) if annotations_from else None
     if source is not None and not source.is_dir():
         raise MocapError(f"--annotations-from {annotations_from}: no such folder")
@@ -242,8 +259,9 @@ def batch(inputs: list[str], out: str, *, scheduler: str | None = None, workers:
     jobs = plan(find_videos(inputs), folder, parse_exports(exports), smooth, source)
     todo = [j for j in jobs if not is_finished(Path(j.folder), j.video, j.settings)]
     tally = Tally(len(jobs), skipped=len(jobs) - len(todo))
-    print(f"mocap batch: {len(jobs)} videos, {tally.skipped} already done, {len(todo)} to do",
-          file=sys.stderr, flush=True)
+    print(
+        f"mocap batch: {len(jobs)} videos, {tally.skipped} already done, {len(todo)} to do", file=sys.stderr, flush=True
+    )
     try:
         if todo:
             with dask_client(scheduler, workers) as client:
@@ -255,35 +273,56 @@ def batch(inputs: list[str], out: str, *, scheduler: str | None = None, workers:
                     tally.finish()
     finally:
         page, _ = write_index(folder)
-    print(f"{tally.done - len(tally.failed)} fitted, {tally.skipped} skipped, {len(tally.failed)} "
-          f"failed; {tally.frames} frames at {tally.fps:.1f} frames/s; library: {page}")
+    print(
+        f"{tally.done - len(tally.failed)} fitted, {tally.skipped} skipped, {len(tally.failed)} "
+        f"failed; {tally.frames} frames at {tally.fps:.1f} frames/s; library: {page}"
+    )
     return tally
 
 
 def add_batch_arguments(parser) -> None:
     """Arguments of `mocap batch`; sets ``run``."""
-    parser.add_argument("inputs", nargs="+", metavar="INPUT",
-                        help="videos, folders of videos (searched below) or glob patterns")
-    parser.add_argument("--out", required=True, metavar="DIR",
-                        help="the library: DIR/<name>/ per video, DIR/index.html and index.csv")
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="an existing Dask cluster, e.g. tcp://host:8786 (default: a local "
-                             "cluster, one process per core)")
-    parser.add_argument("--workers", type=int, metavar="N",
-                        help="processes of the local cluster (default: one per core)")
-    parser.add_argument("--exports", default=",".join(DEFAULT_EXPORTS), metavar="LIST",
-                        help=f"comma-separated, of {', '.join(EXPORTS)} (default: all that this "
-                             "installation writes); the motion "
-                             "file, playback page and contact sheet are always written")
-    parser.add_argument("--annotations-from", metavar="DIR",
-                        help="annotations per video: DIR/<name>/annotations.json (a library "
-                             "reviewed with `mocap serve DIR/<name>`) or DIR/<name>.annotations.json")
+    parser.add_argument(
+        "inputs", nargs="+", metavar="INPUT", help="videos, folders of videos (searched below) or glob patterns"
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="DIR", help="the library: DIR/<name>/ per video, DIR/index.html and index.csv"
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="an existing Dask cluster, e.g. tcp://host:8786 (default: a local cluster, one process per core)",
+    )
+    parser.add_argument(
+        "--workers", type=int, metavar="N", help="processes of the local cluster (default: one per core)"
+    )
+    parser.add_argument(
+        "--exports",
+        default=",".join(DEFAULT_EXPORTS),
+        metavar="LIST",
+        help=f"comma-separated, of {', '.join(EXPORTS)} (default: all that this "
+        "installation writes); the motion "
+        "file, playback page and contact sheet are always written",
+    )
+    parser.add_argument(
+        "--annotations-from",
+        metavar="DIR",
+        help="annotations per video: DIR/<name>/annotations.json (a library "
+        "reviewed with `mocap serve DIR/<name>`) or DIR/<name>.annotations.json",
+    )
     add_smooth(parser, "as `mocap fit`")
     parser.set_defaults(run=run_batch_command)
 
 
 def run_batch_command(args) -> int:
     """Exit code 1 when some video failed (each was reported with its error)."""
-    tally = batch(args.inputs, args.out, scheduler=args.scheduler, workers=args.workers,
-                  exports=args.exports, annotations_from=args.annotations_from, smooth=smooth_of(args))
+    tally = batch(
+        args.inputs,
+        args.out,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        exports=args.exports,
+        annotations_from=args.annotations_from,
+        smooth=smooth_of(args),
+    )
     return 1 if tally.failed else 0

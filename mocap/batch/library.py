@@ -21,19 +21,44 @@ from mocap.io.fileio import atomic_write_bytes, atomic_write_json
 RECORD, FAILED, ANNOTATIONS = "batch.json", "failed.json", "annotations.json"
 FORMAT, VERSION = "mocap-batch", 1
 # the columns of index.csv; the files' columns hold paths relative to DIR
-COLUMNS = ("name", "video", "status", "method", "frames", "fitted", "fps", "mean_score",
-           "doubtful", "seconds", "error", "playback", "motion", "sheet", "bvh", "glb", "csv",
-           "masks")
-FILE_COLUMNS = COLUMNS[COLUMNS.index("playback"):]
+COLUMNS = (
+    "name",
+    "video",
+    "status",
+    "method",
+    "frames",
+    "fitted",
+    "fps",
+    "mean_score",
+    "doubtful",
+    "seconds",
+    "error",
+    "playback",
+    "motion",
+    "sheet",
+    "bvh",
+    "glb",
+    "csv",
+    "masks",
+)
+FILE_COLUMNS = COLUMNS[COLUMNS.index("playback") :]
 
 
-def write_record(folder: Path, video: str, settings: dict, annotations: str | None,
-                 summary: dict, files: dict) -> Path:
+def write_record(folder: Path, video: str, settings: dict, annotations: str | None, summary: dict, files: dict) -> Path:
     """Mark a video's folder finished: video, settings, annotations, summary, files (relative)."""
     (folder / FAILED).unlink(missing_ok=True)
-    return atomic_write_json(folder / RECORD, {
-        "format": FORMAT, "version": VERSION, "video": video, "settings": settings,
-        "annotations": annotations, "summary": summary, "files": files})
+    return atomic_write_json(
+        folder / RECORD,
+        {
+            "format": FORMAT,
+            "version": VERSION,
+            "video": video,
+            "settings": settings,
+            "annotations": annotations,
+            "summary": summary,
+            "files": files,
+        },
+    )
 
 
 def read_record(folder: Path) -> dict | None:
@@ -71,8 +96,9 @@ def rows(out: Path) -> list[dict]:
             found.append(_finished_row(folder.name, record))
         elif (folder / FAILED).is_file():
             failure = json.loads((folder / FAILED).read_text())
-            found.append({"name": folder.name, "video": failure["video"], "status": "failed",
-                          "error": failure["error"]})
+            found.append(
+                {"name": folder.name, "video": failure["video"], "status": "failed", "error": failure["error"]}
+            )
     return found
 
 
@@ -102,30 +128,37 @@ text-align:left;vertical-align:top}td.n{text-align:right}img{width:320px;display
 def index_html(out: Path, found: list[dict]) -> str:
     """The library's page: a table row per video (``rows``)."""
     failed = sum(r["status"] == "failed" for r in found)
-    head = ("<tr><th>contact sheet</th><th>video</th><th>frames</th><th>mean score</th>"
-            "<th>doubtful frames</th><th>files</th></tr>")
+    head = (
+        "<tr><th>contact sheet</th><th>video</th><th>frames</th><th>mean score</th>"
+        "<th>doubtful frames</th><th>files</th></tr>"
+    )
     body = "\n".join(_row_html(r) for r in found)
     title = html.escape(f"Motion library: {out.resolve().name}")
-    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{title}"
-            f"</title><style>{_STYLE}</style></head><body><h1>{title}</h1>\n<p>{len(found)} videos"
-            f", {failed} failed. Review one with <code>mocap serve {html.escape(str(out))}/NAME"
-            f"</code>; its corrections feed <code>mocap batch ... --annotations-from "
-            f"{html.escape(str(out))}</code>.</p>\n<table>\n{head}\n{body}\n</table></body></html>\n")
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{title}'
+        f"</title><style>{_STYLE}</style></head><body><h1>{title}</h1>\n<p>{len(found)} videos"
+        f", {failed} failed. Review one with <code>mocap serve {html.escape(str(out))}/NAME"
+        f"</code>; its corrections feed <code>mocap batch ... --annotations-from "
+        f"{html.escape(str(out))}</code>.</p>\n<table>\n{head}\n{body}\n</table></body></html>\n"
+    )
 
 
 def _row_html(row: dict) -> str:
     name = html.escape(row["name"])
     if row["status"] == "failed":
-        return (f"<tr class=\"failed\"><td></td><td>{name}<br><code>{html.escape(row['video'])}"
-                f"</code></td><td colspan=\"4\">failed: {html.escape(row['error'])}</td></tr>")
-    thumb = f"<a href=\"{_href(row['sheet'])}\"><img src=\"{_href(row['thumb'])}\" alt=\"contact sheet of {name}\"></a>"
-    links = " ".join(f"<a href=\"{_href(row[k])}\">{k}</a>" for k in FILE_COLUMNS
-                     if row.get(k) and k != "playback")
+        return (
+            f'<tr class="failed"><td></td><td>{name}<br><code>{html.escape(row["video"])}'
+            f'</code></td><td colspan="4">failed: {html.escape(row["error"])}</td></tr>'
+        )
+    thumb = f'<a href="{_href(row["sheet"])}"><img src="{_href(row["thumb"])}" alt="contact sheet of {name}"></a>'
+    links = " ".join(f'<a href="{_href(row[k])}">{k}</a>' for k in FILE_COLUMNS if row.get(k) and k != "playback")
     score = "" if row["mean_score"] is None else f"{row['mean_score']:.3f}"
-    return (f"<tr><td>{thumb}</td><td><a href=\"{_href(row['playback'])}\">{name}</a><br>"
-            f"<code>{html.escape(row['video'])}</code><br>{html.escape(row['method'])}</td>"
-            f"<td class=\"n\">{row['frames']} ({row['fitted']} with a person)</td>"
-            f"<td class=\"n\">{score}</td><td class=\"n\">{row['doubtful']}</td><td>{links}</td></tr>")
+    return (
+        f'<tr><td>{thumb}</td><td><a href="{_href(row["playback"])}">{name}</a><br>'
+        f"<code>{html.escape(row['video'])}</code><br>{html.escape(row['method'])}</td>"
+        f'<td class="n">{row["frames"]} ({row["fitted"]} with a person)</td>'
+        f'<td class="n">{score}</td><td class="n">{row["doubtful"]}</td><td>{links}</td></tr>'
+    )
 
 
 def _href(path: str) -> str:
@@ -140,8 +173,9 @@ def review_target(path: str | os.PathLike) -> tuple[str, Path] | None:
     record = read_record(folder)
     if record is None:
         if path.is_dir():
-            raise MocapError(f"{path}: is a folder, not a video nor a video's folder of a "
-                             f"`mocap batch` library (no {RECORD} in it)")
+            raise MocapError(
+                f"{path}: is a folder, not a video nor a video's folder of a `mocap batch` library (no {RECORD} in it)"
+            )
         return None
     notes = folder / ANNOTATIONS
     used = record.get("annotations")

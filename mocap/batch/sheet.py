@@ -19,10 +19,10 @@ from mocap.io.video import VideoInfo, open_video, processing_scale, read_frame
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.plate import clip_background
 
-Progress = Callable[[int, int, str], None]   # done, total, stage
+Progress = Callable[[int, int, str], None]  # done, total, stage
 DEFAULT_FRAMES = 12
-TILE_HEIGHT = 240          # px: smaller videos are upscaled to this
-COLUMNS = 3                # tiles per row
+TILE_HEIGHT = 240  # px: smaller videos are upscaled to this
+COLUMNS = 3  # tiles per row
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 
@@ -36,8 +36,9 @@ def tile_width(info: VideoInfo, height: int = TILE_HEIGHT) -> int:
     return max(1, round(info.width * height / info.height))
 
 
-def frame_tile(frame: np.ndarray, background: Background, scale: float,
-               entry: dict | None, index: int, height: int = TILE_HEIGHT) -> np.ndarray:
+def frame_tile(
+    frame: np.ndarray, background: Background, scale: float, entry: dict | None, index: int, height: int = TILE_HEIGHT
+) -> np.ndarray:
     """The frame beside its silhouette and fitted skeleton, captioned; `entry` is the
     frame's motion-file entry (None when the file has none for it)."""
     size = (round(frame.shape[1] * height / frame.shape[0]), height)
@@ -45,8 +46,7 @@ def frame_tile(frame: np.ndarray, background: Background, scale: float,
     mask = cv2.resize(extract_silhouette(small, background), size, interpolation=cv2.INTER_NEAREST)
     joints = _joints(entry)
     view = silhouette_view(mask, None if joints is None else joints * (height / frame.shape[0]))
-    picture = cv2.resize(frame, size, interpolation=cv2.INTER_AREA if height < frame.shape[0]
-                         else cv2.INTER_LINEAR)
+    picture = cv2.resize(frame, size, interpolation=cv2.INTER_AREA if height < frame.shape[0] else cv2.INTER_LINEAR)
     tile = np.hstack([picture, view])
     cv2.rectangle(tile, (0, 0), (tile.shape[1] - 1, height - 1), (90, 90, 90), 1)
     _caption(tile, f"#{index}  {_status(entry)}")
@@ -83,8 +83,13 @@ def _resize(frame: np.ndarray, scale: float) -> np.ndarray:
     return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
 
 
-def contact_sheet(video: str | os.PathLike, motion: dict, n: int = DEFAULT_FRAMES,
-                  height: int = TILE_HEIGHT, progress: Progress | None = None) -> np.ndarray:
+def contact_sheet(
+    video: str | os.PathLike,
+    motion: dict,
+    n: int = DEFAULT_FRAMES,
+    height: int = TILE_HEIGHT,
+    progress: Progress | None = None,
+) -> np.ndarray:
     """The contact sheet (BGR image) of `n` frames of `video` fitted as `motion` says;
     ``progress(done, total, stage)`` after the background and after each tile."""
     if n < 1:
@@ -109,28 +114,33 @@ def _check_match(info: VideoInfo, motion: dict) -> None:
     v = motion.get("video", {})
     theirs = (v.get("width"), v.get("height"), v.get("frame_count"))
     if theirs != (info.width, info.height, info.frame_count):
-        raise MocapError(f"{info.path}: the motion file was fitted on a video of "
-                         f"{theirs[0]}x{theirs[1]}, {theirs[2]} frames; this one is "
-                         f"{info.width}x{info.height}, {info.frame_count} frames")
+        raise MocapError(
+            f"{info.path}: the motion file was fitted on a video of "
+            f"{theirs[0]}x{theirs[1]}, {theirs[2]} frames; this one is "
+            f"{info.width}x{info.height}, {info.frame_count} frames"
+        )
 
 
 def _grid(tiles: list[np.ndarray], columns: int) -> np.ndarray:
     """Tiles (all one size) in rows of `columns`, the last row padded with black."""
     blank = np.zeros_like(tiles[0])
     tiles = tiles + [blank] * (-len(tiles) % columns)
-    return np.vstack([np.hstack(tiles[r:r + columns]) for r in range(0, len(tiles), columns)])
+    return np.vstack([np.hstack(tiles[r : r + columns]) for r in range(0, len(tiles), columns)])
 
 
-def write_sheet(video: str | os.PathLike, motion_path: str | os.PathLike,
-                out: str | os.PathLike | None = None, n: int = DEFAULT_FRAMES,
-                progress: Progress | None = None) -> Path:
+def write_sheet(
+    video: str | os.PathLike,
+    motion_path: str | os.PathLike,
+    out: str | os.PathLike | None = None,
+    n: int = DEFAULT_FRAMES,
+    progress: Progress | None = None,
+) -> Path:
     """`mocap sheet`: read the motion file, draw the sheet, write it (PNG or JPEG)."""
     out = Path(out) if out else Path(video).with_suffix(".sheet.png")
     if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise MocapError(f"{out}: the contact sheet must end in .png or .jpg")
     check_writable(out)
-    return write_image(out, contact_sheet(video, read_motion(motion_path), n, progress=progress),
-                       "contact sheet")
+    return write_image(out, contact_sheet(video, read_motion(motion_path), n, progress=progress), "contact sheet")
 
 
 def write_image(out: Path, image: np.ndarray, kind: str = "image") -> Path:
@@ -146,8 +156,9 @@ def add_sheet_arguments(parser) -> None:
     parser.add_argument("video", help="the video that was fitted")
     parser.add_argument("motion", help="its motion file (mocap fit --out)")
     parser.add_argument("--out", help="image to write, .png or .jpg (default VIDEO.sheet.png)")
-    parser.add_argument("--frames", type=int, default=DEFAULT_FRAMES,
-                        help=f"how many frames, spread evenly (default {DEFAULT_FRAMES})")
+    parser.add_argument(
+        "--frames", type=int, default=DEFAULT_FRAMES, help=f"how many frames, spread evenly (default {DEFAULT_FRAMES})"
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(run=run_sheet)
 

@@ -25,21 +25,21 @@ from mocap.silhouette.background import Background
 from mocap.silhouette.masks import write_masks
 from mocap.silhouette.plate import clip_background
 
-ALWAYS = {"json": "motion", "html": "playback"}     # registry format -> the library's name
-EXPORTS = (*(k for k in FORMATS if k not in ALWAYS), "masks")   # what --exports may name
+ALWAYS = {"json": "motion", "html": "playback"}  # registry format -> the library's name
+EXPORTS = (*(k for k in FORMATS if k not in ALWAYS), "masks")  # what --exports may name
 # the default: every one this installation writes (FBX needs the fbx extra)
 DEFAULT_EXPORTS = tuple(k for k in EXPORTS if k not in FORMATS or FORMATS[k].available())
 MOTION, SHEET, THUMB, MASKS = "motion.json", "sheet.png", "thumb.jpg", "masks"
-THUMB_WIDTH = 480                        # px: the library page shows hundreds of these
+THUMB_WIDTH = 480  # px: the library page shows hundreds of these
 
 
 @dataclass(frozen=True)
 class Job:
     """A video to do: where its files go, the settings and annotations to use."""
 
-    video: str              # absolute path, as the workers see it
-    folder: str             # DIR/<name>
-    settings: dict          # recorded; a finished folder with other settings is done again
+    video: str  # absolute path, as the workers see it
+    folder: str  # DIR/<name>
+    settings: dict  # recorded; a finished folder with other settings is done again
     annotations: str | None = None
 
     @property
@@ -60,7 +60,7 @@ class Outcome:
 
 def run_job(job: Job) -> Outcome:
     """Do one video; its error, if any, is returned (and recorded), never raised."""
-    cv2.setNumThreads(1)   # one worker process per core: OpenCV's own threads would contend
+    cv2.setNumThreads(1)  # one worker process per core: OpenCV's own threads would contend
     start, cpu = time.perf_counter(), time.process_time()
     folder = Path(job.folder)
     try:
@@ -75,18 +75,17 @@ def run_job(job: Job) -> Outcome:
     try:
         write_failure(folder, job.video, error)
     except OSError:
-        pass    # an unwritable folder: the error still reaches the client
+        pass  # an unwritable folder: the error still reaches the client
     return Outcome(job.name, 0, time.perf_counter() - start, error)
 
 
 def _make(job: Job, folder: Path) -> int:
     """Fit the video and write its folder, record last; returns its frame count."""
-    (folder / RECORD).unlink(missing_ok=True)   # done again: unfinished until the end
+    (folder / RECORD).unlink(missing_ok=True)  # done again: unfinished until the end
     start = time.perf_counter()
     info = open_video(job.video)
     notes = load_annotations(job.annotations, info.frame_count) if job.annotations else Annotations()
-    session = open_session(info, notes, smooth=job.settings["smooth"],
-                           progress=Report(job.name, info.frame_count))
+    session = open_session(info, notes, smooth=job.settings["smooth"], progress=Report(job.name, info.frame_count))
     clip = dataclasses.replace(session.clip(), name=folder.name)
     masks = write_masks(folder / MASKS, info, scene(session)) if "masks" in job.settings["exports"] else None
     files = write_exports(folder, clip, job.settings["exports"], masks)
@@ -96,7 +95,7 @@ def _make(job: Job, folder: Path) -> int:
     return info.frame_count
 
 
-FRAMES_TOPIC = "mocap-batch-frames"    # Dask events: how far each running video is
+FRAMES_TOPIC = "mocap-batch-frames"  # Dask events: how far each running video is
 REPORT_EVERY_S = 1.0
 
 
@@ -108,6 +107,7 @@ class Report:
         self.name, self.frames, self.last = name, frames, time.monotonic()
         try:
             from distributed import get_worker
+
             self.worker = get_worker()
         except (ImportError, ValueError):
             self.worker = None
@@ -147,15 +147,21 @@ def write_sheets(folder: Path, info: VideoInfo) -> dict[str, str]:
     sheet = contact_sheet(info.path, read_motion(folder / MOTION))
     height = max(1, round(sheet.shape[0] * THUMB_WIDTH / sheet.shape[1]))
     thumb = cv2.resize(sheet, (THUMB_WIDTH, height), interpolation=cv2.INTER_AREA)
-    return {"sheet": write_image(folder / SHEET, sheet, "contact sheet").name,
-            "thumb": write_image(folder / THUMB, thumb, "thumbnail").name}
+    return {
+        "sheet": write_image(folder / SHEET, sheet, "contact sheet").name,
+        "thumb": write_image(folder / THUMB, thumb, "thumbnail").name,
+    }
 
 
 def summarise(session: Session, notes: Annotations) -> dict:
     """What the library shows of a fit: frames, frames fitted, mean score, doubtful frames."""
     scores = session.scores
     fitted = np.isfinite(scores)
-    return {"method": notes.method or "silhouette", "frames": len(scores), "fitted": int(fitted.sum()),
-            "fps": session.info.fps,
-            "mean_score": round(float(scores[fitted].mean()), 4) if fitted.any() else None,
-            "doubtful": len(session.review_queue())}
+    return {
+        "method": notes.method or "silhouette",
+        "frames": len(scores),
+        "fitted": int(fitted.sum()),
+        "fps": session.info.fps,
+        "mean_score": round(float(scores[fitted].mean()), 4) if fitted.any() else None,
+        "doubtful": len(session.review_queue()),
+    }

@@ -7,8 +7,13 @@ from mocap.errors import MocapError
 
 def add_smooth(parser, note: str) -> None:
     """``--smooth SIGMA``: the animation's Gaussian smoothing in frames (mocap.lift.motion)."""
-    parser.add_argument("--smooth", type=float, default=0.0, metavar="SIGMA",
-                        help=f"Gaussian smoothing of the animation in frames, {note}")
+    parser.add_argument(
+        "--smooth",
+        type=float,
+        default=0.0,
+        metavar="SIGMA",
+        help=f"Gaussian smoothing of the animation in frames, {note}",
+    )
 
 
 def smooth_of(args) -> float:

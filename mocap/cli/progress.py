@@ -11,16 +11,16 @@ class Bar:
 
     def __init__(self, quiet: bool = False):
         self.quiet = quiet
-        self._bar = None     # the tqdm bar drawn
+        self._bar = None  # the tqdm bar drawn
 
     def __call__(self, done: int, total: int, stage: str = "") -> None:
         if self.quiet or not sys.stderr.isatty():
             return
         if self._bar is None or self._bar.total != total:
             from tqdm import tqdm
+
             self.close()
-            self._bar = tqdm(total=total, desc=stage or None, file=sys.stderr, unit="step",
-                             dynamic_ncols=True)
+            self._bar = tqdm(total=total, desc=stage or None, file=sys.stderr, unit="step", dynamic_ncols=True)
         elif stage:
             self._bar.set_description(stage, refresh=False)
         self._bar.update(done - self._bar.n)

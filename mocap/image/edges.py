@@ -12,12 +12,12 @@ import numpy as np
 
 from mocap.image.percentile import percentile
 
-INNER_PX = 2                       # edges this close to the silhouette's outline are left out
-SIDE_SAMPLES = np.linspace(0.15, 0.85, 6)   # points along each side, fractions of the length
-EDGE_WEIGHT = 0.3                  # S that a segment outlined by full-strength edges gains
-STRONG_PERCENTILE = 90             # of gradient magnitudes inside: an edge of full strength
-STRONG_STRIDE = 3                  # px between the pixels whose magnitudes give that percentile
-_PERPENDICULAR = np.array([-1.0, 1.0])             # (dx, dy) reversed times this: the normal (-dy, dx)
+INNER_PX = 2  # edges this close to the silhouette's outline are left out
+SIDE_SAMPLES = np.linspace(0.15, 0.85, 6)  # points along each side, fractions of the length
+EDGE_WEIGHT = 0.3  # S that a segment outlined by full-strength edges gains
+STRONG_PERCENTILE = 90  # of gradient magnitudes inside: an edge of full strength
+STRONG_STRIDE = 3  # px between the pixels whose magnitudes give that percentile
+_PERPENDICULAR = np.array([-1.0, 1.0])  # (dx, dy) reversed times this: the normal (-dy, dx)
 _BOTH_SIDES = np.array([1.0, -1.0]).reshape(2, 1, 1, 1, 1)
 
 
@@ -29,7 +29,7 @@ class Edges:
         smooth = cv2.GaussianBlur(grey, (3, 3), 0)
         planes = [cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)]
         if where is not None:
-            for plane in planes:            # each plane by a 2D mask: faster than (H, W, 2) at once
+            for plane in planes:  # each plane by a 2D mask: faster than (H, W, 2) at once
                 plane[~where] = 0.0
         gradient = cv2.merge(planes)
         sample = gradient[::STRONG_STRIDE, ::STRONG_STRIDE]
@@ -37,7 +37,7 @@ class Edges:
             sample = sample[where[::STRONG_STRIDE, ::STRONG_STRIDE]]
         magnitude = np.linalg.norm(sample.reshape(-1, 2), axis=-1)
         strong = percentile(magnitude, STRONG_PERCENTILE) if magnitude.size else 0.0
-        self.gradient = gradient                                   # (H, W, 2): x and y
+        self.gradient = gradient  # (H, W, 2): x and y
         self.unit = 1.0 / strong if strong > 0 else 0.0
 
     @classmethod
@@ -57,12 +57,17 @@ class Edges:
         of segments (B, k) from ``starts`` to ``ends`` (B, k, 2), ``widths`` (k,) wide."""
         d = ends - starts
         length = np.maximum(np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]), 1e-9)[..., None]
-        normal = d[..., ::-1] * _PERPENDICULAR / length                     # (B, k, 2)
+        normal = d[..., ::-1] * _PERPENDICULAR / length  # (B, k, 2)
         offset = normal * (np.asarray(widths, float)[..., None] / 2)
         along = starts[..., None, :] + SIDE_SAMPLES[:, None] * d[..., None, :]  # (B, k, T, 2)
-        sides = along + offset[..., None, :] * _BOTH_SIDES                      # (2, B, k, T, 2)
-        g = cv2.remap(self.gradient, sides.reshape(-1, 1, 2).astype(np.float32), None, cv2.INTER_LINEAR,
-                      borderMode=cv2.BORDER_CONSTANT).reshape(sides.shape)
+        sides = along + offset[..., None, :] * _BOTH_SIDES  # (2, B, k, T, 2)
+        g = cv2.remap(
+            self.gradient,
+            sides.reshape(-1, 1, 2).astype(np.float32),
+            None,
+            cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+        ).reshape(sides.shape)
         g = g * normal[..., None, :]
         across = np.abs(g[..., 0] + g[..., 1]) * self.unit
         return np.minimum(across, 1.0).mean(axis=(0, 2, 3))

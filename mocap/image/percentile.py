@@ -15,7 +15,7 @@ def percentile(values: np.ndarray, q: float) -> float:
         raise ValueError("percentile of no values")
     n = a.size
     virtual = (n - 1) * (q / 100)
-    if virtual >= n - 1:            # numpy's top end: both neighbours the largest, index -1
+    if virtual >= n - 1:  # numpy's top end: both neighbours the largest, index -1
         lower, upper, gamma = n - 1, n - 1, virtual + 1
     else:
         lower = int(virtual)

@@ -21,7 +21,7 @@ from mocap.io.jsoncheck import Bad, describe, expect, is_number
 FORMAT, VERSION = "mocap-annotations", 1
 _FRAME_KEY = re.compile(r"0|[1-9][0-9]*")
 _TOP_KEYS = ("format", "version", "method", "background", "keyframes", "frames")
-METHODS = ("silhouette", "track")       # the two methods: mocap fit --method
+METHODS = ("silhouette", "track")  # the two methods: mocap fit --method
 _FRAME_KEYS = ("orientation", "foreshortening", "joints2d")
 
 
@@ -30,7 +30,7 @@ class FrameNote:
     """The user's inputs on one frame; empty fields say nothing."""
 
     orientation: str | None = None
-    foreshortening: dict[str, str] = field(default_factory=dict)     # segment -> toward/away
+    foreshortening: dict[str, str] = field(default_factory=dict)  # segment -> toward/away
     joints2d: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def is_empty(self) -> bool:
@@ -89,8 +89,10 @@ class Annotations:
             raise MocapError(f"unknown joint {joint!r}")
         if xy is not None and not (len(xy) == 2 and all(math.isfinite(float(v)) for v in xy)):
             raise MocapError(f"joint override must be two finite numbers, not {xy!r}")
-        joints = {**self.frames.get(frame, FrameNote()).joints2d,
-                  joint: None if xy is None else (float(xy[0]), float(xy[1]))}
+        joints = {
+            **self.frames.get(frame, FrameNote()).joints2d,
+            joint: None if xy is None else (float(xy[0]), float(xy[1])),
+        }
         return self._with_note(frame, joints2d={k: v for k, v in joints.items() if v is not None})
 
     def with_method(self, method: str | None) -> "Annotations":
@@ -102,8 +104,11 @@ class Annotations:
     def with_background(self, background: str | tuple[int, int] | None) -> "Annotations":
         """Give the empty scene (a file name, or first and last frames); None: estimate it from the clip."""
         try:
-            checked = None if background is None else _background(
-                list(background) if isinstance(background, tuple) else background, None)
+            checked = (
+                None
+                if background is None
+                else _background(list(background) if isinstance(background, tuple) else background, None)
+            )
         except Bad as exc:
             raise MocapError(str(exc)) from None
         return replace(self, background=checked)
@@ -159,6 +164,7 @@ class Annotations:
 
 # -- reading and checking -------------------------------------------------------------
 
+
 def _no_constant(name: str):
     raise ValueError(f"{name} is not a JSON number")
 
@@ -198,8 +204,11 @@ def _background(value, frame_count: int | None) -> str | tuple[int, int]:
         if not value.strip():
             raise Bad("background", "empty file name (leave it out to estimate the background)")
         return value
-    if not (isinstance(value, list) and len(value) == 2
-            and all(isinstance(v, int) and not isinstance(v, bool) for v in value)):
+    if not (
+        isinstance(value, list)
+        and len(value) == 2
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in value)
+    ):
         got = json.dumps(value)[:40] if isinstance(value, list) else describe(value)
         raise Bad("background", f"expected a file name or [first, last] frames, got {got}")
     first, last = value
@@ -217,15 +226,16 @@ def _note(value, place: str) -> FrameNote:
             raise Bad(place, f"unknown key {json.dumps(key)} (expected {', '.join(_FRAME_KEYS)})")
     orientation = value.get("orientation")
     if orientation is not None and orientation not in ORIENTATIONS:
-        raise Bad(f"{place}.orientation", f"unknown orientation {json.dumps(orientation)[:40]} "
-                   f"(choose {', '.join(ORIENTATIONS)})")
+        raise Bad(
+            f"{place}.orientation",
+            f"unknown orientation {json.dumps(orientation)[:40]} (choose {', '.join(ORIENTATIONS)})",
+        )
     signs = expect(value.get("foreshortening", {}), dict, f"{place}.foreshortening", "an object")
     for segment, sign in signs.items():
         if segment not in SEGMENT_INDEX:
             raise Bad(f"{place}.foreshortening", f"unknown segment {json.dumps(segment)[:40]}")
         if sign not in FORESHORTENING:
-            raise Bad(f"{place}.foreshortening.{segment}",
-                       f"expected \"toward\" or \"away\", got {json.dumps(sign)[:40]}")
+            raise Bad(f"{place}.foreshortening.{segment}", f'expected "toward" or "away", got {json.dumps(sign)[:40]}')
     joints = expect(value.get("joints2d", {}), dict, f"{place}.joints2d", "an object")
     points = {}
     for joint, xy in joints.items():
@@ -240,8 +250,8 @@ def _note(value, place: str) -> FrameNote:
 def parse_annotations(data, frame_count: int | None = None) -> Annotations:
     """Check a decoded annotation document; raises Bad naming the place."""
     expect(data, dict, "", "a JSON object")
-    if data.get("format") != FORMAT:        # first: a motion file is told by its format
-        raise Bad("format", f"expected \"{FORMAT}\", got {json.dumps(data.get('format'))[:40]}")
+    if data.get("format") != FORMAT:  # first: a motion file is told by its format
+        raise Bad("format", f'expected "{FORMAT}", got {json.dumps(data.get("format"))[:40]}')
     for key in data:
         if key not in _TOP_KEYS:
             raise Bad("", f"unknown key {json.dumps(key)[:40]} (expected {', '.join(_TOP_KEYS)})")
@@ -253,18 +263,20 @@ def parse_annotations(data, frame_count: int | None = None) -> Annotations:
         raise Bad("method", f"expected one of {', '.join(METHODS)}, got {json.dumps(method)[:40]}")
     background = _background(data["background"], frame_count) if "background" in data else None
     keyframes = _keyframes(data["keyframes"], frame_count) if "keyframes" in data else None
-    frames = expect(data.get("frames", {}), dict, "frames",
-                    'an object of notes by frame index (e.g. {"12": {"orientation": "left"}})')
+    frames = expect(
+        data.get("frames", {}),
+        dict,
+        "frames",
+        'an object of notes by frame index (e.g. {"12": {"orientation": "left"}})',
+    )
     notes = {}
     for key, value in frames.items():
         place = f"frames[{json.dumps(key)[:40]}]"
         notes[_frame_index(key, frame_count, place)] = _note(value, place)
-    return Annotations({k: v for k, v in sorted(notes.items()) if not v.is_empty()}, keyframes,
-                       method, background)
+    return Annotations({k: v for k, v in sorted(notes.items()) if not v.is_empty()}, keyframes, method, background)
 
 
-def annotations_from_text(text: str, frame_count: int | None = None,
-                          source: str = "annotations") -> Annotations:
+def annotations_from_text(text: str, frame_count: int | None = None, source: str = "annotations") -> Annotations:
     """Decode and check annotation JSON; any problem is one MocapError naming the place."""
     try:
         data = json.loads(text, parse_constant=_no_constant, object_pairs_hook=_unique_keys)

@@ -17,7 +17,7 @@ from mocap import body
 from mocap.errors import MocapError
 
 _CHANNEL_NAMES = {f"{axis}{kind}" for axis in "XYZ" for kind in ("position", "rotation")}
-_HEAD_END_MIN_COSINE = 0.7   # a Head End Site this aligned with parent->Head is the top
+_HEAD_END_MIN_COSINE = 0.7  # a Head End Site this aligned with parent->Head is the top
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,7 +51,7 @@ class BvhMotion:
         pos = np.empty((n, len(self.names), 3))
         rot: list[Rotation] = []
         for j, chans in enumerate(self.channels):
-            cols = self.values[:, start[j]:start[j] + len(chans)]
+            cols = self.values[:, start[j] : start[j] + len(chans)]
             trans = np.repeat(self.offsets[j][None], n, axis=0)
             axes, angles = "", []
             for k, chan in enumerate(chans):
@@ -60,8 +60,7 @@ class BvhMotion:
                 else:
                     axes += chan[0]
                     angles.append(cols[:, k])
-            local = (Rotation.from_euler(axes, np.stack(angles, axis=1), degrees=True)
-                     if axes else Rotation.identity(n))
+            local = Rotation.from_euler(axes, np.stack(angles, axis=1), degrees=True) if axes else Rotation.identity(n)
             parent = self.parents[j]
             if parent < 0:
                 pos[:, j], rotation = trans, local
@@ -87,12 +86,18 @@ def parse_bvh(text: str, source: str = "<string>") -> BvhMotion:
     split = re.search(r"^\s*MOTION\b", text, re.MULTILINE)
     if not text.lstrip().startswith("HIERARCHY") or split is None:
         raise MocapError(f"{source}: not a BVH file (expected HIERARCHY ... MOTION)")
-    names, parents, offsets, channels, ends = _parse_hierarchy(text[:split.start()].split(), source)
-    frame_time, values = _parse_motion(text[split.end():], sum(len(c) for c in channels), source)
-    return BvhMotion(names=tuple(names), parents=np.array(parents, dtype=int),
-                     offsets=np.array(offsets, dtype=float), channels=tuple(channels),
-                     end_site=np.array(ends, dtype=bool), frame_time=frame_time,
-                     values=values, source=source)
+    names, parents, offsets, channels, ends = _parse_hierarchy(text[: split.start()].split(), source)
+    frame_time, values = _parse_motion(text[split.end() :], sum(len(c) for c in channels), source)
+    return BvhMotion(
+        names=tuple(names),
+        parents=np.array(parents, dtype=int),
+        offsets=np.array(offsets, dtype=float),
+        channels=tuple(channels),
+        end_site=np.array(ends, dtype=bool),
+        frame_time=frame_time,
+        values=values,
+        source=source,
+    )
 
 
 def _parse_hierarchy(tokens: list[str], source: str):
@@ -104,8 +109,7 @@ def _parse_hierarchy(tokens: list[str], source: str):
         while i < len(tokens):
             tok = tokens[i]
             if tok in ("ROOT", "JOINT", "End"):
-                if (tok == "ROOT") != (not stack and not names) or (
-                        tok == "End" and tokens[i + 1] != "Site"):
+                if (tok == "ROOT") != (not stack and not names) or (tok == "End" and tokens[i + 1] != "Site"):
                     raise MocapError(f"{source}: unexpected {tok} in HIERARCHY")
                 parent = stack[-1] if stack else -1
                 names.append(tokens[i + 1] if tok != "End" else f"{names[parent]}_end")
@@ -121,17 +125,16 @@ def _parse_hierarchy(tokens: list[str], source: str):
                 stack.pop()
                 i += 1
             elif tok == "OFFSET":
-                offsets[stack[-1]] = tuple(float(v) for v in tokens[i + 1:i + 4])
+                offsets[stack[-1]] = tuple(float(v) for v in tokens[i + 1 : i + 4])
                 i += 4
             elif tok == "CHANNELS":
                 count = int(tokens[i + 1])
-                channels[stack[-1]] = _check_channels(tokens[i + 2:i + 2 + count], count, source)
+                channels[stack[-1]] = _check_channels(tokens[i + 2 : i + 2 + count], count, source)
                 i += 2 + count
             else:
                 raise MocapError(f"{source}: unexpected {tok!r} in HIERARCHY")
     except (IndexError, ValueError):
-        raise MocapError(f"{source}: garbled HIERARCHY near token {i} "
-                         f"({' '.join(tokens[i:i + 4])!r})") from None
+        raise MocapError(f"{source}: garbled HIERARCHY near token {i} ({' '.join(tokens[i : i + 4])!r})") from None
     if stack or not names or any(len(o) != 3 for o in offsets):
         raise MocapError(f"{source}: incomplete HIERARCHY (unbalanced braces or short OFFSET)")
     return names, parents, offsets, channels, ends
@@ -153,14 +156,16 @@ def _parse_motion(text: str, n_channels: int, source: str) -> tuple[float, np.nd
     n_frames = int(head.group(1))
     try:
         frame_time = float(head.group(2))
-        values = np.array(text[head.end():].split(), dtype=float)
+        values = np.array(text[head.end() :].split(), dtype=float)
     except ValueError:
         raise MocapError(f"{source}: MOTION data contains a non-number") from None
     if n_frames < 1 or not frame_time > 0:
         raise MocapError(f"{source}: MOTION needs at least one frame and a positive Frame Time")
     if values.size != n_frames * n_channels:
-        raise MocapError(f"{source}: expected {n_frames} frames x {n_channels} channels = "
-                         f"{n_frames * n_channels} numbers, found {values.size}")
+        raise MocapError(
+            f"{source}: expected {n_frames} frames x {n_channels} channels = "
+            f"{n_frames * n_channels} numbers, found {values.size}"
+        )
     return frame_time, values.reshape(n_frames, n_channels)
 
 
@@ -168,7 +173,7 @@ def _parse_motion(text: str, n_channels: int, source: str) -> tuple[float, np.nd
 
 _SIDE_PREFIXES = {"l": ("left", "l"), "r": ("right", "r")}
 _LIMB_ENDS = {"wrist": ("wrist", "hand"), "ankle": ("ankle", "foot")}
-_LIMB_CHAINS = {names[-1]: names[:-1] for names in body.LIMB_JOINTS.values()}   # end -> its chain
+_LIMB_CHAINS = {names[-1]: names[:-1] for names in body.LIMB_JOINTS.values()}  # end -> its chain
 
 
 def _key(name: str) -> str:

@@ -64,5 +64,4 @@ def _check_folder_takes_files(path: Path) -> None:
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        raise MocapError(f"{path}: cannot write in folder {folder} "
-                         f"({exc.strerror or exc})") from None
+        raise MocapError(f"{path}: cannot write in folder {folder} ({exc.strerror or exc})") from None

@@ -67,9 +67,9 @@ def processing_scale(info: VideoInfo, max_side: int = 1280) -> float:
     return min(1.0, max_side / max(info.width, info.height))
 
 
-def iter_frames(source: VideoInfo | str | os.PathLike, start: int = 0,
-                stop: int | None = None, step: int = 1,
-                scale: float = 1.0) -> Iterator[tuple[int, np.ndarray]]:
+def iter_frames(
+    source: VideoInfo | str | os.PathLike, start: int = 0, stop: int | None = None, step: int = 1, scale: float = 1.0
+) -> Iterator[tuple[int, np.ndarray]]:
     """Yield ``(index, frame)`` for start, start+step, ... before ``stop`` (default and limit: the frame
     count), decoded one by one, downscaled (area averaging) when ``scale`` < 1."""
     info = source if isinstance(source, VideoInfo) else open_video(source)
@@ -87,8 +87,7 @@ def iter_frames(source: VideoInfo | str | os.PathLike, start: int = 0,
 def read_frame(info: VideoInfo, index: int, scale: float = 1.0) -> np.ndarray:
     """Frame `index` (random access: seek, or decode forward when seeking is unreliable)."""
     if not 0 <= index < info.frame_count:
-        raise MocapError(f"{info.path}: frame {index} is out of range "
-                         f"(the video has {info.frame_count} frames)")
+        raise MocapError(f"{info.path}: frame {index} is out of range (the video has {info.frame_count} frames)")
     reader = _Reader(info)
     try:
         return _resize(reader.read(index), scale)
@@ -184,8 +183,12 @@ def _count_frames(cap: cv2.VideoCapture, path: str) -> int:
     if count == 0:
         raise MocapError(f"{path}: no complete frame decodes (the file is truncated or damaged)")
     if announced and count < claimed:
-        warnings.warn(f"{path}: only {count} of the {int(claimed)} frames the file announces "
-                      "decode (truncated or damaged); using those", MocapWarning, stacklevel=2)
+        warnings.warn(
+            f"{path}: only {count} of the {int(claimed)} frames the file announces "
+            "decode (truncated or damaged); using those",
+            MocapWarning,
+            stacklevel=2,
+        )
     return count
 
 
@@ -200,10 +203,11 @@ def _unopenable_message(path: str) -> str:
     with open(path, "rb") as f:
         head = f.read(4096)
     for offset, magic, name in _CONTAINERS:
-        if head[offset:offset + len(magic)] == magic:
+        if head[offset : offset + len(magic)] == magic:
             codec = _avi_codec(head) if name == "AVI" else ""
-            return (f"{path}: cannot open this {name} video{codec}: unsupported codec, "
-                    f"or the file is truncated or damaged")
+            return (
+                f"{path}: cannot open this {name} video{codec}: unsupported codec, or the file is truncated or damaged"
+            )
     return f"{path}: not a video file (unrecognised format)"
 
 
@@ -212,7 +216,7 @@ def _avi_codec(head: bytes) -> str:
     at = head.find(b"vids")
     if at < 0 or len(head) < at + 8:
         return ""
-    return f" (codec {head[at + 4:at + 8].decode('latin-1')!r})"
+    return f" (codec {head[at + 4 : at + 8].decode('latin-1')!r})"
 
 
 def _resize(frame: np.ndarray, scale: float) -> np.ndarray:

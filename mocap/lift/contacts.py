@@ -15,19 +15,19 @@ _ANKLES = [JOINT_INDEX[a] for a in FEET]
 # to toe roll lifts it) and creeps; a swinging one travels at one to three times walking speed
 CONTACT_HEIGHT_M = 0.15
 CONTACT_SPEED_M_S = 1.0
-SMOOTH_S = 0.08          # Gaussian sigma of the ankle track before differencing
-MIN_RUN_S = 0.1          # shorter contacts and gaps are noise
+SMOOTH_S = 0.08  # Gaussian sigma of the ankle track before differencing
+MIN_RUN_S = 0.1  # shorter contacts and gaps are noise
 FLOOR_PERCENTILE = 10.0  # of the lower ankle's height around a frame: the floor's level
-FLOOR_WINDOW_S = 1.0     # that running window (a walk plants a foot several times in it)
-BLEND_S = 0.1            # a pin fades in and out over this much time around its contact
+FLOOR_WINDOW_S = 1.0  # that running window (a walk plants a foot several times in it)
+BLEND_S = 0.1  # a pin fades in and out over this much time around its contact
 
 
 def foot_contacts(world: np.ndarray, fps: float) -> np.ndarray:
     """(F, 2) bool: left and right foot planted on each frame of world joints (F, 16, 3; metres, y up)."""
-    ankles = gaussian_filter1d(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6), axis=0,
-                               mode="nearest")
-    floor = percentile_filter(ankles[..., 1].min(axis=1), FLOOR_PERCENTILE,
-                              size=int(round(FLOOR_WINDOW_S * fps)) | 1, mode="nearest")
+    ankles = gaussian_filter1d(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6), axis=0, mode="nearest")
+    floor = percentile_filter(
+        ankles[..., 1].min(axis=1), FLOOR_PERCENTILE, size=int(round(FLOOR_WINDOW_S * fps)) | 1, mode="nearest"
+    )
     speed = np.linalg.norm(np.gradient(ankles[..., :2], axis=0), axis=-1) * fps
     planted = (ankles[..., 1] - floor[:, None] < CONTACT_HEIGHT_M) & (speed < CONTACT_SPEED_M_S)
     width = max(1, int(round(MIN_RUN_S * fps)))
@@ -57,8 +57,9 @@ def pinned_targets(ankle: np.ndarray, planted: np.ndarray, fps: float) -> np.nda
     return ankle + shift
 
 
-def two_bone_ik(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+def two_bone_ik(
+    hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(knee, ankle) (F, 3) of a leg reaching ``target`` as near as it can, thigh and shin lengths
     kept, the knee in the plane of hip, target and old knee (law of cosines)."""
     thigh = np.linalg.norm(knee - hip, axis=-1, keepdims=True)
@@ -69,8 +70,8 @@ def two_bone_ik(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np
     along = reach / np.maximum(dist, 1e-12)
     pole = (knee - hip) - ((knee - hip) * along).sum(-1, keepdims=True) * along
     pole /= np.maximum(np.linalg.norm(pole, axis=-1, keepdims=True), 1e-12)
-    a = (thigh ** 2 - shin ** 2 + dist_c ** 2) / (2 * dist_c)
-    new_knee = hip + a * along + np.sqrt(np.maximum(thigh ** 2 - a ** 2, 0)) * pole
+    a = (thigh**2 - shin**2 + dist_c**2) / (2 * dist_c)
+    new_knee = hip + a * along + np.sqrt(np.maximum(thigh**2 - a**2, 0)) * pole
     return new_knee, hip + along * dist_c
 
 
@@ -80,6 +81,5 @@ def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray
     for side, planted in zip("lr", contacts.T):
         hip, knee, ankle = (JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle"))
         target = pinned_targets(world[:, ankle], planted, fps)
-        out[:, knee], out[:, ankle] = two_bone_ik(world[:, hip], world[:, knee], world[:, ankle],
-                                                  target)
+        out[:, knee], out[:, ankle] = two_bone_ik(world[:, hip], world[:, knee], world[:, ankle], target)
     return out

@@ -11,10 +11,10 @@ from mocap.body import JOINT_INDEX, LIMB_JOINTS, SEGMENT_JOINTS
 from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, yaw_of
 from mocap.smoothest import two_state_path
 
-SWITCH = 2.0            # limb lengths of evidence that renaming a limb pair between frames costs
-SIDE_MARGIN = 0.05      # limb lengths: evidence below this per frame says nothing
-DISAGREE = 0.2          # of the body height: a frame whose landmarks lie this far from the fit's
-                        # joints (median) is one the person model got wrong
+SWITCH = 2.0  # limb lengths of evidence that renaming a limb pair between frames costs
+SIDE_MARGIN = 0.05  # limb lengths: evidence below this per frame says nothing
+DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from the fit's
+# joints (median) is one the person model got wrong
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
 
@@ -48,9 +48,11 @@ class Cues:
         both = np.isfinite(distances).all(axis=1)
         off[both] = np.median(distances[both], axis=1) / body_px[both]
         wrong = ~(off <= DISAGREE)
-        return Cues(np.where(wrong[:, None, None], np.nan, self.joints2d),
-                    np.where(wrong[:, None], 0.0, self.confidence),
-                    np.where(wrong[:, None, None], np.nan, self.world))
+        return Cues(
+            np.where(wrong[:, None, None], np.nan, self.joints2d),
+            np.where(wrong[:, None], 0.0, self.confidence),
+            np.where(wrong[:, None, None], np.nan, self.world),
+        )
 
     @property
     def seen(self) -> np.ndarray:
@@ -92,8 +94,10 @@ def unsided_distances(joints_image: np.ndarray, landmarks: np.ndarray) -> np.nda
 def _namings(joints: np.ndarray, landmarks: np.ndarray, left: str, right: str) -> tuple[np.ndarray, np.ndarray]:
     """(F,) twice: a limb pair's summed joint-landmark distances, landmarks as named and exchanged."""
     l, r = _J[left], _J[right]
-    return (_dist(joints[:, l], landmarks[:, l]) + _dist(joints[:, r], landmarks[:, r]),
-            _dist(joints[:, l], landmarks[:, r]) + _dist(joints[:, r], landmarks[:, l]))
+    return (
+        _dist(joints[:, l], landmarks[:, l]) + _dist(joints[:, r], landmarks[:, r]),
+        _dist(joints[:, l], landmarks[:, r]) + _dist(joints[:, r], landmarks[:, l]),
+    )
 
 
 def _dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -49,20 +49,25 @@ class Inputs:
     """Everything the lifting needs per frame; frames without a person: orientation None, NaN joints."""
 
     orientation: list[str | None]
-    yaw: np.ndarray            # (F,) degrees, see lift.facing_yaw
-    swap: np.ndarray           # (F, 2) bool: image-left arms, legs are the right ones
-    joints2d: np.ndarray       # (F, 16, 2) anatomical pixels, joint overrides applied
-    px_per_unit: np.ndarray    # (F,) pixels per model unit (body height / 175)
-    signs: np.ndarray          # (F, 10) +1 toward, -1 away
-    lengths: np.ndarray        # (10,) segment lengths in model units
-    held: np.ndarray | None = None     # (F, 10) the user's signs where they hold, 0 elsewhere
-    depths: np.ndarray | None = None   # (F, 10) |dZ| a person model sees (cues.world_depths), NaN where none
+    yaw: np.ndarray  # (F,) degrees, see lift.facing_yaw
+    swap: np.ndarray  # (F, 2) bool: image-left arms, legs are the right ones
+    joints2d: np.ndarray  # (F, 16, 2) anatomical pixels, joint overrides applied
+    px_per_unit: np.ndarray  # (F,) pixels per model unit (body height / 175)
+    signs: np.ndarray  # (F, 10) +1 toward, -1 away
+    lengths: np.ndarray  # (10,) segment lengths in model units
+    held: np.ndarray | None = None  # (F, 10) the user's signs where they hold, 0 elsewhere
+    depths: np.ndarray | None = None  # (F, 10) |dZ| a person model sees (cues.world_depths), NaN where none
 
     def lift(self, frame: int) -> np.ndarray:
         """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
-        return lift_pose(self.joints2d[frame], self.px_per_unit[frame], self.yaw[frame],
-                         self.signs[frame], self.lengths,
-                         seen_depths=None if self.depths is None else self.depths[frame])
+        return lift_pose(
+            self.joints2d[frame],
+            self.px_per_unit[frame],
+            self.yaw[frame],
+            self.signs[frame],
+            self.lengths,
+            seen_depths=None if self.depths is None else self.depths[frame],
+        )
 
     @property
     def person(self) -> np.ndarray:
@@ -83,8 +88,7 @@ class Inputs:
         person stretch: Eq. 5 turns the fit's length scatter into depth jitter; real depths are smooth."""
         out = lifted.copy()
         for r in runs(self.person):
-            out[r, :, 2] = gaussian_filter1d(lifted[r, :, 2], DEPTH_SMOOTH_S * fps, axis=0,
-                                             mode="nearest")
+            out[r, :, 2] = gaussian_filter1d(lifted[r, :, 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
         return out
 
     def changed_frames(self, before: "Inputs") -> np.ndarray:
@@ -93,9 +97,12 @@ class Inputs:
         person = self.person
         if not np.array_equal(person, before.person) or not np.array_equal(self.lengths, before.lengths):
             return person
-        same = (_same(self.joints2d, before.joints2d).all(axis=(1, 2))
-                & _same(self.px_per_unit, before.px_per_unit) & _same(self.yaw, before.yaw)
-                & (self.signs == before.signs).all(axis=1))
+        same = (
+            _same(self.joints2d, before.joints2d).all(axis=(1, 2))
+            & _same(self.px_per_unit, before.px_per_unit)
+            & _same(self.yaw, before.yaw)
+            & (self.signs == before.signs).all(axis=1)
+        )
         return person & ~same
 
 
@@ -118,14 +125,21 @@ class Said:
 
     @classmethod
     def nothing(cls, n: int) -> "Said":
-        return cls([None] * n, {}, np.zeros((n, len(SEGMENT_NAMES)), np.int8),
-                   np.full((n, len(SEGMENT_NAMES)), -1))
+        return cls([None] * n, {}, np.zeros((n, len(SEGMENT_NAMES)), np.int8), np.full((n, len(SEGMENT_NAMES)), -1))
 
 
-def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float,
-                   said: Said, lengths: np.ndarray | None = None,
-                   guessed: list[str | None] | None = None, away: np.ndarray | None = None,
-                   near: np.ndarray | None = None, cues: Cues | None = None) -> Inputs:
+def resolve_inputs(
+    joints_image: np.ndarray,
+    body_px: np.ndarray,
+    spread: np.ndarray,
+    fps: float,
+    said: Said,
+    lengths: np.ndarray | None = None,
+    guessed: list[str | None] | None = None,
+    away: np.ndarray | None = None,
+    near: np.ndarray | None = None,
+    cues: Cues | None = None,
+) -> Inputs:
     """Per-frame lifting inputs: the user's sticky orientation over ``guessed`` (None: guessed here);
     sides (sides.track_sides, orientation.legs_crossed); arms steadied; overrides put in; ``lengths``
     (None: the clip's); signs under the user's held ones. ``away`` (F,) the heads' look, ``near`` (F, 2)
@@ -156,11 +170,11 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
     if person.any():
         seen = clip_lengths(joints_image[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
         held = _held_signs(joints, ppu, seen, values, since, person)
-        placed = np.array([any(j.startswith(LIMB_JOINTS["leg"][1:]) for j in overrides.get(i, ()))
-                           for i in range(n)], bool)
+        placed = np.array(
+            [any(j.startswith(LIMB_JOINTS["leg"][1:]) for j in overrides.get(i, ())) for i in range(n)], bool
+        )
         crossed = np.zeros(n, bool)
-        crossed[person] = legs_crossed(joints[person], held[person], yaw[person], ppu[person], seen,
-                                       placed[person])
+        crossed[person] = legs_crossed(joints[person], held[person], yaw[person], ppu[person], seen, placed[person])
         joints = exchange_legs(joints, crossed)
     joints = steadied_arms(joints, person, fps)
     if cues is not None:
@@ -169,8 +183,11 @@ def resolve_inputs(joints_image: np.ndarray, body_px: np.ndarray, spread: np.nda
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
     if lengths is None:
-        lengths = (clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
-                   if person.any() else LENGTH.copy())
+        lengths = (
+            clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
+            if person.any()
+            else LENGTH.copy()
+        )
     # signs are judged on the longer 90th-percentile lengths: where the fit's noise
     # makes a segment look unforeshortened they still keep the two depths apart
     judged = clip_lengths(joints[person], ppu[person]) if person.any() else lengths
@@ -197,8 +214,9 @@ def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndar
     return out
 
 
-def _held_signs(joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values: np.ndarray,
-                since: np.ndarray, person: np.ndarray) -> np.ndarray:
+def _held_signs(
+    joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values: np.ndarray, since: np.ndarray, person: np.ndarray
+) -> np.ndarray:
     """(F, 10) the user's signs where they hold (orientation.held_user_signs), 0 elsewhere."""
     held = np.zeros(values.shape, int)
     for r in runs(person):
@@ -207,13 +225,15 @@ def _held_signs(joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values
     return held
 
 
-def root_track(joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int],
-               focal_px: float | None = None) -> np.ndarray:
+def root_track(
+    joints2d: np.ndarray, px_per_unit: np.ndarray, size: tuple[int, int], focal_px: float | None = None
+) -> np.ndarray:
     """(F, 3) pelvis in metres, camera frame (x right, y up, z toward it; NaN: nobody), by scaled
     orthography: depth = focal * metres-per-unit / ``px_per_unit``; ``size`` (width, height) pixels;
     ``focal_px`` default ``default_camera``'s (the frame width): it scales the depth, not its shape."""
     focal = default_camera(*size, focal_px).focal
     per_m = px_per_unit * BODY_HEIGHT / BODY_HEIGHT_M
     pelvis = joints2d[:, JOINT_INDEX["pelvis"]]
-    return np.stack([(pelvis[:, 0] - size[0] / 2) / per_m, (size[1] / 2 - pelvis[:, 1]) / per_m,
-                     -focal / per_m], axis=-1)
+    return np.stack(
+        [(pelvis[:, 0] - size[0] / 2) / per_m, (size[1] / 2 - pelvis[:, 1]) / per_m, -focal / per_m], axis=-1
+    )

@@ -76,12 +76,18 @@ class Motion:
         rotations, _ = pose_rotations(joints3d, self.offsets)
         rotations = _continuous(rotations)
         positions = forward_kinematics(self.offsets, rotations)
-        return Motion(self.fps, positions[:, JOINT_BONES], self.keyframes, self.root, rotations,
-                      self.offsets, self.origin)
+        return Motion(
+            self.fps, positions[:, JOINT_BONES], self.keyframes, self.root, rotations, self.offsets, self.origin
+        )
 
 
-def build_motion(joints3d_keyframes: dict[int, np.ndarray], n_frames: int, fps: float,
-                 root: np.ndarray | None = None, smooth: float = 0.0) -> Motion:
+def build_motion(
+    joints3d_keyframes: dict[int, np.ndarray],
+    n_frames: int,
+    fps: float,
+    root: np.ndarray | None = None,
+    smooth: float = 0.0,
+) -> Motion:
     """A Motion of ``n_frames`` from keyframes' joints {frame: (16, 3)}: symmetric median offsets,
     rotations slerped between keyframes (held outside); ``root`` (n_frames, 3) pelvis track, NaN rows
     filled (None: keyframe pelvises); ``smooth`` > 0 a Gaussian sigma (frames), keyframes kept exact."""
@@ -99,15 +105,21 @@ def build_motion(joints3d_keyframes: dict[int, np.ndarray], n_frames: int, fps: 
     is_key = np.zeros(n_frames, dtype=bool)
     is_key[keys] = True
     joints3d = positions[:, JOINT_BONES]
-    return Motion(fps=float(fps), joints3d=joints3d, keyframes=is_key, root=track,
-                  rotations=rotations, offsets=offsets, origin=stage_origin(joints3d + track[:, None]))
+    return Motion(
+        fps=float(fps),
+        joints3d=joints3d,
+        keyframes=is_key,
+        root=track,
+        rotations=rotations,
+        offsets=offsets,
+        origin=stage_origin(joints3d + track[:, None]),
+    )
 
 
 def _check_keyframes(joints3d_keyframes, n_frames, fps, smooth) -> tuple[np.ndarray, np.ndarray]:
     """Sorted keyframe indices (K,) and their joints (K, 16, 3); bad input -> MocapError."""
     if not n_frames >= 1 or not fps > 0 or not smooth >= 0:
-        raise MocapError(f"motion needs n_frames >= 1, fps > 0 and smooth >= 0 "
-                         f"(got {n_frames}, {fps}, {smooth})")
+        raise MocapError(f"motion needs n_frames >= 1, fps > 0 and smooth >= 0 (got {n_frames}, {fps}, {smooth})")
     keys = np.array(sorted(joints3d_keyframes), dtype=int)
     if not len(keys) or keys[0] < 0 or keys[-1] >= n_frames:
         raise MocapError(f"keyframes must be a non-empty set of frames in 0..{n_frames - 1}")
@@ -122,8 +134,9 @@ def _slerp_frames(keys: np.ndarray, local: np.ndarray, n_frames: int) -> np.ndar
     if len(keys) == 1:
         return np.repeat(local, n_frames, axis=0)
     times = np.clip(np.arange(n_frames), keys[0], keys[-1])
-    return np.stack([Slerp(keys, Rotation.from_quat(local[:, b]))(times).as_quat()
-                     for b in range(local.shape[1])], axis=1)
+    return np.stack(
+        [Slerp(keys, Rotation.from_quat(local[:, b]))(times).as_quat() for b in range(local.shape[1])], axis=1
+    )
 
 
 def _continuous(quats: np.ndarray) -> np.ndarray:
@@ -145,8 +158,7 @@ def _lerp_frames(keys: np.ndarray, values: np.ndarray, n_frames: int) -> np.ndar
     return values[i] * (1 - w) + values[i + 1] * w
 
 
-def _root_track(keys: np.ndarray, pelvis: np.ndarray, root: np.ndarray | None,
-                n_frames: int) -> np.ndarray:
+def _root_track(keys: np.ndarray, pelvis: np.ndarray, root: np.ndarray | None, n_frames: int) -> np.ndarray:
     """(n_frames, 3) pelvis track: ``root`` with NaN rows filled, or keyframe pelvises interpolated."""
     if root is None:
         return _lerp_frames(keys, pelvis, n_frames)
@@ -160,6 +172,7 @@ def _root_track(keys: np.ndarray, pelvis: np.ndarray, root: np.ndarray | None,
 def _smooth_pinned(track: np.ndarray, keys: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian smoothing along axis 0, the keyframes' residual added back by a natural cubic spline."""
     from scipy.interpolate import CubicSpline  # here: only --smooth needs it
+
     smooth = gaussian_filter1d(track, sigma, axis=0, mode="nearest")
     residual = track[keys] - smooth[keys]
     if len(keys) == 1:

@@ -34,27 +34,28 @@ from mocap.lift.taylor import (
 )
 from mocap.smoothest import smoothest_states, two_state_path
 
-NEGLIGIBLE = 0.25          # |dZ| / length at or below which a sign does not matter
-PROFILE_SPREAD = 0.5       # torso spread below which the body is in profile (yaw 60..120)
+NEGLIGIBLE = 0.25  # |dZ| / length at or below which a sign does not matter
+PROFILE_SPREAD = 0.5  # torso spread below which the body is in profile (yaw 60..120)
 RULE_SPREAD = (0.25, 0.65)  # torso spread over which a profile's image-side rule ramps up (rule_evidence)
-PROFILE_RULE = 0.1         # the image-side rule's weight in a profile, at most (rule_evidence)
-WALK_SPEED = 0.15          # body heights per second: slower pelvis tracks say nothing
-GROWTH = 0.05              # relative body-size change per second that says toward/away
-AWAY_SAYS = 0.25           # pooled head evidence (mocap.silhouette.facing.facing_away) that says away
-CUE_WINDOW_S = 1.0         # half-window over which direction cues are pooled, seconds
-MIN_RUN_S = 0.5            # orientation runs shorter than this join their neighbours
-LIMIT_WEIGHT = 30.0        # model units of acceleration per unit of joint-limit violation
-DEPTH_FILTER_S = 0.15      # seconds: a running median of each |dZ| the signs are chosen on
-SAGITTAL_WEIGHT = 0.5      # limit units per length of depth against the sagittal-plane prior
+PROFILE_RULE = 0.1  # the image-side rule's weight in a profile, at most (rule_evidence)
+WALK_SPEED = 0.15  # body heights per second: slower pelvis tracks say nothing
+GROWTH = 0.05  # relative body-size change per second that says toward/away
+AWAY_SAYS = 0.25  # pooled head evidence (mocap.silhouette.facing.facing_away) that says away
+CUE_WINDOW_S = 1.0  # half-window over which direction cues are pooled, seconds
+MIN_RUN_S = 0.5  # orientation runs shorter than this join their neighbours
+LIMIT_WEIGHT = 30.0  # model units of acceleration per unit of joint-limit violation
+DEPTH_FILTER_S = 0.15  # seconds: a running median of each |dZ| the signs are chosen on
+SAGITTAL_WEIGHT = 0.5  # limit units per length of depth against the sagittal-plane prior
 _J = JOINT_INDEX
-SWITCH_WEIGHT = 2.0        # per leg length apart: exchanging the legs' names between frames
-SAGITTAL_SHOWS = 0.5       # |sin yaw| from which image x shows the legs' swing (yaw 30-150)
-KEEP_RULE = 0.1            # per frame: overruling the image-side rule without a sign against it
+SWITCH_WEIGHT = 2.0  # per leg length apart: exchanging the legs' names between frames
+SAGITTAL_SHOWS = 0.5  # |sin yaw| from which image x shows the legs' swing (yaw 30-150)
+KEEP_RULE = 0.1  # per frame: overruling the image-side rule without a sign against it
 _LEG_SEGMENTS = [SEGMENT_INDEX[s] for side in SIDES for s in limb("leg", side).segments]
 _SIGN_PAIRS = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]])
 
 
 # -- orientation ----------------------------------------------------------------------
+
 
 def facing_side_cues(joints2d: np.ndarray, body_px: np.ndarray, fps: float) -> np.ndarray:
     """(F,) evidence that the performer faces image right (> 0) or left (< 0):
@@ -71,7 +72,7 @@ def pooled(values: np.ndarray, fps: float, pool=np.nanmean) -> np.ndarray:
     half = max(1, int(round(CUE_WINDOW_S * fps)))
     out = np.full(len(values), np.nan)
     for i in np.flatnonzero(np.isfinite(values)):
-        out[i] = pool(values[max(0, i - half): i + half + 1])
+        out[i] = pool(values[max(0, i - half) : i + half + 1])
     return out
 
 
@@ -82,8 +83,9 @@ def looks_away(away: np.ndarray | None, fps: float, n: int) -> np.ndarray:
     return np.nan_to_num(pooled(np.asarray(away, float), fps), nan=0.0) > AWAY_SAYS
 
 
-def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.ndarray,
-                       fps: float, away: np.ndarray | None = None) -> list[str | None]:
+def guess_orientations(
+    joints2d: np.ndarray, body_px: np.ndarray, spread: np.ndarray, fps: float, away: np.ndarray | None = None
+) -> list[str | None]:
     """Each frame's orientation (None: nobody): side from walking and knees, profile below PROFILE_SPREAD,
     backward where ``facing_evidence`` < -1/2; runs shorter than MIN_RUN_S merged into neighbours."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
@@ -101,8 +103,9 @@ def guess_orientations(joints2d: np.ndarray, body_px: np.ndarray, spread: np.nda
     return merge_short_runs(names, max(1, int(round(MIN_RUN_S * fps))))
 
 
-def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
-                    away: np.ndarray | None = None) -> np.ndarray:
+def facing_evidence(
+    joints2d: np.ndarray, body_px: np.ndarray, fps: float, away: np.ndarray | None = None
+) -> np.ndarray:
     """(F,) in [-1, 1]: turned toward (> 0) or away (< 0): +-1 where the median growth over CUE_WINDOW_S
     passes GROWTH per second, else the pooled head look ``away`` / (2 AWAY_SAYS), negated; else 0."""
     ok = np.isfinite(joints2d).all(axis=(1, 2)) & np.isfinite(body_px)
@@ -111,8 +114,7 @@ def facing_evidence(joints2d: np.ndarray, body_px: np.ndarray, fps: float,
         log_px = np.log(body_px[r])
         growth = pooled(np.gradient(log_px) * fps if len(log_px) > 1 else np.zeros(1), fps, np.nanmedian)
         behind = pooled(np.zeros(r.stop - r.start) if away is None else away[r], fps)
-        out[r] = np.where(np.abs(growth) > GROWTH, np.sign(growth),
-                          np.clip(-behind / (2 * AWAY_SAYS), -1.0, 1.0))
+        out[r] = np.where(np.abs(growth) > GROWTH, np.sign(growth), np.clip(-behind / (2 * AWAY_SAYS), -1.0, 1.0))
     return out
 
 
@@ -146,8 +148,10 @@ def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]
     for start, end in pieces:
         if out[start] is not None and end - start < shortest:
             left = out[start - 1] if start > 0 else None
-            right = next((names[a] for a, b in pieces if a >= end and names[a] is not None and b - a >= shortest),
-                         out[end] if end < len(out) else None)
+            right = next(
+                (names[a] for a, b in pieces if a >= end and names[a] is not None and b - a >= shortest),
+                out[end] if end < len(out) else None,
+            )
             fill = left if left is not None else right
             if fill is not None:
                 out[start:end] = [fill] * (end - start)
@@ -155,6 +159,7 @@ def merge_short_runs(names: list[str | None], shortest: int) -> list[str | None]
 
 
 # -- foreshortening signs -------------------------------------------------------------
+
 
 def lean_penalty(axis: np.ndarray, facing: np.ndarray, left: np.ndarray, back: float) -> np.ndarray:
     """Torso or head leaning back more than ``back`` (a cosine) or sideways."""
@@ -177,9 +182,14 @@ def segment_vectors(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.n
     return vec, depth
 
 
-def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
-                lengths: np.ndarray = LENGTH, fixed: np.ndarray | None = None,
-                fps: float = 30.0) -> np.ndarray:
+def guess_signs(
+    joints2d: np.ndarray,
+    px_per_unit: np.ndarray,
+    yaw: np.ndarray,
+    lengths: np.ndarray = LENGTH,
+    fixed: np.ndarray | None = None,
+    fps: float = 30.0,
+) -> np.ndarray:
     """(F, 10) +1 toward / -1 away for anatomical NaN-free 2D joints (F, 16, 2), per torso, head and limb
     by ``smoothest_states``: joint limits and (legs, torso, head) ``sagittal_depth`` per frame, the
     acceleration of |dZ| (median over DEPTH_FILTER_S) between; ``fixed`` (F, 10) user signs, 0: none."""
@@ -189,37 +199,53 @@ def guess_signs(joints2d: np.ndarray, px_per_unit: np.ndarray, yaw: np.ndarray,
     depth = median_filter(depth, size=(width, 1), mode="nearest")
     yaw = np.asarray(yaw, float)
     facing, left = _frame_axes(yaw)
-    sagittal = sagittal_depth(vec[..., 0], yaw, lengths)                          # (F, 10)
+    sagittal = sagittal_depth(vec[..., 0], yaw, lengths)  # (F, 10)
     out = np.ones((len(joints2d), 10), int)
     for name, back in (("torso", 0.2), ("head", 0.3)):
         k = SEGMENT_INDEX[name]
         states = np.array([1, -1])[None]
-        z = states * depth[:, [k]]                                                 # (F, 2)
+        z = states * depth[:, [k]]  # (F, 2)
         axis = np.concatenate([np.repeat(vec[:, None, k], 2, 1), z[..., None]], axis=-1)
-        cost = (lean_penalty(axis, facing[:, None], left[:, None], back)
-                + SAGITTAL_WEIGHT * np.maximum(0, -states * sagittal[:, [k]]))
+        cost = lean_penalty(axis, facing[:, None], left[:, None], back) + SAGITTAL_WEIGHT * np.maximum(
+            0, -states * sagittal[:, [k]]
+        )
         allowed = (fixed[:, [k]] == 0) | (fixed[:, [k]] == states)
         out[:, k] = states[0, smoothest_states(z[..., None], LIMIT_WEIGHT * cost, allowed)]
     for one in LIMBS:
         ku, kl = (SEGMENT_INDEX[s] for s in one.segments)
-        pick = _limb_signs(vec[:, [ku, kl]], depth[:, [ku, kl]], sagittal[:, [ku, kl]],
-                           fixed[:, [ku, kl]], facing, left, SIDE_SIGN[one.side], one.kind == "leg")
+        pick = _limb_signs(
+            vec[:, [ku, kl]],
+            depth[:, [ku, kl]],
+            sagittal[:, [ku, kl]],
+            fixed[:, [ku, kl]],
+            facing,
+            left,
+            SIDE_SIGN[one.side],
+            one.kind == "leg",
+        )
         out[:, ku], out[:, kl] = _SIGN_PAIRS[pick, 0], _SIGN_PAIRS[pick, 1]
     return out
 
 
-def _limb_signs(vec: np.ndarray, depth: np.ndarray, sagittal: np.ndarray, fixed: np.ndarray,
-                facing: np.ndarray, left: np.ndarray, side: float, leg: bool) -> np.ndarray:
+def _limb_signs(
+    vec: np.ndarray,
+    depth: np.ndarray,
+    sagittal: np.ndarray,
+    fixed: np.ndarray,
+    facing: np.ndarray,
+    left: np.ndarray,
+    side: float,
+    leg: bool,
+) -> np.ndarray:
     """(F,) index into _SIGN_PAIRS of one limb's (upper, lower) signs; arguments are
     the two segments' image vectors (F, 2, 2), |dZ|, sagittal depths and user signs."""
     su, sl = _SIGN_PAIRS[:, 0][None], _SIGN_PAIRS[:, 1][None]
-    zu, zl = su * depth[:, [0]], sl * depth[:, [1]]                                # (F, 4)
+    zu, zl = su * depth[:, [0]], sl * depth[:, [1]]  # (F, 4)
     u3 = np.concatenate([np.repeat(vec[:, None, 0], 4, 1), zu[..., None]], axis=-1)
     l3 = np.concatenate([np.repeat(vec[:, None, 1], 4, 1), zl[..., None]], axis=-1)
     cost = limb_penalty(u3, l3, facing[:, None], left[:, None], side, leg)
-    if leg:     # arms swing out of the sagittal plane too (and their 2D x is the fit's worst)
-        cost = cost + SAGITTAL_WEIGHT * (np.maximum(0, -su * sagittal[:, [0]])
-                                         + np.maximum(0, -sl * sagittal[:, [1]]))
+    if leg:  # arms swing out of the sagittal plane too (and their 2D x is the fit's worst)
+        cost = cost + SAGITTAL_WEIGHT * (np.maximum(0, -su * sagittal[:, [0]]) + np.maximum(0, -sl * sagittal[:, [1]]))
     allowed = ((fixed[:, [0]] == 0) | (fixed[:, [0]] == su)) & ((fixed[:, [1]] == 0) | (fixed[:, [1]] == sl))
     return smoothest_states(np.stack([zu, zu + zl], axis=-1), LIMIT_WEIGHT * cost, allowed)
 
@@ -249,28 +275,41 @@ def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarra
 
 # -- which leg is which, from the user's signs ---------------------------------------
 
-def legs_crossed(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
-                 px_per_unit: np.ndarray, lengths: np.ndarray, pinned: np.ndarray) -> np.ndarray:
+
+def legs_crossed(
+    joints: np.ndarray,
+    user_signs: np.ndarray,
+    yaw: np.ndarray,
+    px_per_unit: np.ndarray,
+    lengths: np.ndarray,
+    pinned: np.ndarray,
+) -> np.ndarray:
     """(F,) bool: frames of anatomical 2D joints (F, 16, 2) whose knees and ankles belong to the other
     hip, by the user's held signs (``user_signs`` (F, 10)) against ``sagittal_depth``: a two-state path,
     SWITCH_WEIGHT per leg length apart to exchange, KEEP_RULE a crossed frame; ``pinned`` (F,) never."""
     crossed = np.ones(len(joints), bool)
-    costs = np.stack([_leg_sign_cost(joints, user_signs, yaw, px_per_unit, lengths),
-                      _leg_sign_cost(exchange_legs(joints, crossed), user_signs, yaw, px_per_unit, lengths)],
-                     axis=1)                                                     # (F, 2)
+    costs = np.stack(
+        [
+            _leg_sign_cost(joints, user_signs, yaw, px_per_unit, lengths),
+            _leg_sign_cost(exchange_legs(joints, crossed), user_signs, yaw, px_per_unit, lengths),
+        ],
+        axis=1,
+    )  # (F, 2)
     if not costs.any():
         return ~crossed
     costs[:, 1] += KEEP_RULE
     costs[pinned, 1] = np.inf
     legs = joints[:, [[_J[f"{n}_{s}"] for n in LIMB_JOINTS["leg"][1:]] for s in SIDES]]
     apart = np.linalg.norm(legs[:, 0] - legs[:, 1], axis=-1).sum(-1) / (
-        px_per_unit * (lengths[SEGMENT_INDEX["upper_leg_l"]] + lengths[SEGMENT_INDEX["lower_leg_l"]]))
+        px_per_unit * (lengths[SEGMENT_INDEX["upper_leg_l"]] + lengths[SEGMENT_INDEX["lower_leg_l"]])
+    )
     switch = SWITCH_WEIGHT * np.minimum(apart[1:], apart[:-1])
     return two_state_path(costs, switch).astype(bool)
 
 
-def _leg_sign_cost(joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray,
-                   px_per_unit: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+def _leg_sign_cost(
+    joints: np.ndarray, user_signs: np.ndarray, yaw: np.ndarray, px_per_unit: np.ndarray, lengths: np.ndarray
+) -> np.ndarray:
     """(F,) how far the legs' sagittal depths point against the user's signs (0 near frontal)."""
     vec, _ = segment_vectors(joints, px_per_unit, lengths)
     sagittal = sagittal_depth(vec[..., 0], yaw, lengths)[:, _LEG_SEGMENTS]

@@ -12,28 +12,34 @@ from mocap.body import JOINT_INDEX, LIMB_JOINTS, SIDES
 from mocap.lift.taylor import image_left_is_right, runs
 from mocap.smoothest import two_state_path
 
-SEPARATED = 0.25     # distal joints this many limb lengths apart tell two limbs apart
+SEPARATED = 0.25  # distal joints this many limb lengths apart tell two limbs apart
 # limb lengths of joint distance that a radian of segment turn counts as: a segment
 # (half a limb) that turns a radian moves its distal joint about that far
 ANGLE_WEIGHT = 0.5
-MIN_APART = 3        # frames: shorter stretches apart are fit noise inside a crossing
-STEP_S = 0.5         # s: about one step of a walk or run, so in a gait each leg leads within it
-CROSSING_S = 0.15    # s with the legs close together that a constant pace carries them across
+MIN_APART = 3  # frames: shorter stretches apart are fit noise inside a crossing
+STEP_S = 0.5  # s: about one step of a walk or run, so in a gait each leg leads within it
+CROSSING_S = 0.15  # s with the legs close together that a constant pace carries them across
 # The costs of a naming, in the units of bridge_parity's certainty (limb lengths of
 # joint distance between the two ways of following the legs, a crossing's 1-2):
-LINK_FLOOR = 0.5         # renaming the legs where nothing follows them (close together throughout)
+LINK_FLOOR = 0.5  # renaming the legs where nothing follows them (close together throughout)
 NEAR_WEIGHT = (0.1, 3.0)  # per unit of the near arm's and the near leg's evidence (mocap.silhouette.facing.near_limbs)
-CONVENTION_COST = 1e-3   # per frame against the forward (or, looking away, backward) convention
-KNOWN_COST = 1e6         # per frame against what the user said
+CONVENTION_COST = 1e-3  # per frame against the forward (or, looking away, backward) convention
+KNOWN_COST = 1e6  # per frame against what the user said
 _J = JOINT_INDEX
-_STATES = np.array([[False, True]])      # the legs' naming: keep, swap
+_STATES = np.array([[False, True]])  # the legs' naming: keep, swap
 # the joints whose image sides the arms' and the legs' parities swap
 _PAIR_JOINTS = {"arms": LIMB_JOINTS["arm"][1:], "legs": LIMB_JOINTS["leg"][1:]}
 
 
-def track_sides(joints2d: np.ndarray, known: np.ndarray, facing_x: np.ndarray, fps: float,
-                away: np.ndarray | None = None, near: np.ndarray | None = None,
-                rule: np.ndarray | None = None) -> np.ndarray:
+def track_sides(
+    joints2d: np.ndarray,
+    known: np.ndarray,
+    facing_x: np.ndarray,
+    fps: float,
+    away: np.ndarray | None = None,
+    near: np.ndarray | None = None,
+    rule: np.ndarray | None = None,
+) -> np.ndarray:
     """(F, 3) bool: whether the image-left arm, the image-left leg (hip) is the right one, and whether the
     knees and ankles belong to the other hip. Per person run the legs' naming minimises ``_naming_costs``
     plus each departure's certainty from the followed legs (``naming_path``). ``known`` (F, 2) arms, legs:
@@ -82,8 +88,7 @@ def _naming_costs(known: np.ndarray, rule: np.ndarray, arms_kept: np.ndarray, aw
     """(F, 2) each frame's cost of the legs' keep/swap: KNOWN_COST against ``known`` (legs, or arms
     via ``arms_kept`` (F,)), |rule| against ``rule``, CONVENTION_COST against the convention (``away``)."""
     arm_swap = arms_kept[:, None] ^ _STATES
-    costs = (np.abs(rule)[:, None] * (_STATES != (rule > 0)[:, None])
-             + CONVENTION_COST * (_STATES == away[:, None]))
+    costs = np.abs(rule)[:, None] * (_STATES != (rule > 0)[:, None]) + CONVENTION_COST * (_STATES == away[:, None])
     costs += KNOWN_COST * ((known[:, [1]] >= 0) & (_STATES != (known[:, [1]] == 1)))
     return costs + KNOWN_COST * ((known[:, [0]] >= 0) & (arm_swap != (known[:, [0]] == 1)))
 
@@ -92,8 +97,9 @@ def _near_costs(near: np.ndarray, arms_kept: np.ndarray) -> np.ndarray:
     """(F, 2) cost of the legs' keep/swap against ``near`` (F, 2) arms, legs (> 0: image-left is
     right), NEAR_WEIGHT times their sizes; the arms named through ``arms_kept``."""
     arm_swap = arms_kept[:, None] ^ _STATES
-    return (NEAR_WEIGHT[0] * np.abs(near[:, [0]]) * (arm_swap != (near[:, [0]] > 0))
-            + NEAR_WEIGHT[1] * np.abs(near[:, [1]]) * (_STATES != (near[:, [1]] > 0)))
+    return NEAR_WEIGHT[0] * np.abs(near[:, [0]]) * (arm_swap != (near[:, [0]] > 0)) + NEAR_WEIGHT[1] * np.abs(
+        near[:, [1]]
+    ) * (_STATES != (near[:, [1]] > 0))
 
 
 def _nearer_naming(swap: np.ndarray, costs: np.ndarray) -> np.ndarray:
@@ -111,8 +117,9 @@ def naming_path(costs: np.ndarray, parity: np.ndarray, links: np.ndarray) -> np.
     return two_state_path(anchored, links).astype(bool) ^ flip
 
 
-def _arm_sides(legs: np.ndarray, arms: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray,
-               leg_px: float, half: int) -> np.ndarray:
+def _arm_sides(
+    legs: np.ndarray, arms: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg_px: float, half: int
+) -> np.ndarray:
     """(F,) bool: whether the image-left arm is the right one in a profile, from the legs' sides."""
     stepping = _stepping(legs, legs_swap, facing_x, leg_px, half)
     return np.where(stepping, _counter_phase(legs, legs_swap, arms, facing_x), legs_swap)
@@ -147,9 +154,9 @@ def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[
             margin = _crosses(pair, pieces[k - 1], piece, parity, limb_px)
             current = int(margin > 0)
             middle = (pieces[k - 1].stop + piece.start + 1) // 2
-            parity[middle:piece.start] = current
+            parity[middle : piece.start] = current
             close = piece.start - pieces[k - 1].stop
-            links[pieces[k - 1].stop - 1:piece.start] = abs(margin) * min(1.0, crossing / close)
+            links[pieces[k - 1].stop - 1 : piece.start] = abs(margin) * min(1.0, crossing / close)
         parity[piece.start] = current
         for t in range(piece.start + 1, piece.stop):
             step = np.linalg.norm(flat[t] - flat[t - 1], axis=-1).sum()
@@ -158,7 +165,7 @@ def bridge_parity(pair: np.ndarray, limb_px: float, crossing: int = 1) -> tuple[
             links[t - 1] = abs(cross - step) / limb_px
             parity[t] = current
         end = pieces[k + 1].start if k + 1 < len(pieces) else n
-        parity[piece.stop:end] = current
+        parity[piece.stop : end] = current
     return parity, links
 
 
@@ -197,8 +204,10 @@ def _order_margin(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, l
 def _mismatch(predicted: tuple[np.ndarray, np.ndarray], limbs: np.ndarray, limb_px: float) -> float:
     """How far limbs (2, 3, 2) lie from ``predicted``: joints in limb lengths + ANGLE_WEIGHT x turns (rad)."""
     joints, angles = _limb_features(limbs)
-    return float(np.linalg.norm(predicted[0] - joints, axis=-1).sum() / limb_px
-                 + ANGLE_WEIGHT * np.abs(_wrapped(predicted[1] - angles)).sum())
+    return float(
+        np.linalg.norm(predicted[0] - joints, axis=-1).sum() / limb_px
+        + ANGLE_WEIGHT * np.abs(_wrapped(predicted[1] - angles)).sum()
+    )
 
 
 def _wrapped(radians: np.ndarray) -> np.ndarray:
@@ -208,26 +217,25 @@ def _wrapped(radians: np.ndarray) -> np.ndarray:
 
 def _same_order(flat: np.ndarray, t: int, u: int) -> bool:
     """Whether the limbs of frame u follow those of frame t in the same order."""
-    return (np.linalg.norm(flat[u] - flat[t], axis=-1).sum()
-            <= np.linalg.norm(flat[u, ::-1] - flat[t], axis=-1).sum())
+    return np.linalg.norm(flat[u] - flat[t], axis=-1).sum() <= np.linalg.norm(flat[u, ::-1] - flat[t], axis=-1).sum()
 
 
-def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg_px: float,
-              half: int) -> np.ndarray:
+def _stepping(legs: np.ndarray, legs_swap: np.ndarray, facing_x: np.ndarray, leg_px: float, half: int) -> np.ndarray:
     """(F,) bool gait frames: within ``half`` frames either side each leg is clearly ahead at some time;
     there arms swing opposite the legs (``_counter_phase``), elsewhere they take the legs' names."""
-    lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
+    lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x  # image-right leg ahead
     clear = np.abs(lead) > SEPARATED * leg_px
     right_ahead = legs_swap == (lead < 0)
-    took_turns = [maximum_filter1d((clear & ahead).astype(np.uint8), 2 * half + 1, mode="constant") > 0
-                  for ahead in (right_ahead, ~right_ahead)]
+    took_turns = [
+        maximum_filter1d((clear & ahead).astype(np.uint8), 2 * half + 1, mode="constant") > 0
+        for ahead in (right_ahead, ~right_ahead)
+    ]
     return took_turns[0] & took_turns[1]
 
 
-def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray,
-                   facing_x: np.ndarray) -> np.ndarray:
+def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray, facing_x: np.ndarray) -> np.ndarray:
     """(F,) bool arm swaps in a profile: front arm opposite the front leg; level legs hold the last."""
-    lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x   # image-right leg ahead
+    lead = (legs[:, 1, :, 0].mean(-1) - legs[:, 0, :, 0].mean(-1)) * facing_x  # image-right leg ahead
     arm_lead = (arms[:, 1, :, 0].mean(-1) - arms[:, 0, :, 0].mean(-1)) * facing_x
     out = np.ones(len(legs), bool)
     last = True
@@ -240,8 +248,9 @@ def _counter_phase(legs: np.ndarray, legs_swap: np.ndarray, arms: np.ndarray,
     return out
 
 
-def known_sides(orientations: list[str | None], overrides: dict[int, dict[str, tuple[float, float]]],
-                joints2d: np.ndarray) -> np.ndarray:
+def known_sides(
+    orientations: list[str | None], overrides: dict[int, dict[str, tuple[float, float]]], joints2d: np.ndarray
+) -> np.ndarray:
     """(F, 2) int8 ``known`` for ``track_sides``: the orientation's rule (forward 1, backward 0, profile
     -1) and, where the user placed an elbow, wrist, knee or ankle, the naming that puts it nearer."""
     known = np.full((len(orientations), 2), -1, np.int8)

@@ -15,8 +15,8 @@ UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT
 # tables: hand 0.108 of body height, ankle height 0.039, ankle to ball of foot 0.1 of it
 # forward, toes 0.04)
 HAND, ANKLE_HEIGHT, BALL_FORWARD, TOES = 19.0, 7.0, 14.0, 6.0
-SPINE_AT = 0.2       # Spine: this fraction of the way from the pelvis to the chest
-HEAD_AT = 0.4        # Head (the skull's base): this fraction from the neck to the head top
+SPINE_AT = 0.2  # Spine: this fraction of the way from the pelvis to the chest
+HEAD_AT = 0.4  # Head (the skull's base): this fraction from the neck to the head top
 
 _SIDES = {"Left": "l", "Right": "r"}
 _X = {"l": np.array([1.0, 0.0, 0.0]), "r": np.array([-1.0, 0.0, 0.0])}
@@ -42,31 +42,50 @@ BONE_INDEX = {b: i for i, b in enumerate(BONES)}
 PARENTS = np.array([BONE_INDEX[p] if p else -1 for _, p in _tree()])
 END_SITE = np.array([b.endswith("_End") for b in BONES])
 _CONTRACT = {"pelvis": "Hips", "chest": "Spine1", "neck": "Neck", "head_top": "Head_End"} | {
-    f"{j}_{s}": f"{side}{bone}" for side, s in _SIDES.items()
-    for j, bone in (("shoulder", "Arm"), ("elbow", "ForeArm"), ("wrist", "Hand"),
-                    ("hip", "UpLeg"), ("knee", "Leg"), ("ankle", "Foot"))}
+    f"{j}_{s}": f"{side}{bone}"
+    for side, s in _SIDES.items()
+    for j, bone in (
+        ("shoulder", "Arm"),
+        ("elbow", "ForeArm"),
+        ("wrist", "Hand"),
+        ("hip", "UpLeg"),
+        ("knee", "Leg"),
+        ("ankle", "Foot"),
+    )
+}
 # where each contract joint is among the bones
 JOINT_BONES = np.array([BONE_INDEX[_CONTRACT[j]] for j in JOINTS])
 
 # frame bones: (axis 0 = x / 1 = y that points exactly from bone to a point, that
 # point, the two points whose direction the other axis leans toward)
-_FRAMES = {"Hips": (0, "hip_l", ("pelvis", "chest")),
-           "Spine": (1, "chest", ("hip_r", "hip_l")),
-           "Spine1": (1, "neck", ("shoulder_r", "shoulder_l"))}
+_FRAMES = {
+    "Hips": (0, "hip_l", ("pelvis", "chest")),
+    "Spine": (1, "chest", ("hip_r", "hip_l")),
+    "Spine1": (1, "neck", ("shoulder_r", "shoulder_l")),
+}
 # swing bones: the point the bone turns toward, and its rest direction
 _SWINGS = {"Neck": ("head_top", _UP)} | {
-    f"{side}{bone}": (f"{target}_{s}", rest) for side, s in _SIDES.items()
-    for bone, target, rest in (("Shoulder", "shoulder", _X[s]), ("Arm", "elbow", _X[s]),
-                               ("ForeArm", "wrist", _X[s]), ("UpLeg", "knee", _DOWN),
-                               ("Leg", "ankle", _DOWN))}
+    f"{side}{bone}": (f"{target}_{s}", rest)
+    for side, s in _SIDES.items()
+    for bone, target, rest in (
+        ("Shoulder", "shoulder", _X[s]),
+        ("Arm", "elbow", _X[s]),
+        ("ForeArm", "wrist", _X[s]),
+        ("UpLeg", "knee", _DOWN),
+        ("Leg", "ankle", _DOWN),
+    )
+}
 _FEET = ("LeftFoot", "RightFoot")
 # bones placed by the proportions alone (in the bone's parent's frame, model units)
-_FIXED = {f"{side}ToeBase": np.array([0.0, -ANKLE_HEIGHT, BALL_FORWARD]) for side in _SIDES} | {
-    f"{side}Toe_End": np.array([0.0, 0.0, TOES]) for side in _SIDES} | {
-    f"{side}Hand_End": _X[s] * HAND for side, s in _SIDES.items()}
+_FIXED = (
+    {f"{side}ToeBase": np.array([0.0, -ANKLE_HEIGHT, BALL_FORWARD]) for side in _SIDES}
+    | {f"{side}Toe_End": np.array([0.0, 0.0, TOES]) for side in _SIDES}
+    | {f"{side}Hand_End": _X[s] * HAND for side, s in _SIDES.items()}
+)
 # bones that lie along their parent's rest direction (the parent points at them)
 _ALONG = {"Spine1", "Neck", "Head", "Head_End"} | {
-    f"{side}{bone}" for side in _SIDES for bone in ("Arm", "ForeArm", "Hand", "Leg", "Foot")}
+    f"{side}{bone}" for side in _SIDES for bone in ("Arm", "ForeArm", "Hand", "Leg", "Foot")
+}
 
 
 def rest_direction(bone: str) -> np.ndarray:
@@ -125,8 +144,7 @@ def heading(hips: Rotation) -> Rotation:
     return Rotation.from_rotvec(np.arctan2(forward[:, 0], forward[:, 2])[:, None] * _UP)
 
 
-def global_rotation(bone: str, at: dict[str, np.ndarray], parent: Rotation,
-                    hips: Rotation | None) -> Rotation:
+def global_rotation(bone: str, at: dict[str, np.ndarray], parent: Rotation, hips: Rotation | None) -> Rotation:
     """A bone's rotation in the world from the landmarks ``at`` and its parent's."""
     if bone in _FRAMES:
         axis, target, (a, b) = _FRAMES[bone]
@@ -139,8 +157,7 @@ def global_rotation(bone: str, at: dict[str, np.ndarray], parent: Rotation,
     return parent
 
 
-def pose_rotations(joints: np.ndarray, offsets: np.ndarray | None = None
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def pose_rotations(joints: np.ndarray, offsets: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Local rotations (K, len(BONES), 4; x y z w) posing the skeleton as pelvis-relative contract
     joints (K, 16, 3), and each bone's vector in its parent's frame (K, len(BONES), 3; NaN for bones
     placed by proportion). With ``offsets`` each bone turns from where the fixed bones put it."""
@@ -173,8 +190,11 @@ def clip_offsets(vectors: np.ndarray) -> np.ndarray:
             v = vectors[:, b]
             real = v[np.linalg.norm(v, axis=-1) > 1e-9]
             v = real if len(real) else v
-            offsets[b] = (rest_direction(BONES[p]) * np.median(np.linalg.norm(v, axis=-1))
-                          if name in _ALONG else np.median(v, axis=0))
+            offsets[b] = (
+                rest_direction(BONES[p]) * np.median(np.linalg.norm(v, axis=-1))
+                if name in _ALONG
+                else np.median(v, axis=0)
+            )
     return symmetric(offsets)
 
 
@@ -211,4 +231,3 @@ def forward_kinematics(offsets: np.ndarray, rotations: np.ndarray) -> np.ndarray
 def rest_positions(offsets: np.ndarray) -> np.ndarray:
     """(len(BONES), 3) the T-pose: every bone's position with every rotation identity."""
     return forward_kinematics(offsets, np.tile([0.0, 0.0, 0.0, 1.0], (1, len(BONES), 1)))[0]
-

@@ -28,8 +28,8 @@ from mocap.body import (
     left_direction,
 )
 
-UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT            # metres per model unit
-SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)     # model half-spans: shoulders, hips
+UNIT_M = BODY_HEIGHT_M / BODY_HEIGHT  # metres per model unit
+SPANS = (SHOULDER_HALF_SPAN, HIP_HALF_SPAN)  # model half-spans: shoulders, hips
 # A yaw within this many degrees of a profile (+-90) is named a profile by
 # ``orientation_of_yaw``: the six orientations split the circle into 60-degree sectors.
 PROFILE_HALF_SECTOR = 30.0
@@ -40,6 +40,7 @@ _LIMB_SEGMENTS = [SEGMENT_INDEX[s] for s in SEGMENT_NAMES if s not in ("torso", 
 
 
 # -- orientation ----------------------------------------------------------------------
+
 
 def facing_yaw(orientation: str, spread: float) -> float:
     """Facing yaw in degrees (section 3.4): 0 faces the camera, +90 image right, -90 image left, 180 away.
@@ -107,14 +108,13 @@ def _exchanged(joints2d: np.ndarray, rows: np.ndarray, names: tuple[str, ...]) -
 
 # -- Eq. 4-5 --------------------------------------------------------------------------
 
-def relative_depths(joints2d: np.ndarray, px_per_unit, signs: np.ndarray,
-                    lengths: np.ndarray = LENGTH) -> np.ndarray:
+
+def relative_depths(joints2d: np.ndarray, px_per_unit, signs: np.ndarray, lengths: np.ndarray = LENGTH) -> np.ndarray:
     """(..., 10) dZ per segment (Eq. 5), model units, distal minus proximal, of joints (..., 16, 2) at
     ``px_per_unit`` (scalar or (...,)); ``signs`` +1 toward, -1 away (0: toward); 0 if seen over-long."""
-    ends = np.asarray(joints2d, float)[..., SEGMENT_JOINTS, :]          # (..., 10, 2, 2)
-    seen = (np.linalg.norm(ends[..., 1, :] - ends[..., 0, :], axis=-1)
-            / np.asarray(px_per_unit, float)[..., None])
-    depth = np.sqrt(np.maximum(np.asarray(lengths, float) ** 2 - seen ** 2, 0.0))
+    ends = np.asarray(joints2d, float)[..., SEGMENT_JOINTS, :]  # (..., 10, 2, 2)
+    seen = np.linalg.norm(ends[..., 1, :] - ends[..., 0, :], axis=-1) / np.asarray(px_per_unit, float)[..., None]
+    depth = np.sqrt(np.maximum(np.asarray(lengths, float) ** 2 - seen**2, 0.0))
     return np.where(np.asarray(signs) < 0, -depth, depth)
 
 
@@ -124,9 +124,15 @@ def image_to_model(joints2d: np.ndarray, px_per_unit: float) -> np.ndarray:
     return np.stack([rel[:, 0], -rel[:, 1]], axis=-1) / px_per_unit
 
 
-def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: np.ndarray,
-              lengths: np.ndarray = LENGTH, spans: tuple[float, float] = SPANS,
-              seen_depths: np.ndarray | None = None) -> np.ndarray:
+def lift_pose(
+    joints2d: np.ndarray,
+    px_per_unit: float,
+    yaw_deg: float,
+    signs: np.ndarray,
+    lengths: np.ndarray = LENGTH,
+    spans: tuple[float, float] = SPANS,
+    seen_depths: np.ndarray | None = None,
+) -> np.ndarray:
     """(16, 3) metres (contract frame) from anatomical 2D joints (16, 2): x, y by Eq. 4; z from the pelvis:
     torso and head by Eq. 5, hips and shoulders at ``spans`` along the yaw's lateral axis, then each limb
     by Eq. 5. ``seen_depths`` (10,): a person model's |dZ| (cues.world_depths), signed by ``signs``, where finite."""
@@ -138,7 +144,7 @@ def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: n
     z[_J["neck"]] = dz[_TORSO]
     z[_J["chest"]] = CHEST_FRACTION * dz[_TORSO]
     z[_J["head_top"]] = dz[_TORSO] + dz[_HEAD]
-    across = lateral_axis(yaw_deg)[2]                    # z of the performer's left
+    across = lateral_axis(yaw_deg)[2]  # z of the performer's left
     axis_z = dz[_TORSO] * (1.0 - SHOULDER_DROP / LENGTH[_TORSO])
     for side, sign in SIDE_SIGN.items():
         z[_J[f"shoulder_{side}"]] = axis_z + sign * across * spans[0]
@@ -150,6 +156,7 @@ def lift_pose(joints2d: np.ndarray, px_per_unit: float, yaw_deg: float, signs: n
 
 
 # -- reading a 3D pose back (ground truth, tests, annotations from a pose) -----------
+
 
 def yaw_of(joints3d: np.ndarray) -> float:
     """Facing yaw (degrees) of a 3D pose (16, 3) from its left direction (inverse of ``lateral_axis``)."""
@@ -173,13 +180,13 @@ def depth_fractions(joints3d: np.ndarray) -> np.ndarray:
 
 # -- lengths seen in a clip -----------------------------------------------------------
 
-def clip_lengths(joints2d: np.ndarray, px_per_unit: np.ndarray, q=90.0,
-                 pool: bool = False) -> np.ndarray:
+
+def clip_lengths(joints2d: np.ndarray, px_per_unit: np.ndarray, q=90.0, pool: bool = False) -> np.ndarray:
     """(10,) segment lengths (model units) seen over a clip: the ``q``-th percentile (scalar or (10,))
     of each projected length, pairs pooled with ``pool``; the model's where nothing is seen. Beyond the
     paper: real bodies differ from Table 1, and most segments pass the image plane at full length."""
     j = np.asarray(joints2d, float)
-    ends = j[:, SEGMENT_JOINTS]                                             # (F, 10, 2, 2)
+    ends = j[:, SEGMENT_JOINTS]  # (F, 10, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) / np.asarray(px_per_unit, float)[:, None]
     out = LENGTH.astype(float).copy()
     q = np.broadcast_to(np.asarray(q, float), out.shape)

@@ -12,8 +12,8 @@ import numpy as np
 from mocap.errors import MocapError
 
 DEFAULT_MODEL = "mediapipe"
-NONE = "none"                   # the paper's classical path: no person model
-SURE = 0.5                      # a landmark confidence from which it is taken as seen
+NONE = "none"  # the paper's classical path: no person model
+SURE = 0.5  # a landmark confidence from which it is taken as seen
 
 
 @dataclass(frozen=True)
@@ -58,8 +58,9 @@ class Entry:
     install: str
 
 
-MODELS = {"mediapipe": Entry("mocap.person.mediapipe_pose", "mediapipe",
-                             ".venv/bin/pip install --no-deps mediapipe==0.10.14")}
+MODELS = {
+    "mediapipe": Entry("mocap.person.mediapipe_pose", "mediapipe", ".venv/bin/pip install --no-deps mediapipe==0.10.14")
+}
 CHOICES = (*MODELS, NONE)
 
 
@@ -77,12 +78,14 @@ def open_person_model(name: str = DEFAULT_MODEL) -> PersonModel | None:
     if not available(name):
         raise MocapError(install_hint(name))
     import importlib
+
     return importlib.import_module(MODELS[name].module).Model()
 
 
 def available(name: str = DEFAULT_MODEL) -> bool:
     """Whether the named person model's package is installed (without importing it)."""
     import importlib.util
+
     return name == NONE or importlib.util.find_spec(MODELS[name].package) is not None
 
 

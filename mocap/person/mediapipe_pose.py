@@ -20,9 +20,20 @@ NECK_ALONG = (1.50 - 1.44) / (1.62 - 1.44)
 HEAD_TOP_ALONG = (1.75 - 1.44) / (1.62 - 1.44)
 
 # MediaPipe's landmark numbers of the joints it has itself (BlazePose's 33 points)
-_OWN = {"shoulder_l": 11, "shoulder_r": 12, "elbow_l": 13, "elbow_r": 14, "wrist_l": 15,
-        "wrist_r": 16, "hip_l": 23, "hip_r": 24, "knee_l": 25, "knee_r": 26, "ankle_l": 27,
-        "ankle_r": 28}
+_OWN = {
+    "shoulder_l": 11,
+    "shoulder_r": 12,
+    "elbow_l": 13,
+    "elbow_r": 14,
+    "wrist_l": 15,
+    "wrist_r": 16,
+    "hip_l": 23,
+    "hip_r": 24,
+    "knee_l": 25,
+    "knee_r": 26,
+    "ankle_l": 27,
+    "ankle_r": 28,
+}
 _EARS, _SHOULDERS, _HIPS = (7, 8), (11, 12), (23, 24)
 
 
@@ -35,17 +46,25 @@ class Model:
         try:
             with _quiet_native_logs():
                 from mediapipe.python.solutions import pose
-                self._pose = pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=True,
-                                       enable_segmentation=True, smooth_segmentation=True)
+
+                self._pose = pose.Pose(
+                    static_image_mode=False,
+                    model_complexity=1,
+                    smooth_landmarks=True,
+                    enable_segmentation=True,
+                    smooth_segmentation=True,
+                )
             self._first = True
-        except ImportError as error:     # installed, but a package it needs is not
-            raise MocapError(f"mediapipe does not load ({error}): {MODELS['mediapipe'].install} "
-                             "and the packages mocap lists, or --person-model none") from None
+        except ImportError as error:  # installed, but a package it needs is not
+            raise MocapError(
+                f"mediapipe does not load ({error}): {MODELS['mediapipe'].install} "
+                "and the packages mocap lists, or --person-model none"
+            ) from None
 
     def observe(self, frame: np.ndarray) -> PersonView | None:
         """Its view of the video's next BGR frame, None if it sees nobody."""
         rgb = np.ascontiguousarray(frame[:, :, ::-1])
-        if self._first:                 # its first inference logs how it set itself up
+        if self._first:  # its first inference logs how it set itself up
             with _quiet_native_logs():
                 result = self._pose.process(rgb)
             self._first = False
@@ -58,8 +77,10 @@ class Model:
         world = np.array([(p.x, -p.y, -p.z) for p in result.pose_world_landmarks.landmark])
         joints2d, confidence = to_joints(image[:, :2], image[:, 2])
         world16, _ = to_joints(world, image[:, 2])
-        return PersonView(np.asarray(result.segmentation_mask, np.float32),
-                          Landmarks(joints2d, confidence, world16 - world16[JOINT_INDEX["pelvis"]]))
+        return PersonView(
+            np.asarray(result.segmentation_mask, np.float32),
+            Landmarks(joints2d, confidence, world16 - world16[JOINT_INDEX["pelvis"]]),
+        )
 
     def close(self) -> None:
         self._pose.close()
@@ -75,9 +96,12 @@ def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, n
         out[JOINT_INDEX[name]], conf[JOINT_INDEX[name]] = points[k], visibility[k]
     shoulders, ears, hips = (points[list(p)].mean(axis=0) for p in (_SHOULDERS, _EARS, _HIPS))
     neck = shoulders + NECK_ALONG * (ears - shoulders)
-    derived = {"pelvis": (hips, _HIPS), "neck": (neck, _SHOULDERS + _EARS),
-               "head_top": (shoulders + HEAD_TOP_ALONG * (ears - shoulders), _SHOULDERS + _EARS),
-               "chest": (hips + CHEST_FRACTION * (neck - hips), _HIPS + _SHOULDERS + _EARS)}
+    derived = {
+        "pelvis": (hips, _HIPS),
+        "neck": (neck, _SHOULDERS + _EARS),
+        "head_top": (shoulders + HEAD_TOP_ALONG * (ears - shoulders), _SHOULDERS + _EARS),
+        "chest": (hips + CHEST_FRACTION * (neck - hips), _HIPS + _SHOULDERS + _EARS),
+    }
     for name, (point, made_of) in derived.items():
         out[JOINT_INDEX[name]], conf[JOINT_INDEX[name]] = point, visibility[list(made_of)].min()
     return out, np.clip(conf, 0.0, 1.0)

@@ -5,15 +5,26 @@ Beside them, the silhouette method's per-frame products a session hands out."""
 from mocap.session.base import Session
 from mocap.session.silhouette import SilhouetteSession
 from mocap.session.tracking import (
-                                    MARKS_NEEDED,
-                                    TrackSession,
-                                    check_tracking_marks,
-                                    marks_from_fit,
-                                    marks_of,
-                                    remarks_of,
-                                    tracked_video,
+    MARKS_NEEDED,
+    TrackSession,
+    check_tracking_marks,
+    marks_from_fit,
+    marks_of,
+    remarks_of,
+    tracked_video,
 )
 from mocap.silhouette import FrameFit, Silhouette
 
-__all__ = ["MARKS_NEEDED", "FrameFit", "Session", "Silhouette", "SilhouetteSession", "TrackSession",
-           "check_tracking_marks", "marks_from_fit", "marks_of", "remarks_of", "tracked_video"]
+__all__ = [
+    "MARKS_NEEDED",
+    "FrameFit",
+    "Session",
+    "Silhouette",
+    "SilhouetteSession",
+    "TrackSession",
+    "check_tracking_marks",
+    "marks_from_fit",
+    "marks_of",
+    "remarks_of",
+    "tracked_video",
+]

@@ -26,12 +26,11 @@ from mocap.session.review import Doubt, covering, review_queue
 class Session(ABC):
     """A video's per-frame results and the user's annotations (checked: mocap.io.annotations); the 3D on demand."""
 
-    method: str                     # "silhouette" or "track", as the annotations name it
-    score_name: str                 # what ``scores`` are, for the page
-    review_spacing = 0              # frames around a listed doubtful frame the review skips
+    method: str  # "silhouette" or "track", as the annotations name it
+    score_name: str  # what ``scores`` are, for the page
+    review_spacing = 0  # frames around a listed doubtful frame the review skips
 
-    def __init__(self, info: VideoInfo, annotations: Annotations | None = None,
-                 smooth: float = 0.0):
+    def __init__(self, info: VideoInfo, annotations: Annotations | None = None, smooth: float = 0.0):
         self.info, self.smooth = info, smooth
         self._annotations = annotations or Annotations()
         self._queue: list[Doubt] | None = None
@@ -91,7 +90,7 @@ class Session(ABC):
         return np.zeros(self.n_frames, bool)
 
     def far_arm(self) -> str | None:
-        """"l" or "r": the arm to check first, where the method knows one."""
+        """ "l" or "r": the arm to check first, where the method knows one."""
         return None
 
     # -- what a frame shows and where it comes from ----------------------------------
@@ -144,8 +143,9 @@ class Session(ABC):
         keys = self.keyframes()
         if not keys:
             raise MocapError(f"{self.info.path}: no keyframe shows a person, nothing to lift")
-        return build_motion({k: self.pose3d(k) for k in keys}, self.n_frames, self.info.fps,
-                            root=self.root(), smooth=self.smooth)
+        return build_motion(
+            {k: self.pose3d(k) for k in keys}, self.n_frames, self.info.fps, root=self.root(), smooth=self.smooth
+        )
 
     @property
     def silhouette_confidence(self) -> np.ndarray | None:
@@ -165,8 +165,7 @@ class Session(ABC):
         contacts, confidence = motion.contacts, self.confidence()
         frames = []
         for i in range(self.n_frames):
-            entry: dict = {"index": i, "keyframe": bool(motion.keyframes[i]),
-                           "person": bool(person[i])}
+            entry: dict = {"index": i, "keyframe": bool(motion.keyframes[i]), "person": bool(person[i])}
             if lost[i]:
                 entry["lost"] = True
             if person[i]:
@@ -186,8 +185,13 @@ class Session(ABC):
         """The motion and its motion-file frames (every export's source); ``foot_lock``: Motion.foot_locked."""
         motion, info = self.motion(), self.info
         motion = motion.foot_locked() if foot_lock else motion
-        video = {"path": info.path, "width": info.width, "height": info.height, "fps": info.fps,
-                 "frame_count": info.frame_count}
+        video = {
+            "path": info.path,
+            "width": info.width,
+            "height": info.height,
+            "fps": info.fps,
+            "frame_count": info.frame_count,
+        }
         return Clip(Path(info.path).stem, video, self.motion_frames(motion), motion)
 
     def export(self, key: str, foot_lock: bool = False) -> tuple[str, bytes]:

@@ -26,13 +26,13 @@ from mocap.body import (
 from mocap.silhouette.masks import DOUBTFUL
 from mocap.track.loss import stretches
 
-LOW_SCORE = 0.7           # S below this is a doubtful fit
-END_ON_RATIO = 0.3        # seen length / length below this: the segment points at the camera
-SWAP_MARGIN = 0.5         # crossed distances below this fraction of the kept ones: a swap
-SWAP_MIN_MOVE = 0.03      # of the body height: smaller motions say nothing about sides
-REASON_WEIGHT = 0.3       # doubt added by each reason beyond the score's own 1 - S
-LOST_DOUBT = 10.0         # doubt of a lost stretch: above every other reason's
-_PAIRS = tuple((f"{names[-1]}_l", f"{names[-1]}_r") for names in LIMB_JOINTS.values())   # limb ends
+LOW_SCORE = 0.7  # S below this is a doubtful fit
+END_ON_RATIO = 0.3  # seen length / length below this: the segment points at the camera
+SWAP_MARGIN = 0.5  # crossed distances below this fraction of the kept ones: a swap
+SWAP_MIN_MOVE = 0.03  # of the body height: smaller motions say nothing about sides
+REASON_WEIGHT = 0.3  # doubt added by each reason beyond the score's own 1 - S
+LOST_DOUBT = 10.0  # doubt of a lost stretch: above every other reason's
+_PAIRS = tuple((f"{names[-1]}_l", f"{names[-1]}_r") for names in LIMB_JOINTS.values())  # limb ends
 
 
 @dataclass(frozen=True)
@@ -78,9 +78,14 @@ def likely_swaps(joints2d: np.ndarray, px_per_unit: np.ndarray) -> np.ndarray:
 
 def lost_stretches(session) -> list[Doubt]:
     """A stop at the first frame of every stretch where the body was lost, longest first."""
-    out = [Doubt(first, LOST_DOUBT + (stop - first) / session.n_frames,
-                 (f"body lost on frames {first}-{stop - 1}: mark the body here",))
-           for first, stop in stretches(session.lost)]
+    out = [
+        Doubt(
+            first,
+            LOST_DOUBT + (stop - first) / session.n_frames,
+            (f"body lost on frames {first}-{stop - 1}: mark the body here",),
+        )
+        for first, stop in stretches(session.lost)
+    ]
     return sorted(out, key=lambda d: (-d.value, d.frame))
 
 
@@ -88,15 +93,18 @@ def review_queue(session) -> list[Doubt]:
     """Every doubtful frame with a person of a session, most doubtful first, after ``lost_stretches``."""
     inputs = session.inputs
     scores = session.scores
-    signs = (end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
-             broken_limits(inputs.joints2d),
-             likely_swaps(inputs.joints2d, inputs.px_per_unit))
+    signs = (
+        end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
+        broken_limits(inputs.joints2d),
+        likely_swaps(inputs.joints2d, inputs.px_per_unit),
+    )
     guessed = session.silhouette_confidence
     guessed = np.zeros(len(scores), bool) if guessed is None else guessed < DOUBTFUL
     queue = []
     for i in np.flatnonzero(np.isfinite(scores)):
-        reasons = _reasons(f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE,
-                           *(sign[i] for sign in signs)) + (GUESSED,) * bool(guessed[i])
+        reasons = _reasons(
+            f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE, *(sign[i] for sign in signs)
+        ) + (GUESSED,) * bool(guessed[i])
         if reasons:
             queue.append(Doubt(int(i), float(1.0 - scores[i] + REASON_WEIGHT * len(reasons)), reasons))
     return lost_stretches(session) + sorted(queue, key=lambda d: (-d.value, d.frame))
@@ -118,16 +126,20 @@ def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:
         frames = range(start, min(start + width, n_frames))
         middle = min(start + spacing, n_frames - 1)
         top = max((by_frame[f] for f in frames if f in by_frame), key=lambda d: d.value, default=None)
-        reasons = ("nothing doubtful nearby",) if top is None else tuple(
-            r if top.frame == middle else f"{r} (frame {top.frame})" for r in top.reasons)
+        reasons = (
+            ("nothing doubtful nearby",)
+            if top is None
+            else tuple(r if top.frame == middle else f"{r} (frame {top.frame})" for r in top.reasons)
+        )
         stops.append(Doubt(middle, 0.0 if top is None else top.value, reasons))
     return lost + sorted(stops, key=lambda d: (-d.value, d.frame))
 
 
-def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray,
-             swaps: np.ndarray) -> tuple[str, ...]:
+def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray, swaps: np.ndarray) -> tuple[str, ...]:
     """One frame's doubts in words (``score``: the frame's score, named)."""
-    return ((f"low {score}",) * bool(low)
-            + tuple(f"{segment_label(SEGMENT_NAMES[k])} seen end-on" for k in np.flatnonzero(end_on))
-            + tuple(f"{segment_label(name)} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
-            + tuple(f"{('hands', 'feet')[p]} may have swapped sides" for p in np.flatnonzero(swaps)))
+    return (
+        (f"low {score}",) * bool(low)
+        + tuple(f"{segment_label(SEGMENT_NAMES[k])} seen end-on" for k in np.flatnonzero(end_on))
+        + tuple(f"{segment_label(name)} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
+        + tuple(f"{('hands', 'feet')[p]} may have swapped sides" for p in np.flatnonzero(swaps))
+    )

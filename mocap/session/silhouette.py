@@ -32,14 +32,21 @@ class SilhouetteSession(Session):
     method = "silhouette"
     score_name = "similarity S"
 
-    def __init__(self, info: VideoInfo, fits: list[FrameFit],
-                 annotations: Annotations | None = None, smooth: float = 0.0, *,
-                 silhouettes: list[Silhouette | None] | None = None,
-                 background: Background | None = None, person: str = NONE):
+    def __init__(
+        self,
+        info: VideoInfo,
+        fits: list[FrameFit],
+        annotations: Annotations | None = None,
+        smooth: float = 0.0,
+        *,
+        silhouettes: list[Silhouette | None] | None = None,
+        background: Background | None = None,
+        person: str = NONE,
+    ):
         super().__init__(info, annotations, smooth)
         self.fits = fits
         self.silhouettes, self.background = silhouettes, background
-        self.person_model = person          # the person model the fit looked through (mocap.person)
+        self.person_model = person  # the person model the fit looked through (mocap.person)
         self._inputs: Inputs | None = None
         # the inputs lifted last, their frames' lifts, and those smoothed over time
         self._lifted: tuple[Inputs, np.ndarray, np.ndarray] | None = None
@@ -52,15 +59,17 @@ class SilhouetteSession(Session):
     def _away(self) -> np.ndarray | None:
         """(F,) how much the head's look says facing away (silhouette.facing.facing_away); None without silhouettes."""
         joints = self._arrays[0]
-        return (None if self.silhouettes is None else
-                facing_away(self.silhouettes, joints, processing_scale(self.info)))
+        return None if self.silhouettes is None else facing_away(self.silhouettes, joints, processing_scale(self.info))
 
     @cached_property
     def _near(self) -> "NearLimbs | None":
         """Limbs whose outline shows across the body (mocap.silhouette.facing.near_limbs); None without silhouettes."""
         joints, body_px, _ = self._arrays
-        return (None if self.silhouettes is None else
-                NearLimbs(self.silhouettes, joints, body_px, processing_scale(self.info)))
+        return (
+            None
+            if self.silhouettes is None
+            else NearLimbs(self.silhouettes, joints, body_px, processing_scale(self.info))
+        )
 
     @cached_property
     def cues(self) -> Cues | None:
@@ -118,10 +127,17 @@ class SilhouetteSession(Session):
     def inputs(self) -> Inputs:
         if self._inputs is None:
             joints, body_px, spread = self._arrays
-            self._inputs = resolve_inputs(joints, body_px, spread, self.info.fps,
-                                          said_of(self._annotations, len(joints)),
-                                          guessed=self._guessed, away=self._away, near=self._near,
-                                          cues=self.cues)
+            self._inputs = resolve_inputs(
+                joints,
+                body_px,
+                spread,
+                self.info.fps,
+                said_of(self._annotations, len(joints)),
+                guessed=self._guessed,
+                away=self._away,
+                near=self._near,
+                cues=self.cues,
+            )
         return self._inputs
 
     def held_signs(self) -> np.ndarray:
@@ -151,14 +167,14 @@ class NearLimbs:
     """mocap.silhouette.facing.near_limbs of a clip, computed per run when read (``near[frames]``, a slice:
     (len, 2)) and kept: only runs seen in profile need it (mocap.lift.sides.track_sides)."""
 
-    def __init__(self, silhouettes: list[Silhouette | None], joints2d: np.ndarray,
-                 body_px: np.ndarray, scale: float):
+    def __init__(self, silhouettes: list[Silhouette | None], joints2d: np.ndarray, body_px: np.ndarray, scale: float):
         self.silhouettes, self.joints2d, self.body_px, self.scale = silhouettes, joints2d, body_px, scale
         self._runs: dict[tuple[int, int], np.ndarray] = {}
 
     def __getitem__(self, frames: slice) -> np.ndarray:
         start, stop, _ = frames.indices(len(self.joints2d))
         if (start, stop) not in self._runs:
-            self._runs[start, stop] = near_limbs(self.silhouettes[start:stop], self.joints2d[start:stop],
-                                                 self.body_px[start:stop], self.scale)
+            self._runs[start, stop] = near_limbs(
+                self.silhouettes[start:stop], self.joints2d[start:stop], self.body_px[start:stop], self.scale
+            )
         return self._runs[start, stop]

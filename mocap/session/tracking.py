@@ -32,8 +32,10 @@ from mocap.track.tracking import (
     turn_of,
 )
 
-MARKS_NEEDED = ("the tracking method needs the 16 joints marked on frame 0 (--annotations "
-                'with frames["0"].joints2d, or mark them in the app)')
+MARKS_NEEDED = (
+    "the tracking method needs the 16 joints marked on frame 0 (--annotations "
+    'with frames["0"].joints2d, or mark them in the app)'
+)
 
 
 def marks_of(notes: Annotations) -> dict[str, tuple[float, float]]:
@@ -47,14 +49,23 @@ def marks_of(notes: Annotations) -> dict[str, tuple[float, float]]:
 def remarks_of(notes: Annotations) -> dict[int, dict[str, tuple[float, float]]]:
     """frame -> the joints of every later frame where the annotations place all 16:
     the body marked again, which seeds the tracker anew (mocap.track.reseed)."""
-    return {f: dict(n.joints2d) for f, n in sorted(notes.frames.items())
-            if f > 0 and n.joints2d and len(n.joints2d) == len(JOINTS)}
+    return {
+        f: dict(n.joints2d)
+        for f, n in sorted(notes.frames.items())
+        if f > 0 and n.joints2d and len(n.joints2d) == len(JOINTS)
+    }
 
 
 def tracked_video(info: VideoInfo, notes: Annotations, progress=None, focal_px: float | None = None) -> TrackResult:
     """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of."""
-    return track_clip(info, marks_of(notes), progress, focal_px=focal_px,
-                       orientation=notes.orientations(1)[0], remarks=remarks_of(notes))
+    return track_clip(
+        info,
+        marks_of(notes),
+        progress,
+        focal_px=focal_px,
+        orientation=notes.orientations(1)[0],
+        remarks=remarks_of(notes),
+    )
 
 
 def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:
@@ -85,8 +96,9 @@ class TrackSession(Session):
         """A pin's reach to either side (spread_corrections): the review lists one frame per stretch."""
         return spread_frames(self.info.fps)
 
-    def __init__(self, info: VideoInfo, tracked: TrackResult,
-                 annotations: Annotations | None = None, smooth: float = 0.0):
+    def __init__(
+        self, info: VideoInfo, tracked: TrackResult, annotations: Annotations | None = None, smooth: float = 0.0
+    ):
         super().__init__(info, annotations, smooth)
         self.tracked = tracked
         self.camera = default_camera(info.width, info.height, tracked.focal_px)
@@ -118,7 +130,7 @@ class TrackSession(Session):
         self._resolution = None
 
     def far_arm(self) -> str | None:
-        """"l" or "r": the arm farther from the camera in frame 0's reconstructed key triangle
+        """ "l" or "r": the arm farther from the camera in frame 0's reconstructed key triangle
         (mocap.track.parts.far_arm), None facing the camera or away; the tracker loses it most."""
         self._resolved()
         return far_arm(self._placed[3][0, :, 2])
@@ -159,8 +171,7 @@ class TrackSession(Session):
 
     def _joints2d(self) -> np.ndarray:
         """Tracked joints with the user's overrides put in and carried around them (spread_corrections)."""
-        return spread_corrections(self.tracked.joints2d, self._annotations.overrides(),
-                                  self.info.fps)
+        return spread_corrections(self.tracked.joints2d, self._annotations.overrides(), self.info.fps)
 
     def _reconstructed(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """((F, 16, 3) pinhole-frame joints, (F, 10) user signs where held): each trunk turned to its
@@ -174,16 +185,13 @@ class TrackSession(Session):
         fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
         return (free if not fixed.any() else self._placed_joints(steady, key, fixed)), fixed
 
-    def _placed_joints(self, steady: np.ndarray, key: np.ndarray,
-                       fixed: np.ndarray | None = None) -> np.ndarray:
+    def _placed_joints(self, steady: np.ndarray, key: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """(F, 16, 3) pinhole-frame joints placed from the key joints (place_joints, bones measured where
         the body was not lost), depths smoothed along their rays (steady_depths)."""
-        return steady_depths(place_joints(steady, key, self.camera, fixed=fixed, seen=~self.lost),
-                             self.info.fps)
+        return steady_depths(place_joints(steady, key, self.camera, fixed=fixed, seen=~self.lost), self.info.fps)
 
     @staticmethod
-    def _shown(joints: np.ndarray, camera: np.ndarray,
-               held: np.ndarray) -> tuple[Inputs, np.ndarray, np.ndarray]:
+    def _shown(joints: np.ndarray, camera: np.ndarray, held: np.ndarray) -> tuple[Inputs, np.ndarray, np.ndarray]:
         """(inputs with orientation, signs and lengths read back from the 3D; joints pelvis-centred in
         the contract frame; the pelvis in the camera frame, the root)."""
         joints3d = to_contract(camera)
@@ -192,8 +200,16 @@ class TrackSession(Session):
         yaw = np.array([yaw_of(pose) for pose in joints3d])
         ends = joints3d[:, SEGMENT_JOINTS]
         lengths = np.median(np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1), axis=0) / UNIT_M
-        inputs = Inputs([orientation_of_yaw(y) for y in yaw], yaw, np.zeros((n, 2), bool), joints,
-                        np.full(n, body_px(joints) / BODY_HEIGHT), signs_of(joints3d), lengths, held)
+        inputs = Inputs(
+            [orientation_of_yaw(y) for y in yaw],
+            yaw,
+            np.zeros((n, 2), bool),
+            joints,
+            np.full(n, body_px(joints) / BODY_HEIGHT),
+            signs_of(joints3d),
+            lengths,
+            held,
+        )
         return inputs, joints3d, root
 
     def _free_placement(self, steady: np.ndarray, turns: list) -> tuple[np.ndarray, np.ndarray]:

@@ -17,8 +17,9 @@ Shown = Callable[["Silhouette | FrameFit | None", int, bool], None]
 __all__ = ["Background", "FrameFit", "Silhouette", "clip_background", "fit_clip"]
 
 
-def fit_clip(info: VideoInfo, background: Background | None = None, model: PersonModel | None = None,
-             shown: Shown | None = None) -> tuple[list[Silhouette | None], list[FrameFit]]:
+def fit_clip(
+    info: VideoInfo, background: Background | None = None, model: PersonModel | None = None, shown: Shown | None = None
+) -> tuple[list[Silhouette | None], list[FrameFit]]:
     """Each frame's silhouette (section 3.2; against ``background``, else the clip's own, with the person
     ``model`` if given) and 2D fit (section 3.3), streamed to ``shown(product, frame, final)`` (fits whose legs
     are not chosen yet first with ``final`` False). MocapError if no frame holds a person."""
@@ -35,8 +36,10 @@ def fit_clip(info: VideoInfo, background: Background | None = None, model: Perso
             say(fit, fit.index, False)
     if all(s is None for s in stream.silhouettes):
         frames = "its only frame" if n == 1 else f"any of its {n} frames"
-        raise MocapError(f"{info.path}: no person found in {frames} (one who never moves shows only "
-                         "against a photo of the empty scene: --background, or the app's Stage tab)")
+        raise MocapError(
+            f"{info.path}: no person found in {frames} (one who never moves shows only "
+            "against a photo of the empty scene: --background, or the app's Stage tab)"
+        )
     for fit in stream.finish():
         fits.append(fit)
         say(fit, fit.index, True)

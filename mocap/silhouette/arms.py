@@ -9,35 +9,24 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (
-    BODY_HEIGHT,
-    JOINT_INDEX,
-    LENGTH,
-    SEGMENT_INDEX,
-    SIDES,
-    WIDTH,
-    Pose2D,
-    forward_kinematics_2d,
-    image_angle,
-    knee_bend,
-    limb,
-)
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, WIDTH, knee_bend, limb
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
+from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d, image_angle
 from mocap.silhouette.raster import HAND_LENGTH, Canvas, draw_model, pose_quads, posed_quads, sweep_scorer
 from mocap.silhouette.search import Knob, refine_limb, search_angle, span
 
 ARM = {side: limb("arm", side).segments for side in SIDES}
 GUESS_RATIOS = (1.0, 0.8)
-ARM_REFINE_HALF_RANGE = 15.0     # degrees searched around an arm's best first guess
-KNEE_FACING = 0.01               # knee bend, of body height, that tells the facing side
-ELBOW_BACK = 20.0                # degrees an elbow may seem to bend backward (fit noise)
-ELBOW_SHOWS_SPREAD = 0.8         # torso spread below which the elbow's bend shows in the image
-CROSS_SPREAD = 0.3               # torso spread below which (near profile) an arm may cross the torso's axis
+ARM_REFINE_HALF_RANGE = 15.0  # degrees searched around an arm's best first guess
+KNEE_FACING = 0.01  # knee bend, of body height, that tells the facing side
+ELBOW_BACK = 20.0  # degrees an elbow may seem to bend backward (fit noise)
+ELBOW_SHOWS_SPREAD = 0.8  # torso spread below which the elbow's bend shows in the image
+CROSS_SPREAD = 0.3  # torso spread below which (near profile) an arm may cross the torso's axis
 # (upper, lower) angles every 30 degrees all around the shoulder: arm guesses that the
 # frame's edges may pick inside the silhouette
 ARM_GRID = [(float(u), float(u + b)) for u in range(0, 360, 30) for b in range(-150, 151, 30)]
 _GRID_GUESSES = np.array([(*a, GUESS_RATIOS[0], GUESS_RATIOS[0]) for a in ARM_GRID])
-GRID_SHORTENED = 16              # the grid's best arms that are also tried at the other GUESS_RATIOS
+GRID_SHORTENED = 16  # the grid's best arms that are also tried at the other GUESS_RATIOS
 
 
 def _contour_guess(points: np.ndarray, default: tuple[float, float]) -> tuple[float, float]:
@@ -56,7 +45,7 @@ def two_link_angles(start: np.ndarray, end: np.ndarray, l1: float, l2: float) ->
     toward = image_angle(d)
     if dist >= l1 + l2 or dist < 1e-6:
         return [(toward, toward)]
-    alpha = float(np.degrees(np.arccos(np.clip((l1 ** 2 + dist ** 2 - l2 ** 2) / (2 * l1 * dist), -1, 1))))
+    alpha = float(np.degrees(np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1, 1))))
     out = []
     for upper in (toward + alpha, toward - alpha):
         elbow = start + l1 * np.array([np.cos(np.radians(upper)), -np.sin(np.radians(upper))])
@@ -89,14 +78,16 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
     return np.concatenate([guesses, _GRID_GUESSES]) if canvas.by_edges else guesses
 
 
-def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[float, float],
-                   reach: tuple[float, float]):
+def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[float, float], reach: tuple[float, float]):
     """An arm curve's (upper, lower) angle guesses (Algorithms 3-4, and the ``reach``-long arm bent either way to
     its farthest point), and the straight arm foreshortened to it: ((u, l), (r, r))."""
     tip = points[np.argmax(np.hypot(*(points - shoulder).T))]
     toward = image_angle(tip - shoulder)
     ratio = min(float(np.hypot(*(tip - shoulder))) / sum(reach), 1.0)
-    return [_contour_guess(points, default), *two_link_angles(shoulder, tip, *reach)], ((toward, toward), (ratio, ratio))
+    return [_contour_guess(points, default), *two_link_angles(shoulder, tip, *reach)], (
+        (toward, toward),
+        (ratio, ratio),
+    )
 
 
 def image_side(shape: tuple[int, int], pose: Pose2D, side: str) -> np.ndarray:
@@ -127,7 +118,7 @@ def fit_arms(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, facing: int = 0)
 
 def hand_area(scale: float) -> float:
     """Pixels a hand covers (HAND_LENGTH by a lower arm's width) at ``scale``."""
-    return HAND_LENGTH * WIDTH[SEGMENT_INDEX["lower_arm_l"]] * scale ** 2
+    return HAND_LENGTH * WIDTH[SEGMENT_INDEX["lower_arm_l"]] * scale**2
 
 
 def own_pixels(canvas: Canvas, pose: Pose2D, side: str) -> int:
@@ -136,21 +127,22 @@ def own_pixels(canvas: Canvas, pose: Pose2D, side: str) -> int:
     return int(np.count_nonzero(drawn & canvas.sil & canvas.free))
 
 
-def fit_arm(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
-            facing: int = 0, crossing: bool = False) -> Pose2D:
+def fit_arm(
+    canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, facing: int = 0, crossing: bool = False
+) -> Pose2D:
     """One arm on its image side (``crossing``: anywhere): the best first guess bending the elbow the way the
     performer faces (``facing``: +1 image right, -1 left, 0 unknown), refined by Algorithms 1 and 6."""
     keep = None if crossing else image_side(canvas.sil.shape, pose, side)
     own = canvas.fork(keep=keep, by_edges=True)
     pose = best_arm_guess(own, pose, side, prev, facing, crossing)
     upper = ARM[side][0]
-    pose = search_angle(own, pose, (upper,), ARM[side],
-                        *span(pose.angle[SEGMENT_INDEX[upper]], ARM_REFINE_HALF_RANGE))
+    pose = search_angle(own, pose, (upper,), ARM[side], *span(pose.angle[SEGMENT_INDEX[upper]], ARM_REFINE_HALF_RANGE))
     return refine_limb(pose, ARM[side], own, ARM_REFINE_HALF_RANGE)
 
 
-def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
-                   facing: int = 0, crossing: bool = False) -> Pose2D:
+def best_arm_guess(
+    canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, facing: int = 0, crossing: bool = False
+) -> Pose2D:
     """The guess best by S of those not bending the elbow back, the grid narrowed as Algorithm 1 narrows."""
     guesses = arm_candidates(canvas, pose, side, prev, crossing)
     backward = elbow_bends_back(guesses[:, 0], guesses[:, 1], pose.spread, facing)
@@ -160,8 +152,9 @@ def best_arm_guess(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
     angle, ratio, scores, score = _scored_guesses(canvas, pose, side, guesses)
     if grid.any():
         top = np.flatnonzero(grid)[np.argsort(-scores[grid], kind="stable")[:GRID_SHORTENED]]
-        shorter = np.concatenate([np.column_stack([guesses[top, :2], np.full((len(top), 2), r)])
-                                  for r in GUESS_RATIOS[1:]])
+        shorter = np.concatenate(
+            [np.column_stack([guesses[top, :2], np.full((len(top), 2), r)]) for r in GUESS_RATIOS[1:]]
+        )
         more = _scored_guesses(canvas, pose, side, shorter, score)
         angle, ratio, scores = (np.concatenate(pair) for pair in zip((angle, ratio, scores), more[:3]))
     best = int(np.argmax(scores))

@@ -15,15 +15,16 @@ import numpy as np
 from mocap.errors import MocapError
 from mocap.image.percentile import percentile, row_medians
 from mocap.io.video import VideoInfo, sample_frames
+from mocap.silhouette.cleaning import clean_mask, cleaning_disk, mask_box
 
 MAD_TO_SIGMA = 1.4826
 _MEDIAN_PER_QUARTILE = 1.41  # median / lower quartile of the largest of three |normal|
 _GAIN_SAMPLES = 1000  # pixels (on a regular grid) that estimate an exposure gain
-K_SIGMA = 3.0         # noise sigmas a difference must exceed to be foreground
+K_SIGMA = 3.0  # noise sigmas a difference must exceed to be foreground
 MIN_THRESHOLD = 12.0  # grey levels: compression artefacts of a very clean clip stay out
 SHADOW_RATIO = (0.35, 0.95)  # a shadow darkens the background by a factor in this range
 SHADOW_CHROMA = 0.12  # and keeps its colour within this share of its brightest channel
-SHADOW_NCC = 0.5      # correlation with the background's texture that a shadow keeps
+SHADOW_NCC = 0.5  # correlation with the background's texture that a shadow keeps
 
 
 @dataclass(frozen=True)
@@ -49,9 +50,13 @@ class Background:
         return cv2.merge([self.threshold] * 3)
 
 
-def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int = 30,
-                        scale: float = 1.0, k: float = K_SIGMA,
-                        min_threshold: float = MIN_THRESHOLD) -> Background:
+def estimate_background(
+    source: VideoInfo | Iterable[np.ndarray],
+    n_samples: int = 30,
+    scale: float = 1.0,
+    k: float = K_SIGMA,
+    min_threshold: float = MIN_THRESHOLD,
+) -> Background:
     """Per-pixel temporal median (section 3.2) of frames brought to one exposure: `source` is a video
     (`n_samples` frames read at `scale`) or the frames; threshold `k` noise sigmas, at least `min_threshold`."""
     if isinstance(source, VideoInfo):
@@ -59,7 +64,7 @@ def estimate_background(source: VideoInfo | Iterable[np.ndarray], n_samples: int
     else:
         frames = list(source)
     stack = _check_frames(frames)
-    grid = (slice(None), *_gain_grid(stack.shape[1:3]))   # all exposure_gain looks at
+    grid = (slice(None), *_gain_grid(stack.shape[1:3]))  # all exposure_gain looks at
     reference = _median(stack[grid])
     for frame in stack:
         frame[:] = cv2.transform(frame, np.diag(exposure_gain(frame[grid[1:]], reference)))
@@ -102,9 +107,9 @@ def _quantile(stack: np.ndarray, q: float, rows: int = 32) -> np.ndarray:
     high = min(low + 1, len(stack) - 1)
     out = np.empty(stack.shape[1:], np.float32)
     for y in range(0, stack.shape[1], rows):
-        ranked = _sorted(stack[:, y:y + rows])
+        ranked = _sorted(stack[:, y : y + rows])
         below = ranked[low].astype(np.float32)
-        out[y:y + rows] = below + (position - low) * (ranked[high].astype(np.float32) - below)
+        out[y : y + rows] = below + (position - low) * (ranked[high].astype(np.float32) - below)
     return out
 
 
@@ -126,8 +131,9 @@ def _merge_sort_pairs(n: int) -> tuple[tuple[int, int], ...]:
         k = p
         while k >= 1:
             for j in range(k % p, n - k, 2 * k):
-                pairs += [(i + j, i + j + k) for i in range(min(k, n - j - k))
-                          if (i + j) // (2 * p) == (i + j + k) // (2 * p)]
+                pairs += [
+                    (i + j, i + j + k) for i in range(min(k, n - j - k)) if (i + j) // (2 * p) == (i + j + k) // (2 * p)
+                ]
             k //= 2
         p *= 2
     return tuple(pairs)
@@ -166,9 +172,12 @@ def _gain_grid(shape: tuple[int, ...]) -> tuple[slice, slice]:
     return slice(None, None, stride), slice(None, None, stride)
 
 
-def extract_silhouette(frame: np.ndarray, background: Background,
-                       shadow_ratio: tuple[float, float] = SHADOW_RATIO,
-                       shadow_chroma: float = SHADOW_CHROMA) -> np.ndarray:
+def extract_silhouette(
+    frame: np.ndarray,
+    background: Background,
+    shadow_ratio: tuple[float, float] = SHADOW_RATIO,
+    shadow_chroma: float = SHADOW_CHROMA,
+) -> np.ndarray:
     """The performer's silhouette in `frame` (HxW uint8 0/255, empty if nobody): module doc."""
     frame = at_exposure(frame, background)
     mask = foreground(frame, background)
@@ -178,8 +187,9 @@ def extract_silhouette(frame: np.ndarray, background: Background,
 def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
     """`frame` brought to the background's exposure; ValueError if it does not match the background."""
     if frame.shape != background.image.shape or frame.dtype != np.uint8:
-        raise ValueError(f"frame {frame.shape} {frame.dtype} does not match the "
-                         f"background {background.image.shape} uint8")
+        raise ValueError(
+            f"frame {frame.shape} {frame.dtype} does not match the background {background.image.shape} uint8"
+        )
     return cv2.transform(frame, np.diag(exposure_gain(frame, background.image)))
 
 
@@ -189,17 +199,27 @@ def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
     return cv2.compare(cv2.cvtColor(over, cv2.COLOR_BGR2GRAY), 0, cv2.CMP_GT)
 
 
-def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
-                   ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
+def remove_shadows(
+    mask: np.ndarray,
+    frame: np.ndarray,
+    background: Background,
+    ratio: tuple[float, float] = SHADOW_RATIO,
+    chroma: float = SHADOW_CHROMA,
+) -> np.ndarray:
     """`mask` without its soft shadows (section 3.2's noted failure)."""
     return without_shadows(mask, frame, background, shadow_candidates(mask, frame, background, ratio, chroma))
 
 
-def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Background,
-                      ratio: tuple[float, float] = SHADOW_RATIO, chroma: float = SHADOW_CHROMA) -> np.ndarray:
+def shadow_candidates(
+    mask: np.ndarray,
+    frame: np.ndarray,
+    background: Background,
+    ratio: tuple[float, float] = SHADOW_RATIO,
+    chroma: float = SHADOW_CHROMA,
+) -> np.ndarray:
     """Pixels of `mask` (0/255) darker than the background by one factor in `ratio`, hue within `chroma`."""
     candidates = np.zeros_like(mask)
-    box = mask_box(mask, 0)                     # the work only where `mask` has pixels
+    box = mask_box(mask, 0)  # the work only where `mask` has pixels
     if box is None:
         return candidates
     frame, scene = np.ascontiguousarray(frame[box]), np.ascontiguousarray(background.image[box])
@@ -208,16 +228,16 @@ def shadow_candidates(mask: np.ndarray, frame: np.ndarray, background: Backgroun
     f = _channel_rows(np.take(frame.reshape(-1, 3), index, axis=0))
     b = _channel_rows(np.take(scene.reshape(-1, 3), index, axis=0)) + 1.0
     level = f.sum(axis=0) / b.sum(axis=0)
-    like = ((level > ratio[0]) & (level < ratio[1])
-            & (np.abs(f - level * b).max(axis=0) < chroma * level * b.max(axis=0)))
+    like = (
+        (level > ratio[0]) & (level < ratio[1]) & (np.abs(f - level * b).max(axis=0) < chroma * level * b.max(axis=0))
+    )
     inside = np.zeros(grey.shape, np.uint8)
     inside.reshape(-1)[index[like]] = 255
     candidates[box] = inside
     return candidates
 
 
-def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
-                    candidates: np.ndarray) -> np.ndarray:
+def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background, candidates: np.ndarray) -> np.ndarray:
     """`mask` without the solid areas of shadow `candidates` that keep the background's texture."""
     box = shadow_box(candidates)
     if box is None:
@@ -226,14 +246,17 @@ def without_shadows(mask: np.ndarray, frame: np.ndarray, background: Background,
     shadow = np.zeros_like(mask)
     shadow[box] = cv2.morphologyEx(
         _textured_alike(candidates[box], grey, background.grey[box], background.sigma, mask.shape),
-        cv2.MORPH_OPEN, _disk(mask.shape),
-        borderType=cv2.BORDER_CONSTANT, borderValue=0)
+        cv2.MORPH_OPEN,
+        cleaning_disk(mask.shape),
+        borderType=cv2.BORDER_CONSTANT,
+        borderValue=0,
+    )
     return cv2.bitwise_and(mask, cv2.bitwise_not(shadow))
 
 
 def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] | None:
     """The box (slices) of the candidates' solid areas, plus the vote's reach and `margin`; None if none."""
-    disk = _disk(candidates.shape)
+    disk = cleaning_disk(candidates.shape)
     near = mask_box(candidates, disk.shape[0])  # the opening keeps nothing outside the candidates' box
     if near is None:
         return None
@@ -245,16 +268,9 @@ def shadow_box(candidates: np.ndarray, margin: int = 0) -> tuple[slice, slice] |
     return slice(max(0, y - pad), y + h + pad), slice(max(0, x - pad), x + w + pad)
 
 
-def mask_box(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
-    """The box (slices) of a mask's nonzero pixels and `margin` more within the image, None if empty."""
-    x, y, w, h = cv2.boundingRect(mask)
-    if not w:
-        return None
-    return slice(max(0, y - margin), y + h + margin), slice(max(0, x - margin), x + w + margin)
-
-
-def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray,
-                    sigma: float, frame_shape: tuple[int, ...]) -> np.ndarray:
+def _textured_alike(
+    candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarray, sigma: float, frame_shape: tuple[int, ...]
+) -> np.ndarray:
     """The shadow `candidates` (0/255) that keep the background's texture: a shadow scales it, so over 5x5 pixels
     the frame correlates with the background (over SHADOW_NCC) with at least half the darkened contrast, which
     cloth over a pattern does not. Only where that contrast clears K_SIGMA noise does it tell, so candidates vote
@@ -271,9 +287,10 @@ def _textured_alike(candidates: np.ndarray, grey: np.ndarray, grey_bg: np.ndarra
     size = (_vote_size(frame_shape),) * 2
     near_keeps = cv2.boxFilter(keeps, -1, size, normalize=False)
     near_loses = cv2.boxFilter(loses, -1, size, normalize=False)
-    count, label = cv2.connectedComponents(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, _disk(frame_shape)))
-    piece = (np.bincount(label.ravel(), keeps.ravel(), count)
-             >= np.bincount(label.ravel(), loses.ravel(), count))[label]
+    count, label = cv2.connectedComponents(cv2.morphologyEx(candidates, cv2.MORPH_OPEN, cleaning_disk(frame_shape)))
+    piece = (np.bincount(label.ravel(), keeps.ravel(), count) >= np.bincount(label.ravel(), loses.ravel(), count))[
+        label
+    ]
     shadow = np.where(near_keeps + near_loses > 0, near_keeps >= near_loses, piece)
     return np.where(shadow & (candidates > 0), np.uint8(255), np.uint8(0))
 
@@ -289,89 +306,13 @@ def _local_spread(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mean, np.sqrt(np.maximum(cv2.blur(image * image, (5, 5)) - mean * mean, 0.0))
 
 
-def clean_mask(mask: np.ndarray, max_hole: float = 0.02, min_area: float = 0.001,
-               min_piece: float = 0.02, stood: np.ndarray | None = None) -> np.ndarray:
-    """Open (speckle), close (gaps), keep the person, fill its holes under `max_hole` of its area. The person is
-    the largest region (none under `min_area` of the frame) and nearby regions of `min_piece` of it (a leg cut
-    off), less those lying mostly where `stood` (``_apart_where_stood``)."""
-    out, disk = np.zeros_like(mask), _disk(mask.shape)
-    box = mask_box(mask, 2 * disk.shape[0] + 2)  # beyond the closing's reach, and a ring of zeros
-    if box is None:
-        return out
-    out[box] = _cleaned(mask[box], disk, max_hole, min_area * mask.size, min_piece,
-                        None if stood is None else stood[box])
-    return out
-
-
-def _cleaned(mask: np.ndarray, disk: np.ndarray, max_hole: float, min_area: float,
-             min_piece: float, stood: np.ndarray | None = None) -> np.ndarray:
-    """``clean_mask`` on a box holding all of the mask (``min_area`` in pixels)."""
-    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, disk)
-    contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
-    person = np.zeros_like(mask)
-    if not contours:
-        return person
-    parents = hierarchy[0][:, 3]
-    areas = np.array([cv2.contourArea(c) for c in contours])
-    keep = _person_regions(contours, parents, areas, min_area, min_piece)
-    if not keep:
-        return person
-    if stood is not None:
-        keep = [keep[0]] + [i for i in keep[1:] if not _apart_where_stood(contours[i], stood)]
-    cv2.drawContours(person, [contours[i] for i in keep], -1, 255, cv2.FILLED)
-    limit = max_hole * areas[keep].sum()
-    holes = [c for c, p, a in zip(contours, parents, areas) if p in keep and a >= limit]
-    if holes:
-        open_holes = np.zeros_like(mask)
-        cv2.drawContours(open_holes, holes, -1, 255, cv2.FILLED)
-        person = cv2.bitwise_or(cv2.bitwise_and(person, cv2.bitwise_not(open_holes)),
-                                cv2.bitwise_and(person, mask))
-    return person
-
-
-def _person_regions(contours, parents, areas, min_area: float, min_piece: float) -> list[int]:
-    """Indices of the person's outer contours: the largest, and large ones within a tenth of its height."""
-    outer = np.flatnonzero(parents < 0)
-    main = outer[np.argmax(areas[outer])]
-    if areas[main] < min_area:
-        return []
-    x, y, w, h = cv2.boundingRect(contours[main])
-    gap = max(2, h // 10)
-    keep = [int(main)]
-    for i in outer:
-        lx, ly, lw, lh = cv2.boundingRect(contours[i])
-        near = (lx <= x + w + gap and x <= lx + lw + gap
-                and ly <= y + h + gap and y <= ly + lh + gap)
-        if i != main and near and areas[i] >= min_piece * areas[main]:
-            keep.append(int(i))
-    return keep
-
-
-def _apart_where_stood(contour: np.ndarray, stood: np.ndarray) -> bool:
-    """Whether a region apart from the person's largest lies mostly where `stood`: there it is scene uncovered
-    when the performer left (a jump), since a performer standing there joins their body."""
-    inside = np.zeros(stood.shape, np.uint8)
-    cv2.drawContours(inside, [contour], -1, 1, cv2.FILLED)
-    area = cv2.countNonZero(inside)
-    return area > 0 and np.count_nonzero(stood[inside > 0]) > 0.5 * area
-
-
 def _check_frames(frames: list[np.ndarray]) -> np.ndarray:
     if not frames:
         raise MocapError("no frames to estimate the background from")
     shape = frames[0].shape
-    if len(shape) != 3 or shape[2] != 3 or any(
-            f.shape != shape or f.dtype != np.uint8 for f in frames):
-        raise ValueError(f"background frames must all be HxWx3 uint8 BGR like the "
-                         f"first, {shape} {frames[0].dtype}")
+    if len(shape) != 3 or shape[2] != 3 or any(f.shape != shape or f.dtype != np.uint8 for f in frames):
+        raise ValueError(f"background frames must all be HxWx3 uint8 BGR like the first, {shape} {frames[0].dtype}")
     return np.stack(frames)
-
-
-def _disk(shape: tuple[int, ...]) -> np.ndarray:
-    """The structuring element of the cleaning: about 1% of the frame height, odd, >= 3."""
-    size = max(3, round(shape[0] / 100) | 1)
-    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
 
 
 def _channel_rows(pixels: np.ndarray) -> np.ndarray:

@@ -11,18 +11,18 @@ import numpy as np
 from mocap.silhouette.background import (
     Background,
     at_exposure,
-    clean_mask,
     foreground,
     shadow_box,
     shadow_candidates,
     without_shadows,
 )
+from mocap.silhouette.cleaning import clean_mask
 
-SHADOW_ANGLE = 0.06     # radians: a shadow's mean hue over 5x5 pixels from the scene's (the cover's)
-MIN_ALPHA = 0.5         # the share of a pixel the body covers for it to be the body's
-CLEAR = 2.0             # thresholds between body and scene colour for an alpha to be read
+SHADOW_ANGLE = 0.06  # radians: a shadow's mean hue over 5x5 pixels from the scene's (the cover's)
+MIN_ALPHA = 0.5  # the share of a pixel the body covers for it to be the body's
+CLEAR = 2.0  # thresholds between body and scene colour for an alpha to be read
 _SQUARE = np.ones((3, 3), np.uint8)
-_REACH = 2              # pixels: the widest window's (5x5) reach around a pixel
+_REACH = 2  # pixels: the widest window's (5x5) reach around a pixel
 
 
 def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.ndarray, np.ndarray]:
@@ -37,16 +37,18 @@ def silhouette_and_cover(frame: np.ndarray, background: Background) -> tuple[np.
     if cv2.countNonZero(hued) == cv2.countNonZero(candidates):
         return fit, trim_blends(fit, plain, frame, background.image, background.threshold)
     body = without_shadows(differs, frame, background, hued)
-    return fit, trim_blends(clean_mask(body, stood=background.stood), body, frame, background.image,
-                            background.threshold)
+    return fit, trim_blends(
+        clean_mask(body, stood=background.stood), body, frame, background.image, background.threshold
+    )
 
 
-def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,
-              angle: float = SHADOW_ANGLE) -> np.ndarray:
+def keeps_hue(
+    candidates: np.ndarray, frame: np.ndarray, background: Background, angle: float = SHADOW_ANGLE
+) -> np.ndarray:
     """The shadow ``candidates`` (0/255) whose mean residual from the darkened background over 5x5 pixels is
     within ``angle`` radians of their mean colour (a shadow darkens all channels alike, dark cloth of the scene's
     hue is a few degrees off); all stay where the background is a guess (``held``)."""
-    box = shadow_box(candidates, margin=2)      # the rest stays, whatever its hue
+    box = shadow_box(candidates, margin=2)  # the rest stays, whatever its hue
     if box is None:
         return candidates
     near = np.ascontiguousarray(candidates[box])
@@ -66,8 +68,9 @@ def keeps_hue(candidates: np.ndarray, frame: np.ndarray, background: Background,
     return out
 
 
-def trim_blends(person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scene: np.ndarray,
-                threshold: np.ndarray) -> np.ndarray:
+def trim_blends(
+    person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scene: np.ndarray, threshold: np.ndarray
+) -> np.ndarray:
     """``person`` (0/255) without pixels the body covers under MIN_ALPHA of: those cleaning added (not in
     ``differs``), then the outline, each against body pixels near. ``frame``, ``scene``: BGR at one exposure;
     ``threshold``: grey levels. A pixel stays with no body near, or body and scene within CLEAR thresholds."""
@@ -75,21 +78,30 @@ def trim_blends(person: np.ndarray, differs: np.ndarray, frame: np.ndarray, scen
     if not w:
         return person
     box = (slice(max(0, y - 1), y + h + 1), slice(max(0, x - 1), x + w + 1))
-    frame, scene, threshold, near, differs = (   # each window's reach (two) beyond the box: none
+    frame, scene, threshold, near, differs = (  # each window's reach (two) beyond the box: none
         cv2.copyMakeBorder(a[box], _REACH, _REACH, _REACH, _REACH, cv2.BORDER_CONSTANT, value=0)
-        for a in (frame, scene, threshold, person, differs))
+        for a in (frame, scene, threshold, person, differs)
+    )
     frame, scene = frame.astype(np.float32), scene.astype(np.float32)
     near = _drop(near, np.flatnonzero(cv2.subtract(near, differs)), differs, 5, frame, scene, threshold)
     inner = cv2.erode(near, _SQUARE)
     further = cv2.subtract(inner, cv2.erode(inner, _SQUARE))
     out = person.copy()
-    out[box] = _drop(near, np.flatnonzero(cv2.subtract(near, inner)), further, 3, frame, scene,
-                     threshold)[_REACH:-_REACH, _REACH:-_REACH]
+    out[box] = _drop(near, np.flatnonzero(cv2.subtract(near, inner)), further, 3, frame, scene, threshold)[
+        _REACH:-_REACH, _REACH:-_REACH
+    ]
     return out
 
 
-def _drop(mask: np.ndarray, index: np.ndarray, body: np.ndarray, window: int, frame: np.ndarray,
-          scene: np.ndarray, threshold: np.ndarray) -> np.ndarray:
+def _drop(
+    mask: np.ndarray,
+    index: np.ndarray,
+    body: np.ndarray,
+    window: int,
+    frame: np.ndarray,
+    scene: np.ndarray,
+    threshold: np.ndarray,
+) -> np.ndarray:
     """``mask`` less the flat ``index`` pixels (``window`` // 2 from the edges) under MIN_ALPHA of the mean
     ``body`` colour in their window; ``frame``, ``scene`` float32."""
     if not len(index):
@@ -106,8 +118,9 @@ def _drop(mask: np.ndarray, index: np.ndarray, body: np.ndarray, window: int, fr
     return out
 
 
-def _window_sums(chosen: np.ndarray, image: np.ndarray, index: np.ndarray,
-                 window: int) -> tuple[np.ndarray, np.ndarray]:
+def _window_sums(
+    chosen: np.ndarray, image: np.ndarray, index: np.ndarray, window: int
+) -> tuple[np.ndarray, np.ndarray]:
     """How many ``chosen`` (bool) pixels each ``window`` around the flat ``index`` pixels (``window`` // 2 from
     the edges) holds, and the sum of their ``image`` colours."""
     r, width = window // 2, chosen.shape[1]

@@ -7,8 +7,8 @@ import numpy as np
 
 from mocap.body import JOINT_INDEX, LENGTH, SEGMENT_INDEX, WIDTH
 
-MIN_CORNER_DISTANCE = 4        # Algorithm 4
-MIN_CORNER_ANGLE = 10.0        # Algorithm 4, degrees
+MIN_CORNER_DISTANCE = 4  # Algorithm 4
+MIN_CORNER_ANGLE = 10.0  # Algorithm 4, degrees
 
 
 def row_runs(band: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -22,8 +22,9 @@ def row_runs(band: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rows, starts, changes[1::2] % width
 
 
-def _line_angles(xs: np.ndarray, ys: np.ndarray, counts: np.ndarray, sx, sy, sxx, syy, sxy,
-                 dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
+def _line_angles(
+    xs: np.ndarray, ys: np.ndarray, counts: np.ndarray, sx, sy, sxx, syy, sxy, dx: np.ndarray, dy: np.ndarray
+) -> np.ndarray:
     """Principal-axis angles of point sets given their running sums, oriented along (dx, dy)."""
     n = np.maximum(counts, 1)
     cxx = sxx / n - (sx / n) ** 2
@@ -42,8 +43,18 @@ def find_angle(points: np.ndarray, default: float) -> float:
     if len(pts) < 2 or np.ptp(pts, axis=0).max() < 1e-6:
         return float(default)
     x, y = pts[:, 0], pts[:, 1]
-    a = _line_angles(x, y, np.array([len(pts)]), x.sum(), y.sum(), (x * x).sum(), (y * y).sum(),
-                     (x * y).sum(), np.array([x[-1] - x[0]]), np.array([y[-1] - y[0]]))
+    a = _line_angles(
+        x,
+        y,
+        np.array([len(pts)]),
+        x.sum(),
+        y.sum(),
+        (x * x).sum(),
+        (y * y).sum(),
+        (x * y).sum(),
+        np.array([x[-1] - x[0]]),
+        np.array([y[-1] - y[0]]),
+    )
     return float(_near(a[0], default))
 
 
@@ -61,8 +72,8 @@ def find_elbow_corner(points: np.ndarray) -> int:
         return -1
     x, y = pts[:, 0], pts[:, 1]
     sums = [np.cumsum(v) for v in (x, y, x * x, y * y, x * y)]
-    head = [s[idx] for s in sums]                       # points 0..i
-    tail = [s[-1] - s[idx - 1] for s in sums]           # points i..n-1
+    head = [s[idx] for s in sums]  # points 0..i
+    tail = [s[-1] - s[idx - 1] for s in sums]  # points i..n-1
     upper = _line_angles(x, y, idx + 1, *head, x[idx] - x[0], y[idx] - y[0])
     lower = _line_angles(x, y, n - idx, *tail, x[-1] - x[idx], y[-1] - y[idx])
     diff = np.abs((upper - lower + 180.0) % 360.0 - 180.0)
@@ -88,16 +99,15 @@ def lower_leg_curves(sil: np.ndarray, joints: np.ndarray, scale: float):
     y0, y1 = lower_leg_band(sil, joints, scale)
     half = 45 * scale
     x0 = max(int(pelvis[0] - half), 0)
-    band = sil[max(y0, 0):max(y1, y0 + 1), x0:int(pelvis[0] + half)]
+    band = sil[max(y0, 0) : max(y1, y0 + 1), x0 : int(pelvis[0] + half)]
     rows, starts, ends = row_runs(band)
     leg_w = WIDTH[SEGMENT_INDEX["lower_leg_l"]] * scale
     keep = (ends - starts) >= 0.25 * leg_w
     rows, starts, ends = rows[keep], starts[keep], ends[keep]
     curves = {"l": [], "r": []}
     counts = []
-    cuts = np.flatnonzero(np.diff(rows)) + 1        # runs come row by row, left to right
-    for r, s, e in zip(rows[np.r_[0, cuts]] if len(rows) else [], np.split(starts, cuts),
-                       np.split(ends, cuts)):
+    cuts = np.flatnonzero(np.diff(rows)) + 1  # runs come row by row, left to right
+    for r, s, e in zip(rows[np.r_[0, cuts]] if len(rows) else [], np.split(starts, cuts), np.split(ends, cuts)):
         counts.append(len(s))
         for side, x in _leg_centres(s, e, leg_w, curves).items():
             curves[side].append((x, r))
@@ -128,7 +138,7 @@ def lower_legs_cross(line_counts) -> bool:
     two = np.nonzero(c >= 2)[0]
     if len(two) == 0:
         return False
-    rest = c[two[0]:]
+    rest = c[two[0] :]
     return bool(np.mean(rest >= 2) > 0.8 and two[0] >= 2)
 
 
@@ -140,7 +150,7 @@ def arm_curve(canvas, joints: np.ndarray, side: str, scale: float, runs: str | N
     reach = (LENGTH[SEGMENT_INDEX["upper_arm_l"]] + LENGTH[SEGMENT_INDEX["lower_arm_l"]]) * scale
     y0 = max(int(shoulder[1] - reach), 0)
     y1 = int(shoulder[1] + reach)
-    residual = (canvas.sil[y0:y1] > canvas.fixed[y0:y1])
+    residual = canvas.sil[y0:y1] > canvas.fixed[y0:y1]
     rows, starts, ends = row_runs(residual)
     min_w = 0.3 * WIDTH[SEGMENT_INDEX["upper_arm_l"]] * scale
     keep = (ends - starts) >= min_w
@@ -155,7 +165,7 @@ def arm_curve(canvas, joints: np.ndarray, side: str, scale: float, runs: str | N
         return np.zeros((0, 2))
     order = np.lexsort((centres if runs == "l" else -centres, rows))
     rows, centres = rows[order], centres[order]
-    first = np.r_[True, rows[1:] != rows[:-1]]                   # outermost run per row
+    first = np.r_[True, rows[1:] != rows[:-1]]  # outermost run per row
     pts = np.column_stack([centres[first], rows[first].astype(float)])
     near = np.hypot(*(pts - shoulder).T) <= reach * 1.1
     pts = pts[near]

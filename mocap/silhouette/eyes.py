@@ -9,21 +9,23 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENTS, Pose2D, model_joints
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENTS, model_joints
 from mocap.person import SURE, Landmarks
+from mocap.silhouette.model2d import Pose2D
 
-PERSON_LEVEL = 0.5          # a person-mask probability from which a pixel is the performer
-EDGE_BAND = 0.01            # of the person mask's height: the band outside it where background
-                            # subtraction may add pixels (its edges follow the frame's)
-APART = 0.04                # of the body height: shoulders or hips this far apart in x
-                            # tell the image-left limb from the image-right one
+PERSON_LEVEL = 0.5  # a person-mask probability from which a pixel is the performer
+EDGE_BAND = 0.01  # of the person mask's height: the band outside it where background
+# subtraction may add pixels (its edges follow the frame's)
+APART = 0.04  # of the body height: shoulders or hips this far apart in x
+# tell the image-left limb from the image-right one
 _J = JOINT_INDEX
 _PAIRS = {"arm": ("shoulder", "elbow", "wrist"), "leg": ("hip", "knee", "ankle")}
 _LIMB_SEGMENTS = {"arm": ("upper_arm", "lower_arm"), "leg": ("upper_leg", "lower_leg")}
 
 
-def fused_mask(classical: np.ndarray, person: np.ndarray, held: np.ndarray | None
-               ) -> tuple[np.ndarray, np.ndarray] | None:
+def fused_mask(
+    classical: np.ndarray, person: np.ndarray, held: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray] | None:
     """The silhouette (uint8 0/255): the person model's mask (probabilities ``person``) grown by the
     ``classical`` (0/255) pixels in an EDGE_BAND around it, not ``held``; and the pixels only the model gave
     (bool). None where its mask is empty."""
@@ -50,8 +52,9 @@ class Targets:
     weight: np.ndarray
 
 
-def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px_per_unit: float,
-                prev: Pose2D | None) -> Targets | None:
+def fit_targets(
+    landmarks: Landmarks | None, origin: np.ndarray, step: float, px_per_unit: float, prev: Pose2D | None
+) -> Targets | None:
     """A frame's landmarks in its normalised crop's pixels (``origin``, ``step``), image-sided, or None."""
     if landmarks is None:
         return None
@@ -60,8 +63,9 @@ def fit_targets(landmarks: Landmarks | None, origin: np.ndarray, step: float, px
     return Targets(model_joints(points, px_per_unit), weight)
 
 
-def image_sided(points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_per_unit: float
-                ) -> tuple[np.ndarray, np.ndarray]:
+def image_sided(
+    points: np.ndarray, weight: np.ndarray, prev: Pose2D | None, px_per_unit: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Landmarks (16, 2) and weights with limb pairs named by image side: by the shoulders' (hips') x where they
     lie APART, else by the pairing nearer ``prev``'s angles."""
     points, weight = points.copy(), weight.copy()

@@ -12,10 +12,10 @@ from mocap.image.edges import Edges
 
 # The upper head (from above the ears to the crown, of the fitted neck -> head top) is
 # split into its dark and light tones (Otsu): the dark one (hair) grows as the head turns away.
-HEAD_BAND = (0.35, 1.1, 0.4)   # along the head from, to; half-width across (head lengths)
-SHARE_BETWEEN = 0.6            # the dark share between the three-quarter views, front and back
-SHARE_SPAN = 0.15              # from it to a sure front or back
-MIN_CONTRAST = 30.0            # grey levels between the two tones: less is one tone, no cue
+HEAD_BAND = (0.35, 1.1, 0.4)  # along the head from, to; half-width across (head lengths)
+SHARE_BETWEEN = 0.6  # the dark share between the three-quarter views, front and back
+SHARE_SPAN = 0.15  # from it to a sure front or back
+MIN_CONTRAST = 30.0  # grey levels between the two tones: less is one tone, no cue
 _J_TOP, _J_NECK = JOINT_INDEX["head_top"], JOINT_INDEX["neck"]
 
 
@@ -27,12 +27,12 @@ def hair_share(grey: np.ndarray, mask: np.ndarray, neck: np.ndarray, top: np.nda
         return np.nan
     lo = np.maximum(np.floor(np.minimum(neck, top) - length).astype(int), 0)
     hi = np.minimum(np.ceil(np.maximum(neck, top) + length).astype(int) + 1, grey.shape[1::-1])
-    yy, xx = np.mgrid[lo[1]:hi[1], lo[0]:hi[0]]
-    rel = np.stack([xx - neck[0], yy - neck[1]], axis=-1) / length ** 2
+    yy, xx = np.mgrid[lo[1] : hi[1], lo[0] : hi[0]]
+    rel = np.stack([xx - neck[0], yy - neck[1]], axis=-1) / length**2
     along, across = rel @ u, rel @ np.array([-u[1], u[0]])
     start, end, half = HEAD_BAND
-    inside = mask[lo[1]:hi[1], lo[0]:hi[0]] & (along >= start) & (along <= end) & (np.abs(across) <= half)
-    tones = grey[lo[1]:hi[1], lo[0]:hi[0]][inside]
+    inside = mask[lo[1] : hi[1], lo[0] : hi[0]] & (along >= start) & (along <= end) & (np.abs(across) <= half)
+    tones = grey[lo[1] : hi[1], lo[0] : hi[0]][inside]
     if tones.size < 10:
         return np.nan
     cut, _ = cv2.threshold(tones.reshape(-1, 1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
@@ -53,8 +53,7 @@ def facing_away(silhouettes: list, joints2d: np.ndarray, scale: float) -> np.nda
         if arm_over_head(joints):
             continue
         origin = np.array(sil.box[:2], float)
-        share = hair_share(sil.grey, sil.mask() > 0, joints[_J_NECK] * scale - origin,
-                           joints[_J_TOP] * scale - origin)
+        share = hair_share(sil.grey, sil.mask() > 0, joints[_J_NECK] * scale - origin, joints[_J_TOP] * scale - origin)
         if np.isfinite(share):
             out[i] = np.clip((share - SHARE_BETWEEN) / SHARE_SPAN, -1.0, 1.0)
     return out
@@ -72,7 +71,7 @@ def arm_over_head(joints: np.ndarray) -> bool:
     length2 = float(u @ u)
     if not length2 > 0:
         return False
-    ends = joints[_CHAINS["arm"]]                                              # (2, 3, 2)
+    ends = joints[_CHAINS["arm"]]  # (2, 3, 2)
     points = ends[:, :-1, None] + _ARM_SAMPLES[:, None] * (ends[:, 1:] - ends[:, :-1])[:, :, None]
     rel = (points - neck) / length2
     along, across = rel @ u, rel @ np.array([-u[1], u[0]])
@@ -94,7 +93,7 @@ def near_limbs(silhouettes: list, joints2d: np.ndarray, body_px: np.ndarray, sca
             continue
         edges = Edges.inside(sil.grey, sil.mask() > 0)
         for k, kind in enumerate(_KINDS):
-            chains = joints[_CHAINS[kind]] * scale - np.array(sil.box[:2], float)      # (2, 3, 2)
+            chains = joints[_CHAINS[kind]] * scale - np.array(sil.box[:2], float)  # (2, 3, 2)
             widths = _WIDTHS[kind] * body_px[i] * scale / BODY_HEIGHT
             support = edges.support(chains[:, :-1], chains[:, 1:], widths)
             out[i, k] = float(support[0] - support[1])

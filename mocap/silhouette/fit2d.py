@@ -2,20 +2,20 @@
 Algorithms 1-6 (section 3.3), left and right being image sides. Torso and head, legs, then arms, each by the
 narrowing search; beyond the paper, searches centred on the previous frame (temporal coherence)."""
 
-
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, FOOT_LENGTH, SEGMENT_INDEX, Pose2D, forward_kinematics_2d
+from mocap.body import BODY_HEIGHT, FOOT_LENGTH, SEGMENT_INDEX
 from mocap.silhouette.arms import facing_of_knees, fit_arms
 from mocap.silhouette.legs import LEGS, leg_hypotheses
+from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d
 from mocap.silhouette.raster import Canvas, draw_model, pose_quads, similarity
 from mocap.silhouette.torso import TORSO_HEAD, fit_torso_head, initial_pose
 
-FIT_BODY_PX = 96.0               # height of the normalised standing silhouette the fit works on
+FIT_BODY_PX = 96.0  # height of the normalised standing silhouette the fit works on
 FIT_SCALE = FIT_BODY_PX / (BODY_HEIGHT + FOOT_LENGTH)  # the silhouette is the body and its feet
 
 
@@ -29,8 +29,14 @@ class Fit2D:
     alternatives: tuple["Fit2D", ...] = ()
 
 
-def fit_frame(silhouette: np.ndarray, scale: float, prev: Pose2D | None = None,
-              spread: float | None = None, grey: np.ndarray | None = None, targets=None) -> Fit2D:
+def fit_frame(
+    silhouette: np.ndarray,
+    scale: float,
+    prev: Pose2D | None = None,
+    spread: float | None = None,
+    grey: np.ndarray | None = None,
+    targets=None,
+) -> Fit2D:
     """Fit the 10-cylinder model to one normalised silhouette (section 3.3), other leg hypotheses as
     ``alternatives``; ``spread``: the torso's if given; ``grey``: the frame's (edges guide the arms);
     ``targets``: landmarks (eyes.Targets) every search draws joints toward."""

@@ -12,8 +12,8 @@ import numpy as np
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SIDES
 from mocap.silhouette.fit2d import FIT_BODY_PX, Fit2D
 
-LAG_S = 0.5                 # seconds of later frames seen before a frame's legs are chosen
-SMOOTH_WEIGHT = 1.0         # S given up per body height that knees and ankles move (mean)
+LAG_S = 0.5  # seconds of later frames seen before a frame's legs are chosen
+SMOOTH_WEIGHT = 1.0  # S given up per body height that knees and ankles move (mean)
 _LEG_JOINTS = [JOINT_INDEX[f"{j}_{s}"] for s in SIDES for j in LIMB_JOINTS["leg"][1:]]
 
 

@@ -9,19 +9,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import (
-    FOOT_LENGTH,
-    JOINT_INDEX,
-    LENGTH,
-    LIMB_JOINTS,
-    SEGMENT_INDEX,
-    SIDES,
-    Pose2D,
-    forward_kinematics_2d,
-    image_angle,
-    limb,
-)
+from mocap.body import FOOT_LENGTH, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, limb
 from mocap.silhouette.contour import find_angle, lower_leg_band, lower_leg_curves, lower_legs_cross
+from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d, image_angle
 from mocap.silhouette.raster import Canvas, pose_quads, poses_quads, sweep_scorer
 from mocap.silhouette.search import RATIO_RANGE, TRACK_HALF_RANGE, Knob, around, refine_limb, search_angle, span
 
@@ -32,16 +22,16 @@ UPPER_LEGS, LOWER_LEGS = tuple(zip(LEG["l"], LEG["r"]))
 # fitted (a deep squat's thighs are level or above); frames outside Table 1 are
 # flagged for review instead of forced inside.
 THIGH_RANGE = (175.0, 365.0)
-THIGH_TRACK_HALF_RANGE = 40.0    # degrees searched around a previous thigh, which swings fastest
-CROSSED_GAIN = 0.02              # S by which crossed thighs must explain more to be kept
-CROSSED_TURN = 30.0              # degrees less thigh turn since the last frame that keeps a crossing
-UNCROSS_SPREAD = 0.3             # torso spread below which (near profile) thighs may cross
-KNEE_REACH = 150.0               # degrees a knee folds at most, seen in the image
-RAISED_KNEE = 0.5                # of a thigh's length above Algorithm 2's rows: a raised knee
-ONE_LEG_SHARE = 0.5              # of Algorithm 2's rows with two runs or more, below which they show one leg
-FOOT_REACH = 1.5                 # feet's lengths (FOOT_LENGTH) of silhouette past a raised ankle at most
-THIGH_MATCH = 0.75               # of the other thigh's length in the image, below which a raised "thigh" is not one
-DISTINCT_PX = 1.0                # leg hypotheses whose joints all lie this close are one
+THIGH_TRACK_HALF_RANGE = 40.0  # degrees searched around a previous thigh, which swings fastest
+CROSSED_GAIN = 0.02  # S by which crossed thighs must explain more to be kept
+CROSSED_TURN = 30.0  # degrees less thigh turn since the last frame that keeps a crossing
+UNCROSS_SPREAD = 0.3  # torso spread below which (near profile) thighs may cross
+KNEE_REACH = 150.0  # degrees a knee folds at most, seen in the image
+RAISED_KNEE = 0.5  # of a thigh's length above Algorithm 2's rows: a raised knee
+ONE_LEG_SHARE = 0.5  # of Algorithm 2's rows with two runs or more, below which they show one leg
+FOOT_REACH = 1.5  # feet's lengths (FOOT_LENGTH) of silhouette past a raised ankle at most
+THIGH_MATCH = 0.75  # of the other thigh's length in the image, below which a raised "thigh" is not one
+DISTINCT_PX = 1.0  # leg hypotheses whose joints all lie this close are one
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised: float) -> Pose2D:
@@ -52,8 +42,7 @@ def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised:
     crossed = lower_legs_cross(runs)
     for side, other in (("l", "r"), ("r", "l")):
         default = (prev or pose).angle[SEGMENT_INDEX[LEG[side][1]]]
-        pose = Knob("angle", (LEG[side][1],)).apply(
-            pose, find_angle(curves[other if crossed else side], default))
+        pose = Knob("angle", (LEG[side][1],)).apply(pose, find_angle(curves[other if crossed else side], default))
     for side in SIDES:
         pose = search_thigh(canvas, pose, side, prev)
     pose = _uncrossed_thighs(canvas, _best_leg_pairing(canvas, pose), prev)
@@ -76,8 +65,11 @@ def raised_knee_row(sil: np.ndarray, joints: np.ndarray, scale: float, runs) -> 
 def raised_leg(pose: Pose2D, side: str, row: float) -> bool:
     """Whether a knee is above image ``row`` on a thigh THIGH_MATCH as long as the other (else a hand)."""
     up, other = SEGMENT_INDEX[LEG[side][0]], SEGMENT_INDEX[LEG[other_side(side)][0]]
-    return bool(row > -np.inf and pose.ratio[up] >= THIGH_MATCH * pose.ratio[other]
-                and forward_kinematics_2d(pose)[JOINT_INDEX[f"knee_{side}"], 1] < row)
+    return bool(
+        row > -np.inf
+        and pose.ratio[up] >= THIGH_MATCH * pose.ratio[other]
+        and forward_kinematics_2d(pose)[JOINT_INDEX[f"knee_{side}"], 1] < row
+    )
 
 
 def other_side(side: str) -> str:
@@ -110,8 +102,9 @@ def ends_in_foot(sil: np.ndarray, pose: Pose2D, side: str) -> bool:
 def search_thigh(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None) -> Pose2D:
     """One upper leg by Algorithm 1 with its lower leg attached (Fig. 3b-c), near ``prev``'s if given."""
     thigh = LEG[side][0]
-    return search_angle(canvas, pose, (thigh,), LEG[side],
-                        *around(prev, thigh, *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE))
+    return search_angle(
+        canvas, pose, (thigh,), LEG[side], *around(prev, thigh, *THIGH_RANGE, 270.0, THIGH_TRACK_HALF_RANGE)
+    )
 
 
 def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Pose2D]:
@@ -139,8 +132,7 @@ def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | Non
     pose = search_thigh(beside, pose, side, prev)
     if raised_leg(pose, side, raised):
         return search_shin(beside, pose, side)
-    return search_angle(beside, pose, (lower,), (lower,),
-                        *span(pose.angle[SEGMENT_INDEX[lower]], TRACK_HALF_RANGE))
+    return search_angle(beside, pose, (lower,), (lower,), *span(pose.angle[SEGMENT_INDEX[lower]], TRACK_HALF_RANGE))
 
 
 def leg_scores(canvas: Canvas, poses: list[Pose2D]) -> np.ndarray:
@@ -163,8 +155,10 @@ def _distinct(poses: list[Pose2D]) -> list[Pose2D]:
 
 def _segments_cross(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> bool:
     """Whether the segments a-b and c-d (2D points) intersect."""
+
     def turn(p, q, r):
         return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+
     return turn(a, b, c) * turn(a, b, d) < 0 and turn(c, d, a) * turn(c, d, b) < 0
 
 

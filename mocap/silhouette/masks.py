@@ -16,8 +16,8 @@ from mocap.silhouette.background import Background
 from mocap.silhouette.blend import silhouette_and_cover
 from mocap.silhouette.passes import holds_person
 
-HELD_WARNING = 0.1      # median share of the silhouettes over guessed pixels that warns
-DOUBTFUL = 0.8          # a frame's silhouette confidence below this is worth a look
+HELD_WARNING = 0.1  # median share of the silhouettes over guessed pixels that warns
+DOUBTFUL = 0.8  # a frame's silhouette confidence below this is worth a look
 
 
 def silhouette_confidence(silhouettes: list, background: Background) -> np.ndarray:
@@ -40,9 +40,11 @@ def held_warning(confidence: np.ndarray) -> str | None:
     found = confidence[np.isfinite(confidence)]
     if not len(found) or 1.0 - float(np.median(found)) < HELD_WARNING:
         return None
-    return (f"the empty scene was never seen under {1.0 - float(np.median(found)):.0%} of the "
-            f"performer's silhouette (they stay there), where it is guessed: give a clean plate "
-            f"with --background (a photo or short video of the empty scene)")
+    return (
+        f"the empty scene was never seen under {1.0 - float(np.median(found)):.0%} of the "
+        f"performer's silhouette (they stay there), where it is guessed: give a clean plate "
+        f"with --background (a photo or short video of the empty scene)"
+    )
 
 
 def write_masks(folder: str | os.PathLike, info: VideoInfo, background: Background) -> Path:

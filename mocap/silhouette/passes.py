@@ -21,14 +21,14 @@ from mocap.silhouette.legchain import LAG_S, LegChain
 from mocap.silhouette.plate import clip_background
 from mocap.silhouette.torso import head_top_row, torso_spread, torso_width_readable
 
-MIN_PERSON_FRACTION = 0.002     # of the frame's area: smaller blobs are nobody
-SCALE_WINDOW_S = 1.0            # half-width of the body height's window, seconds
-MARGIN = 0.25                   # of the body height, around the silhouette's box when fitting
-SPREAD_PERCENTILE = 5           # of torso foreshortening estimates around a frame: the fit's
-LIFT_SPREAD_PERCENTILE = 20     # of the readable ones around a frame: the lift's
+MIN_PERSON_FRACTION = 0.002  # of the frame's area: smaller blobs are nobody
+SCALE_WINDOW_S = 1.0  # half-width of the body height's window, seconds
+MARGIN = 0.25  # of the body height, around the silhouette's box when fitting
+SPREAD_PERCENTILE = 5  # of torso foreshortening estimates around a frame: the fit's
+LIFT_SPREAD_PERCENTILE = 20  # of the readable ones around a frame: the lift's
 SPREAD_FALLBACK_PERCENTILE = 50  # of all of them, the lift's where none is readable
-SPREAD_WINDOW_S = 0.5           # half-width of that window, seconds
-MIN_TRACK_SCORE = 0.5           # a previous fit below this is not used as a search centre
+SPREAD_WINDOW_S = 0.5  # half-width of that window, seconds
+MIN_TRACK_SCORE = 0.5  # a previous fit below this is not used as a search centre
 
 
 @dataclass(frozen=True)
@@ -37,21 +37,26 @@ class Silhouette:
     levels there (mocap.image.edges); with a person model, its ``landmarks`` and the pixels its mask gave
     (``learned``, packed like ``bits``)."""
 
-    box: tuple[int, int, int, int]          # x0, y0, x1, y1 in processing pixels
+    box: tuple[int, int, int, int]  # x0, y0, x1, y1 in processing pixels
     bits: np.ndarray
     grey: np.ndarray | None = None
     landmarks: Landmarks | None = None
     learned: np.ndarray | None = None
 
     @classmethod
-    def from_mask(cls, mask: np.ndarray, frame: np.ndarray | None = None, landmarks: Landmarks | None = None,
-                  learned: np.ndarray | None = None) -> "Silhouette | None":
+    def from_mask(
+        cls,
+        mask: np.ndarray,
+        frame: np.ndarray | None = None,
+        landmarks: Landmarks | None = None,
+        learned: np.ndarray | None = None,
+    ) -> "Silhouette | None":
         if not holds_person(mask):
             return None
         x, y, w, h = cv2.boundingRect(mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8))
-        grey = None if frame is None else cv2.cvtColor(frame[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
-        learned = None if learned is None else np.packbits(learned[y:y + h, x:x + w])
-        return cls((x, y, x + w, y + h), np.packbits(mask[y:y + h, x:x + w] > 0), grey, landmarks, learned)
+        grey = None if frame is None else cv2.cvtColor(frame[y : y + h, x : x + w], cv2.COLOR_BGR2GRAY)
+        learned = None if learned is None else np.packbits(learned[y : y + h, x : x + w])
+        return cls((x, y, x + w, y + h), np.packbits(mask[y : y + h, x : x + w] > 0), grey, landmarks, learned)
 
     @property
     def height(self) -> int:
@@ -83,13 +88,14 @@ class FrameFit:
     joints2d: np.ndarray | None
     score: float | None
     fit: Fit2D | None = None
-    body_px: float | None = None    # video pixels of the model's 175-unit body height
-    spread: float | None = None     # the torso's spread as the lift reads it (lift_spread)
+    body_px: float | None = None  # video pixels of the model's 175-unit body height
+    spread: float | None = None  # the torso's spread as the lift reads it (lift_spread)
     landmarks: Landmarks | None = None  # a person model's (mocap.person), in video pixels
 
 
-def iter_silhouettes(info: VideoInfo, scale: float, background: Background | None = None,
-                     person: PersonModel | None = None) -> Iterator[Silhouette | None]:
+def iter_silhouettes(
+    info: VideoInfo, scale: float, background: Background | None = None, person: PersonModel | None = None
+) -> Iterator[Silhouette | None]:
     """Pass one (section 3.2): each frame's Silhouette or None (background: ``plate.clip_background`` unless
     given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``)."""
     background = background or clip_background(info, scale)
@@ -154,15 +160,18 @@ def rolling_percentile(values: np.ndarray, half: int, q: float) -> np.ndarray:
 
 def window_percentile(values, i: int, half: int, q: float) -> float:
     """The q-th percentile of the finite values within +-half of entry i."""
-    return nanpercentile(np.asarray(values[max(0, i - half): i + half + 1], float), q)
+    return nanpercentile(np.asarray(values[max(0, i - half) : i + half + 1], float), q)
 
 
 def torso_reads(sil: Silhouette, height: float, small: np.ndarray | None = None) -> tuple[float, float, bool]:
     """A frame's torso spread as the fit reads it (normalised to ``height``) and as the lift does (at the
     processing resolution, finer), and whether its width is readable; ``small``: ``normalise``'s mask if at hand."""
     small = normalise(sil, height)[0] if small is None else small
-    return (torso_spread(small, FIT_SCALE), torso_spread(sil.mask(), height * FIT_SCALE / FIT_BODY_PX),
-            torso_width_readable(small, FIT_SCALE, FIT_BODY_PX))
+    return (
+        torso_spread(small, FIT_SCALE),
+        torso_spread(sil.mask(), height * FIT_SCALE / FIT_BODY_PX),
+        torso_width_readable(small, FIT_SCALE, FIT_BODY_PX),
+    )
 
 
 def lift_spread(spreads, readable, i: int, half: int) -> float:
@@ -194,10 +203,17 @@ class Fitter:
 
     def __init__(self, scale: float, fps: float):
         self.scale, self.chain = scale, LegChain(half_window(LAG_S, fps))
-        self.latest: FrameFit | None = None     # the last frame fitted, legs not yet chosen
+        self.latest: FrameFit | None = None  # the last frame fitted, legs not yet chosen
 
-    def fit(self, index: int, sil: Silhouette | None, height: float, spread: float,
-            lift_spread: float, normalised: tuple | None = None) -> list[FrameFit]:
+    def fit(
+        self,
+        index: int,
+        sil: Silhouette | None,
+        height: float,
+        spread: float,
+        lift_spread: float,
+        normalised: tuple | None = None,
+    ) -> list[FrameFit]:
         """Fit a frame with the torso's ``spread`` (``normalised``: ``normalise(sil, height)`` if at hand);
         returns the fits now decided, ``latest`` holding this frame's fit with the best path's legs until then."""
         self.latest = None
@@ -207,8 +223,7 @@ class Fitter:
         best = self.chain.current
         prev = best.pose if best is not None and best.score >= MIN_TRACK_SCORE else None
         targets = fit_targets(sil.landmarks, origin, step, FIT_SCALE, prev)
-        fit = fit_frame(small, FIT_SCALE, centred_on(prev, targets), spread, normalised_grey(sil, height),
-                        targets)
+        fit = fit_frame(small, FIT_SCALE, centred_on(prev, targets), spread, normalised_grey(sil, height), targets)
         landmarks = None if sil.landmarks is None else sil.landmarks.scaled(1.0 / self.scale)
         item = (index, origin, step, lift_spread, landmarks)
         decided = list(_frame_fits(self.chain.push(item, fit), self.scale))
@@ -230,13 +245,13 @@ class FitStream:
         self.height_half = half_window(SCALE_WINDOW_S, fps)
         self.spread_half = half_window(SPREAD_WINDOW_S, fps)
         self.silhouettes: list[Silhouette | None] = []
-        self._sizes: list[float] = []       # silhouette heights, NaN where nobody is
-        self._standing: list[float] = []    # their heights from the head's top (head_to_feet)
-        self._heights: list[float] = []     # body heights (body_heights) known so far
-        self._spreads: list[float] = []     # per-frame torso spreads (torso.torso_spread)
+        self._sizes: list[float] = []  # silhouette heights, NaN where nobody is
+        self._standing: list[float] = []  # their heights from the head's top (head_to_feet)
+        self._heights: list[float] = []  # body heights (body_heights) known so far
+        self._spreads: list[float] = []  # per-frame torso spreads (torso.torso_spread)
         self._lift_reads: list[float] = []  # the same at the processing resolution (torso_reads)
-        self._readable: list[bool] = []     # whether each is trusted (torso.torso_width_readable)
-        self._normalised: dict[int, tuple] = {}   # frames read but not fitted yet: normalise's
+        self._readable: list[bool] = []  # whether each is trusted (torso.torso_width_readable)
+        self._normalised: dict[int, tuple] = {}  # frames read but not fitted yet: normalise's
         self._fitted = 0
         self._provisional: list[FrameFit] = []
 
@@ -257,13 +272,15 @@ class FitStream:
         n, out, half = len(self.silhouettes), [], self.height_half
         while len(self._standing) < n and (end or len(self._standing) + half < n):
             j, sil = len(self._standing), self.silhouettes[len(self._standing)]
-            self._standing.append(np.nan if sil is None else head_to_feet(
-                sil, window_percentile(self._sizes, j, half, STANDING_PERCENTILE)))
+            self._standing.append(
+                np.nan
+                if sil is None
+                else head_to_feet(sil, window_percentile(self._sizes, j, half, STANDING_PERCENTILE))
+            )
         known = len(self._standing)
         while len(self._heights) < known and (end or len(self._heights) + half < known):
             i, sil = len(self._heights), self.silhouettes[len(self._heights)]
-            height = np.nan if sil is None else window_percentile(self._standing, i, half,
-                                                                  STANDING_PERCENTILE)
+            height = np.nan if sil is None else window_percentile(self._standing, i, half, STANDING_PERCENTILE)
             self._heights.append(height)
             if sil is not None:
                 self._normalised[i] = normalise(sil, height)
@@ -273,11 +290,17 @@ class FitStream:
         known, self._provisional = len(self._heights), []
         while self._fitted < known and (end or self._fitted + self.spread_half < known):
             i = self._fitted
-            spreads = ((np.nan, np.nan) if self.silhouettes[i] is None else
-                       (window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE),
-                        lift_spread(self._lift_reads, self._readable, i, self.spread_half)))
-            out += self.fitter.fit(i, self.silhouettes[i], self._heights[i], *spreads,
-                                   normalised=self._normalised.pop(i, None))
+            spreads = (
+                (np.nan, np.nan)
+                if self.silhouettes[i] is None
+                else (
+                    window_percentile(self._spreads, i, self.spread_half, SPREAD_PERCENTILE),
+                    lift_spread(self._lift_reads, self._readable, i, self.spread_half),
+                )
+            )
+            out += self.fitter.fit(
+                i, self.silhouettes[i], self._heights[i], *spreads, normalised=self._normalised.pop(i, None)
+            )
             if self.fitter.latest is not None and not end:
                 self._provisional.append(self.fitter.latest)
             self._fitted += 1

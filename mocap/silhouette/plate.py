@@ -28,16 +28,17 @@ from mocap.silhouette.background import (
 )
 from mocap.silhouette.uncover import uncovered_scene
 
-HALF = 0.5              # evidence on at least this fraction of samples: the performer stays
-RADIUS = 0.07           # of the evidence's height: a body part's reach around evidence
+HALF = 0.5  # evidence on at least this fraction of samples: the performer stays
+RADIUS = 0.07  # of the evidence's height: a body part's reach around evidence
 GRABCUT_ITERATIONS = 4
-COLOUR_BINS = 16        # per channel, of the colour histograms that validate the pieces
+COLOUR_BINS = 16  # per channel, of the colour histograms that validate the pieces
 BACKGROUND_FRAMES = 30  # frames whose median is the background (of the clip, or of the scene)
-MIN_UNCOVERED = 3       # samples showing the scene before a pixel's scene is taken from them
+MIN_UNCOVERED = 3  # samples showing the scene before a pixel's scene is taken from them
 
 
-def clip_background(info: VideoInfo, scale: float,
-                    source: str | os.PathLike | tuple[int, int] | None = None) -> Background:
+def clip_background(
+    info: VideoInfo, scale: float, source: str | os.PathLike | tuple[int, int] | None = None
+) -> Background:
     """A clip's background: the user's empty scene (``clean_plate``) if `source` is given, else the median of
     BACKGROUND_FRAMES samples without the performer who stays (``performer_free``)."""
     if source is not None:
@@ -59,8 +60,16 @@ def performer_free(background: Background, frames: list[np.ndarray]) -> Backgrou
     steady = _steady(background.image, frames, background.sigma)
     held_in_median = _without_steady_scene(held_in_median, steady)
     mixed = _mixed_around(held_in_median, steady, radius)
-    image, held = _replate(background.image, held_in_median, mixed, np.stack(frames), np.stack(masks), radius,
-                          odds, noise_floor(background.sigma))
+    image, held = _replate(
+        background.image,
+        held_in_median,
+        mixed,
+        np.stack(frames),
+        np.stack(masks),
+        radius,
+        odds,
+        noise_floor(background.sigma),
+    )
     threshold = background.threshold.copy()
     threshold[dilated(region | held_in_median, _disk(radius)) > 0] = noise_floor(background.sigma)
     return replace(background, image=image, threshold=threshold, held=held, stood=stood)
@@ -96,8 +105,9 @@ def performer_region(masks: list[np.ndarray], radius: int) -> np.ndarray | None:
     return region
 
 
-def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray],
-                  masks: list[np.ndarray]) -> np.ndarray:
+def _median_holds(
+    image: np.ndarray, region: np.ndarray, radius: int, frames: list[np.ndarray], masks: list[np.ndarray]
+) -> np.ndarray:
     """Pixels (bool) where the median image shows the performer (steps 3-4), and the colour odds."""
     disk = _disk(radius)
     around = dilated(region, disk)
@@ -106,7 +116,7 @@ def _median_holds(image: np.ndarray, region: np.ndarray, radius: int, frames: li
     cut[region > 0] = cv2.GC_PR_FGD
     x, y, w, h = cv2.boundingRect(dilated(around, disk))
     cut_fg = np.zeros(region.shape, np.uint8)
-    cut_fg[y:y + h, x:x + w] = _grabcut(image[y:y + h, x:x + w], cut[y:y + h, x:x + w])
+    cut_fg[y : y + h, x : x + w] = _grabcut(image[y : y + h, x : x + w], cut[y : y + h, x : x + w])
     near = dilated(cut_fg, disk) > 0
     performer = np.concatenate([f[(m > 0) & ~near] for f, m in zip(frames, masks)])
     odds = _colour_odds(performer, image[around == 0])
@@ -120,7 +130,7 @@ def _grabcut(image: np.ndarray, cut: np.ndarray) -> np.ndarray:
     """GrabCut's foreground (0/1 uint8) of ``image`` seeded by ``cut`` (its GC_* labels)."""
     cut = cut.copy()
     models = (np.zeros((1, 65)), np.zeros((1, 65)))
-    cv2.setRNGSeed(0)   # GrabCut's colour models start from k-means: the same clip, the same cut
+    cv2.setRNGSeed(0)  # GrabCut's colour models start from k-means: the same clip, the same cut
     cv2.grabCut(np.ascontiguousarray(image), cut, None, *models, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
     return ((cut == cv2.GC_FGD) | (cut == cv2.GC_PR_FGD)).astype(np.uint8)
 
@@ -131,9 +141,9 @@ def _colour_odds(performer: np.ndarray, scene: np.ndarray) -> np.ndarray:
 
 
 def _histogram(samples: np.ndarray) -> np.ndarray:
-    hist = np.ones(COLOUR_BINS ** 3)
+    hist = np.ones(COLOUR_BINS**3)
     if len(samples):
-        hist += np.bincount(_colour_code(samples), minlength=COLOUR_BINS ** 3)
+        hist += np.bincount(_colour_code(samples), minlength=COLOUR_BINS**3)
     return hist / hist.sum()
 
 
@@ -196,8 +206,16 @@ def _mixed_around(holds: np.ndarray, steady: np.ndarray, radius: int) -> np.ndar
     return _joined(holds, near & ~steady) & ~holds
 
 
-def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np.ndarray, masks: np.ndarray,
-             radius: int, odds: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
+def _replate(
+    image: np.ndarray,
+    holds: np.ndarray,
+    mixed: np.ndarray,
+    frames: np.ndarray,
+    masks: np.ndarray,
+    radius: int,
+    odds: np.ndarray,
+    floor: int,
+) -> tuple[np.ndarray, np.ndarray]:
     """Step 5: the median image with the scene put back where it ``holds`` the performer or is ``mixed`` (there
     only where uncovered), and the pixels left to inpainting (bool)."""
     scene, seen = uncovered_scene(image, holds | mixed, frames, floor)
@@ -211,8 +229,9 @@ def _replate(image: np.ndarray, holds: np.ndarray, mixed: np.ndarray, frames: np
     return plate, held
 
 
-def _scene_coloured(image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray,
-                    odds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _scene_coloured(
+    image: np.ndarray, holds: np.ndarray, frames: np.ndarray, masks: np.ndarray, odds: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """``image`` with the median of the scene-coloured samples that differ from it (``masks``) where it ``holds``
     the performer and MIN_UNCOVERED do, and where they do (bool)."""
     index = np.flatnonzero(holds)
@@ -248,14 +267,14 @@ def dilated(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
 
 # -- the empty scene given by the user -----------------------------------------------
 
+
 def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, scale: float) -> Background:
     """The background from the user's empty scene (a photo, a video's median, or clip frames (first, last)) in
     the clip's size and tones (``scene_image``); threshold: the noise floor of the clip against it."""
     if isinstance(source, tuple):
         first, last = source
         if not 0 <= first <= last < info.frame_count:
-            raise MocapError(f"background frames {first}..{last} are not within the video's "
-                             f"{info.frame_count} frames")
+            raise MocapError(f"background frames {first}..{last} are not within the video's {info.frame_count} frames")
         indices = np.unique(np.linspace(first, last, min(BACKGROUND_FRAMES, last - first + 1)).round())
         image = _median([read_frame(info, int(i), scale) for i in indices])
     else:
@@ -264,8 +283,7 @@ def clean_plate(source: str | os.PathLike | tuple[int, int], info: VideoInfo, sc
     if samples[0].shape != image.shape:
         image = cv2.resize(image, samples[0].shape[1::-1], interpolation=cv2.INTER_AREA)
     image = scene_image(image, estimate_background(samples))
-    deviation = [cv2.absdiff(cv2.transform(f, np.diag(exposure_gain(f, image))), image).max(axis=2)
-                 for f in samples]
+    deviation = [cv2.absdiff(cv2.transform(f, np.diag(exposure_gain(f, image))), image).max(axis=2) for f in samples]
     sigma = MAD_TO_SIGMA * median_level(deviation)
     return Background(image, np.full(image.shape[:2], noise_floor(sigma), np.uint8), sigma)
 
@@ -312,8 +330,7 @@ def _plate_image(path: str, size: tuple[int, int]) -> np.ndarray:
         image = _median([f for _, f in sample_frames(plate_video, BACKGROUND_FRAMES)])
     h, w = image.shape[:2]
     if abs(w * size[1] - h * size[0]) > max(w, h):
-        raise MocapError(f"{path}: the background is {w}x{h}, the video {size[0]}x{size[1]}: "
-                         f"not the same shape")
+        raise MocapError(f"{path}: the background is {w}x{h}, the video {size[0]}x{size[1]}: not the same shape")
     return image
 
 

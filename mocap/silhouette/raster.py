@@ -12,37 +12,35 @@ import numpy as np
 from mocap.body import (
     BODY_HEIGHT,
     FOOT_LENGTH,
-    KINEMATIC_MATRIX,
     LENGTH,
     SEGMENT_INDEX,
     SEGMENT_JOINTS,
     SEGMENT_NAMES,
     WIDTH,
-    Pose2D,
-    joints_of_basis,
-    kinematic_basis,
     torso_width,
 )
 from mocap.image.edges import EDGE_WEIGHT, Edges
+from mocap.silhouette.model2d import KINEMATIC_MATRIX, Pose2D, joints_of_basis, kinematic_basis
 
-LANDMARK_WEIGHT = 0.6           # S that a confident landmark far from its joint takes away
-LANDMARK_SIGMA = 0.05           # of the body height: a landmark's distance that costs half of it
-_SHIFT = 4                      # sub-pixel bits for cv2 polygon fill
+LANDMARK_WEIGHT = 0.6  # S that a confident landmark far from its joint takes away
+LANDMARK_SIGMA = 0.05  # of the body height: a landmark's distance that costs half of it
+_SHIFT = 4  # sub-pixel bits for cv2 polygon fill
 _ONE = 1 << _SHIFT
-_PERPENDICULAR = np.array([-1.0, 1.0])   # (dx, dy) reversed times this: the normal (-dy, dx)
-_CORNER_END = np.array([0, 1, 1, 0])     # a rectangle's corners: at which end of the segment,
-_CORNER_SIDE = np.array([1.0, 1.0, -1.0, -1.0])   # and on which side of it
+_PERPENDICULAR = np.array([-1.0, 1.0])  # (dx, dy) reversed times this: the normal (-dy, dx)
+_CORNER_END = np.array([0, 1, 1, 0])  # a rectangle's corners: at which end of the segment,
+_CORNER_SIDE = np.array([1.0, 1.0, -1.0, -1.0])  # and on which side of it
 _TORSO = SEGMENT_INDEX["torso"]
 _HAS_FOOT = np.isin(np.arange(len(SEGMENT_NAMES)), [SEGMENT_INDEX["lower_leg_l"], SEGMENT_INDEX["lower_leg_r"]])
 # The hand (not in the paper's 10 cylinders nor the contract's joints): the lower arm's
 # continuation past the wrist, this long in model units at its foreshortening; without it
 # the fit puts the wrist at the silhouette's end, in the hand.
 HAND_LENGTH = 13.0
-_HAND_REACH = np.zeros(len(SEGMENT_NAMES))       # of the lower arm's drawn length
-_HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = HAND_LENGTH / LENGTH[
-    SEGMENT_INDEX["lower_arm_l"]]
+_HAND_REACH = np.zeros(len(SEGMENT_NAMES))  # of the lower arm's drawn length
+_HAND_REACH[[SEGMENT_INDEX["lower_arm_l"], SEGMENT_INDEX["lower_arm_r"]]] = (
+    HAND_LENGTH / LENGTH[SEGMENT_INDEX["lower_arm_l"]]
+)
 _ALL_SEGMENTS = tuple(range(len(SEGMENT_NAMES)))
-# rows of ``_corner_basis``: body.kinematic_basis's 12, then the segments' directions and normals
+# rows of ``_corner_basis``: model2d.kinematic_basis's 12, then the segments' directions and normals
 _DIRECTIONS, _NORMALS, _BASIS_ROWS = 12, 12 + len(SEGMENT_NAMES), 12 + 2 * len(SEGMENT_NAMES)
 
 
@@ -76,9 +74,8 @@ def _corner_weights(segments: tuple[int, ...], scale: float) -> np.ndarray:
     return weights.reshape(4 * k, _BASIS_ROWS)
 
 
-def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
-                  torso: bool) -> np.ndarray:
-    """``body.kinematic_basis``'s 12 vectors, then each segment's unit direction (cos, -sin) and normal (sin,
+def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread, torso: bool) -> np.ndarray:
+    """``model2d.kinematic_basis``'s 12 vectors, then each segment's unit direction (cos, -sin) and normal (sin,
     cos): (_BASIS_ROWS, B, 2); the torso's normal times its seen half width if ``torso``."""
     basis, cos, sin = kinematic_basis(pelvis, scale, angle, ratio, spread, rows=_BASIS_ROWS)
     basis[_DIRECTIONS:_NORMALS, :, 0] = basis[_NORMALS:, :, 1] = cos
@@ -89,9 +86,10 @@ def _corner_basis(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, sp
     return basis
 
 
-def posed_quads(pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread,
-                segments=None) -> tuple[np.ndarray, np.ndarray]:
-    """Rectangles (B, k, 4, 2) of the ``segments`` (indices) of B poses as ``body.forward_kinematics_2d_batch``
+def posed_quads(
+    pelvis, scale: float, angle: np.ndarray, ratio: np.ndarray, spread, segments=None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rectangles (B, k, 4, 2) of the ``segments`` (indices) of B poses as ``model2d.forward_kinematics_2d_batch``
     takes them, and their joints (B, 16, 2): the torso as wide as ``spread`` shows it, lower legs on past the
     ankle by the foot (body.FOOT_LENGTH), lower arms into the hand (HAND_LENGTH)."""
     segments = _ALL_SEGMENTS if segments is None else tuple(segments)
@@ -108,9 +106,14 @@ def pose_quads(pose: Pose2D, segments=SEGMENT_NAMES) -> np.ndarray:
 
 def poses_quads(poses: list[Pose2D], segments=SEGMENT_NAMES) -> np.ndarray:
     """The rectangles (P, k, 4, 2) of the named segments of 2D poses of one scale."""
-    return posed_quads(np.array([p.pelvis for p in poses], float), poses[0].scale,
-                       np.array([p.angle for p in poses]), np.array([p.ratio for p in poses]),
-                       np.array([p.spread for p in poses]), [SEGMENT_INDEX[s] for s in segments])[0]
+    return posed_quads(
+        np.array([p.pelvis for p in poses], float),
+        poses[0].scale,
+        np.array([p.angle for p in poses]),
+        np.array([p.ratio for p in poses]),
+        np.array([p.spread for p in poses]),
+        [SEGMENT_INDEX[s] for s in segments],
+    )[0]
 
 
 def fill_quads(mask: np.ndarray, quads: np.ndarray, offset=(0, 0)) -> np.ndarray:
@@ -138,16 +141,15 @@ def similarity_from_counts(sil_area, model_area, overlap) -> np.ndarray:
 def similarity(silhouette: np.ndarray, model: np.ndarray) -> float:
     """S(I1, I2) of Eq. 1-3 between two masks (nonzero = inside)."""
     sil, mod = silhouette > 0, model > 0
-    return float(similarity_from_counts(np.count_nonzero(sil), np.count_nonzero(mod),
-                                        np.count_nonzero(sil & mod)))
+    return float(similarity_from_counts(np.count_nonzero(sil), np.count_nonzero(mod), np.count_nonzero(sil & mod)))
 
 
 def _draw_planes(candidates: np.ndarray, offset: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Each candidate's polygons (B, k, 4, 2) filled into its own 0/1 plane (B, H, W)."""
-    pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32, order="C")   # windows keep them >= 0
+    pts = ((candidates - offset) * _ONE + 0.5).astype(np.int32, order="C")  # windows keep them >= 0
     planes = np.zeros((len(pts),) + shape, np.uint8)
     fill, line = cv2.fillConvexPoly, cv2.LINE_8
-    for k in range(pts.shape[1]):               # segment by segment: less loop overhead
+    for k in range(pts.shape[1]):  # segment by segment: less loop overhead
         for plane, quad in zip(planes, pts[:, k]):
             fill(plane, quad, 1, line, _SHIFT)  # one by one: fillPoly would make overlaps holes
     return planes
@@ -160,7 +162,7 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None 
     outline = slice(None) if outline is None else outline
     x0, y0, x1, y1 = bounding_window(sweep[outline], canvas.sil.shape)
     offset, shape = np.array([x0, y0], float), (y1 - y0, x1 - x0)
-    if not shape[0] or not shape[1]:            # swept wholly outside the frame: explains nothing
+    if not shape[0] or not shape[1]:  # swept wholly outside the frame: explains nothing
         return np.zeros(len(sweep)), lambda candidates: np.zeros(len(candidates))
     planes = _draw_planes(sweep, offset, shape)
     free = canvas.free[y0:y1, x0:x1]
@@ -174,12 +176,13 @@ def sweep_scorer(canvas: "Canvas", sweep: np.ndarray, outline: list[int] | None 
     def weigh(planes_: np.ndarray) -> np.ndarray:
         totals = np.einsum("bn,n->b", planes_.reshape(len(planes_), -1), weights)
         return similarity_from_counts(sil_area, totals & low, totals >> dtype(shift))
+
     return weigh(planes), lambda candidates: weigh(_draw_planes(candidates, offset, shape))
 
 
 def bounding_window(quads: np.ndarray, shape: tuple[int, int], pad: float = 1.0) -> tuple[int, int, int, int]:
     """Integer box (x0, y0, x1, y1), clipped to shape, holding all given polygons."""
-    xs, ys = quads.reshape(-1, 2).T.copy()          # cv2's minimum and maximum: cheaper than numpy's
+    xs, ys = quads.reshape(-1, 2).T.copy()  # cv2's minimum and maximum: cheaper than numpy's
     (ax, bx, _, _), (ay, by, _, _) = cv2.minMaxLoc(xs), cv2.minMaxLoc(ys)
     h, w = shape
     x0, y0 = min(max(math.floor(ax - pad), 0), w), min(max(math.floor(ay - pad), 0), h)
@@ -193,10 +196,10 @@ class Canvas:
     def __init__(self, silhouette: np.ndarray, grey: np.ndarray | None = None, targets=None):
         self.sil = (silhouette > 0).astype(np.uint8)
         self.fixed = np.zeros_like(self.sil)
-        self.free = np.ones_like(self.sil)     # 1 - fixed, which every search reads
+        self.free = np.ones_like(self.sil)  # 1 - fixed, which every search reads
         self.edges = None if grey is None else Edges.inside(grey, self.sil)
         self.by_edges = False
-        self.targets = targets                 # a person model's landmarks (mocap.silhouette.eyes.Targets)
+        self.targets = targets  # a person model's landmarks (mocap.silhouette.eyes.Targets)
 
     def fork(self, quads=(), keep: np.ndarray | None = None, by_edges: bool = False) -> "Canvas":
         """A copy with ``quads`` fitted too, silhouette only where ``keep``, following edges if ``by_edges``."""

@@ -7,14 +7,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, FOOT_LENGTH, LENGTH, SEGMENT_INDEX, Pose2D, spread_for_width
+from mocap.body import BODY_HEIGHT, FOOT_LENGTH, LENGTH, SEGMENT_INDEX, spread_for_width
 from mocap.image.percentile import percentile
 from mocap.silhouette.contour import row_runs
+from mocap.silhouette.model2d import Pose2D
 from mocap.silhouette.raster import Canvas
 from mocap.silhouette.search import RATIO_SWEEP_STEP, Knob, Search, around, search, search_angle, search_ratio
 
 TORSO_HEAD = ("torso", "head")
-WAIST_RANGE = (45.0, 135.0)      # Table 1
+WAIST_RANGE = (45.0, 135.0)  # Table 1
 # A crouching body's trunk (bent over, or leaning over folded legs) may lean further
 # than Table 1's waist, down to this far above level (as in a deep squat).
 CROUCH_RANGE = (15.0, 165.0)
@@ -24,14 +25,14 @@ CROUCH_TRUNK_SHARE = 0.5
 # Below this share of the standing height a body is crouching (a walk's or a run's
 # longest strides lower the hips less).
 CROUCH_SPAN = 0.9
-NECK_RANGE = (45.0, 135.0)       # Table 1
-SILHOUETTE_BLEED_PX = 1.0        # silhouettes come out this much wider than the body
+NECK_RANGE = (45.0, 135.0)  # Table 1
+SILHOUETTE_BLEED_PX = 1.0  # silhouettes come out this much wider than the body
 # A head (round from any side) is this wide (model units) this far under its crown;
 # a raised forearm or hand is narrower.
 HEAD_ROW_WIDTH = 14.0
 HEAD_ROW_DEPTH = 3.0
-UPRIGHT_SPAN = (0.94, 1.05)      # silhouette height / standing height of an upright body
-RAISED_PX = 1                    # fit pixels of silhouette over the head: none raised
+UPRIGHT_SPAN = (0.94, 1.05)  # silhouette height / standing height of an upright body
+RAISED_PX = 1  # fit pixels of silhouette over the head: none raised
 
 
 def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
@@ -40,7 +41,7 @@ def initial_pose(silhouette: np.ndarray, scale: float) -> Pose2D:
     top, bottom = head_top_row(silhouette, scale), int(rows[-1])
     head = LENGTH[SEGMENT_INDEX["head"]] * scale
     pelvis_y = min(top + head + LENGTH[SEGMENT_INDEX["torso"]] * scale, bottom)
-    xs = np.nonzero(silhouette[int(top + head): int(pelvis_y) + 1])[1]
+    xs = np.nonzero(silhouette[int(top + head) : int(pelvis_y) + 1])[1]
     x = float(np.median(xs)) if len(xs) else float(np.median(np.nonzero(silhouette)[1]))
     return Pose2D(pelvis=np.array([x, pelvis_y]), scale=scale)
 
@@ -56,8 +57,7 @@ def head_top_row(silhouette: np.ndarray, scale: float) -> int:
     return max(int(rows[0]), int(round(wide[0] - HEAD_ROW_DEPTH * scale)))
 
 
-def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None,
-                   spread: float | None = None) -> Pose2D:
+def fit_torso_head(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, spread: float | None = None) -> Pose2D:
     """Torso angle (Algorithm 1, head along it: Fig. 3a), x, spread (unless given), head angle, ratios."""
     pose = place_torso(canvas, pose, prev)
     pose = fit_spread(canvas, pose) if spread is None else replace(pose, spread=spread)
@@ -73,8 +73,7 @@ def place_torso(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> Pose2D:
     pelvis = crouch_pelvis(canvas.sil, pose)
     crouching = pelvis is not None
     lo, hi, c = around(prev, "torso", *(CROUCH_RANGE if crouching else WAIST_RANGE), 90.0)
-    pose = search_angle(canvas, replace(pose, pelvis=pelvis) if crouching else pose,
-                        TORSO_HEAD, TORSO_HEAD, lo, hi, c)
+    pose = search_angle(canvas, replace(pose, pelvis=pelvis) if crouching else pose, TORSO_HEAD, TORSO_HEAD, lo, hi, c)
     return fit_pelvis_x(canvas, pose if crouching else under_the_head(canvas.sil, pose))
 
 
@@ -86,8 +85,7 @@ def crouch_pelvis(silhouette: np.ndarray, pose: Pose2D) -> np.ndarray | None:
     short, allowed = standing - (bottom - top), (1.0 - CROUCH_SPAN) * standing
     if short <= allowed:
         return None
-    y = min(top + trunk_reach(pose.scale) - CROUCH_TRUNK_SHARE * short * min(short / allowed - 1.0, 1.0),
-            bottom)
+    y = min(top + trunk_reach(pose.scale) - CROUCH_TRUNK_SHARE * short * min(short / allowed - 1.0, 1.0), bottom)
     xs = np.flatnonzero(silhouette[int(round(y))])
     return np.array([float(np.median(xs)) if len(xs) else pose.pelvis[0], y])
 
@@ -117,7 +115,7 @@ def torso_spread(silhouette: np.ndarray, scale: float) -> float:
         return 1.0
     top = head_top_row(silhouette, scale)
     head, torso = LENGTH[SEGMENT_INDEX["head"]] * scale, LENGTH[SEGMENT_INDEX["torso"]] * scale
-    band = silhouette[int(top + head + 0.25 * torso): int(top + head + 0.75 * torso)] > 0
+    band = silhouette[int(top + head + 0.25 * torso) : int(top + head + 0.75 * torso)] > 0
     rows, starts, ends = row_runs(band)
     if len(rows) == 0:
         return 1.0
@@ -145,5 +143,4 @@ def fit_pelvis_x(canvas: Canvas, pose: Pose2D, reach: float = 12.0) -> Pose2D:
 
 def fit_spread(canvas: Canvas, pose: Pose2D) -> Pose2D:
     """The torso's horizontal foreshortening (0 profile .. 1 frontal) by Algorithm 6's search."""
-    return search(pose, Search(canvas, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05,
-                               RATIO_SWEEP_STEP))
+    return search(pose, Search(canvas, Knob("spread"), TORSO_HEAD, 0.0, 1.0, pose.spread, 0.05, RATIO_SWEEP_STEP))

@@ -6,14 +6,15 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from mocap.silhouette.background import mask_box
+from mocap.silhouette.cleaning import mask_box
 
-AGREEING = 0.25     # of the samples: a group that agrees on a pixel's scene
-MIN_GROUP = 3       # samples, whatever the share
+AGREEING = 0.25  # of the samples: a group that agrees on a pixel's scene
+MIN_GROUP = 3  # samples, whatever the share
 
 
-def uncovered_scene(image: np.ndarray, holds: np.ndarray, frames: np.ndarray,
-                    floor: int) -> tuple[np.ndarray, np.ndarray]:
+def uncovered_scene(
+    image: np.ndarray, holds: np.ndarray, frames: np.ndarray, floor: int
+) -> tuple[np.ndarray, np.ndarray]:
     """The scene (uint8) where the median ``image`` ``holds`` the performer, and where seen (bool), peeled in
     ring by ring: samples that show the scene at a neighbour and differ from the median are candidates; the scene
     is the median of their largest group agreeing within ``floor``, if AGREEING of the samples."""
@@ -24,14 +25,14 @@ def uncovered_scene(image: np.ndarray, holds: np.ndarray, frames: np.ndarray,
         return scene, seen
     stack = frames[(slice(None), *box)].astype(np.int16)
     median, inside = image[box].astype(np.int16), holds[box]
-    shows = _within(stack, median, floor)                   # (S, h, w): where the median is the scene
+    shows = _within(stack, median, floor)  # (S, h, w): where the median is the scene
     shows[:, inside] = False
     known = ~inside
     rings = cv2.distanceTransform(inside.astype(np.uint8), cv2.DIST_C, 3)
     for ring in range(1, int(rings.max()) + 1):
         ys, xs = np.nonzero(rings == ring)
-        near = _near(shows & known, ys, xs)                  # (S, n): shown at a known neighbour
-        values = stack[:, ys, xs]                            # (S, n, 3)
+        near = _near(shows & known, ys, xs)  # (S, n): shown at a known neighbour
+        values = stack[:, ys, xs]  # (S, n, 3)
         near &= ~_within(values, median[ys, xs], floor)
         found, colour = _largest_agreeing(values, near, floor)
         scene[box][ys[found], xs[found]] = colour[found].astype(np.uint8)
@@ -62,10 +63,10 @@ def _near(mask: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
 def _largest_agreeing(values: np.ndarray, candidates: np.ndarray, floor: int) -> tuple[np.ndarray, np.ndarray]:
     """Per pixel of ``values`` (S, n, 3): whether the largest group of ``candidates`` (S, n) within ``floor`` of
     one has AGREEING of the samples and MIN_GROUP, and its median: (n,) bool, (n, 3) float."""
-    agree = _within(values[:, None], values[None], floor)                 # (S, S, n)
+    agree = _within(values[:, None], values[None], floor)  # (S, S, n)
     agree &= candidates[:, None] & candidates[None]
     best = agree.sum(axis=1).argmax(axis=0)
-    members = agree[best, :, np.arange(values.shape[1])].T                # (S, n)
+    members = agree[best, :, np.arange(values.shape[1])].T  # (S, n)
     found = members.sum(axis=0) >= max(MIN_GROUP, AGREEING * len(values))
     grouped = np.where(members[..., None], values, np.nan).astype(np.float32)
     colour = np.zeros((values.shape[1], 3), np.float32)

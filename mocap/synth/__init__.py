@@ -22,32 +22,44 @@ from mocap.synth.hair import draw_hair
 from mocap.synth.truth import Camera, Truth, save_truth
 from mocap.synth.walk import walk_cycle
 
-WALK_CYCLE = "walk-cycle"   # the source name of the procedural walk
+WALK_CYCLE = "walk-cycle"  # the source name of the procedural walk
 VIEWS = {"side": 0.0, "three-quarter": 45.0, "front": 90.0}
 _UP = np.array([0.0, 1.0, 0.0])
-_RING = np.exp(2j * np.pi * np.arange(24) / 24)           # 24 samples on each end ellipse
+_RING = np.exp(2j * np.pi * np.arange(24) / 24)  # 24 samples on each end ellipse
 _TORSO, _HEAD = body.SEGMENT_INDEX["torso"], body.SEGMENT_INDEX["head"]
 _LIGHT = np.array([-0.5, 0.6, 0.62]) / np.linalg.norm([-0.5, 0.6, 0.62])  # camera frame
 # shading layers: (radius fraction, shift toward the light in radii, brightness)
 _LAYERS = np.array([[1.0, 0.0, 0.72], [0.62, 0.3, 1.0], [0.25, 0.55, 1.18]])
-_COLOURS = np.array([  # BGR per piece: body.SEGMENT_NAMES order, then the feet (shoes)
-    (60, 70, 165), (135, 165, 220), (80, 95, 190), (125, 160, 215), (55, 60, 145),
-    (110, 145, 200), (145, 100, 60), (160, 115, 75), (120, 80, 45), (135, 92, 55),
-    (50, 55, 62), (60, 66, 75)])
+_COLOURS = np.array(
+    [  # BGR per piece: body.SEGMENT_NAMES order, then the feet (shoes)
+        (60, 70, 165),
+        (135, 165, 220),
+        (80, 95, 190),
+        (125, 160, 215),
+        (55, 60, 145),
+        (110, 145, 200),
+        (145, 100, 60),
+        (160, 115, 75),
+        (120, 80, 45),
+        (135, 92, 55),
+        (50, 55, 62),
+        (60, 66, 75),
+    ]
+)
 _SHINS = [body.SEGMENT_INDEX["lower_leg_l"], body.SEGMENT_INDEX["lower_leg_r"]]
 # Feet (body units, of 175): soles body.FOOT_LENGTH under the ankles, heels 6 behind
 # and toes 22 ahead (anthropometric tables: foot 0.152 of the stature, ankle at a fifth)
 _HEEL, _TOE, _FOOT_R = 6.0, 22.0, body.FOOT_LENGTH / 2 / body.BODY_HEIGHT  # round feet
 _SHADES = np.clip(_COLOURS[:, None, :] * _LAYERS[None, :, 2:], 0, 255).tolist()
 _NOISE_PAD = 32
-_PAN_SPEED = 3                                             # px/frame, moving background
+_PAN_SPEED = 3  # px/frame, moving background
 # body shapes: each kind of segment's widths (lateral and front to back) against the
 # model's (body.WIDTH), so that a method can be tried on a body other than its own model
-SHAPES = {"model": {},
-          "slim": {"head": 0.95, "torso": 0.8, "upper_arm": 0.75, "lower_arm": 0.75,
-                   "upper_leg": 0.75, "lower_leg": 0.8},
-          "broad": {"head": 1.05, "torso": 1.3, "upper_arm": 1.3, "lower_arm": 1.2,
-                    "upper_leg": 1.3, "lower_leg": 1.2}}
+SHAPES = {
+    "model": {},
+    "slim": {"head": 0.95, "torso": 0.8, "upper_arm": 0.75, "lower_arm": 0.75, "upper_leg": 0.75, "lower_leg": 0.8},
+    "broad": {"head": 1.05, "torso": 1.3, "upper_arm": 1.3, "lower_arm": 1.2, "upper_leg": 1.3, "lower_leg": 1.2},
+}
 
 
 @dataclass(frozen=True)
@@ -56,18 +68,18 @@ class RenderOptions:
 
     view: str = "side"
     yaw: float | None = None
-    pitch: float = 0.0                 # degrees, positive looks down
+    pitch: float = 0.0  # degrees, positive looks down
     size: tuple[int, int] = (640, 480)
     fps: float = 30.0
-    perspective: float | None = None   # focal length in pixels; None = orthographic
-    body_fraction: float = 0.6         # body height / frame height, if the path fits
-    margin: float = 0.05               # free border, fraction of the frame
+    perspective: float | None = None  # focal length in pixels; None = orthographic
+    body_fraction: float = 0.6  # body height / frame height, if the path fits
+    margin: float = 0.05  # free border, fraction of the frame
     moving_background: bool = False
     antialias: bool = True
-    noise: float = 2.0                 # sensor noise sigma, grey levels
+    noise: float = 2.0  # sensor noise sigma, grey levels
     seed: int = 0
-    shape: str = "model"               # a key of SHAPES: the body's widths
-    hair: bool = False                 # hair over the back of the head and the crown
+    shape: str = "model"  # a key of SHAPES: the body's widths
+    hair: bool = False  # hair over the back of the head and the crown
 
     @property
     def yaw_deg(self) -> float:
@@ -80,6 +92,7 @@ class RenderOptions:
 
 
 # -- camera ---------------------------------------------------------------------------
+
 
 def _rotation(yaw_deg: float, pitch_deg: float, joints0: np.ndarray) -> np.ndarray:
     """World -> camera rotation for a yaw from the performer's initial lateral axis."""
@@ -107,11 +120,18 @@ def frame_camera(joints_world: np.ndarray, radii: np.ndarray, opts: RenderOption
         kind, scale, origin = "orthographic", min(wanted, fit), mid
     else:
         rel = pts - mid
-        dist = max(opts.perspective / wanted, np.max(
-            rel[:, 2:] + opts.perspective * np.abs(rel[:, :2]) / half))
+        dist = max(opts.perspective / wanted, np.max(rel[:, 2:] + opts.perspective * np.abs(rel[:, :2]) / half))
         kind, scale, origin = "perspective", float(opts.perspective), mid + [0.0, 0.0, dist]
-    return Camera(kind=kind, yaw_deg=opts.yaw_deg, pitch_deg=float(opts.pitch), rotation=rot,
-                  origin=origin @ rot, scale=float(scale), cx=width / 2, cy=frame_h / 2)
+    return Camera(
+        kind=kind,
+        yaw_deg=opts.yaw_deg,
+        pitch_deg=float(opts.pitch),
+        rotation=rot,
+        origin=origin @ rot,
+        scale=float(scale),
+        cx=width / 2,
+        cy=frame_h / 2,
+    )
 
 
 def body_pieces(joints: np.ndarray) -> np.ndarray:
@@ -121,9 +141,10 @@ def body_pieces(joints: np.ndarray) -> np.ndarray:
     u = body.body_height(joints.reshape(-1, 16, 3)[0]) / body.BODY_HEIGHT
     trunk = _unit(joints[..., j["neck"], :] - joints[..., j["pelvis"], :], _UP)[..., None, :]
     ahead = np.cross(joints[..., j["hip_l"], :] - joints[..., j["hip_r"], :], trunk[..., 0, :])
-    shin = _unit(ends[..., _SHINS, 1, :] - ends[..., _SHINS, 0, :], -_UP)   # (..., 2, 3)
-    ahead = _unit(ahead[..., None, :] - (ahead[..., None, :] * shin).sum(-1, keepdims=True) * shin,
-                  trunk)   # legs raised straight ahead: the feet point up the trunk
+    shin = _unit(ends[..., _SHINS, 1, :] - ends[..., _SHINS, 0, :], -_UP)  # (..., 2, 3)
+    ahead = _unit(
+        ahead[..., None, :] - (ahead[..., None, :] * shin).sum(-1, keepdims=True) * shin, trunk
+    )  # legs raised straight ahead: the feet point up the trunk
     axis = ends[..., _SHINS, 1, :] + shin * (body.FOOT_LENGTH / 2 * u)
     feet = np.stack([axis - ahead * (_HEEL * u), axis + ahead * (_TOE * u)], axis=-2)
     return np.concatenate([ends, feet], axis=-3)
@@ -134,7 +155,7 @@ def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarra
 
     ``radii`` (12, 2): lateral and front-to-back radii (the torso's lateral axis runs right to
     left). One ring per layer: radii times ``layer[0]``, shifted ``layer[1]`` radii to the light."""
-    ends = body_pieces(joints_cam)                                   # (..., 12, 2, 3)
+    ends = body_pieces(joints_cam)  # (..., 12, 2, 3)
     axis = _unit(ends[..., 1, :] - ends[..., 0, :], _UP)
     across = _unit(np.cross(axis, [0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
     lateral = np.broadcast_to(across, axis.shape).copy()
@@ -142,12 +163,14 @@ def cylinder_points(joints_cam: np.ndarray, radii: np.ndarray, layers: np.ndarra
     lateral = _unit(lateral - (lateral * axis).sum(-1, keepdims=True) * axis, across)
     sagittal = np.cross(axis, lateral)
     light = _unit(_LIGHT - (axis @ _LIGHT)[..., None] * axis, across)
-    r = radii[:, None, :] * layers[:, :1]                            # (12, L, 2)
-    ring = (_RING.real[:, None] * r[..., None, 0:1, None] * lateral[..., None, None, None, :]
-            + _RING.imag[:, None] * r[..., None, 1:2, None] * sagittal[..., None, None, None, :])
+    r = radii[:, None, :] * layers[:, :1]  # (12, L, 2)
+    ring = (
+        _RING.real[:, None] * r[..., None, 0:1, None] * lateral[..., None, None, None, :]
+        + _RING.imag[:, None] * r[..., None, 1:2, None] * sagittal[..., None, None, None, :]
+    )
     shift = (radii[:, :1] * layers[:, 1])[..., None] * light[..., None, :]  # (..., 10, L, 3)
-    centres = ends[..., None, :, None, :] + shift[..., None, None, :]    # (..., 10, L, 2, 1, 3)
-    pts = centres + ring                                             # (..., 10, L, 2, R, 3)
+    centres = ends[..., None, :, None, :] + shift[..., None, None, :]  # (..., 10, L, 2, 1, 3)
+    pts = centres + ring  # (..., 10, L, 2, R, 3)
     return pts.reshape(*pts.shape[:-3], 2 * len(_RING), 3)
 
 
@@ -159,16 +182,17 @@ def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
 
 # -- pictures -------------------------------------------------------------------------
 
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     """Everything needed to draw any frame of a clip."""
 
     opts: RenderOptions
     camera: Camera
-    joints_cam: np.ndarray   # (F, 16, 3) camera frame
-    radii: np.ndarray        # (12, 2) lateral and front-to-back radii (segments, feet), m
-    canvas: np.ndarray       # background, wider than the frame when it pans
-    noise: np.ndarray        # (2, H+pad, W+pad, 3) positive and negative sensor noise
+    joints_cam: np.ndarray  # (F, 16, 3) camera frame
+    radii: np.ndarray  # (12, 2) lateral and front-to-back radii (segments, feet), m
+    canvas: np.ndarray  # background, wider than the frame when it pans
+    noise: np.ndarray  # (2, H+pad, W+pad, 3) positive and negative sensor noise
 
 
 def shape_widths(shape: str) -> np.ndarray:
@@ -185,8 +209,8 @@ def plan_scene(joints_world: np.ndarray, opts: RenderOptions) -> Scene:
         raise MocapError(f"expected joints of shape (F, 16, 3), got {joints_world.shape}")
     height = body.body_height(joints_world[0])
     radii = np.concatenate([body.semi_axes(height), np.full((2, 2), _FOOT_R * height)])
-    camera = frame_camera(joints_world, radii, opts)         # the model's: shapes share it
-    radii[:len(body.SEGMENT_NAMES)] *= shape_widths(opts.shape)[:, None]
+    camera = frame_camera(joints_world, radii, opts)  # the model's: shapes share it
+    radii[: len(body.SEGMENT_NAMES)] *= shape_widths(opts.shape)[:, None]
     (width, height), rng = opts.size, np.random.default_rng(opts.seed)
     pan = min(_PAN_SPEED * (len(joints_world) - 1), width) if opts.moving_background else 0
     canvas = _room(width + pan, height, rng, clutter=opts.moving_background)
@@ -217,8 +241,9 @@ def _room(width: int, height: int, rng: np.random.Generator, clutter: bool) -> n
             cv2.circle(img, (x, y), r, colour, -1)
         else:
             cv2.rectangle(img, (x, y), (x + 2 * r, y + r), colour, -1)
-    coarse = cv2.resize(rng.normal(0, 6, (height // 16 + 2, width // 16 + 2)), (width, height),
-                        interpolation=cv2.INTER_CUBIC)
+    coarse = cv2.resize(
+        rng.normal(0, 6, (height // 16 + 2, width // 16 + 2)), (width, height), interpolation=cv2.INTER_CUBIC
+    )
     img += coarse[..., None] + rng.normal(0, 2.5, (height, width, 1))
     return np.clip(img, 0, 255).astype(np.uint8)
 
@@ -229,27 +254,28 @@ def background(scene: Scene, i: int) -> np.ndarray:
     pan = scene.canvas.shape[1] - width
     step = (i * _PAN_SPEED) % (2 * pan) if pan else 0
     offset = step if step <= pan else 2 * pan - step
-    return scene.canvas[:, offset:offset + width]
+    return scene.canvas[:, offset : offset + width]
 
 
 def draw_frame(scene: Scene, i: int) -> np.ndarray:
     """The BGR image of frame ``i``: background, cylinders back to front, sensor noise."""
     img = background(scene, i).copy()
     pts = cylinder_points(scene.joints_cam[i], scene.radii, _LAYERS)
-    px = np.round(scene.camera.project_camera(pts) * 16).astype(np.int32)   # 4 fraction bits
+    px = np.round(scene.camera.project_camera(pts) * 16).astype(np.int32)  # 4 fraction bits
     depth = body_pieces(scene.joints_cam[i]).mean(axis=1)[:, 2]
     line = cv2.LINE_AA if scene.opts.antialias else cv2.LINE_8
     for k in np.argsort(depth):
         for layer in range(len(_LAYERS)):
             cv2.fillConvexPoly(img, cv2.convexHull(px[k, layer]), _SHADES[k][layer], line, 4)
-        if k == _HEAD and scene.opts.hair:      # a face in front, hair behind (mocap.silhouette.facing)
-            draw_hair(img, scene.joints_cam[i], scene.radii[k, 0], scene.camera.project_camera,
-                      cv2.convexHull(px[k, 0]), line)
+        if k == _HEAD and scene.opts.hair:  # a face in front, hair behind (mocap.silhouette.facing)
+            draw_hair(
+                img, scene.joints_cam[i], scene.radii[k, 0], scene.camera.project_camera, cv2.convexHull(px[k, 0]), line
+            )
     if scene.opts.noise > 0:
         width, height = scene.opts.size
         dy, dx = np.random.default_rng([scene.opts.seed, i]).integers(0, _NOISE_PAD, 2)
-        cv2.add(img, scene.noise[0, dy:dy + height, dx:dx + width], dst=img)
-        cv2.subtract(img, scene.noise[1, dy:dy + height, dx:dx + width], dst=img)
+        cv2.add(img, scene.noise[0, dy : dy + height, dx : dx + width], dst=img)
+        cv2.subtract(img, scene.noise[1, dy : dy + height, dx : dx + width], dst=img)
     return img
 
 
@@ -261,17 +287,31 @@ def scene_truth(scene: Scene, source: str, source_frames: np.ndarray) -> Truth:
     # a perspective body's size varies; quote it at the mean depth of the clip
     depth = 1.0 if cam.kind == "orthographic" else float(-np.mean(pelvis[:, 2]))
     width, height = scene.opts.size
-    return Truth(source=source, fps=float(scene.opts.fps), width=width, height=height,
-                 camera=cam, body_height_m=height_m, body_height_px=cam.scale * height_m / depth,
-                 source_frames=np.asarray(source_frames, dtype=int),
-                 joints2d=cam.project_camera(scene.joints_cam),
-                 joints3d=scene.joints_cam - pelvis[:, None], pelvis_camera=pelvis)
+    return Truth(
+        source=source,
+        fps=float(scene.opts.fps),
+        width=width,
+        height=height,
+        camera=cam,
+        body_height_m=height_m,
+        body_height_px=cam.scale * height_m / depth,
+        source_frames=np.asarray(source_frames, dtype=int),
+        joints2d=cam.project_camera(scene.joints_cam),
+        joints3d=scene.joints_cam - pelvis[:, None],
+        pelvis_camera=pelvis,
+    )
 
 
-def render_clip(joints_world: np.ndarray, out_video: str | Path,
-                options: RenderOptions | None = None, *, truth_path: str | Path | None = None,
-                source: str = "joints", source_frames: np.ndarray | None = None,
-                **overrides) -> Truth:
+def render_clip(
+    joints_world: np.ndarray,
+    out_video: str | Path,
+    options: RenderOptions | None = None,
+    *,
+    truth_path: str | Path | None = None,
+    source: str = "joints",
+    source_frames: np.ndarray | None = None,
+    **overrides,
+) -> Truth:
     """Render joints (F, 16, 3; metres, y up) to ``out_video`` and its truth JSON (default
     VIDEO.truth.json); ``overrides`` set RenderOptions fields, e.g. ``view="front"``."""
     opts = replace(options or RenderOptions(), **overrides)
@@ -283,9 +323,13 @@ def render_clip(joints_world: np.ndarray, out_video: str | Path,
     return truth
 
 
-def resample_indices(n_source: int, frame_time: float, fps: float,
-                     frames: tuple[int | None, int | None] | None = None,
-                     seconds: float | None = None) -> np.ndarray:
+def resample_indices(
+    n_source: int,
+    frame_time: float,
+    fps: float,
+    frames: tuple[int | None, int | None] | None = None,
+    seconds: float | None = None,
+) -> np.ndarray:
     """Source frame nearest in time for each output frame, in ``frames`` (slice rules), ``seconds`` long."""
     start, stop, _ = slice(*(frames or (None, None))).indices(n_source)
     if stop <= start:
@@ -296,11 +340,17 @@ def resample_indices(n_source: int, frame_time: float, fps: float,
     return np.minimum(picks, stop - 1)
 
 
-def render_motion(source: str | Path, out_video: str | Path,
-                  options: RenderOptions | None = None, *,
-                  frames: tuple[int | None, int | None] | None = None,
-                  seconds: float | None = None, in_place: bool = False,
-                  truth_path: str | Path | None = None, **overrides) -> Truth:
+def render_motion(
+    source: str | Path,
+    out_video: str | Path,
+    options: RenderOptions | None = None,
+    *,
+    frames: tuple[int | None, int | None] | None = None,
+    seconds: float | None = None,
+    in_place: bool = False,
+    truth_path: str | Path | None = None,
+    **overrides,
+) -> Truth:
     """Render a BVH file (resampled to the output fps by nearest frame), or with
     ``source="walk-cycle"`` the procedural walk (``seconds`` long, default 4)."""
     opts = replace(options or RenderOptions(), **overrides)
@@ -310,69 +360,6 @@ def render_motion(source: str | Path, out_video: str | Path,
         motion = read_bvh(source)
         joints, frame_time = contract_joints(motion), motion.frame_time
     picks = resample_indices(len(joints), frame_time, opts.fps, frames, seconds)
-    return render_clip(joints[picks], out_video, opts, truth_path=truth_path,
-                       source=Path(source).name, source_frames=picks)
-
-
-# -- command line ---------------------------------------------------------------------
-
-def add_synth_arguments(parser) -> None:
-    """Arguments of `mocap synth`; sets ``run`` to the function that renders."""
-    parser.add_argument("source", help="BVH file, or 'walk-cycle' for the procedural walk")
-    parser.add_argument("out", help="video to write (.mp4 or .avi)")
-    parser.add_argument("--view", choices=list(VIEWS), default="side",
-                        help="camera direction relative to the performer (default side)")
-    parser.add_argument("--yaw", type=float, help="camera yaw in degrees (overrides --view)")
-    parser.add_argument("--pitch", type=float, default=0.0, help="degrees looking down")
-    parser.add_argument("--size", default="640x480", help="WIDTHxHEIGHT (default 640x480)")
-    parser.add_argument("--fps", type=float, default=30.0, help="output frame rate")
-    parser.add_argument("--frames", help="source frame range A:B (BVH frames)")
-    parser.add_argument("--seconds", type=float, help="maximum duration (walk-cycle: 4)")
-    parser.add_argument("--perspective", type=float, metavar="FOCAL_PX",
-                        help="pinhole camera with this focal length (default orthographic)")
-    parser.add_argument("--body-fraction", type=float, default=0.6,
-                        help="body height / frame height when the path fits (default 0.6)")
-    parser.add_argument("--moving-background", action="store_true",
-                        help="pan a cluttered background (for the tracking method)")
-    parser.add_argument("--no-antialias", action="store_true", help="hard polygon edges")
-    parser.add_argument("--hair", action="store_true", help="dark hair over the back of the head")
-    parser.add_argument("--noise", type=float, default=2.0, help="sensor noise sigma")
-    parser.add_argument("--in-place", action="store_true", help="walk-cycle on the spot")
-    parser.add_argument("--truth", help="ground truth JSON (default OUT.truth.json)")
-    parser.add_argument("--seed", type=int, default=0, help="background and noise seed")
-    parser.add_argument("--shape", choices=list(SHAPES), default="model",
-                        help="the body's widths: the model's own (default), slim or broad")
-    parser.set_defaults(run=run_synth)
-
-
-def run_synth(args) -> None:
-    """Render as the parsed `mocap synth` arguments say and report what was written."""
-    opts = RenderOptions(view=args.view, yaw=args.yaw, pitch=args.pitch,
-                         size=_parse_pair(args.size, "x", "--size", int), fps=args.fps,
-                         perspective=args.perspective, body_fraction=args.body_fraction,
-                         moving_background=args.moving_background,
-                         antialias=not args.no_antialias, noise=args.noise, seed=args.seed,
-                         shape=args.shape, hair=args.hair)
-    if min(opts.size) < 16 or opts.fps <= 0 or not 0 < opts.body_fraction <= 1 or (
-            opts.perspective is not None and opts.perspective <= 0):
-        raise MocapError("--size must be at least 16x16, --fps and --perspective positive, "
-                         "--body-fraction in (0, 1]")
-    frames = _parse_pair(args.frames, ":", "--frames", lambda v: int(v) if v else None) \
-        if args.frames else None
-    truth = render_motion(args.source, args.out, opts, frames=frames, seconds=args.seconds,
-                          in_place=args.in_place, truth_path=args.truth)
-    print(f"wrote {args.out}: {len(truth.joints2d)} frames {truth.width}x{truth.height}, "
-          f"body {truth.body_height_px:.0f} px tall "
-          f"({100 * truth.body_height_px / truth.height:.0f}% of the frame), "
-          f"truth {args.truth or Path(args.out).with_suffix('.truth.json')}")
-
-
-def _parse_pair(text: str, sep: str, flag: str, convert) -> tuple:
-    """'640x480' -> (640, 480); '10:' -> (10, None); bad text -> MocapError."""
-    parts = text.split(sep)
-    try:
-        if len(parts) != 2:
-            raise ValueError
-        return tuple(convert(p.strip()) for p in parts)
-    except ValueError:
-        raise MocapError(f"{flag} expects A{sep}B, got {text!r}") from None
+    return render_clip(
+        joints[picks], out_video, opts, truth_path=truth_path, source=Path(source).name, source_frames=picks
+    )

@@ -8,10 +8,10 @@ import numpy as np
 
 from mocap.body import SEGMENT_INDEX, SEGMENT_JOINTS, left_direction, unit
 
-HAIRLINE = 0.35          # of the head's length above the neck: hair above it at the back
-FRINGE = 0.8             # above it, hair all round (the forehead's hairline)
+HAIRLINE = 0.35  # of the head's length above the neck: hair above it at the back
+FRINGE = 0.8  # above it, hair all round (the forehead's hairline)
 HAIR_BGR = (38, 48, 66)  # dark brown
-_BACK_ARC = 0.25         # hair where the head's surface faces less than this far forward
+_BACK_ARC = 0.25  # hair where the head's surface faces less than this far forward
 
 
 def hair_patches(joints: np.ndarray, radius: float, samples: int = 24) -> list[np.ndarray]:
@@ -35,13 +35,12 @@ def _circular_runs(mask: np.ndarray) -> list[np.ndarray]:
     """Index arrays of the stretches of True (two or more) around a circular mask."""
     if mask.all():
         return [np.arange(len(mask))]
-    shift = int(np.argmin(mask))                    # start on a False: no run wraps
+    shift = int(np.argmin(mask))  # start on a False: no run wraps
     edges = np.flatnonzero(np.diff(np.r_[0, np.roll(mask, -shift).astype(int), 0]))
     return [(np.arange(a, b) + shift) % len(mask) for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
-def draw_hair(img: np.ndarray, joints: np.ndarray, radius: float, project, outline: np.ndarray,
-              line: int) -> None:
+def draw_hair(img: np.ndarray, joints: np.ndarray, radius: float, project, outline: np.ndarray, line: int) -> None:
     """Paint ``hair_patches`` onto a drawn head; ``project``: camera frame -> pixels; ``outline``:
     the head's hull in sixteenths of a pixel, which clips the patches."""
     outline = outline.reshape(-1, 2).astype(np.float32)

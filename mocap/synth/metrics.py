@@ -36,14 +36,13 @@ def procrustes_aligned(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
     fix = np.ones(len(s))
     fix[-1] = d
     rot = (u * fix) @ vt
-    scale = (s * fix).sum() / max((p ** 2).sum(), 1e-12)
+    scale = (s * fix).sum() / max((p**2).sum(), 1e-12)
     return scale * p @ rot + mt
 
 
 def pa_mpjpe(pred: np.ndarray, truth: np.ndarray) -> float:
     """Mean per-joint error after Procrustes alignment, averaged over frames (F, J, 3)."""
-    return float(np.mean([np.linalg.norm(procrustes_aligned(p, t) - t, axis=-1).mean()
-                          for p, t in zip(pred, truth)]))
+    return float(np.mean([np.linalg.norm(procrustes_aligned(p, t) - t, axis=-1).mean() for p, t in zip(pred, truth)]))
 
 
 def facing_error(pred: np.ndarray, truth: np.ndarray) -> float:
@@ -65,8 +64,7 @@ def labelled_errors(joints2d: np.ndarray, labels: dict[str, dict[str, list[float
                 options = [(joints[JOINT_INDEX[kind]],)]
             else:
                 options = list(permutations(joints[[JOINT_INDEX[f"{kind}_l"], JOINT_INDEX[f"{kind}_r"]]], len(seen)))
-            distances = min((np.linalg.norm(np.array(seen) - np.array(o), axis=-1) for o in options),
-                            key=np.sum)
+            distances = min((np.linalg.norm(np.array(seen) - np.array(o), axis=-1) for o in options), key=np.sum)
             out.setdefault(kind, []).extend(distances.tolist())
     return {kind: np.array(d) for kind, d in out.items()}
 
@@ -74,5 +72,6 @@ def labelled_errors(joints2d: np.ndarray, labels: dict[str, dict[str, list[float
 def labelled_body_height(labels: dict[str, dict[str, list[float]]]) -> float:
     """The body height in pixels that hand marks show: the median over frames of the
     lower marked ankle's height below the head top."""
-    return float(np.median([max(m[a][1] for a in ("ankle_a", "ankle_b") if a in m) - m["head_top"][1]
-                            for m in labels.values()]))
+    return float(
+        np.median([max(m[a][1] for a in ("ankle_a", "ankle_b") if a in m) - m["head_top"][1] for m in labels.values()])
+    )

@@ -31,7 +31,7 @@ def _side_anchors(notes: Annotations, joints2d: np.ndarray, start: int, names: l
     stop = start
     while stop < min(len(names), start + 30) and names[stop] == names[start]:
         stop += 1
-    for kind in LIMB_JOINTS.values():                   # each limb's end, left
+    for kind in LIMB_JOINTS.values():  # each limb's end, left
         joint = f"{kind[-1]}_l"
         j, k = JOINTS.index(joint), JOINTS.index(joint[:-1] + "r")
         gap = np.linalg.norm(joints2d[start:stop, j] - joints2d[start:stop, k], axis=-1)

@@ -44,17 +44,24 @@ class Camera:
         """JSON form; ``scale`` is named ``focal`` for a perspective camera."""
         d = {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in asdict(self).items()}
         d["focal" if self.kind == "perspective" else "scale"] = d.pop("scale")
-        d["projection"] = ("u = cx + s*x, v = cy - s*y" if self.kind == "orthographic" else
-                           "u = cx + f*x/(-z), v = cy - f*y/(-z)") + \
-            " with (x, y, z) = rotation @ (world - origin)"
+        d["projection"] = (
+            "u = cx + s*x, v = cy - s*y" if self.kind == "orthographic" else "u = cx + f*x/(-z), v = cy - f*y/(-z)"
+        ) + " with (x, y, z) = rotation @ (world - origin)"
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "Camera":
         """Inverse of ``to_dict``."""
-        return cls(kind=d["kind"], yaw_deg=d["yaw_deg"], pitch_deg=d["pitch_deg"],
-                   rotation=np.array(d["rotation"]), origin=np.array(d["origin"]),
-                   scale=d.get("scale", d.get("focal")), cx=d["cx"], cy=d["cy"])
+        return cls(
+            kind=d["kind"],
+            yaw_deg=d["yaw_deg"],
+            pitch_deg=d["pitch_deg"],
+            rotation=np.array(d["rotation"]),
+            origin=np.array(d["origin"]),
+            scale=d.get("scale", d.get("focal")),
+            cx=d["cx"],
+            cy=d["cy"],
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,23 +75,38 @@ class Truth:
     camera: Camera
     body_height_m: float
     body_height_px: float
-    source_frames: np.ndarray   # (F,) frame of the source motion shown in each frame
-    joints2d: np.ndarray        # (F, 16, 2) pixels, anatomical left/right
-    joints3d: np.ndarray        # (F, 16, 3) metres, camera-aligned, origin at the pelvis
-    pelvis_camera: np.ndarray   # (F, 3) pelvis in the camera frame (re-projection)
+    source_frames: np.ndarray  # (F,) frame of the source motion shown in each frame
+    joints2d: np.ndarray  # (F, 16, 2) pixels, anatomical left/right
+    joints3d: np.ndarray  # (F, 16, 3) metres, camera-aligned, origin at the pelvis
+    pelvis_camera: np.ndarray  # (F, 3) pelvis in the camera frame (re-projection)
 
     def to_dict(self) -> dict:
         """The ``mocap-truth`` JSON document."""
-        frames = [{"index": i, "source_frame": int(s),
-                   "joints2d": np.round(j2, 3).tolist(), "joints3d": np.round(j3, 5).tolist(),
-                   "pelvis_camera": np.round(p, 5).tolist()}
-                  for i, (s, j2, j3, p) in enumerate(zip(
-                      self.source_frames, self.joints2d, self.joints3d, self.pelvis_camera))]
-        return {"format": "mocap-truth", "version": 1, "source": self.source,
-                "fps": self.fps, "width": self.width, "height": self.height,
-                "camera": self.camera.to_dict(), "body_height_m": self.body_height_m,
-                "body_height_px": self.body_height_px, "joints": list(body.JOINTS),
-                "frames": frames}
+        frames = [
+            {
+                "index": i,
+                "source_frame": int(s),
+                "joints2d": np.round(j2, 3).tolist(),
+                "joints3d": np.round(j3, 5).tolist(),
+                "pelvis_camera": np.round(p, 5).tolist(),
+            }
+            for i, (s, j2, j3, p) in enumerate(
+                zip(self.source_frames, self.joints2d, self.joints3d, self.pelvis_camera)
+            )
+        ]
+        return {
+            "format": "mocap-truth",
+            "version": 1,
+            "source": self.source,
+            "fps": self.fps,
+            "width": self.width,
+            "height": self.height,
+            "camera": self.camera.to_dict(),
+            "body_height_m": self.body_height_m,
+            "body_height_px": self.body_height_px,
+            "joints": list(body.JOINTS),
+            "frames": frames,
+        }
 
 
 def save_truth(truth: Truth, path: str | Path) -> None:
@@ -99,12 +121,18 @@ def load_truth(path: str | Path) -> Truth:
         if d.get("format") != "mocap-truth" or d.get("version") != 1:
             raise MocapError(f"{path}: not a mocap-truth version 1 file")
         frames = d["frames"]
-        return Truth(source=d["source"], fps=d["fps"], width=d["width"], height=d["height"],
-                     camera=Camera.from_dict(d["camera"]), body_height_m=d["body_height_m"],
-                     body_height_px=d["body_height_px"],
-                     source_frames=np.array([f["source_frame"] for f in frames], dtype=int),
-                     joints2d=np.array([f["joints2d"] for f in frames], dtype=float),
-                     joints3d=np.array([f["joints3d"] for f in frames], dtype=float),
-                     pelvis_camera=np.array([f["pelvis_camera"] for f in frames], dtype=float))
+        return Truth(
+            source=d["source"],
+            fps=d["fps"],
+            width=d["width"],
+            height=d["height"],
+            camera=Camera.from_dict(d["camera"]),
+            body_height_m=d["body_height_m"],
+            body_height_px=d["body_height_px"],
+            source_frames=np.array([f["source_frame"] for f in frames], dtype=int),
+            joints2d=np.array([f["joints2d"] for f in frames], dtype=float),
+            joints3d=np.array([f["joints3d"] for f in frames], dtype=float),
+            pelvis_camera=np.array([f["pelvis_camera"] for f in frames], dtype=float),
+        )
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise MocapError(f"cannot read truth file {path}: {exc}") from None

@@ -10,11 +10,11 @@ import cv2
 import numpy as np
 
 X, Y, THETA, M, N = range(5)
-ROWS, COLS = 14, 7                 # largest sub-pixel grid of a block
-CHANNEL_WEIGHTS = np.full(3, 1 / 3, np.float32)   # W_R, W_G, W_B of Eq. 3
-CENTRE_WEIGHT, MARGIN_WEIGHT = 2.0, 1.0           # W_1 > W_2 of Eq. 4
-Penalty = Callable[[np.ndarray], np.ndarray]   # blocks (K, 5) -> grey levels (K,)
-MIN_DIFF = 1.0                     # grey levels: keeps S = 1/D finite for a perfect match
+ROWS, COLS = 14, 7  # largest sub-pixel grid of a block
+CHANNEL_WEIGHTS = np.full(3, 1 / 3, np.float32)  # W_R, W_G, W_B of Eq. 3
+CENTRE_WEIGHT, MARGIN_WEIGHT = 2.0, 1.0  # W_1 > W_2 of Eq. 4
+Penalty = Callable[[np.ndarray], np.ndarray]  # blocks (K, 5) -> grey levels (K,)
+MIN_DIFF = 1.0  # grey levels: keeps S = 1/D finite for a perfect match
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,15 +42,16 @@ def make_grid(m: float, n: float, beyond: float = 0.0) -> Grid:
 def between(start: np.ndarray, end: np.ndarray, n) -> np.ndarray:
     """Blocks (K, 5) of width(s) n from points ``start`` (K, 2) to ``end`` (K, 2)."""
     d = end - start
-    return np.column_stack([start, np.arctan2(d[:, 1], d[:, 0]),
-                            np.maximum(np.hypot(d[:, 0], d[:, 1]), 2.0),
-                            np.broadcast_to(n, len(d))])
+    return np.column_stack(
+        [start, np.arctan2(d[:, 1], d[:, 0]), np.maximum(np.hypot(d[:, 0], d[:, 1]), 2.0), np.broadcast_to(n, len(d))]
+    )
 
 
 def block_end(blocks: np.ndarray) -> np.ndarray:
     """(..., 2) the middle of the far side of blocks (..., 5)."""
     return blocks[..., :2] + blocks[..., M, None] * np.stack(
-        [np.cos(blocks[..., THETA]), np.sin(blocks[..., THETA])], axis=-1)
+        [np.cos(blocks[..., THETA]), np.sin(blocks[..., THETA])], axis=-1
+    )
 
 
 def to_block(point: np.ndarray, block: np.ndarray) -> np.ndarray:
@@ -75,8 +76,8 @@ def turned(offset, block: np.ndarray) -> np.ndarray:
 def block_points(blocks: np.ndarray, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     """Pixel coordinates (x, y), each (B*R, C) float32, of every block's sub-pixels."""
     cos, sin = np.cos(blocks[:, THETA]), np.sin(blocks[:, THETA])
-    down = grid.along[None, :, None] * blocks[:, M, None, None]       # along the middle line
-    side = grid.across[None, None, :] * blocks[:, N, None, None]      # across it
+    down = grid.along[None, :, None] * blocks[:, M, None, None]  # along the middle line
+    side = grid.across[None, None, :] * blocks[:, N, None, None]  # across it
     x = blocks[:, X, None, None] + down * cos[:, None, None] - side * sin[:, None, None]
     y = blocks[:, Y, None, None] + down * sin[:, None, None] + side * cos[:, None, None]
     shape = (-1, len(grid.across))
@@ -87,8 +88,7 @@ def sample_blocks(image: np.ndarray, blocks: np.ndarray, grid: Grid) -> np.ndarr
     """Colours (B, R, C, 3) float32 of the blocks' sub-pixels by bilinear interpolation (steps 2-3)."""
     x, y = block_points(np.atleast_2d(blocks), grid)
     out = cv2.remap(image, x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    return out.reshape(len(np.atleast_2d(blocks)), len(grid.along), len(grid.across), 3
-                       ).astype(np.float32)
+    return out.reshape(len(np.atleast_2d(blocks)), len(grid.along), len(grid.across), 3).astype(np.float32)
 
 
 def similarity(model: np.ndarray, samples: np.ndarray, grid: Grid) -> np.ndarray:
@@ -98,8 +98,8 @@ def similarity(model: np.ndarray, samples: np.ndarray, grid: Grid) -> np.ndarray
     A model (A, R, C, 3) holds A alternatives (beyond the paper): a block's S is its best one's."""
     if model.ndim == 4:
         return np.max([similarity(one, samples, grid) for one in model], axis=0)
-    weights = (grid.weights[:, :, None] * CHANNEL_WEIGHTS).ravel()        # W_1 or W_2 times W_c
-    diff = np.abs(samples - model).reshape(len(samples), -1)               # (B, R * C * 3)
+    weights = (grid.weights[:, :, None] * CHANNEL_WEIGHTS).ravel()  # W_1 or W_2 times W_c
+    diff = np.abs(samples - model).reshape(len(samples), -1)  # (B, R * C * 3)
     return 1.0 / np.maximum(diff @ weights, MIN_DIFF)
 
 
@@ -114,8 +114,14 @@ def ring(radius: int) -> np.ndarray:
         return np.zeros((1, 2))
     r = radius
     side = np.arange(-r, r)
-    return np.concatenate([np.c_[side, np.full(2 * r, -r)], np.c_[np.full(2 * r, r), side],
-                           np.c_[-side, np.full(2 * r, r)], np.c_[np.full(2 * r, -r), -side]])
+    return np.concatenate(
+        [
+            np.c_[side, np.full(2 * r, -r)],
+            np.c_[np.full(2 * r, r), side],
+            np.c_[-side, np.full(2 * r, r)],
+            np.c_[np.full(2 * r, -r), -side],
+        ]
+    )
 
 
 def morphs(block: np.ndarray, d_theta: np.ndarray, d_m: np.ndarray, zoom: bool) -> np.ndarray:
@@ -135,10 +141,19 @@ def penalised(s: np.ndarray, cands: np.ndarray, penalty: Penalty | None) -> np.n
     return s if penalty is None else 1.0 / (1.0 / s + penalty(cands))
 
 
-def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
-           d_theta: np.ndarray, d_m: np.ndarray, *, zoom: bool = False,
-           max_ring: int = 0, step: float = 1.0,
-           penalty: Penalty | None = None) -> tuple[np.ndarray, float]:
+def search(
+    image: np.ndarray,
+    model: np.ndarray,
+    grid: Grid,
+    start: np.ndarray,
+    d_theta: np.ndarray,
+    d_m: np.ndarray,
+    *,
+    zoom: bool = False,
+    max_ring: int = 0,
+    step: float = 1.0,
+    penalty: Penalty | None = None,
+) -> tuple[np.ndarray, float]:
     """The best block and its S on Fig. 6's path: all morphs at each point of a circle, on while a circle improves, up
     to ``max_ring`` circles ``step`` px apart (0: position fixed); ``penalty`` added to 1/S."""
     shapes = morphs(start, d_theta, d_m, zoom)
@@ -156,8 +171,9 @@ def search(image: np.ndarray, model: np.ndarray, grid: Grid, start: np.ndarray,
     return best, best_s
 
 
-def lengthen(image: np.ndarray, model: np.ndarray, grid: Grid, block: np.ndarray,
-             extra: np.ndarray, tolerance: float) -> tuple[np.ndarray, float]:
+def lengthen(
+    image: np.ndarray, model: np.ndarray, grid: Grid, block: np.ndarray, extra: np.ndarray, tolerance: float
+) -> tuple[np.ndarray, float]:
     """The longest of ``block`` and its ``extra``-px lengthenings with S within ``tolerance`` of the best, its S."""
     cands = np.repeat(block[None], len(extra) + 1, axis=0)
     cands[1:, M] += extra

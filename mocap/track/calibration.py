@@ -19,12 +19,13 @@ KEY = np.array([JOINT_INDEX[j] for j in KEY_TRIANGLE])
 KEY_LINES = ((0, 1), (0, 2), (1, 2))
 # the hips and the chest, a second triangle beyond the paper's (see ``calibrate``)
 HIP_TRIANGLE = (*(body.limb("leg", side).joints[0] for side in body.SIDES), KEY_TRIANGLE[2])
-CALIBRATION_LINES = tuple((JOINT_INDEX[t[i]], JOINT_INDEX[t[j]])
-                          for t in (KEY_TRIANGLE, HIP_TRIANGLE) for i, j in KEY_LINES)
-SPAN_RANGE = (0.2, 0.5)         # metres: shoulder spans the calibration may find
+CALIBRATION_LINES = tuple(
+    (JOINT_INDEX[t[i]], JOINT_INDEX[t[j]]) for t in (KEY_TRIANGLE, HIP_TRIANGLE) for i, j in KEY_LINES
+)
+SPAN_RANGE = (0.2, 0.5)  # metres: shoulder spans the calibration may find
 # the chest's height above the pelvis the calibration may find, of the shoulders' height
 CHEST_RANGE = (0.45, 0.85)
-MAX_CALIBRATION_ERROR = 0.03    # of the marked body's size: a worse fit is refused
+MAX_CALIBRATION_ERROR = 0.03  # of the marked body's size: a worse fit is refused
 NEWTON_STEPS = 30
 # body frame -> pinhole frame facing the camera (left to image right, up to image up, forward to the camera)
 FACING_CAMERA = np.diag([1.0, -1.0, -1.0])
@@ -34,14 +35,21 @@ def model_skeleton() -> np.ndarray:
     """(16, 3) the standing model in metres, body frame: x the performer's left, y up, z forward, pelvis origin."""
     length = dict(zip(body.SEGMENT_NAMES, body.LENGTH))
     torso = length["torso"]
-    at = {"pelvis": (0, 0), "neck": (0, torso), "chest": (0, body.CHEST_FRACTION * torso),
-          "head_top": (0, torso + length["head"])}
+    at = {
+        "pelvis": (0, 0),
+        "neck": (0, torso),
+        "chest": (0, body.CHEST_FRACTION * torso),
+        "head_top": (0, torso + length["head"]),
+    }
     for one in body.LIMBS:
         sign = body.SIDE_SIGN[one.side]
-        at[one.joints[0]] = ((sign * body.SHOULDER_HALF_SPAN, torso - body.SHOULDER_DROP)
-                             if one.kind == "arm" else (sign * body.HIP_HALF_SPAN, 0.0))
+        at[one.joints[0]] = (
+            (sign * body.SHOULDER_HALF_SPAN, torso - body.SHOULDER_DROP)
+            if one.kind == "arm"
+            else (sign * body.HIP_HALF_SPAN, 0.0)
+        )
         for segment, (a, b) in zip(one.segments, (one.joints[:2], one.joints[1:])):
-            at[b] = (at[a][0], at[a][1] - length[segment])      # hanging straight down
+            at[b] = (at[a][0], at[a][1] - length[segment])  # hanging straight down
     return np.array([[*at[j], 0.0] for j in JOINTS], dtype=float) * UNIT_M
 
 
@@ -105,14 +113,12 @@ def line_distances(params: np.ndarray, camera: Pinhole, marks: np.ndarray) -> np
     return np.array(out)
 
 
-def newton(residual, params: np.ndarray, steps: int = NEWTON_STEPS,
-           eps: float = 1e-6) -> np.ndarray:
+def newton(residual, params: np.ndarray, steps: int = NEWTON_STEPS, eps: float = 1e-6) -> np.ndarray:
     """Solve residual(params) = 0 (least squares when over-determined) by Gauss-Newton steps with a numerical Jacobian
     (Eq. 9: J delta = -E), halving steps that do not reduce |E|."""
     r = residual(params)
     for _ in range(steps):
-        jac = np.column_stack([(residual(params + eps * e) - r) / eps
-                               for e in np.eye(len(params))])
+        jac = np.column_stack([(residual(params + eps * e) - r) / eps for e in np.eye(len(params))])
         delta = np.linalg.lstsq(jac, -r, rcond=None)[0]
         for _ in range(10):
             trial = residual(params + delta)
@@ -132,18 +138,17 @@ def initial_params(marks: np.ndarray, camera: Pinhole) -> list[np.ndarray]:
 
     def seen(a: str, b: str) -> np.ndarray:
         return marks[j[a]] - marks[j[b]]
+
     shoulders = (marks[j["shoulder_l"]] + marks[j["shoulder_r"]]) / 2 - marks[j["pelvis"]]
     depth = camera.focal * MODEL[j["shoulder_l"], 1] / max(np.hypot(*shoulders), 1e-6)
     hips = 2 * body.HIP_HALF_SPAN * UNIT_M * camera.focal / depth
     cos = np.clip(seen("hip_l", "hip_r")[0] / hips, -1.0, 1.0)
-    span = np.clip(abs(seen("shoulder_l", "shoulder_r")[0]) * depth / camera.focal
-                   / max(abs(cos), 0.3), *SPAN_RANGE)
+    span = np.clip(abs(seen("shoulder_l", "shoulder_r")[0]) * depth / camera.focal / max(abs(cos), 0.3), *SPAN_RANGE)
     out = []
     for yaw in (np.arccos(cos), -np.arccos(cos)):
         rotation = Rotation.from_matrix(FACING_CAMERA @ Rotation.from_euler("y", yaw).as_matrix())
         centre = camera.rays(marks[j["chest"]]) * depth
-        out.append(np.r_[rotation.as_rotvec(), centre - rotation.apply(MODEL[j["chest"]]), span,
-                         MODEL[j["chest"], 1]])
+        out.append(np.r_[rotation.as_rotvec(), centre - rotation.apply(MODEL[j["chest"]]), span, MODEL[j["chest"], 1]])
     return out
 
 
@@ -152,8 +157,7 @@ def shape_ranges() -> np.ndarray:
     return np.array([SPAN_RANGE, np.array(CHEST_RANGE) * MODEL[KEY[0], 1]])
 
 
-def bounded_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray,
-                ranges: np.ndarray) -> np.ndarray:
+def bounded_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray, ranges: np.ndarray) -> np.ndarray:
     """Parameters (8,) fitted to the marks (16, 2) from ``start`` (Eq. 9), the shape unknowns refitted at the nearer
     end of ``ranges`` (2, 2; one value: held) where the free fit leaves them (near profile the span is loose)."""
     fixed = ranges[:, 0] == ranges[:, 1]
@@ -173,11 +177,11 @@ def held_fit(marks: np.ndarray, camera: Pinhole, start: np.ndarray, held: np.nda
         out = start.copy()
         out[vary] = p
         return out
+
     return full(newton(lambda p: line_distances(full(p), camera, marks), start[vary]))
 
 
-def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None,
-              chest: float | None = None) -> Calibration:
+def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None, chest: float | None = None) -> Calibration:
     """The body's pose on frame 0 from the marks (16, 2): Newton's method on Eq. 9 over the key triangle's and, beyond
     the paper, the hips-chest triangle's lines, with shoulder span and chest height (unless ``chest`` given)
     unknown too. ``turn`` "left"/"right" picks one of two mirror fits, else the smaller residual; MocapError where
@@ -188,11 +192,16 @@ def calibrate(marks: np.ndarray, camera: Pinhole, turn: str | None = None,
     fits = [bounded_fit(marks, camera, p0, ranges) for p0 in initial_params(marks, camera)]
     error = [np.abs(line_distances(p, camera, marks)).max() for p in fits]
     if min(error) > MAX_CALIBRATION_ERROR * np.ptp(marks, axis=0).max():
-        raise MocapError("cannot calibrate the camera from the marked shoulders, chest and "
-                         "hips: they fit no view of a human trunk" + (
-                             "; the shoulders and the hips are marked turned opposite ways: "
-                             "swap shoulder_l and shoulder_r, or hip_l and hip_r"
-                             if turned_apart(marks) else ""))
+        raise MocapError(
+            "cannot calibrate the camera from the marked shoulders, chest and "
+            "hips: they fit no view of a human trunk"
+            + (
+                "; the shoulders and the hips are marked turned opposite ways: "
+                "swap shoulder_l and shoulder_r, or hip_l and hip_r"
+                if turned_apart(marks)
+                else ""
+            )
+        )
     if turn in ("left", "right"):
         wrong_side = [(Calibration.from_params(p).yaw > 0) != (turn == "right") for p in fits]
         error = [np.inf if wrong else e for e, wrong in zip(error, wrong_side)]

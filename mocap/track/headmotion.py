@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-DIRECTIONS = np.radians(90.0 + 5.0 * np.arange(36))   # alpha_0 = 90, alpha_n+1 = alpha_n + 5
-P_START, P_STEP, P_RANGE = 0.5, 0.05, (0.2, 0.9)      # the adaptive threshold p
+DIRECTIONS = np.radians(90.0 + 5.0 * np.arange(36))  # alpha_0 = 90, alpha_n+1 = alpha_n + 5
+P_START, P_STEP, P_RANGE = 0.5, 0.05, (0.2, 0.9)  # the adaptive threshold p
 
 
 @dataclass(frozen=True)
@@ -23,8 +23,9 @@ class Displacement:
         return float(np.hypot(*self.vector))
 
 
-def difference_lines(prev: np.ndarray, cur: np.ndarray, centre: np.ndarray,
-                     diameter: float) -> tuple[np.ndarray, np.ndarray]:
+def difference_lines(
+    prev: np.ndarray, cur: np.ndarray, centre: np.ndarray, diameter: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(t (S,), diff (36, S)): |dR| + |dG| + |dB| (Eq. 1-3) along the 36 lines through the head centre ``centre`` of
     the region Omega (radius 2L, L = ``diameter``), t the signed distance along (cos alpha, -sin alpha)."""
     t = np.arange(-2 * diameter, 2 * diameter + 0.5, 1.0, dtype=np.float32)
@@ -52,8 +53,9 @@ def two_peak_displacement(t: np.ndarray, profile: np.ndarray, p: float) -> float
     return float(np.sign(far) * widths.mean())
 
 
-def head_displacement(prev: np.ndarray, cur: np.ndarray, calvaria: np.ndarray,
-                      neck: np.ndarray, p: float) -> Displacement:
+def head_displacement(
+    prev: np.ndarray, cur: np.ndarray, calvaria: np.ndarray, neck: np.ndarray, p: float
+) -> Displacement:
     """The calvaria's motion (Eq. 1-5): direction of the largest Sum_n (Eq. 4-5), length from its two-peak curve."""
     diameter = max(float(np.hypot(*(calvaria - neck))), 2.0)
     t, diff = difference_lines(prev, cur, (calvaria + neck) / 2, diameter)

@@ -10,7 +10,7 @@ import numpy as np
 from mocap.camera import Pinhole
 from mocap.track.calibration import KEY, KEY_LINES, calibrate, newton
 
-SIDE_MARGIN_DEG = 15.0          # a trunk turned less than this from facing the camera (or away) shows no side
+SIDE_MARGIN_DEG = 15.0  # a trunk turned less than this from facing the camera (or away) shows no side
 # the side a body is turned to ("left", "right", None: unsaid): one for every frame, or each frame's
 Turns = str | Sequence[str | None] | None
 
@@ -18,9 +18,11 @@ Turns = str | Sequence[str | None] | None
 def key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray) -> np.ndarray:
     """Depths Z_i (3,) of the key joints on their ``rays`` (3, 3) keeping the triangle's ``sides`` (3,) (Eq. 11 with
     P_i = Z_i ray_i, Eq. 10), least squares by Gauss-Newton from the previous ``depths``."""
+
     def residual(z):
         p = z[:, None] * rays
         return np.array([np.linalg.norm(p[i] - p[j]) for i, j in KEY_LINES]) - sides
+
     return newton(residual, np.asarray(depths, float))
 
 
@@ -47,8 +49,7 @@ def turned_against(key: np.ndarray, turn: str | None) -> bool:
     return turn is not None and clear and (yaw > 0) != (turn == "right")
 
 
-def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
-                     turn: str | None) -> np.ndarray:
+def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray, turn: str | None) -> np.ndarray:
     """A frame's key depths (3,) from the previous frame's (Eq. 10-11) on the side ``turn`` says: where the solution
     faces the other side, the one from its depths mirrored about their mean, if that faces ``turn``."""
     found = key_depths(rays, depths, sides)
@@ -58,8 +59,9 @@ def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray,
     return found if turned_against(mirror[:, None] * rays, turn) else mirror
 
 
-def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
-               before: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+def key_joints(
+    joints2d: np.ndarray, camera: Pinhole, turns: Turns = None, before: tuple[np.ndarray, np.ndarray] | None = None
+) -> np.ndarray:
     """(F, 3, 3) key joints per frame: calibrated on frame 0 (Eq. 6-9), then each from the one before (Eq. 10-11).
     ``turns``: one side or each frame's; ``before``: (2D joints, key joints) of an earlier call, reused unmoved."""
     rays = camera.rays(joints2d[:, KEY])
@@ -80,7 +82,6 @@ def key_joints(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
     return out
 
 
-
 def mirror_images(key: np.ndarray, steps: int = 20) -> np.ndarray:
     """(F, 3, 3) the other Eq. 10-11 solution for key joints (F, 3, 3), from depths mirrored about their mean."""
     lines = np.array(KEY_LINES)
@@ -90,7 +91,7 @@ def mirror_images(key: np.ndarray, steps: int = 20) -> np.ndarray:
     rows = np.arange(len(lines))
     for _ in range(steps):
         points = z[..., None] * rays
-        gap = points[:, lines[:, 0]] - points[:, lines[:, 1]]                   # (F, 3, 3)
+        gap = points[:, lines[:, 0]] - points[:, lines[:, 1]]  # (F, 3, 3)
         length = np.maximum(np.linalg.norm(gap, axis=-1), 1e-12)
         jac = np.zeros((len(key), len(lines), 3))
         jac[:, rows, lines[:, 0]] = (gap * rays[:, lines[:, 0]]).sum(-1) / length

@@ -16,18 +16,18 @@ from mocap.track.keydepths import body_axes, frame_key_depths
 from mocap.track.rays import limb_candidates
 from mocap.track.rays import limb_penalty as joint_limits
 
-AROUND_STEP = 15.0         # degrees between the directions tried around a limb's root
-FOLD_COST = 20.0           # grey levels per unit of overlap: a lower block on its own upper block (limbs look alike),
-HEAD_COST = 40.0           # ... an arm's lower block on the head,
-TWIN_COST = 25.0           # ... a lower block on its twin's
-JUMP_COST = 8.0            # grey levels per usual length that a lower block's ends moved (a hidden limb stays)
-TWIN_OVERLAP = 0.3         # overlap of twin lower blocks past which the twins are placed jointly
-OVERLAP_POINTS = 8         # points along a lower block's middle line that measure its overlap
-OUTLINE_COST = 20.0        # grey levels an arm block pays for long sides without an edge
-LEG_OUTLINE_COST = 5.0     # ... a leg block (legs cross, and share their edges where they do)
-LIMITS_COST = 10.0         # grey levels per unit of an arm's least joint-limit penalty in 3D
-KNEE_STEP = 0.04           # of the shin's length: spacing of the knee places tried (settled_knee)
-KNEE_STEPS = 3             # ... that many steps up and down the shin, one to either side
+AROUND_STEP = 15.0  # degrees between the directions tried around a limb's root
+FOLD_COST = 20.0  # grey levels per unit of overlap: a lower block on its own upper block (limbs look alike),
+HEAD_COST = 40.0  # ... an arm's lower block on the head,
+TWIN_COST = 25.0  # ... a lower block on its twin's
+JUMP_COST = 8.0  # grey levels per usual length that a lower block's ends moved (a hidden limb stays)
+TWIN_OVERLAP = 0.3  # overlap of twin lower blocks past which the twins are placed jointly
+OVERLAP_POINTS = 8  # points along a lower block's middle line that measure its overlap
+OUTLINE_COST = 20.0  # grey levels an arm block pays for long sides without an edge
+LEG_OUTLINE_COST = 5.0  # ... a leg block (legs cross, and share their edges where they do)
+LIMITS_COST = 10.0  # grey levels per unit of an arm's least joint-limit penalty in 3D
+KNEE_STEP = 0.04  # of the shin's length: spacing of the knee places tried (settled_knee)
+KNEE_STEPS = 3  # ... that many steps up and down the shin, one to either side
 ARM_M = tuple(float(LENGTH[SEGMENT_INDEX[f"{kind}_arm_l"]]) * UNIT_M for kind in ("upper", "lower"))
 
 
@@ -35,7 +35,7 @@ def overlap(lowers: np.ndarray, other: np.ndarray) -> np.ndarray:
     """How much each block of ``lowers`` (K, 5) lies on ``other`` (5,) (or K blocks), in [0, 1]: the mean of
     max(1 - d / n, 0) along its middle line, d the distance to other's middle line, n other's width."""
     t = (np.arange(OVERLAP_POINTS) + 0.5) / OVERLAP_POINTS
-    length = lowers[:, M, None] * t                                        # (K, P)
+    length = lowers[:, M, None] * t  # (K, P)
     other = np.broadcast_to(other, lowers.shape)
     cos, sin = np.cos(other[:, THETA])[:, None], np.sin(other[:, THETA])[:, None]
     dx = lowers[:, X, None] + length * np.cos(lowers[:, THETA])[:, None] - other[:, X, None]
@@ -50,24 +50,33 @@ def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
     return float(overlap(lower_a[None], lower_b)[0] + overlap(lower_b[None], lower_a)[0]) / 2
 
 
-def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float,
-                 avoid: tuple = ()) -> blocks.Penalty:
+def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float, avoid: tuple = ()) -> blocks.Penalty:
     """Penalty of lower blocks whose upper part (``width``) runs from ``root``: FOLD_COST per overlap with it,
     ``cost`` per overlap with each (cost, block) of ``avoid``, JUMP_COST per ``length`` moved from ``last``."""
+
     def penalty(lowers: np.ndarray) -> np.ndarray:
         uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
-        jump = (np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
-                + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)) / length
-        return FOLD_COST * overlap(lowers, uppers) + JUMP_COST * jump + sum(
-            cost * overlap(lowers, block) for cost, block in avoid)
+        jump = (
+            np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
+            + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)
+        ) / length
+        return (
+            FOLD_COST * overlap(lowers, uppers)
+            + JUMP_COST * jump
+            + sum(cost * overlap(lowers, block) for cost, block in avoid)
+        )
+
     return penalty
 
 
 def outline_cost(edges: Edges, cost: float = OUTLINE_COST) -> blocks.Penalty:
     """Penalty of blocks (K, 5): ``cost`` times one less their long sides' edge support (Edges.support)."""
+
     def penalty(candidates: np.ndarray) -> np.ndarray:
-        return cost * (1.0 - edges.support(candidates[:, None, :2], block_end(candidates)[:, None],
-                                           candidates[:, None, N]))
+        return cost * (
+            1.0 - edges.support(candidates[:, None, :2], block_end(candidates)[:, None], candidates[:, None, N])
+        )
+
     return penalty
 
 
@@ -91,20 +100,23 @@ def marked_lengths(marks: np.ndarray, camera: Pinhole, depth: float, kind: str) 
     """(upper, lower) metres of a limb ``kind`` as the marks (16, 2) show it at ``depth``: the longer side's."""
     out = []
     for n in range(2):
-        seen = [np.linalg.norm(marks[JOINT_INDEX[one.joints[n + 1]]] - marks[JOINT_INDEX[one.joints[n]]])
-                for one in body.LIMBS if one.kind == kind]
+        seen = [
+            np.linalg.norm(marks[JOINT_INDEX[one.joints[n + 1]]] - marks[JOINT_INDEX[one.joints[n]]])
+            for one in body.LIMBS
+            if one.kind == kind
+        ]
         out.append(max(seen) * depth / camera.focal)
     return out[0], out[1]
 
 
-def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int,
-                    cost: float = LIMITS_COST) -> blocks.Penalty:
+def arm_limits_cost(camera: Pinhole, key: np.ndarray, arm: int, cost: float = LIMITS_COST) -> blocks.Penalty:
     """Penalty of lower blocks for the arm's 3D pose from its shoulder in ``key`` (3, 3); ``arm``: 0 left, 1 right."""
     return limits_cost(camera, key[arm], body_axes(key), ARM_M, 1.0 if arm == 0 else -1.0, False, cost)
 
 
-def leg_limits_cost(camera: Pinhole, key: np.ndarray, hip: np.ndarray, leg: int,
-                    lengths: tuple[float, float], cost: float = LIMITS_COST) -> blocks.Penalty:
+def leg_limits_cost(
+    camera: Pinhole, key: np.ndarray, hip: np.ndarray, leg: int, lengths: tuple[float, float], cost: float = LIMITS_COST
+) -> blocks.Penalty:
     """Penalty of a leg's lower blocks for their 3D pose at ``lengths`` from the hip, on its pixel ``hip``'s ray at
     the model trunk's depth under ``key`` (3, 3); ``leg`` 0 left, 1 right."""
     axes = body_axes(key)
@@ -113,16 +125,25 @@ def leg_limits_cost(camera: Pinhole, key: np.ndarray, hip: np.ndarray, leg: int,
     return limits_cost(camera, root, axes, lengths, 1.0 if leg == 0 else -1.0, True, cost)
 
 
-def limits_cost(camera: Pinhole, root: np.ndarray, axes: np.ndarray, lengths: tuple[float, float],
-                side: float, leg: bool, cost: float = LIMITS_COST) -> blocks.Penalty:
+def limits_cost(
+    camera: Pinhole,
+    root: np.ndarray,
+    axes: np.ndarray,
+    lengths: tuple[float, float],
+    side: float,
+    leg: bool,
+    cost: float = LIMITS_COST,
+) -> blocks.Penalty:
     """Penalty of lower blocks (K, 5): ``cost`` times the least joint-limit penalty of their ends' four placements at
     ``lengths`` from ``root`` (3,) (rays.limb_candidates); ``axes`` (3, 3); ``side`` +1 left, -1 right."""
+
     def penalty(lowers: np.ndarray) -> np.ndarray:
         rays = camera.rays(np.stack([lowers[:, :2], block_end(lowers)], axis=1))
         roots = np.broadcast_to(root, (len(lowers), 3))
         placed = limb_candidates(roots, rays, lengths)
         body = np.broadcast_to(axes, (len(lowers), 3, 3))
         return cost * joint_limits(roots, placed, body, leg, side).min(axis=1)
+
     return penalty
 
 
@@ -136,41 +157,56 @@ def limb_cost(s: np.ndarray, k: int) -> float:
     return 1.0 / s[k] + 1.0 / s[k + 1]
 
 
-def around_root(image: np.ndarray, root: np.ndarray, upper: tuple, lower: tuple,
-                penalty: blocks.Penalty, upper_penalty: blocks.Penalty | None = None,
-                upper_weight: float = 1.0, upper_scales: tuple[float, ...] = (1.0,)) -> np.ndarray:
+def around_root(
+    image: np.ndarray,
+    root: np.ndarray,
+    upper: tuple,
+    lower: tuple,
+    penalty: blocks.Penalty,
+    upper_penalty: blocks.Penalty | None = None,
+    upper_weight: float = 1.0,
+    upper_scales: tuple[float, ...] = (1.0,),
+) -> np.ndarray:
     """The lower block of the least-cost part directions around ``root`` (AROUND_STEP apart, usual lengths, upper at
     ``upper_scales``): weighted 1/S plus penalties. ``upper``, ``lower``: (colour model, grid, width, length)."""
     angles = np.radians(np.arange(0.0, 360.0, AROUND_STEP))
     (model_u, grid_u, n_u, m_u), (model_l, grid_l, n_l, m_l) = upper, lower
     ways = np.c_[np.cos(angles), np.sin(angles)]
     reach = np.repeat(np.asarray(upper_scales) * m_u, len(angles))[:, None]
-    uppers = blocks.between(np.broadcast_to(root, (len(reach), 2)),
-                            root + reach * np.tile(ways, (len(upper_scales), 1)), n_u)
+    uppers = blocks.between(
+        np.broadcast_to(root, (len(reach), 2)), root + reach * np.tile(ways, (len(upper_scales), 1)), n_u
+    )
     starts = np.repeat(block_end(uppers), len(angles), axis=0)
     lowers = blocks.between(starts, starts + m_l * np.tile(ways, (len(uppers), 1)), n_l)
     upper_cost = upper_weight / blocks.score(image, model_u, grid_u, uppers)
     if upper_penalty is not None:
         upper_cost += upper_penalty(uppers)
-    cost = upper_cost[:, None] + (1.0 / blocks.score(image, model_l, grid_l, lowers)
-           + penalty(lowers)).reshape(len(uppers), -1)
+    cost = upper_cost[:, None] + (1.0 / blocks.score(image, model_l, grid_l, lowers) + penalty(lowers)).reshape(
+        len(uppers), -1
+    )
     return lowers[int(np.argmin(cost))]
 
 
-def settled_knee(image: np.ndarray, hip: np.ndarray, shin: np.ndarray, thigh_part: tuple,
-                 shin_part: tuple, thigh_cost: blocks.Penalty,
-                 shin_cost: blocks.Penalty) -> tuple[np.ndarray, float]:
+def settled_knee(
+    image: np.ndarray,
+    hip: np.ndarray,
+    shin: np.ndarray,
+    thigh_part: tuple,
+    shin_part: tuple,
+    thigh_cost: blocks.Penalty,
+    shin_cost: blocks.Penalty,
+) -> tuple[np.ndarray, float]:
     """``shin`` and S with the knee moved (7 x 3 places KNEE_STEP apart) where thigh and shin match best: a shin alone
     slides up one-coloured trousers. ``thigh_part``: (model, grid, width); ``shin_part``: (model, grid)."""
     ankle, along = block_end(shin), np.array([np.cos(shin[THETA]), np.sin(shin[THETA])])
     steps = np.arange(-KNEE_STEPS, KNEE_STEPS + 1) * KNEE_STEP * shin[M]
     sideways = np.array([-1.0, 0.0, 1.0]) * KNEE_STEP * shin[M]
-    knees = (shin[:2] + steps[:, None, None] * along
-             + sideways[None, :, None] * np.array([-along[1], along[0]])).reshape(-1, 2)
+    knees = (
+        shin[:2] + steps[:, None, None] * along + sideways[None, :, None] * np.array([-along[1], along[0]])
+    ).reshape(-1, 2)
     shins = blocks.between(knees, np.broadcast_to(ankle, knees.shape), shin[N])
     thighs = blocks.between(np.broadcast_to(hip, knees.shape), knees, thigh_part[2])
     s_shins = blocks.score(image, *shin_part, shins)
-    cost = (1.0 / blocks.score(image, *thigh_part[:2], thighs) + thigh_cost(thighs)
-            + 1.0 / s_shins + shin_cost(shins))
+    cost = 1.0 / blocks.score(image, *thigh_part[:2], thighs) + thigh_cost(thighs) + 1.0 / s_shins + shin_cost(shins)
     best = int(np.argmin(cost))
     return shins[best], float(s_shins[best])

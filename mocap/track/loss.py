@@ -10,17 +10,17 @@ from mocap.track.blocks import M, X, Y, block_end
 from mocap.track.calibration import UNIT_M
 from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, TORSO
 
-MATCH_FULL, MATCH_NONE = 0.7, 0.25   # of the part's usual S
-SCALE_FULL, SCALE_NONE = 0.08, 0.3   # |log| of the body's change of scale over one frame
-STRETCH_FULL, STRETCH_NONE = 1.25, 1.8   # a part's length over its calibrated length
+MATCH_FULL, MATCH_NONE = 0.7, 0.25  # of the part's usual S
+SCALE_FULL, SCALE_NONE = 0.08, 0.3  # |log| of the body's change of scale over one frame
+STRETCH_FULL, STRETCH_NONE = 1.25, 1.8  # a part's length over its calibrated length
 # metres per second an end of the part may move (the trunk, the rest)
 SPEED = {TORSO: (3.0, 8.0), HEAD: (3.0, 8.0)}
 LIMB_SPEED = (8.0, 20.0)
-BORDER_PX = 2.0                      # an end this near the border (or past it) has left the frame
-GAP_S = 0.4                          # seconds: lost stretches no longer are bridged (``bridged``)
-FOUND = 0.7                          # ... both above this again: the body is found again
-LOST = 0.3                           # the head's or the trunk's confidence below this: the body is lost
-DISTINCT = 2.5                       # ... unless both match this many times better than anywhere else
+BORDER_PX = 2.0  # an end this near the border (or past it) has left the frame
+GAP_S = 0.4  # seconds: lost stretches no longer are bridged (``bridged``)
+FOUND = 0.7  # ... both above this again: the body is found again
+LOST = 0.3  # the head's or the trunk's confidence below this: the body is lost
+DISTINCT = 2.5  # ... unless both match this many times better than anywhere else
 HEAD_M = float(LENGTH[SEGMENT_INDEX["head"]]) * UNIT_M
 
 
@@ -29,8 +29,9 @@ def ramp(value: np.ndarray, full: float, none: float) -> np.ndarray:
     return np.clip((none - np.asarray(value, float)) / (none - full), 0.0, 1.0)
 
 
-def part_confidence(new: np.ndarray, last: np.ndarray, s: np.ndarray, usual: np.ndarray,
-                    expected: np.ndarray, shape: tuple, fps: float) -> np.ndarray:
+def part_confidence(
+    new: np.ndarray, last: np.ndarray, s: np.ndarray, usual: np.ndarray, expected: np.ndarray, shape: tuple, fps: float
+) -> np.ndarray:
     """(10,) confidence of blocks ``new`` (10, 5) tracked from ``last`` (10, 5) with S ``s`` (10,) against ``usual`` S
     (inf: none yet), ``expected`` (10,) calibrated lengths in px, on a frame of ``shape`` at ``fps``."""
     zoom = new[HEAD, M] / last[HEAD, M]
@@ -38,15 +39,20 @@ def part_confidence(new: np.ndarray, last: np.ndarray, s: np.ndarray, usual: np.
     match = np.where(np.isfinite(usual), ramp(-s / usual, -MATCH_FULL, -MATCH_NONE), 1.0)
     scale = ramp(abs(np.log(zoom)), SCALE_FULL, SCALE_NONE)
     stretch = ramp(new[:, M] / expected, STRETCH_FULL, STRETCH_NONE)
-    moved = np.maximum(np.linalg.norm(new[:, :2] - last[:, :2], axis=-1),
-                       np.linalg.norm(block_end(new) - block_end(last), axis=-1)) * fps / px_per_m
+    moved = (
+        np.maximum(
+            np.linalg.norm(new[:, :2] - last[:, :2], axis=-1), np.linalg.norm(block_end(new) - block_end(last), axis=-1)
+        )
+        * fps
+        / px_per_m
+    )
     speed = np.array([ramp(v, *SPEED.get(k, LIMB_SPEED)) for k, v in enumerate(moved)])
     return match * scale * stretch * speed * inside(new, shape)
 
 
 def inside(new: np.ndarray, shape: tuple) -> np.ndarray:
     """(10,) 1 for a block whose both ends lie inside the frame, else 0."""
-    ends = np.stack([new[:, [X, Y]], block_end(new)], axis=1)             # (10, 2, 2)
+    ends = np.stack([new[:, [X, Y]], block_end(new)], axis=1)  # (10, 2, 2)
     size = np.array([shape[1], shape[0]], float) - 1.0
     ok = (ends >= BORDER_PX) & (ends <= size - BORDER_PX)
     return ok.all(axis=(1, 2)).astype(float)

@@ -11,8 +11,8 @@ from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, LENGTH, SEGMENT_NAMES, 
 from mocap.errors import MocapError
 
 KEY_TRIANGLE = ("shoulder_l", "shoulder_r", "chest")
-MIN_KEY_SIDE = 0.04        # of the body height: shorter key-triangle sides "coincide"
-MIN_KEY_ANGLE_DEG = 8.0    # a key-triangle corner nearer 0 or 180 degrees is "collinear"
+MIN_KEY_SIDE = 0.04  # of the body height: shorter key-triangle sides "coincide"
+MIN_KEY_ANGLE_DEG = 8.0  # a key-triangle corner nearer 0 or 180 degrees is "collinear"
 _LENGTH = dict(zip(SEGMENT_NAMES, LENGTH))
 
 
@@ -31,8 +31,7 @@ def check_marks(marks, width: int, height: int) -> np.ndarray:
         if not (np.isfinite(x) and np.isfinite(y)):
             raise MocapError(f"joint {name} is not marked on frame 0 (all 16 joints are needed)")
         if not (0 <= x < width and 0 <= y < height):
-            raise MocapError(f"joint {name} at ({x:.1f}, {y:.1f}) is outside the "
-                             f"{width}x{height} frame")
+            raise MocapError(f"joint {name} at ({x:.1f}, {y:.1f}) is outside the {width}x{height} frame")
     check_key_triangle(marks)
     return marks
 
@@ -43,15 +42,18 @@ def check_key_triangle(marks: np.ndarray) -> None:
     least = MIN_KEY_SIDE * BODY_HEIGHT * body_scale(marks)
     for i, j in ((0, 1), (0, 2), (1, 2)):
         if np.hypot(*(pts[i] - pts[j])) < least:
-            raise MocapError(f"degenerate key triangle: {KEY_TRIANGLE[i]} and {KEY_TRIANGLE[j]} "
-                             f"nearly coincide (a profile view?); the shoulders and the chest "
-                             f"must span a triangle")
+            raise MocapError(
+                f"degenerate key triangle: {KEY_TRIANGLE[i]} and {KEY_TRIANGLE[j]} "
+                f"nearly coincide (a profile view?); the shoulders and the chest "
+                f"must span a triangle"
+            )
     for k in range(3):
         a, b = pts[(k + 1) % 3] - pts[k], pts[(k + 2) % 3] - pts[k]
         cos = a @ b / (np.hypot(*a) * np.hypot(*b))
         if np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) > 180.0 - MIN_KEY_ANGLE_DEG:
-            raise MocapError(f"degenerate key triangle: {KEY_TRIANGLE[k]} is nearly on the "
-                             f"line through the other two key joints")
+            raise MocapError(
+                f"degenerate key triangle: {KEY_TRIANGLE[k]} is nearly on the line through the other two key joints"
+            )
 
 
 def across_trunk(marks: np.ndarray, side: str) -> float:
@@ -80,9 +82,10 @@ def shoulders_as_hips(marks: np.ndarray) -> np.ndarray:
 
 def body_scale(marks: np.ndarray) -> float:
     """Pixels per model unit of marks: the least foreshortened of head-and-trunk and the two legs."""
+
     def seen(*names: str) -> float:
-        return sum(np.hypot(*(marks[JOINT_INDEX[a]] - marks[JOINT_INDEX[b]]))
-                   for a, b in zip(names, names[1:]))
+        return sum(np.hypot(*(marks[JOINT_INDEX[a]] - marks[JOINT_INDEX[b]])) for a, b in zip(names, names[1:]))
+
     trunk = seen("head_top", "neck", "pelvis") / (_LENGTH["head"] + _LENGTH["torso"])
     leg = _LENGTH["upper_leg_l"] + _LENGTH["lower_leg_l"]
     legs = [seen(*limb("leg", side).joints) / leg for side in SIDES]

@@ -13,12 +13,12 @@ from mocap.body import JOINT_INDEX, JOINTS, LENGTH, SEGMENT_INDEX, SEGMENTS, SHO
 from mocap.track import blocks
 from mocap.track.blocks import M, N, block_end, from_block
 
-SHORTEST = 0.3             # of a part's longest length: the shortest it is seen (search_part)
-LENGTHEN_STEPS = np.arange(1, 6) * 0.03   # of the longest: lengthenings tried (blocks.lengthen)
+SHORTEST = 0.3  # of a part's longest length: the shortest it is seen (search_part)
+LENGTHEN_STEPS = np.arange(1, 6) * 0.03  # of the longest: lengthenings tried (blocks.lengthen)
 LENGTHEN_TOLERANCE = 0.03  # relative loss of S a lengthening may cost
-FAR_MARGIN_M = 0.1         # metres one shoulder of the marks lies deeper than the other: the far arm
-TOLD_APART = 40.0          # grey levels from what lies beside an arm at which its sub-pixel weighs fully
-LEAST_WEIGHT = 0.05        # ... the share of its weight a sub-pixel like what lies beside keeps
+FAR_MARGIN_M = 0.1  # metres one shoulder of the marks lies deeper than the other: the far arm
+TOLD_APART = 40.0  # grey levels from what lies beside an arm at which its sub-pixel weighs fully
+LEAST_WEIGHT = 0.05  # ... the share of its weight a sub-pixel like what lies beside keeps
 
 
 @dataclass(frozen=True)
@@ -59,15 +59,17 @@ class Part:
 
 # head to feet: the head and the trunk each from its distal to its proximal joint, then
 # every limb's two segments from its root
-PARTS = (*(Part(s, *SEGMENTS[s][::-1]) for s in ("head", "torso")),
-         *(Part(s, *SEGMENTS[s]) for one in body.LIMBS for s in one.segments))
+PARTS = (
+    *(Part(s, *SEGMENTS[s][::-1]) for s in ("head", "torso")),
+    *(Part(s, *SEGMENTS[s]) for one in body.LIMBS for s in one.segments),
+)
 PART_JOINTS = np.array([[JOINT_INDEX[p.start], JOINT_INDEX[p.end]] for p in PARTS])
 HEAD, TORSO = 0, 1
 # upper part of each limb (its lower part follows it), in body.LIMBS's order
 LIMBS = tuple(2 + 2 * n for n in range(len(body.LIMBS)))
 ARMS, LEGS = (tuple(k for k, one in zip(LIMBS, body.LIMBS) if one.kind == kind) for kind in ("arm", "leg"))
 TWINS = (ARMS, LEGS)
-TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}   # each forearm's twin
+TWIN_PART = {a + 1: b + 1 for a, b in (ARMS, ARMS[::-1])}  # each forearm's twin
 
 
 def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
@@ -83,10 +85,12 @@ def part_widths(marks: np.ndarray, scale: float) -> np.ndarray:
 
 def part_lengths() -> np.ndarray:
     """(10,) model lengths of the parts; an arm's two parts both take the longer (elbows sit differently)."""
+
     def length(segment: str) -> float:
         if "_arm_" not in segment:
             return float(LENGTH[SEGMENT_INDEX[segment]])
         return float(max(LENGTH[SEGMENT_INDEX[f"{kind}_arm{segment[-2:]}"]] for kind in ("upper", "lower")))
+
     return np.array([length(p.segment) for p in PARTS])
 
 
@@ -99,27 +103,41 @@ def skeleton(parts: np.ndarray, chest: np.ndarray) -> np.ndarray:
     return joints
 
 
-def search_part(image: np.ndarray, model: np.ndarray, grid: blocks.Grid, start: np.ndarray,
-                part: Part, longest: float,
-                penalty: blocks.Penalty | None = None) -> tuple[np.ndarray, float]:
+def search_part(
+    image: np.ndarray,
+    model: np.ndarray,
+    grid: blocks.Grid,
+    start: np.ndarray,
+    part: Part,
+    longest: float,
+    penalty: blocks.Penalty | None = None,
+) -> tuple[np.ndarray, float]:
     """The part's block and S searched coarse to fine from ``start`` (blocks.search, charged ``penalty``); every part
     but the head kept within SHORTEST to 1 times ``longest`` px, then lengthened to its end (blocks.lengthen)."""
     best, s = start.copy(), 0.0
     for stage in part.schedule:
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
-        best, s = blocks.search(image, model, grid, best, np.radians(stage.d_theta_deg),
-                                best[M] * np.asarray(stage.d_m), zoom=part.segment == "head",
-                                max_ring=stage.rings, step=stage.step, penalty=penalty)
+        best, s = blocks.search(
+            image,
+            model,
+            grid,
+            best,
+            np.radians(stage.d_theta_deg),
+            best[M] * np.asarray(stage.d_m),
+            zoom=part.segment == "head",
+            max_ring=stage.rings,
+            step=stage.step,
+            penalty=penalty,
+        )
     if part.segment != "head":
         best[M] = np.clip(best[M], SHORTEST * longest, longest)
         extra = LENGTHEN_STEPS * longest
-        best, s = blocks.lengthen(image, model, grid, best, extra[best[M] + extra <= longest],
-                                  LENGTHEN_TOLERANCE)
+        best, s = blocks.lengthen(image, model, grid, best, extra[best[M] + extra <= longest], LENGTHEN_TOLERANCE)
     return best, s
 
 
 def far_arm(key_depths: np.ndarray) -> str | None:
-    """"l" or "r": the arm whose shoulder is FAR_MARGIN_M deeper in ``key_depths`` (l, r, chest), else None."""
+    """ "l" or "r": the arm whose shoulder is FAR_MARGIN_M deeper in ``key_depths`` (l, r, chest), else None."""
     gap = key_depths[0] - key_depths[1]
     if abs(gap) < FAR_MARGIN_M:
         return None
@@ -163,9 +181,9 @@ def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.n
     """(R, C) whether each sub-pixel of ``model`` (R, C, 3) is the part's own colour: past the joints always, else
     nearer the middle columns' median than the colours a width out in ``around`` (2, R, C, 3)."""
     inside = (grid.along >= 0) & (grid.along <= 1)
-    middle = np.argsort(np.abs(grid.across))[:max(1, len(grid.across) // 3)]
+    middle = np.argsort(np.abs(grid.across))[: max(1, len(grid.across) // 3)]
     own = np.median(model[inside][:, middle].reshape(-1, 3), axis=0)
-    outside = np.stack([around[0, :, 0], around[1, :, -1]], axis=1)                   # (R, 2, 3)
+    outside = np.stack([around[0, :, 0], around[1, :, -1]], axis=1)  # (R, 2, 3)
     to_own = np.abs(model - own) @ blocks.CHANNEL_WEIGHTS
     to_outside = (np.abs(model[:, :, None] - outside[:, None]) @ blocks.CHANNEL_WEIGHTS).min(axis=-1)
     return (to_own <= to_outside) | ~inside[:, None]
@@ -176,5 +194,4 @@ def arm_grids(frame: np.ndarray, parts: np.ndarray, grids: list, far: int | None
     (``far``: its forearm), whose marked colours are mostly the trunk."""
     hidden = () if far is None else (far - 1, far)
     arms = {k + i for k in ARMS for i in (0, 1)} - set(hidden)
-    return [told_apart(frame, parts[k], grid, k - 1 in ARMS) if k in arms else grid
-            for k, grid in enumerate(grids)]
+    return [told_apart(frame, parts[k], grid, k - 1 in ARMS) if k in arms else grid for k, grid in enumerate(grids)]

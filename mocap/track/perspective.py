@@ -18,10 +18,11 @@ from mocap.track.rays import LIMBS, choose_limb, limb_candidates, limb_penalty, 
 # bones from the centre to the fringe: (known joint, joint placed from it)
 BONES = tuple((JOINT_INDEX[a], JOINT_INDEX[b]) for a, b in body.bones_from(tuple(JOINTS[k] for k in KEY)))
 BONE_INDEX = {bone: n for n, bone in enumerate(BONES)}
-TORSO_BONES = len(BONES) - 2 * len(body.LIMBS)   # the first bones move with the key triangle
+TORSO_BONES = len(BONES) - 2 * len(body.LIMBS)  # the first bones move with the key triangle
 # pelvis to hips: the model's, not measured
-HIP_BONES = tuple(n for n, (_, b) in enumerate(BONES[:TORSO_BONES])
-                  if JOINTS[b] in {one.joints[0] for one in body.LIMBS})
+HIP_BONES = tuple(
+    n for n, (_, b) in enumerate(BONES[:TORSO_BONES]) if JOINTS[b] in {one.joints[0] for one in body.LIMBS}
+)
 # percentile of a bone's seen lengths (measured_lengths) by the joint it places, else the median: head and torso
 # the lower quartile (a length read long becomes a lean), the shins the upper (tracked best and upright, so they show
 # their whole length), the forearms the 60th (the hands work in front, foreshortening them)
@@ -67,14 +68,16 @@ def guide_trunk() -> np.ndarray:
 
 
 GUIDE = guide_trunk()
-BONE_PAIRS = _pooled_bones()     # measured, left/right pooled
+BONE_PAIRS = _pooled_bones()  # measured, left/right pooled
 # (upper arm, forearm) bones of each arm
-ARM_BONES = tuple((BONE_INDEX[JOINT_INDEX[a], JOINT_INDEX[b]], BONE_INDEX[JOINT_INDEX[b], JOINT_INDEX[c]])
-                  for a, b, c in (one.joints for one in body.LIMBS if one.kind == "arm"))
+ARM_BONES = tuple(
+    (BONE_INDEX[JOINT_INDEX[a], JOINT_INDEX[b]], BONE_INDEX[JOINT_INDEX[b], JOINT_INDEX[c]])
+    for a, b, c in (one.joints for one in body.LIMBS if one.kind == "arm")
+)
 TRUNK_SIGNS = _trunk_signs()
 # share of the way to the swing plane a limb joint moves (toward_swing_planes); sight-normal cosines from which
 # the move is made in part and in full (a plane seen edge-on tells no depth)
-SWING_PLANE_WEIGHT = {False: 0.3, True: 0.5}   # arm, leg
+SWING_PLANE_WEIGHT = {False: 0.3, True: 0.5}  # arm, leg
 SWING_PLANE_SIGHT = (0.3, 0.6)
 # joint-limit penalty per metre between the key triangle's mirror images that switching costs (``sided_key``)
 MIRROR_SWITCH_COST = 20.0
@@ -86,14 +89,15 @@ def bone_lengths(joints3d: np.ndarray) -> np.ndarray:
     return np.linalg.norm(joints3d[..., bones[:, 1], :] - joints3d[..., bones[:, 0], :], axis=-1)
 
 
-def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
-                     seen: np.ndarray | None = None) -> np.ndarray:
+def measured_lengths(
+    joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole, seen: np.ndarray | None = None
+) -> np.ndarray:
     """(13,) bone lengths (m): a percentile (LENGTH_PERCENTILES) of each bone's image length at the body's ``depth``
     (F,), sides pooled, over frames ``seen`` (F,) bool (default all), at the model triangle's scale; hip bones the
     model's. Beyond the paper's anatomical lengths: a bone taken too long gets depth it does not have."""
     if seen is not None and seen.any():
         joints2d, depth = joints2d[seen], depth[seen]
-    ends = joints2d[:, np.array(BONES)]                                     # (F, 13, 2, 2)
+    ends = joints2d[:, np.array(BONES)]  # (F, 13, 2, 2)
     seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) * depth[:, None] / camera.focal
     out = np.empty(len(BONES))
     out[list(HIP_BONES)] = body.HIP_HALF_SPAN * UNIT_M
@@ -106,8 +110,7 @@ def measured_lengths(joints2d: np.ndarray, depth: np.ndarray, camera: Pinhole,
     return out
 
 
-def trunk_joints(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
-                 fixed: np.ndarray | None = None) -> np.ndarray:
+def trunk_joints(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
     """(F, 16, 3) key and trunk joints, each on its ray at the root nearer the guide trunk (``guide_trunk``) carried
     by the key triangle, or the other root where ``fixed`` (F, 10) (+1 toward, -1 away, 0 unsaid) demands it."""
     joints = np.zeros(rays.shape)
@@ -115,7 +118,7 @@ def trunk_joints(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
     axes = body_axes(key)
     frames = np.arange(len(key))
     for (a, b), length in list(zip(BONES, lengths))[:TORSO_BONES]:
-        roots = ray_roots(joints[:, a], rays[:, b], length)                    # (F, 2, 3)
+        roots = ray_roots(joints[:, a], rays[:, b], length)  # (F, 2, 3)
         guess = joints[:, a] + axes @ (GUIDE[b] - GUIDE[a])
         miss = np.linalg.norm(roots - guess[:, None], axis=-1)
         allowed = np.ones(miss.shape, bool)
@@ -128,8 +131,7 @@ def trunk_joints(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
     return joints
 
 
-def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
-              fixed: np.ndarray | None = None) -> np.ndarray:
+def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
     """Elbows, wrists, knees and ankles placed on their rays (rays.choose_limb), kept to ``fixed`` (F, 10)."""
     axes = body_axes(joints[:, KEY])
     frames = np.arange(len(joints))
@@ -138,26 +140,39 @@ def add_limbs(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
         cands = limb_candidates(joints[:, root], rays[:, [middle, end]], tuple(lengths[list(pair)]))
         allowed = None
         if fixed is not None:
-            depths = np.concatenate([np.repeat(joints[:, root, None, None, 2], 4, axis=1),
-                                     cands[..., 2]], axis=2)                  # (F, 4, 3)
+            depths = np.concatenate(
+                [np.repeat(joints[:, root, None, None, 2], 4, axis=1), cands[..., 2]], axis=2
+            )  # (F, 4, 3)
             said = fixed[:, [SEGMENT_OF[root, middle], SEGMENT_OF[middle, end]]]
             allowed = signs_allowed(toward_signs(depths), said)
-        pick = choose_limb(cands - joints[:, root, None, None],
-                           limb_penalty(joints[:, root], cands, axes, leg, side), allowed)
+        pick = choose_limb(
+            cands - joints[:, root, None, None], limb_penalty(joints[:, root], cands, axes, leg, side), allowed
+        )
         joints[:, middle], joints[:, end] = cands[frames, pick, 0], cands[frames, pick, 1]
     return joints
 
 
-def reconstruct(joints2d: np.ndarray, camera: Pinhole, turns: Turns = None,
-                lengths: np.ndarray | None = None, seen: np.ndarray | None = None) -> np.ndarray:
+def reconstruct(
+    joints2d: np.ndarray,
+    camera: Pinhole,
+    turns: Turns = None,
+    lengths: np.ndarray | None = None,
+    seen: np.ndarray | None = None,
+) -> np.ndarray:
     """(F, 16, 3) pinhole-frame joints (metres) of 2D joints (F, 16, 2): the key joints turned to ``turns`` on the
     side the limbs take (``sided_key``), then the rest (``place_joints``, bones measured over ``seen``)."""
     key = sided_key(joints2d, key_joints(joints2d, camera, turns), camera, turns, lengths, seen)
     return place_joints(joints2d, key, camera, lengths, seen=seen)
 
 
-def sided_key(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole, turns: Turns = None,
-              lengths: np.ndarray | None = None, seen: np.ndarray | None = None) -> np.ndarray:
+def sided_key(
+    joints2d: np.ndarray,
+    key: np.ndarray,
+    camera: Pinhole,
+    turns: Turns = None,
+    lengths: np.ndarray | None = None,
+    seen: np.ndarray | None = None,
+) -> np.ndarray:
     """(F, 3, 3) per frame ``key`` or its mirror, whichever the limbs take better (two-state path, switches costing
     MIRROR_SWITCH_COST per metre), never a mirror clearly against ``turns``: Eq. 10-11 alone keep a wrong turn."""
     if lengths is None:
@@ -166,8 +181,7 @@ def sided_key(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole, turns: Tur
     rays = camera.rays(joints2d)
     costs = np.stack([limits_under(k, rays, lengths) for k in (key, mirror)], axis=1)
     held = [turns] * len(key) if turns is None or isinstance(turns, str) else list(turns)
-    against = np.array([turned_against(m, t) and not turned_against(k, t)
-                        for k, m, t in zip(key, mirror, held)])
+    against = np.array([turned_against(m, t) and not turned_against(k, t) for k, m, t in zip(key, mirror, held)])
     costs[against, 1] = np.inf
     apart = np.linalg.norm(key - mirror, axis=-1).max(axis=1)
     path = two_state_path(costs, MIRROR_SWITCH_COST * np.maximum(apart[1:], apart[:-1]))
@@ -186,9 +200,14 @@ def limits_under(key: np.ndarray, rays: np.ndarray, lengths: np.ndarray) -> np.n
     return out
 
 
-def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,
-                 lengths: np.ndarray | None = None, fixed: np.ndarray | None = None,
-                 seen: np.ndarray | None = None) -> np.ndarray:
+def place_joints(
+    joints2d: np.ndarray,
+    key: np.ndarray,
+    camera: Pinhole,
+    lengths: np.ndarray | None = None,
+    fixed: np.ndarray | None = None,
+    seen: np.ndarray | None = None,
+) -> np.ndarray:
     """(F, 16, 3) every joint from ``key`` (F, 3, 3) centre to fringe at bone ``lengths`` (default measured over
     ``seen``), depth choices kept to ``fixed`` (F, 10) (+1 toward, -1 away, 0 unsaid) where given."""
     if lengths is None:
@@ -198,8 +217,9 @@ def place_joints(joints2d: np.ndarray, key: np.ndarray, camera: Pinhole,
     return toward_swing_planes(joints, rays, lengths, fixed)
 
 
-def toward_swing_planes(joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray,
-                        fixed: np.ndarray | None = None) -> np.ndarray:
+def toward_swing_planes(
+    joints: np.ndarray, rays: np.ndarray, lengths: np.ndarray, fixed: np.ndarray | None = None
+) -> np.ndarray:
     """Limb joints of ``joints`` (F, 16, 3) moved SWING_PLANE_WEIGHT of the way along their rays to the swing plane
     (through the root, square to the shoulders), unless edge-on or ``fixed``: ray-sphere depths swing with pixel
     errors near the image plane. Limbs raised sideways are drawn toward the plane."""
@@ -232,4 +252,4 @@ def steady_depths(points: np.ndarray, fps: float) -> np.ndarray:
 def to_contract(points: np.ndarray) -> np.ndarray:
     """Pinhole joints (..., 16, 3) -> CONTRACT.md's frame: metres, pelvis origin, x right, y up, z to camera."""
     out = points * np.array([1.0, -1.0, -1.0])
-    return out - out[..., JOINT_INDEX["pelvis"]:JOINT_INDEX["pelvis"] + 1, :]
+    return out - out[..., JOINT_INDEX["pelvis"] : JOINT_INDEX["pelvis"] + 1, :]

@@ -12,15 +12,15 @@ from mocap.track import blocks
 from mocap.track.blocks import THETA, M, N, X, Y, block_end, from_block, to_block
 from mocap.track.parts import HEAD, TORSO
 
-PEAKS = 6                  # the best places of the head's scan refined by the search path
-SCAN_STEP = 0.4            # of the head's width: the spacing of the scan's grid
-PEAK_SPACING = 1.0         # of the head's length: distinct places of the scan lie this far apart
-ZOOMS = np.array([0.8, 1.0, 1.25])   # of the last good head's size: the sizes the head is looked for at
-TRUNK_TURNS = np.radians(np.arange(-45.0, 46.0, 15.0))   # the trunk's turns tried from the last good one
-CHUNK = 16384              # sub-pixel rows scored at once (OpenCV's remap takes fewer than 32767)
-REFOUND = 0.7              # of their usual S: the least match of head and trunk found again
-REFINED = 3                # heads refined by the search: the best matched where they lie
-TRUNKS_REFINED = 3         # ... trunks hung from each head refined
+PEAKS = 6  # the best places of the head's scan refined by the search path
+SCAN_STEP = 0.4  # of the head's width: the spacing of the scan's grid
+PEAK_SPACING = 1.0  # of the head's length: distinct places of the scan lie this far apart
+ZOOMS = np.array([0.8, 1.0, 1.25])  # of the last good head's size: the sizes the head is looked for at
+TRUNK_TURNS = np.radians(np.arange(-45.0, 46.0, 15.0))  # the trunk's turns tried from the last good one
+CHUNK = 16384  # sub-pixel rows scored at once (OpenCV's remap takes fewer than 32767)
+REFOUND = 0.7  # of their usual S: the least match of head and trunk found again
+REFINED = 3  # heads refined by the search: the best matched where they lie
+TRUNKS_REFINED = 3  # ... trunks hung from each head refined
 
 # the tracker's searches: (frame, start block) -> the head's (block, S);
 # (frame, start block, the head's block) -> the trunk's (block, S)
@@ -37,8 +37,9 @@ class Found(NamedTuple):
     s: np.ndarray
 
 
-def scanned(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid,
-            block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def scanned(
+    frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, block: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(K, 5) ``block`` moved over a grid SCAN_STEP of its width apart (ends inside ``frame``), and (K,) their S."""
     height, width = frame.shape[:2]
     step = max(SCAN_STEP * block[N], 2.0)
@@ -48,13 +49,15 @@ def scanned(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid,
     cands[:, Y] = np.repeat(ys, len(xs))
     cands = cands[_inside(block_end(cands), frame.shape)]
     chunk = CHUNK // len(grid.along)
-    s = np.concatenate([blocks.score(frame, model, grid, cands[i:i + chunk])
-                        for i in range(0, len(cands), chunk)] or [np.zeros(0)])
+    s = np.concatenate(
+        [blocks.score(frame, model, grid, cands[i : i + chunk]) for i in range(0, len(cands), chunk)] or [np.zeros(0)]
+    )
     return cands, s
 
 
-def scan_heads(frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, head: np.ndarray,
-               peaks: int = PEAKS) -> np.ndarray:
+def scan_heads(
+    frame: np.ndarray, model: np.ndarray, grid: blocks.Grid, head: np.ndarray, peaks: int = PEAKS
+) -> np.ndarray:
     """(K, 5) the ``peaks`` best head blocks of ``scanned``, each PEAK_SPACING head lengths from better ones."""
     cands, s = scanned(frame, model, grid, head)
     kept: list[np.ndarray] = []
@@ -79,8 +82,15 @@ def _inside(points: np.ndarray, shape: tuple) -> np.ndarray:
     return ((points >= 0) & (points <= np.array([shape[1], shape[0]]) - 1)).all(axis=1)
 
 
-def reacquired(frame: np.ndarray, starts: np.ndarray, good: np.ndarray, usual: np.ndarray,
-               head_search: HeadSearch, trunk_search: TrunkSearch, score: Score) -> Found | None:
+def reacquired(
+    frame: np.ndarray,
+    starts: np.ndarray,
+    good: np.ndarray,
+    usual: np.ndarray,
+    head_search: HeadSearch,
+    trunk_search: TrunkSearch,
+    score: Score,
+) -> Found | None:
     """Head and trunk found again on ``frame``, or None: heads of ``starts`` (K, 5) at ZOOMS, the REFINED best
     refined; under each matching REFOUND of ``usual`` (10,) the ``good`` (10, 5) trunk hung at each turn, the
     TRUNKS_REFINED best refined; the pair whose worse ratio to ``usual`` is best, if at least REFOUND."""
@@ -92,8 +102,7 @@ def reacquired(frame: np.ndarray, starts: np.ndarray, good: np.ndarray, usual: n
             continue
         hung = hung_trunks(good, head)
         order = np.argsort(-score(frame, TORSO, hung))[:TRUNKS_REFINED]
-        trunk, s_trunk = max((trunk_search(frame, start, head) for start in hung[order]),
-                             key=lambda match: match[1])
+        trunk, s_trunk = max((trunk_search(frame, start, head) for start in hung[order]), key=lambda match: match[1])
         ratio = min(s_head / usual[HEAD], s_trunk / usual[TORSO])
         if ratio > best_ratio:
             best, best_ratio = Found(np.stack([head, trunk]), np.array([s_head, s_trunk])), ratio

@@ -22,8 +22,14 @@ class Track(NamedTuple):
     lost: np.ndarray
 
 
-def run_tracker(frames: Iterable[np.ndarray], marks: np.ndarray, tick: Callable[[], None],
-                camera: Pinhole | None, turn: str | None, fps: float) -> Track:
+def run_tracker(
+    frames: Iterable[np.ndarray],
+    marks: np.ndarray,
+    tick: Callable[[], None],
+    camera: Pinhole | None,
+    turn: str | None,
+    fps: float,
+) -> Track:
     """The tracker seeded with ``marks`` (16, 2) on the first of ``frames``, run through all (``tick`` each)."""
     it = iter(frames)
     tracker = BodyTracker(next(it), marks, camera, turn, fps)
@@ -42,13 +48,17 @@ def merged(forward: Track, backward: Track) -> Track:
     nearer_back = np.arange(n) > (n - 1) / 2
     take_back = ~backward.lost & (forward.lost | nearer_back)
     take_back[0], take_back[-1] = False, True
-    return Track(*(np.where(take_back.reshape(-1, *[1] * (f.ndim - 1)), b, f)
-                   for f, b in zip(forward, backward)))
+    return Track(*(np.where(take_back.reshape(-1, *[1] * (f.ndim - 1)), b, f) for f, b in zip(forward, backward)))
 
 
-def track_seeded(frames: Iterable[np.ndarray], seeds: dict[int, np.ndarray],
-                 progress: Callable[[int], None] | None, camera: Pinhole | None,
-                 turn: str | None, fps: float) -> Track:
+def track_seeded(
+    frames: Iterable[np.ndarray],
+    seeds: dict[int, np.ndarray],
+    progress: Callable[[int], None] | None,
+    camera: Pinhole | None,
+    turn: str | None,
+    fps: float,
+) -> Track:
     """Track ``frames`` from every seed (frame -> (16, 2) marks, frame 0 among them), forward and backward between
     seeds, ``merged``; ``progress(done)`` counts every pass's frames."""
     keys = sorted(seeds)
@@ -58,15 +68,15 @@ def track_seeded(frames: Iterable[np.ndarray], seeds: dict[int, np.ndarray],
         done[0] += 1
         if progress:
             progress(done[0] + 1)
+
     it = iter(frames)
     if len(keys) == 1:
         return run_tracker(it, seeds[0], tick, camera, turn, fps)
     kept = [next(it) for _ in range(keys[-1] + 1)]
     parts = []
     for a, b in zip(keys, keys[1:]):
-        forward = run_tracker(kept[a:b + 1], seeds[a], tick, camera, turn, fps)
-        backward = run_tracker(kept[b:a - 1 if a else None:-1], seeds[b], tick, camera, turn, fps)
+        forward = run_tracker(kept[a : b + 1], seeds[a], tick, camera, turn, fps)
+        backward = run_tracker(kept[b : a - 1 if a else None : -1], seeds[b], tick, camera, turn, fps)
         parts.append(merged(forward, Track(*(x[::-1] for x in backward))))
     rest = run_tracker([kept[-1], *it], seeds[keys[-1]], tick, camera, turn, fps)
     return Track(*(np.concatenate([*(p[i][:-1] for p in parts), rest[i]]) for i in range(4)))
-

@@ -51,31 +51,36 @@ from mocap.track.parts import (
 )
 from mocap.track.reacquire import carried, distinctness, reacquired, scan_heads
 
-BEYOND = 0.3               # of a part's length: the block reaches this far past both joints
-MAX_STRETCH = 1.15         # a part is seen at most this much longer than its length
-UPDATE_RATE = 0.3          # linear weighting of a colour model by the new block
-UPDATE_MIN = 0.9           # of the part's median S so far: worse matches leave the model
-ANCHOR = 0.5               # weight of frame 0's colours in every updated model
-HISTORY = 150              # frames of S that the median looks back on
-USUAL_MIN = 0.6            # of a part's model length: the least usual length (around_root)
-ZOOM_RANGE = (0.5, 2.0)    # of the marked head's length: the head's (the body's) scale stays in it
-HEAD_RETRY = 0.3           # of the head's median S: a worse match is searched again (_track_head)
-FAR_UPPER_WEIGHT = 0.3     # of its 1/S: what the far arm's upper arm's match weighs around its root
-FAR_UPPER_SCALES = (1.0, 0.9)   # of its usual length: the far arm's upper arm's lengths tried there
+BEYOND = 0.3  # of a part's length: the block reaches this far past both joints
+MAX_STRETCH = 1.15  # a part is seen at most this much longer than its length
+UPDATE_RATE = 0.3  # linear weighting of a colour model by the new block
+UPDATE_MIN = 0.9  # of the part's median S so far: worse matches leave the model
+ANCHOR = 0.5  # weight of frame 0's colours in every updated model
+HISTORY = 150  # frames of S that the median looks back on
+USUAL_MIN = 0.6  # of a part's model length: the least usual length (around_root)
+ZOOM_RANGE = (0.5, 2.0)  # of the marked head's length: the head's (the body's) scale stays in it
+HEAD_RETRY = 0.3  # of the head's median S: a worse match is searched again (_track_head)
+FAR_UPPER_WEIGHT = 0.3  # of its 1/S: what the far arm's upper arm's match weighs around its root
+FAR_UPPER_SCALES = (1.0, 0.9)  # of its usual length: the far arm's upper arm's lengths tried there
 
 
 class BodyTracker:
     """State carried between frames: blocks (10, 5) and velocities, colour models, recent S, the head's threshold p,
     the trunk in 3D (``TrunkDepth``; ``camera`` default the frame's) and the parts' confidence at ``fps``."""
 
-    def __init__(self, frame0: np.ndarray, marks: np.ndarray, camera: Pinhole | None = None,
-                 turn: str | None = None, fps: float = 25.0):
+    def __init__(
+        self,
+        frame0: np.ndarray,
+        marks: np.ndarray,
+        camera: Pinhole | None = None,
+        turn: str | None = None,
+        fps: float = 25.0,
+    ):
         scale = body_scale(marks)
         self.fps = fps
         self.trunk = TrunkDepth(marks, camera or default_camera(frame0.shape[1], frame0.shape[0]), turn)
         self.limb_costs: dict[int, tuple[blocks.Penalty, blocks.Penalty]] = {}
-        self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]],
-                                     part_widths(marks, scale))
+        self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]], part_widths(marks, scale))
         self.longest = MAX_STRETCH * np.maximum(scale * part_lengths(), self.blocks[:, M])
         self.head_width = self.blocks[HEAD, N]
         self.head_lengths = np.array(ZOOM_RANGE) * self.blocks[HEAD, M]
@@ -86,10 +91,13 @@ class BodyTracker:
         self.lost = self.held = False
         self.velocity = np.zeros_like(self.blocks)
         self.far_forearm = far_forearm(self.trunk.depths)
-        self.grids = arm_grids(frame0, self.blocks, [blocks.make_grid(b[M], b[N], 0.0 if k == HEAD else BEYOND)
-                                                     for k, b in enumerate(self.blocks)], self.far_forearm)
-        self.models = [blocks.sample_blocks(frame0, b, g)[0]
-                       for b, g in zip(self.blocks, self.grids)]
+        self.grids = arm_grids(
+            frame0,
+            self.blocks,
+            [blocks.make_grid(b[M], b[N], 0.0 if k == HEAD else BEYOND) for k, b in enumerate(self.blocks)],
+            self.far_forearm,
+        )
+        self.models = [blocks.sample_blocks(frame0, b, g)[0] for b, g in zip(self.blocks, self.grids)]
         self.marked = list(self.models)
         self.good = self.blocks.copy()
         self.history: deque[np.ndarray] = deque(maxlen=HISTORY)
@@ -128,15 +136,14 @@ class BodyTracker:
 
     def _held(self, frame: np.ndarray, new: np.ndarray) -> bool:
         """Whether head and trunk of ``new`` each match DISTINCT times better where they lie than anywhere else."""
-        return all(distinctness(frame, self._model(k), self.grids[k], new[k]) >= DISTINCT
-                   for k in (HEAD, TORSO))
+        return all(distinctness(frame, self._model(k), self.grids[k], new[k]) >= DISTINCT for k in (HEAD, TORSO))
 
     def _reacquire(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> bool:
         """Whether a lost body's head and trunk are found again (into ``new``, ``s``; limbs from the good pose)."""
-        starts = np.concatenate([new[[HEAD]], self.good[[HEAD]],
-                                 scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])])
-        found = reacquired(frame, starts, self.good, self._usual(), self._head_search,
-                           self._track_torso, self._score)
+        starts = np.concatenate(
+            [new[[HEAD]], self.good[[HEAD]], scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])]
+        )
+        found = reacquired(frame, starts, self.good, self._usual(), self._head_search, self._track_torso, self._score)
         if found is None:
             return False
         self.blocks = carried(self.good, found.blocks[1])
@@ -156,8 +163,7 @@ class BodyTracker:
         found[M] = np.clip(found[M], *self.head_lengths)
         return found, s
 
-    def _confidence(self, new: np.ndarray, s: np.ndarray, shape: tuple,
-                    usual: np.ndarray | None = None) -> np.ndarray:
+    def _confidence(self, new: np.ndarray, s: np.ndarray, shape: tuple, usual: np.ndarray | None = None) -> np.ndarray:
         """(10,) part confidences (loss.part_confidence) against ``usual`` S (default ``_usual``)."""
         expected = self.longest / MAX_STRETCH * new[HEAD, N] / self.head_width
         usual = self._usual() if usual is None else usual
@@ -180,11 +186,9 @@ class BodyTracker:
         predicted[1:, N] = self.blocks[1:, N] * predicted[HEAD, M] / self.blocks[HEAD, M]
         return predicted
 
-    def _search(self, image: np.ndarray, k: int, start: np.ndarray, zoom: float,
-                penalty: blocks.Penalty | None = None):
+    def _search(self, image: np.ndarray, k: int, start: np.ndarray, zoom: float, penalty: blocks.Penalty | None = None):
         """Part k's block and S searched from ``start`` (parts.search_part), the body at ``zoom``."""
-        return search_part(image, self._model(k), self.grids[k], start, PARTS[k],
-                           self.longest[k] * zoom, penalty)
+        return search_part(image, self._model(k), self.grids[k], start, PARTS[k], self.longest[k] * zoom, penalty)
 
     def _zoom(self, head: np.ndarray) -> float:
         """The body's scale on a frame against the marks' by its ``head`` block."""
@@ -199,19 +203,21 @@ class BodyTracker:
         order = np.argsort(-blocks.score(frame, self.models[HEAD], self.grids[HEAD], starts))
         found, s = self._search(frame, HEAD, starts[order[0]], self._zoom(head))
         if s < HEAD_RETRY * self._usual()[HEAD]:
-            found, s = max((found, s), self._search(frame, HEAD, starts[order[1]], self._zoom(head)),
-                           key=lambda match: match[1])
+            found, s = max(
+                (found, s), self._search(frame, HEAD, starts[order[1]], self._zoom(head)), key=lambda match: match[1]
+            )
         found[M] = np.clip(found[M], *self.head_lengths)
         self.p = adapt_threshold(self.p, moved.length, float(np.hypot(*(found[:2] - head[:2]))))
         return found, s
 
-    def _track_torso(self, frame: np.ndarray, predicted: np.ndarray,
-                     head: np.ndarray) -> tuple[np.ndarray, float]:
+    def _track_torso(self, frame: np.ndarray, predicted: np.ndarray, head: np.ndarray) -> tuple[np.ndarray, float]:
         """Trunk searched from the prediction and at its usual length, the better kept: one colour lets it shrink."""
         usual = predicted.copy()
         usual[M] = self.lengths[TORSO] * self._zoom(head)
-        return max((self._search(frame, TORSO, start, self._zoom(head)) for start in (predicted, usual)),
-                   key=lambda match: match[1])
+        return max(
+            (self._search(frame, TORSO, start, self._zoom(head)) for start in (predicted, usual)),
+            key=lambda match: match[1],
+        )
 
     def _root(self, k: int, new: np.ndarray) -> np.ndarray:
         """Limb k's root (a shoulder or hip) carried by the trunk's motion to ``new``."""
@@ -219,21 +225,21 @@ class BodyTracker:
 
     def _limb_costs(self, new: np.ndarray, edges: Edges) -> dict:
         """Each limb's (upper, lower) block penalties: missing edges; for the lower block joint limits in 3D too."""
-        key = self.trunk.follow(np.array([*(self._root(k, new) for k in ARMS),
-                                          from_block(self.chest, new[TORSO])]))
+        key = self.trunk.follow(np.array([*(self._root(k, new) for k in ARMS), from_block(self.chest, new[TORSO])]))
         arm, leg = outline_cost(edges), outline_cost(edges, LEG_OUTLINE_COST)
-        costs = {k: (arm, added(arm, arm_limits_cost(self.trunk.camera, key, n)))
-                 for n, k in enumerate(ARMS)}
-        return costs | {k: (leg, added(leg, leg_limits_cost(self.trunk.camera, key, self._root(k, new), n,
-                                                            self.trunk.leg_lengths)))
-                        for n, k in enumerate(LEGS)}
+        costs = {k: (arm, added(arm, arm_limits_cost(self.trunk.camera, key, n))) for n, k in enumerate(ARMS)}
+        return costs | {
+            k: (leg, added(leg, leg_limits_cost(self.trunk.camera, key, self._root(k, new), n, self.trunk.leg_lengths)))
+            for n, k in enumerate(LEGS)
+        }
 
-    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
-                    avoid: tuple) -> None:
+    def _track_limb(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int, avoid: tuple) -> None:
         """Limb k from its root: best directions ``around_root``, then ``_hang``, kept off ``avoid``."""
         root = self._root(k, new)
-        parts = [(self._model(i), self.grids[i], new[i, N],
-                  self.lengths[i] * new[HEAD, N] / self.head_width) for i in (k, k + 1)]
+        parts = [
+            (self._model(i), self.grids[i], new[i, N], self.lengths[i] * new[HEAD, N] / self.head_width)
+            for i in (k, k + 1)
+        ]
         penalty = limb_penalty(root, new[k, N], self.blocks[k + 1], parts[1][3], avoid)
         upper_cost, lower_cost = self.limb_costs[k]
         penalty = added(penalty, lower_cost)
@@ -250,8 +256,7 @@ class BodyTracker:
         """The (cost, block) pairs limb k's lower part keeps off: the head for an arm (skin matches the face)."""
         return ((HEAD_COST, new[HEAD].copy()),) if k in ARMS else ()
 
-    def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray,
-                    twins: tuple[int, int]) -> None:
+    def _part_twins(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, twins: tuple[int, int]) -> None:
         """Twin limbs whose lower blocks overlap, tracked again each off the other's; least 1/S + overlap kept."""
         a, b = twins
         if twin_overlap(new[a + 1], new[b + 1]) < TWIN_OVERLAP:
@@ -262,18 +267,33 @@ class BodyTracker:
             avoid = (*self._avoided(moved, new), (TWIN_COST, new[kept + 1].copy()))
             self._track_limb(image, placed, similarity, moved, avoid)
             options.append((placed, similarity))
-        costs = [limb_cost(sim, a) + limb_cost(sim, b)
-                 + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options]
+        costs = [
+            limb_cost(sim, a) + limb_cost(sim, b) + TWIN_COST * twin_overlap(n[a + 1], n[b + 1]) for n, sim in options
+        ]
         new[:], s[:] = options[int(np.argmin(costs))]
 
-    def _hang(self, image: np.ndarray, new: np.ndarray, s: np.ndarray, k: int,
-              root: np.ndarray, lower: np.ndarray, penalty: blocks.Penalty) -> None:
+    def _hang(
+        self,
+        image: np.ndarray,
+        new: np.ndarray,
+        s: np.ndarray,
+        k: int,
+        root: np.ndarray,
+        lower: np.ndarray,
+        penalty: blocks.Penalty,
+    ) -> None:
         """Limb k's lower part searched from ``lower``, a leg's knee settled, the upper part from ``root`` to it."""
         new[k + 1], s[k + 1] = self._search(image, k + 1, lower, self._zoom(new[HEAD]), penalty)
         if k not in ARMS:
             new[k + 1], s[k + 1] = settled_knee(
-                image, root, new[k + 1], (self._model(k), self.grids[k], new[k, N]),
-                (self._model(k + 1), self.grids[k + 1]), self.limb_costs[k][0], penalty)
+                image,
+                root,
+                new[k + 1],
+                (self._model(k), self.grids[k], new[k, N]),
+                (self._model(k + 1), self.grids[k + 1]),
+                self.limb_costs[k][0],
+                penalty,
+            )
         new[k] = blocks.between(root[None], new[k + 1, None, :2], new[k, N])[0]
         s[k] = blocks.score(image, self._model(k), self.grids[k], new[k])[0]
 

@@ -23,16 +23,17 @@ from mocap.track.perspective import reconstruct, steady_depths, to_contract
 from mocap.track.reseed import Track, track_seeded
 
 Progress = Callable[[int, int], None]
-LOW_RELIABILITY = 0.5      # a part matched this much worse than usual is taken as hidden
+LOW_RELIABILITY = 0.5  # a part matched this much worse than usual is taken as hidden
 # seconds (Gaussian sigma) the 2D joints are smoothed over for the 3D alone: depth sqrt(l^2 - d^2) is steep
 # near the image plane, so jitter moves joints along rays
 SMOOTH_S = 0.05
-TURN_CUE_S = 1.0           # seconds from frame 0 whose knee bends tell an unsaid turn
+TURN_CUE_S = 1.0  # seconds from frame 0 whose knee bends tell an unsaid turn
 # seconds over which a user's correction fades out on the frames around it (spread_corrections)
 SPREAD_S = 0.2
 # an arm joint a correction also carries by its parent joint (spread_corrections)
-CARRIED_BY = {JOINT_INDEX[joint]: JOINT_INDEX[JOINT_PARENT[joint]]
-              for side in SIDES for joint in limb("arm", side).joints[1:]}
+CARRIED_BY = {
+    JOINT_INDEX[joint]: JOINT_INDEX[JOINT_PARENT[joint]] for side in SIDES for joint in limb("arm", side).joints[1:]
+}
 
 
 def _joint_parts() -> list[tuple[int, ...]]:
@@ -63,10 +64,15 @@ class TrackResult:
     lost: np.ndarray
 
 
-def track_frames(frames: Iterable[np.ndarray], marks: np.ndarray,
-                 progress: Callable[[int], None] | None = None, camera: Pinhole | None = None,
-                 turn: str | None = None, fps: float = 25.0,
-                 remarks: dict[int, np.ndarray] | None = None) -> Track:
+def track_frames(
+    frames: Iterable[np.ndarray],
+    marks: np.ndarray,
+    progress: Callable[[int], None] | None = None,
+    camera: Pinhole | None = None,
+    turn: str | None = None,
+    fps: float = 25.0,
+    remarks: dict[int, np.ndarray] | None = None,
+) -> Track:
     """Track ``marks`` (16, 2) of frame 0 and ``remarks`` (frame -> marks) through BGR ``frames``: (F, 16, 2) joints,
     (F, 10) S (inf where marked), (F, 10) confidence (1 where marked) and (F,) lost."""
     return track_seeded(frames, {**(remarks or {}), 0: marks}, progress, camera, turn, fps)
@@ -74,14 +80,13 @@ def track_frames(frames: Iterable[np.ndarray], marks: np.ndarray,
 
 def joint_reliability(similarity: np.ndarray) -> np.ndarray:
     """(F, 16) per joint the least of its parts' S (F, 10) over their clip median, at most 1."""
-    tracked = np.where(np.isfinite(similarity[1:]), similarity[1:], np.nan)   # marked frames aside
+    tracked = np.where(np.isfinite(similarity[1:]), similarity[1:], np.nan)  # marked frames aside
     usual = np.nanmedian(tracked, axis=0) if np.isfinite(tracked).any() else np.ones(len(PARTS))
     part = np.minimum(similarity / usual, 1.0)
     return np.stack([part[:, list(parts)].min(axis=1) for parts in JOINT_PARTS], axis=1)
 
 
-def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray,
-                    threshold: float = LOW_RELIABILITY) -> np.ndarray:
+def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray, threshold: float = LOW_RELIABILITY) -> np.ndarray:
     """Joints (F, 16, 2), stretches below ``threshold`` between reliable frames interpolated (self-occlusion)."""
     out = joints2d.copy()
     frames = np.arange(len(joints2d))
@@ -93,8 +98,9 @@ def fill_unreliable(joints2d: np.ndarray, reliability: np.ndarray,
     return out
 
 
-def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tuple[float, float]]],
-                       fps: float, spread_s: float = SPREAD_S) -> np.ndarray:
+def spread_corrections(
+    joints2d: np.ndarray, corrections: dict[int, dict[str, tuple[float, float]]], fps: float, spread_s: float = SPREAD_S
+) -> np.ndarray:
     """Joints (F, 16, 2) with the user's ``corrections`` (frame -> {joint: (x, y)}) put in, their offsets fading over
     ``spread_s`` around each (a tracker off on one frame was off on its neighbours), arm joints ``carried``."""
     out = joints2d.copy()
@@ -110,8 +116,9 @@ def spread_corrections(joints2d: np.ndarray, corrections: dict[int, dict[str, tu
     return out
 
 
-def carried(joints2d: np.ndarray, j: int, parent: int, keys: list[int], pins: np.ndarray,
-            moved: np.ndarray, fade: int) -> np.ndarray:
+def carried(
+    joints2d: np.ndarray, j: int, parent: int, keys: list[int], pins: np.ndarray, moved: np.ndarray, fade: int
+) -> np.ndarray:
     """(F, 2) joint ``j`` around its ``pins`` (K, 2) on frames ``keys`` carried by its ``parent``: the interpolated
     pinned vector from the parent, weighted as the ``moved`` pins' offsets fade; a lost arm moves with the body."""
     frames = np.arange(len(joints2d))
@@ -135,8 +142,7 @@ def faded_offsets(n_frames: int, keys: list[int], offsets: list[np.ndarray], fad
     return np.stack([np.interp(frames, at, values[:, c], left=0.0, right=0.0) for c in range(2)], axis=-1)
 
 
-def carried_pins(corrections: dict[int, dict[str, tuple[float, float]]], frame: int,
-                 fps: float) -> dict[str, int]:
+def carried_pins(corrections: dict[int, dict[str, tuple[float, float]]], frame: int, fps: float) -> dict[str, int]:
     """joint -> the nearest other frame whose correction moves it on ``frame`` (spread_corrections), frame 0 aside."""
     fade = spread_frames(fps)
     out: dict[str, int] = {}
@@ -164,23 +170,33 @@ def turn_of(orientation: str | None) -> str | None:
     return side
 
 
-def track_clip(video: str | os.PathLike | VideoInfo, marks, progress: Progress | None = None,
-                *, focal_px: float | None = None, orientation: str | None = None,
-                remarks: dict | None = None) -> TrackResult:
+def track_clip(
+    video: str | os.PathLike | VideoInfo,
+    marks,
+    progress: Progress | None = None,
+    *,
+    focal_px: float | None = None,
+    orientation: str | None = None,
+    remarks: dict | None = None,
+) -> TrackResult:
     """Track a video (path or VideoInfo) from its 16 joints marked on frame 0 and reconstruct 3D. ``marks``: (16, 2)
     in JOINTS order or joint -> (x, y) (bad ones raise MocapError); ``focal_px`` default the frame width;
     ``orientation``: CONTRACT.md's word for frame 0, whose side tells the turn (None: ``guessed_turn``);
     ``remarks``: frame -> joints marked again (mocap.track.reseed); ``progress(done, total)`` after every frame."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     marks, scale = check_marks(marks, info.width, info.height), processing_scale(info)
-    seeds = {f: (check_marks(m, info.width, info.height) + 0.5) * scale - 0.5
-             for f, m in (remarks or {}).items() if 0 < f < info.frame_count}
+    seeds = {
+        f: (check_marks(m, info.width, info.height) + 0.5) * scale - 0.5
+        for f, m in (remarks or {}).items()
+        if 0 < f < info.frame_count
+    }
     turn = turn_of(orientation)
     step = (lambda done: progress(done, info.frame_count + max(seeds, default=0))) if progress else None
     frames = (frame for _, frame in iter_frames(info, scale=scale))
     camera = default_camera(info.width, info.height, focal_px)
-    joints, similarity, parts, lost = track_frames(frames, (marks + 0.5) * scale - 0.5, step,
-                                                   camera.scaled(scale), turn, info.fps, seeds)
+    joints, similarity, parts, lost = track_frames(
+        frames, (marks + 0.5) * scale - 0.5, step, camera.scaled(scale), turn, info.fps, seeds
+    )
     joints = (joints + 0.5) / scale - 0.5
     reliability = joint_reliability(similarity)
     joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
@@ -191,12 +207,13 @@ def track_clip(video: str | os.PathLike | VideoInfo, marks, progress: Progress |
 
 
 def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
-    """"left" or "right" by the knees' bend over the first TURN_CUE_S (knee_facing): mirror turns fit alike."""
-    return knee_facing(joints2d[:max(1, int(round(TURN_CUE_S * fps)))])
+    """ "left" or "right" by the knees' bend over the first TURN_CUE_S (knee_facing): mirror turns fit alike."""
+    return knee_facing(joints2d[: max(1, int(round(TURN_CUE_S * fps)))])
 
 
-def steady_reconstruction(joints2d: np.ndarray, camera: Pinhole, turns: Turns, fps: float,
-                          seen: np.ndarray | None = None) -> np.ndarray:
+def steady_reconstruction(
+    joints2d: np.ndarray, camera: Pinhole, turns: Turns, fps: float, seen: np.ndarray | None = None
+) -> np.ndarray:
     """(F, 16, 3) pinhole joints (metres) of 2D joints (F, 16, 2): ``reconstruct`` of ``steady_joints`` turned to
     ``turns``, bones over frames ``seen``, depths smoothed (``steady_depths``)."""
     return steady_depths(reconstruct(steady_joints(joints2d, fps), camera, turns, seen=seen), fps)

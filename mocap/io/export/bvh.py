@@ -17,7 +17,7 @@ from mocap.lift.skeleton import BONES, END_SITE, PARENTS
 CM_PER_M = 100.0
 _ORDER = "ZXY"
 _ROTATION_CHANNELS = " ".join(f"{axis}rotation" for axis in _ORDER)
-_JOINTS = np.flatnonzero(~END_SITE)      # the bones with channels, depth-first
+_JOINTS = np.flatnonzero(~END_SITE)  # the bones with channels, depth-first
 
 
 def bvh_text(motion: Motion) -> str:
@@ -30,7 +30,7 @@ def bvh_text(motion: Motion) -> str:
 
 
 def _offset(offset_cm: np.ndarray) -> str:
-    return "OFFSET " + " ".join(f"{v:.6f}" for v in offset_cm + 0.0)     # no "-0.000000"
+    return "OFFSET " + " ".join(f"{v:.6f}" for v in offset_cm + 0.0)  # no "-0.000000"
 
 
 def _joint_lines(bone: int, offsets_cm: np.ndarray, depth: int) -> list[str]:
@@ -39,10 +39,15 @@ def _joint_lines(bone: int, offsets_cm: np.ndarray, depth: int) -> list[str]:
     if END_SITE[bone]:
         return [f"{pad}End Site", f"{pad}{{", f"{pad}  {_offset(offsets_cm[bone])}", f"{pad}}}"]
     head = "ROOT" if PARENTS[bone] < 0 else "JOINT"
-    channels = (f"6 Xposition Yposition Zposition {_ROTATION_CHANNELS}" if PARENTS[bone] < 0
-                else f"3 {_ROTATION_CHANNELS}")
-    lines = [f"{pad}{head} {BONES[bone]}", f"{pad}{{", f"{pad}  {_offset(offsets_cm[bone])}",
-             f"{pad}  CHANNELS {channels}"]
+    channels = (
+        f"6 Xposition Yposition Zposition {_ROTATION_CHANNELS}" if PARENTS[bone] < 0 else f"3 {_ROTATION_CHANNELS}"
+    )
+    lines = [
+        f"{pad}{head} {BONES[bone]}",
+        f"{pad}{{",
+        f"{pad}  {_offset(offsets_cm[bone])}",
+        f"{pad}  CHANNELS {channels}",
+    ]
     for child in np.flatnonzero(PARENTS == bone):
         lines += _joint_lines(child, offsets_cm, depth + 1)
     return lines + [f"{pad}}}"]

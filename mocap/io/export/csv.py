@@ -15,10 +15,12 @@ from mocap.body import JOINTS
 from mocap.lift.contacts import FEET
 from mocap.lift.motion import Motion
 
-HEADER = (["frame", "time_s", "keyframe", "score"]
-          + [f"{j}_{axis}" for j in JOINTS for axis in ("u_right_px", "v_down_px")]
-          + [f"{j}_{axis}" for j in JOINTS for axis in ("x_right_m", "y_up_m", "z_toward_camera_m")]
-          + [f"{foot}_contact" for foot in FEET])
+HEADER = (
+    ["frame", "time_s", "keyframe", "score"]
+    + [f"{j}_{axis}" for j in JOINTS for axis in ("u_right_px", "v_down_px")]
+    + [f"{j}_{axis}" for j in JOINTS for axis in ("x_right_m", "y_up_m", "z_toward_camera_m")]
+    + [f"{foot}_contact" for foot in FEET]
+)
 
 
 def _cells(values, fmt: str) -> list[str]:
@@ -40,7 +42,11 @@ def csv_text(motion: Motion, frames: list[dict]) -> str:
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(HEADER)
     for i in range(n):
-        writer.writerow([i, f"{motion.times[i]:.6f}", int(motion.keyframes[i])]
-                        + _cells([score[i]], ".4f") + _cells(joints2d[i].ravel(), ".3f")
-                        + _cells(world[i], ".6f") + contacts[i].tolist())
+        writer.writerow(
+            [i, f"{motion.times[i]:.6f}", int(motion.keyframes[i])]
+            + _cells([score[i]], ".4f")
+            + _cells(joints2d[i].ravel(), ".3f")
+            + _cells(world[i], ".6f")
+            + contacts[i].tolist()
+        )
     return out.getvalue()

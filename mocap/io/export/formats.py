@@ -43,14 +43,16 @@ class Format:
     holds: str
     render: Callable[[Clip], bytes]
     available: Callable[[], bool] = _always
-    needs: str = ""                     # how to make it available, where it is not
+    needs: str = ""  # how to make it available, where it is not
 
 
 # Each format's module is imported when it is first written: the command line reads
 # the table for its options, and its --help stays instant without numpy and scipy.
 
+
 def _json(clip: Clip) -> bytes:
     from mocap.io.export.motion_json import motion_text
+
     # the exports' world origin (Motion.origin) with what the run adds (CONTRACT.md)
     extra = {"origin": [round(float(v), 4) for v in clip.motion.origin]} | clip.extra
     return motion_text(clip.video, clip.frames, extra).encode()
@@ -58,46 +60,59 @@ def _json(clip: Clip) -> bytes:
 
 def _bvh(clip: Clip) -> bytes:
     from mocap.io.export.bvh import bvh_text
+
     return bvh_text(clip.motion).encode()
 
 
 def _glb(clip: Clip) -> bytes:
     from mocap.io.export.glb import glb_bytes
+
     return glb_bytes(clip.motion)
 
 
 def _fbx(clip: Clip) -> bytes:
     from mocap.io.export.fbx import fbx_bytes
+
     return fbx_bytes(clip.motion)
 
 
 def _has_blender() -> bool:
     from mocap.io.export.fbx import has_blender
+
     return has_blender()
 
 
 def _csv(clip: Clip) -> bytes:
     from mocap.io.export.csv import csv_text
+
     return csv_text(clip.motion, clip.frames).encode()
 
 
 def _html(clip: Clip) -> bytes:
     from mocap.io.export.html import motion_html
+
     return motion_html(clip.motion, clip.name).encode("utf-8")
 
 
-FORMATS: dict[str, Format] = {f.key: f for f in (
-    Format("json", "motion JSON", ".motion.json", "the motion file (CONTRACT.md)", _json),
-    Format("bvh", "BVH", ".bvh", "the animation as BVH", _bvh),
-    Format("glb", "GLB", ".glb", "the animated cylinder body as GLB", _glb),
-    Format("fbx", "FBX", ".fbx", "the skinned character as FBX (needs the fbx extra: Blender)",
-           _fbx, _has_blender, "FBX export needs Blender as a Python module: "
-                               "pip install 'mocap[fbx]' (Python 3.11)"),
-    Format("csv", "CSV", ".csv", "every frame's 2D and world joints, score and foot contacts as "
-           "CSV", _csv),
-    Format("html", "HTML page", ".html", "the playback page (one file, opens without a server)",
-           _html),
-)}
+FORMATS: dict[str, Format] = {
+    f.key: f
+    for f in (
+        Format("json", "motion JSON", ".motion.json", "the motion file (CONTRACT.md)", _json),
+        Format("bvh", "BVH", ".bvh", "the animation as BVH", _bvh),
+        Format("glb", "GLB", ".glb", "the animated cylinder body as GLB", _glb),
+        Format(
+            "fbx",
+            "FBX",
+            ".fbx",
+            "the skinned character as FBX (needs the fbx extra: Blender)",
+            _fbx,
+            _has_blender,
+            "FBX export needs Blender as a Python module: pip install 'mocap[fbx]' (Python 3.11)",
+        ),
+        Format("csv", "CSV", ".csv", "every frame's 2D and world joints, score and foot contacts as CSV", _csv),
+        Format("html", "HTML page", ".html", "the playback page (one file, opens without a server)", _html),
+    )
+}
 
 
 def export_format(key: str) -> Format:
@@ -122,8 +137,10 @@ def check_ending(key: str, path: str | os.PathLike) -> None:
     fmt, name = FORMATS[key], os.fspath(path).lower()
     for other in FORMATS.values():
         if name.endswith(other.suffix) and not name.endswith(fmt.suffix):
-            raise MocapError(f"{path}: the {fmt.label} would go into a file named like a {other.label} "
-                             f"({other.suffix}); name it {fmt.suffix}")
+            raise MocapError(
+                f"{path}: the {fmt.label} would go into a file named like a {other.label} "
+                f"({other.suffix}); name it {fmt.suffix}"
+            )
 
 
 def export_file(key: str, clip: Clip) -> tuple[str, bytes]:

@@ -28,17 +28,29 @@ def playback_html(name: str, fps: float, joints: np.ndarray) -> str:
     """The page for a clip: ``joints`` (F, 16, 3) world joints, NaN where a frame has none."""
     joints = np.asarray(joints, dtype=float)
     if joints.ndim != 3 or joints.shape[1:] != (len(body.JOINTS), 3) or not len(joints):
-        raise MocapError(f"a playback page needs (frames, {len(body.JOINTS)}, 3) joints, "
-                         f"got shape {joints.shape}")
+        raise MocapError(f"a playback page needs (frames, {len(body.JOINTS)}, 3) joints, got shape {joints.shape}")
     if not fps > 0:
         raise MocapError(f"a playback page needs a positive frame rate, got {fps}")
     radii = body.semi_axes(body.BODY_HEIGHT_M).mean(axis=1)
-    segments = [[body.JOINTS.index(a), body.JOINTS.index(b), round(float(radii[i]), 3),
-                 COLOURS[s] if s in COLOURS else COLOURS[s[-1]]]
-                for i, (s, (a, b)) in enumerate(body.SEGMENTS.items())]
+    segments = [
+        [
+            body.JOINTS.index(a),
+            body.JOINTS.index(b),
+            round(float(radii[i]), 3),
+            COLOURS[s] if s in COLOURS else COLOURS[s[-1]],
+        ]
+        for i, (s, (a, b)) in enumerate(body.SEGMENTS.items())
+    ]
     frames = [None if not np.isfinite(f).all() else np.round(f, 3).tolist() for f in joints]
-    data = {"name": name, "fps": float(fps), "n_frames": len(joints), "joints": list(body.JOINTS),
-            "segments": segments, "marks": _marks(), "frames": frames}
+    data = {
+        "name": name,
+        "fps": float(fps),
+        "n_frames": len(joints),
+        "joints": list(body.JOINTS),
+        "segments": segments,
+        "marks": _marks(),
+        "frames": frames,
+    }
     # '<' escaped: no '</script>' in a clip's name can end the script early
     text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
     template = TEMPLATE.read_text(encoding="utf-8")
@@ -50,12 +62,23 @@ def _marks() -> dict:
     is the body's left, and per mark its segment's joints, place along it, offset in front, length, radius (m)."""
     units = body.BODY_HEIGHT_M / body.BODY_HEIGHT
     front = body.semi_axes(body.BODY_HEIGHT_M)[:, 1]
-    return {"left": [[body.JOINT_INDEX[f"{names[0]}_l"], body.JOINT_INDEX[f"{names[0]}_r"]]
-                     for names in body.LIMB_JOINTS.values()],
-            "marks": [[*(body.JOINT_INDEX[j] for j in body.SEGMENTS[s]), along,
-                       round(float(front[body.SEGMENT_INDEX[s]]), 4), length * units, radius * units]
-                      for s, along, length, radius in FACING_MARKS.values()],
-            "colour": COLOURS["mark"]}
+    return {
+        "left": [
+            [body.JOINT_INDEX[f"{names[0]}_l"], body.JOINT_INDEX[f"{names[0]}_r"]]
+            for names in body.LIMB_JOINTS.values()
+        ],
+        "marks": [
+            [
+                *(body.JOINT_INDEX[j] for j in body.SEGMENTS[s]),
+                along,
+                round(float(front[body.SEGMENT_INDEX[s]]), 4),
+                length * units,
+                radius * units,
+            ]
+            for s, along, length, radius in FACING_MARKS.values()
+        ],
+        "colour": COLOURS["mark"],
+    }
 
 
 def motion_html(motion: Motion, name: str) -> str:

@@ -11,7 +11,9 @@ from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, SEGMENT_INDEX, SEGMENT_JOINTS
 # name -> (segment, where along it from its proximal joint, length and radius in model
 # units of a 175-unit body); each stands out of its segment's front
 FACING_MARKS: dict[str, tuple[str, float, float, float]] = {
-    "nose": ("head", 0.4, 6.0, 2.5), "chest": ("torso", 0.75, 4.0, 6.0)}
+    "nose": ("head", 0.4, 6.0, 2.5),
+    "chest": ("torso", 0.75, 4.0, 6.0),
+}
 
 
 def facing_marks(joints3d: np.ndarray, body_height: float = BODY_HEIGHT_M) -> np.ndarray:

@@ -36,9 +36,11 @@ class MaskFolder:
 
     def finish(self) -> Path:
         """Put the written masks in the folder's place."""
+
         def swap() -> None:
             shutil.rmtree(self.folder, ignore_errors=True)
             self.partial.rename(self.folder)
+
         self._guard(swap)
         return self.folder
 
@@ -46,5 +48,4 @@ class MaskFolder:
         try:
             action()
         except OSError as exc:
-            raise MocapError(f"cannot write the masks folder {self.folder}: "
-                             f"{exc.strerror or exc}") from None
+            raise MocapError(f"cannot write the masks folder {self.folder}: {exc.strerror or exc}") from None

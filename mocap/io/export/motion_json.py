@@ -20,8 +20,14 @@ _METRES = ("joints3d", "root")
 def motion_dict(video: dict, frames: list[dict], extra: dict | None = None) -> dict:
     """The motion file's content; frames hold numpy arrays or lists; ``extra`` adds
     optional top-level fields (CONTRACT.md: "masks")."""
-    return {"format": FORMAT, "version": VERSION, "video": video, "joints": list(JOINTS),
-            **(extra or {}), "frames": [_frame_entry(f) for f in frames]}
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "video": video,
+        "joints": list(JOINTS),
+        **(extra or {}),
+        "frames": [_frame_entry(f) for f in frames],
+    }
 
 
 def _frame_entry(frame: dict) -> dict:
@@ -41,8 +47,7 @@ def motion_text(video: dict, frames: list[dict], extra: dict | None = None) -> s
     return json.dumps(motion_dict(video, frames, extra), indent=1) + "\n"
 
 
-def write_motion(path: str | os.PathLike, video: dict, frames: list[dict],
-                 extra: dict | None = None) -> Path:
+def write_motion(path: str | os.PathLike, video: dict, frames: list[dict], extra: dict | None = None) -> Path:
     """Write the motion file atomically."""
     return write_export(path, motion_text(video, frames, extra).encode(), "motion")
 
@@ -68,8 +73,7 @@ def read_motion(path: str | os.PathLike) -> dict:
 
 
 # per-frame arrays: their shape (16: one per joint, canonical order)
-_ARRAYS = {"joints2d": (len(JOINTS), 2), "joints3d": (len(JOINTS), 3), "root": (3,),
-           "confidence": (len(JOINTS),)}
+_ARRAYS = {"joints2d": (len(JOINTS), 2), "joints3d": (len(JOINTS), 3), "root": (3,), "confidence": (len(JOINTS),)}
 
 
 def _check_video(video) -> None:
