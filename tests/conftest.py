@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from browser_helpers import chromium  # noqa: F401 (the browser fixture, for every test module)
+from browser_helpers import browser, chromium  # noqa: F401 (the browser fixtures, for every test module)
 from helpers import render_walk
 
 from mocap.cli import main
