@@ -21,6 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from browser_helpers import ARTIFACTS, SKIP_WITHOUT_CHROMIUM
 from helpers import frame_joints, render_walk, text_mp4
 
 from mocap.batch import Tally, find_videos, library_names
@@ -278,32 +279,27 @@ def test_bad_input_is_one_line(args, message, videos, tmp_path, capsys):
 
 
 @pytest.mark.browser
-def test_index_page_opens_in_chromium_and_its_links_resolve(library):
-    sync_api = pytest.importorskip("playwright.sync_api")
-    from browser_helpers import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS
-
-    if not CHROMIUM.exists():
-        pytest.skip("Debian's chromium is not installed (apt-get install chromium)")
+@SKIP_WITHOUT_CHROMIUM
+def test_index_page_opens_in_chromium_and_its_links_resolve(library, chromium):
     out = library[0]
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page()
-            page.goto((out / "index.html").as_uri())
-            assert page.locator("tbody tr, table tr").count() == 5  # the header and 4 videos
-            images = page.eval_on_selector_all("img", "els => els.map(e => e.naturalWidth)")
-            assert len(images) == 3 and min(images) == 480  # every thumbnail decoded
-            ARTIFACTS.mkdir(parents=True, exist_ok=True)
-            page.screenshot(path=str(ARTIFACTS / "library.png"), full_page=True)
-            links = page.eval_on_selector_all("a", "els => els.map(e => e.href)")
-            paths = [Path(sync_api_path(u)) for u in links]
-            assert len(paths) == 3 * 8 and all(p.exists() for p in paths)
-            page.get_by_role("link", name="walk_b", exact=True).click()
-            page.wait_for_load_state()
-            assert page.title() == "walk_b · mocap playback"
-            assert page.locator("#timeline").get_attribute("max") == "29"
-        finally:
-            browser.close()
+    context = chromium.new_context()
+    try:
+        page = context.new_page()
+        page.goto((out / "index.html").as_uri())
+        assert page.locator("tbody tr, table tr").count() == 5  # the header and 4 videos
+        images = page.eval_on_selector_all("img", "els => els.map(e => e.naturalWidth)")
+        assert len(images) == 3 and min(images) == 480  # every thumbnail decoded
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "library.png"), full_page=True)
+        links = page.eval_on_selector_all("a", "els => els.map(e => e.href)")
+        paths = [Path(sync_api_path(u)) for u in links]
+        assert len(paths) == 3 * 8 and all(p.exists() for p in paths)
+        page.get_by_role("link", name="walk_b", exact=True).click()
+        page.wait_for_load_state()
+        assert page.title() == "walk_b · mocap playback"
+        assert page.locator("#timeline").get_attribute("max") == "29"
+    finally:
+        context.close()
 
 
 def sync_api_path(url: str) -> str:

@@ -12,23 +12,13 @@ from pathlib import Path
 import pytest
 import viser
 from app_helpers import TINY_FRAMES, app, download_export, tiny_video  # noqa: F401
+from browser_helpers import SKIP_WITHOUT_CHROMIUM
 from helpers import page_data
 
 from app.controls import HELP_FILE, build_controls, help_markdown
 from mocap.body import ORIENTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 ARTIFACTS = ROOT / "artifacts" / "help"
 
 
@@ -102,34 +92,31 @@ def test_help_explains_the_topics_with_a_picture():
 
 
 @pytest.mark.browser
-@pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is not installed")
-def test_help_folder_and_playback_download_in_chromium(app, tmp_path):
-    sync_api = pytest.importorskip("playwright.sync_api")
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        try:
-            context = browser.new_context(viewport={"width": 1280, "height": 800}, accept_downloads=True)
-            page = context.new_page()
-            page.set_default_timeout(20_000)
-            page.goto(f"http://127.0.0.1:{app.server.get_port()}/")
-            page.get_by_text(re.compile("frames fitted")).first.wait_for()
-            warning = page.get_by_text("Software WebGL rendering detected")
-            if warning.count():
-                warning.locator("xpath=../..").get_by_role("button").first.click()
-            # the help: one click
-            page.get_by_text("Help", exact=True).first.click()
-            page.get_by_text("Keyboard shortcuts").wait_for()
-            picture = page.locator("img[src^='data:image/svg']").first
-            picture.scroll_into_view_if_needed()
-            page.wait_for_function("img => img.complete && img.naturalWidth > 0", arg=picture.element_handle())
-            ARTIFACTS.mkdir(parents=True, exist_ok=True)
-            page.wait_for_timeout(300)
-            page.screenshot(path=str(ARTIFACTS / "help_folder.png"))
-            # the playback page: the export button
-            path = download_export(page, "HTML page", tmp_path)
-            assert path.name == "walk.html"
-            data = page_data(path.read_text())
-            assert data["n_frames"] == len(data["frames"]) == TINY_FRAMES
-            assert data["name"] == "walk"
-        finally:
-            browser.close()
+@SKIP_WITHOUT_CHROMIUM
+def test_help_folder_and_playback_download_in_chromium(app, tmp_path, chromium):
+    try:
+        context = chromium.new_context(viewport={"width": 1280, "height": 800}, accept_downloads=True)
+        page = context.new_page()
+        page.set_default_timeout(20_000)
+        page.goto(f"http://127.0.0.1:{app.server.get_port()}/")
+        page.get_by_text(re.compile("frames fitted")).first.wait_for()
+        warning = page.get_by_text("Software WebGL rendering detected")
+        if warning.count():
+            warning.locator("xpath=../..").get_by_role("button").first.click()
+        # the help: one click
+        page.get_by_text("Help", exact=True).first.click()
+        page.get_by_text("Keyboard shortcuts").wait_for()
+        picture = page.locator("img[src^='data:image/svg']").first
+        picture.scroll_into_view_if_needed()
+        page.wait_for_function("img => img.complete && img.naturalWidth > 0", arg=picture.element_handle())
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.wait_for_timeout(300)
+        page.screenshot(path=str(ARTIFACTS / "help_folder.png"))
+        # the playback page: the export button
+        path = download_export(page, "HTML page", tmp_path)
+        assert path.name == "walk.html"
+        data = page_data(path.read_text())
+        assert data["n_frames"] == len(data["frames"]) == TINY_FRAMES
+        assert data["name"] == "walk"
+    finally:
+        context.close()

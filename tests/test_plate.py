@@ -67,6 +67,18 @@ def test_the_median_holds_the_performer_and_the_plate_does_not(in_place):
     assert free.held.any() and (free.held & covered).sum() >= 0.8 * free.held.sum()
 
 
+def fifth_frame_ious(clip, info, background) -> list[float]:
+    """IoU of every fifth frame's silhouette against the clip's true mask."""
+    return [
+        iou(
+            extract_silhouette(frame, background),
+            cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE),
+        )
+        for i, frame in iter_frames(info)
+        if i % 5 == 0
+    ]
+
+
 def test_a_boxer_whose_legs_stay_put_keeps_them(tmp_path):
     """punch_front (CMU 02_05, rendered over bricks): jabs on the spot, the legs
     hardly move, so the median holds them below the region the arms outline; they
@@ -77,14 +89,7 @@ def test_a_boxer_whose_legs_stay_put_keeps_them(tmp_path):
         pytest.skip(f"real data absent: {clip}")
     info = open_video(clip / "video.mp4")
     background = clip_background(info, 1.0)
-    scores = [
-        iou(
-            extract_silhouette(frame, background),
-            cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE),
-        )
-        for i, frame in iter_frames(info)
-        if i % 5 == 0
-    ]
+    scores = fifth_frame_ious(clip, info, background)
     assert np.mean(scores) > 0.85 and min(scores) > 0.75
     legs = cv2.imread(str(clip / "masks" / "000000.png"), cv2.IMREAD_GRAYSCALE)[200:] > 0
     assert background.held is not None and background.held[200:][legs].mean() > 0.5
@@ -106,14 +111,7 @@ def test_beside_a_performer_who_stays_the_plate_is_the_scene_not_the_medians_mix
     photo = clean_plate(DEV_CLIPS / "backgrounds" / "rocket.jpg", info, 1.0).image
     wrong = cv2.absdiff(background.image, photo).max(axis=2) > noise_floor(background.sigma)
     assert (wrong & ~background.held).sum() < 900
-    scores = [
-        iou(
-            extract_silhouette(frame, background),
-            cv2.imread(str(clip / "masks" / f"{i:06d}.png"), cv2.IMREAD_GRAYSCALE),
-        )
-        for i, frame in iter_frames(info)
-        if i % 5 == 0
-    ]
+    scores = fifth_frame_ious(clip, info, background)
     assert np.mean(scores) > 0.855
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from browser_helpers import SKIP_WITHOUT_CHROMIUM
 from helpers import page_data
 
 from mocap.cli import main as cli
@@ -20,17 +21,6 @@ from mocap.synth.walk import walk_cycle
 
 N_FRAMES, FPS = 100, 25.0
 GONE = 50  # a frame without a pose
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 ARTIFACTS = Path(__file__).resolve().parents[1] / "artifacts" / "playback"
 
 
@@ -69,7 +59,6 @@ def test_page_of_a_motion_uses_the_world_joints():
     np.testing.assert_allclose(data["frames"][3], motion.world_joints[3], atol=1e-3)
 
 
-@pytest.mark.skipif(not CHROMIUM.exists(), reason="Debian's chromium is not installed")
 def test_page_of_a_fitted_motion_file_follows_its_root(fitted_walk, tmp_path):
     """`mocap fit` writes each frame's root; the page of the file moves the body along it."""
     clip = fitted_walk("side")
@@ -81,53 +70,51 @@ def test_page_of_a_fitted_motion_file_follows_its_root(fitted_walk, tmp_path):
 
 
 @pytest.mark.browser
-def test_page_plays_from_disk_in_chromium(page_file):
-    sync_api = pytest.importorskip("playwright.sync_api")
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        try:
-            context = browser.new_context(viewport={"width": 900, "height": 640}, offline=True)
-            requests = []
-            context.on("request", lambda r: requests.append(r.url))
-            page = context.new_page()
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(page_file.as_uri())
-            counter = page.locator("#counter")
-            counter.wait_for()
-            page.wait_for_function("document.getElementById('counter').textContent.length > 0")
-            first = counter.text_content()
-            page.wait_for_function(f"document.getElementById('counter').textContent !== {first!r}", timeout=5000)
-            assert re.fullmatch(rf"frame \d+ of 0–{N_FRAMES - 1}", counter.text_content())
-            assert page.get_by_text(f"{N_FRAMES} frames · 25 fps").is_visible()
-            assert page.locator("h1").text_content() == "walk <side>"
-            # pause on a frame with a pose, then sample the canvas: the body's colours are there
-            page.locator("#play").click()
-            page.locator("#timeline").fill("10")
-            shown = page.evaluate("""() => {
-                const c = document.getElementById('view');
-                const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-                let body = 0, other = 0;
-                for (let i = 0; i < d.length; i += 16) {
-                    const [r, g, b] = [d[i], d[i + 1], d[i + 2]];
-                    if (Math.abs(r - 0xf4) + Math.abs(g - 0xf5) + Math.abs(b - 0xf7) > 60) body++;
-                    else other++;
-                }
-                return body / (body + other);
-            }""")
-            assert 0.005 < shown < 0.5, f"{shown:.3%} of the canvas drawn"
-            assert counter.text_content() == f"frame 10 of 0–{N_FRAMES - 1}"  # 0-based, as the files
-            # the nose and the chest's mark drawn where mocap.body puts them (facing shows)
-            pose = page.evaluate("() => DATA.frames[10]")
-            drawn = np.array(page.evaluate("() => facingMarks(DATA.frames[10]).map(m => [m[0], m[1]])"))
-            marks = facing_marks(np.array(pose))
-            np.testing.assert_allclose(drawn[:, 0], marks[:, 0], atol=1e-3)
-            np.testing.assert_allclose(drawn[:, 1], marks[:, 0] + marks[:, 1] * marks[:, 2, :1], atol=1e-3)
-            page.locator("#play").click()
-            page.wait_for_timeout(300)
-            ARTIFACTS.mkdir(parents=True, exist_ok=True)
-            page.screenshot(path=str(ARTIFACTS / "playback.png"))
-            assert not errors, errors
-            assert all(u.startswith("file://") for u in requests), requests
-        finally:
-            browser.close()
+@SKIP_WITHOUT_CHROMIUM
+def test_page_plays_from_disk_in_chromium(page_file, chromium):
+    try:
+        context = chromium.new_context(viewport={"width": 900, "height": 640}, offline=True)
+        requests = []
+        context.on("request", lambda r: requests.append(r.url))
+        page = context.new_page()
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(page_file.as_uri())
+        counter = page.locator("#counter")
+        counter.wait_for()
+        page.wait_for_function("document.getElementById('counter').textContent.length > 0")
+        first = counter.text_content()
+        page.wait_for_function(f"document.getElementById('counter').textContent !== {first!r}", timeout=5000)
+        assert re.fullmatch(rf"frame \d+ of 0–{N_FRAMES - 1}", counter.text_content())
+        assert page.get_by_text(f"{N_FRAMES} frames · 25 fps").is_visible()
+        assert page.locator("h1").text_content() == "walk <side>"
+        # pause on a frame with a pose, then sample the canvas: the body's colours are there
+        page.locator("#play").click()
+        page.locator("#timeline").fill("10")
+        shown = page.evaluate("""() => {
+            const c = document.getElementById('view');
+            const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+            let body = 0, other = 0;
+            for (let i = 0; i < d.length; i += 16) {
+                const [r, g, b] = [d[i], d[i + 1], d[i + 2]];
+                if (Math.abs(r - 0xf4) + Math.abs(g - 0xf5) + Math.abs(b - 0xf7) > 60) body++;
+                else other++;
+            }
+            return body / (body + other);
+        }""")
+        assert 0.005 < shown < 0.5, f"{shown:.3%} of the canvas drawn"
+        assert counter.text_content() == f"frame 10 of 0–{N_FRAMES - 1}"  # 0-based, as the files
+        # the nose and the chest's mark drawn where mocap.body puts them (facing shows)
+        pose = page.evaluate("() => DATA.frames[10]")
+        drawn = np.array(page.evaluate("() => facingMarks(DATA.frames[10]).map(m => [m[0], m[1]])"))
+        marks = facing_marks(np.array(pose))
+        np.testing.assert_allclose(drawn[:, 0], marks[:, 0], atol=1e-3)
+        np.testing.assert_allclose(drawn[:, 1], marks[:, 0] + marks[:, 1] * marks[:, 2, :1], atol=1e-3)
+        page.locator("#play").click()
+        page.wait_for_timeout(300)
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "playback.png"))
+        assert not errors, errors
+        assert all(u.startswith("file://") for u in requests), requests
+    finally:
+        context.close()

@@ -181,7 +181,9 @@ def extract_silhouette(
     """The performer's silhouette in `frame` (HxW uint8 0/255, empty if nobody): module doc."""
     frame = at_exposure(frame, background)
     mask = foreground(frame, background)
-    return clean_mask(remove_shadows(mask, frame, background, shadow_ratio, shadow_chroma), stood=background.stood)
+    return clean_mask(
+        remove_shadows(mask, frame, background, ratio=shadow_ratio, chroma=shadow_chroma), stood=background.stood
+    )
 
 
 def at_exposure(frame: np.ndarray, background: Background) -> np.ndarray:
@@ -199,15 +201,9 @@ def foreground(frame: np.ndarray, background: Background) -> np.ndarray:
     return cv2.compare(cv2.cvtColor(over, cv2.COLOR_BGR2GRAY), 0, cv2.CMP_GT)
 
 
-def remove_shadows(
-    mask: np.ndarray,
-    frame: np.ndarray,
-    background: Background,
-    ratio: tuple[float, float] = SHADOW_RATIO,
-    chroma: float = SHADOW_CHROMA,
-) -> np.ndarray:
-    """`mask` without its soft shadows (section 3.2's noted failure)."""
-    return without_shadows(mask, frame, background, shadow_candidates(mask, frame, background, ratio, chroma))
+def remove_shadows(mask: np.ndarray, frame: np.ndarray, background: Background, **shade) -> np.ndarray:
+    """`mask` without its soft shadows (section 3.2's noted failure); ``shade``: shadow_candidates' ratio, chroma."""
+    return without_shadows(mask, frame, background, shadow_candidates(mask, frame, background, **shade))
 
 
 def shadow_candidates(
