@@ -179,7 +179,7 @@ def _add_export(p) -> None:
     p.set_defaults(run=run)
 
 
-_progress = Bar()  # --quiet makes it quiet (main)
+_progress = Bar()  # quiet with --quiet or off a terminal (main)
 _OPENCV_LOG_ERROR = 2  # OpenCV's LOG_LEVEL_ERROR
 
 
@@ -262,7 +262,7 @@ def main(argv: list[str] | None = None) -> int:
         argv = sys.argv[1:] if argv is None else argv
         # imports what the command needs: a Ctrl+C lands here too
         args = build_parser(_command(argv)).parse_args(argv)
-        _progress.quiet = getattr(args, "quiet", False)
+        _progress.quiet = getattr(args, "quiet", False) or not sys.stderr.isatty()  # before a model pipes it
         args.progress = _progress
         _quiet_video_libraries()
         with warnings.catch_warnings():

@@ -10,11 +10,11 @@ class Bar:
     """``bar(done, total, stage)`` after each step; a new total starts a new bar; ``close`` before other output."""
 
     def __init__(self, quiet: bool = False):
-        self.quiet = quiet
+        self.quiet = quiet  # the caller's: --quiet, or stderr is not a terminal
         self._bar = None  # the tqdm bar drawn
 
     def __call__(self, done: int, total: int, stage: str = "") -> None:
-        if self.quiet or not sys.stderr.isatty():
+        if self.quiet:
             return
         if self._bar is None or self._bar.total != total:
             from tqdm import tqdm

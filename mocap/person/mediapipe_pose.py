@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
+import warnings
 
 import numpy as np
 
@@ -43,8 +45,10 @@ class Model:
     name = "mediapipe"
 
     def __init__(self):
+        NativeLogFilter.hold()
         try:
-            with _quiet_native_logs():
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # protobuf's deprecation notes on mediapipe's generated code
                 from mediapipe.python.solutions import pose
 
                 self._pose = pose.Pose(
@@ -54,8 +58,8 @@ class Model:
                     enable_segmentation=True,
                     smooth_segmentation=True,
                 )
-            self._first = True
         except ImportError as error:  # installed, but a package it needs is not
+            NativeLogFilter.release()
             raise MocapError(
                 f"mediapipe does not load ({error}): {MODELS['mediapipe'].install} "
                 "and the packages mocap lists, or --person-model none"
@@ -63,13 +67,9 @@ class Model:
 
     def observe(self, frame: np.ndarray) -> PersonView | None:
         """Its view of the video's next BGR frame, None if it sees nobody."""
-        rgb = np.ascontiguousarray(frame[:, :, ::-1])
-        if self._first:  # its first inference logs how it set itself up
-            with _quiet_native_logs():
-                result = self._pose.process(rgb)
-            self._first = False
-        else:
-            result = self._pose.process(rgb)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # protobuf's, on every call of mediapipe's graph
+            result = self._pose.process(np.ascontiguousarray(frame[:, :, ::-1]))
         if result.pose_landmarks is None or result.segmentation_mask is None:
             return None
         h, w = frame.shape[:2]
@@ -84,6 +84,7 @@ class Model:
 
     def close(self) -> None:
         self._pose.close()
+        NativeLogFilter.release()
 
 
 def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -107,19 +108,52 @@ def to_joints(points: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, n
     return out, np.clip(conf, 0.0, 1.0)
 
 
-@contextlib.contextmanager
-def _quiet_native_logs():
-    """Standard error closed while the model is built and runs its first frame (MediaPipe's C++ set-up logs would
-    break the one-line messages); no longer, since the descriptor is the whole process's."""
-    try:
-        saved = os.dup(2)
-    except OSError:
-        yield
-        return
-    with open(os.devnull, "wb") as null:
-        os.dup2(null.fileno(), 2)
-        try:
-            yield
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
+NATIVE_NOISE = (b"INFO: Created TensorFlow Lite", b"I0000 ", b"W0000 ", b"WARNING: All log messages before absl")
+
+
+class NativeLogFilter:
+    """Standard error passed through a pipe that drops MediaPipe's and TensorFlow Lite's set-up log lines
+    (NATIVE_NOISE), which their threads write at any time while a model runs and which would break the
+    command line's one-line messages; everything else, Python's or native, goes through. One filter for the
+    process, held while any model is open (``hold``, ``release``)."""
+
+    _lock = threading.Lock()
+    _users = 0
+    _saved = -1
+    _thread: threading.Thread | None = None
+
+    @classmethod
+    def hold(cls) -> None:
+        with cls._lock:
+            if cls._users == 0:
+                cls._saved = os.dup(2)
+                read, write = os.pipe()
+                os.dup2(write, 2)
+                os.close(write)
+                cls._thread = threading.Thread(target=cls._forward, args=(read, cls._saved), daemon=True)
+                cls._thread.start()
+            cls._users += 1
+
+    @classmethod
+    def release(cls) -> None:
+        with cls._lock:
+            cls._users -= 1
+            if cls._users == 0:
+                os.dup2(cls._saved, 2)  # the pipe's last writer gone: the thread reads to its end
+                cls._thread.join(timeout=1.0)
+                os.close(cls._saved)
+
+    @staticmethod
+    def _forward(read: int, out: int) -> None:
+        pending = b""  # a line's start that may become noise (the logs write a line in pieces)
+        with contextlib.suppress(OSError):
+            while chunk := os.read(read, 65536):
+                *lines, last = (pending + chunk).splitlines(keepends=True)
+                if last.endswith((b"\n", b"\r")):
+                    lines, last = [*lines, last], b""
+                noise = any(n.startswith(last) or last.startswith(n) for n in NATIVE_NOISE)
+                pending = last if noise else b""
+                kept = b"".join(line for line in lines if not line.startswith(NATIVE_NOISE))
+                if kept or not noise:
+                    os.write(out, kept + (b"" if noise else last))
+        os.close(read)
