@@ -10,7 +10,7 @@ from pathlib import Path
 
 from app.signs import build_signs
 from app.texts import EYES_HELP, STAGE_HELP
-from mocap.body import JOINTS, ORIENTATIONS
+from app.words import JOINT_CHOICES, ORIENTATION_CHOICES
 from mocap.io.export.formats import FORMATS
 from mocap.person import DEFAULT_MODEL, available, install_hint
 
@@ -19,14 +19,17 @@ NO_JOINT = "none"  # the joint dropdown's "clicks place nothing"
 FRAME_STEPS = ("◀ frame", "frame ▶")
 KEY_STEPS = ("◀ keyframe", "keyframe ▶")
 EDITS = ("↶ undo", "redo ↷")
+VIEW_PAIRS = ("frame + 3D", "silhouette + side")  # a phone's two views at a time (app.layout.PAIRS)
 DOWNLOADS = {fmt.label: fmt.key for fmt in FORMATS.values()}  # button -> format
 METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}  # shown -> annotations'
 MARKING_HELP = (
-    "The tracking method follows the 16 joints you mark on frame 0, over any "
-    "background. **Mark joints** goes to frame 0 and asks for each joint in turn: "
-    "click where it is on the video frame. Then press **Track**. Where the review "
-    "says the body was lost, go to a frame that shows it and press **Mark joints** "
-    "again: the 16 joints marked there start the tracking anew; press **Track**."
+    "The tracking method follows the 16 joints marked on frame 0, over any "
+    "background. With the learned eyes on, choosing it places them where the person "
+    "model sees the body: check each, and move a wrong one with Joints: Place. Or "
+    "**Mark joints**: it goes to frame 0 and asks for each joint in turn; click where "
+    "it is on the video frame. Then press **Track**. Where the review says the body "
+    "was lost, go to a frame that shows it and press **Mark joints** again: the 16 "
+    "joints marked there start the tracking anew; press **Track**."
 )
 STATIC = Path(__file__).resolve().parents[1] / "static"
 HELP_FILE = STATIC / "help.md"  # the Help folder; its pictures sit beside it
@@ -68,6 +71,7 @@ class Controls:
 
     progress: object
     status: object
+    views: object
     method: object
     frame: object
     frame_steps: object
@@ -101,10 +105,11 @@ class Controls:
 
 def build_controls(gui, n_frames: int) -> Controls:
     """Lay out the control panel: the frame and the undo history always in view, the rest on tabs."""
-    gui.configure_theme(control_width="large", show_share_button=False)
+    gui.configure_theme(control_width="medium", show_share_button=False)
     gui.main_panel.dock_right()
     progress = gui.add_progress_bar(0.0, animated=True)
     status = gui.add_markdown("Preprocessing…")
+    views = gui.add_button_group("Views", VIEW_PAIRS, visible=False)
     method = gui.add_dropdown(
         "Method",
         tuple(METHOD_CHOICES),
@@ -118,11 +123,30 @@ def build_controls(gui, n_frames: int) -> Controls:
     keyframe = gui.add_button("Unmark keyframe", icon="key")
     frame_info = gui.add_markdown("")
     edits = gui.add_button_group("Edit", EDITS)
+    # folders, not tabs, above them so that they show without scrolling: used once, at the end,
+    # or seldom (a sixth tab would wrap the tabs)
+    with gui.add_folder("Export", expand_by_default=False):
+        foot_lock = gui.add_checkbox(
+            "Foot lock",
+            initial_value=False,
+            hint="keep each planted foot in place through its contact in the files downloaded",
+        )
+        downloads = {
+            f.label: gui.add_button(f.label, icon="download", disabled=True, hint=None if f.available() else f.needs)
+            for f in FORMATS.values()
+        }
+        gui.add_markdown(
+            "*HTML page*: the playback page, one HTML file that plays the "
+            "body in any browser, from disk, with no server."
+        )
+    with gui.add_folder("Help", expand_by_default=False):
+        gui.add_markdown(HELP)
+        help_page = gui.add_markdown(help_markdown(), image_root=STATIC)
     tabs = gui.add_tab_group()
     with tabs.add_tab("Body"):
         orientation = gui.add_dropdown(
             "Facing",
-            (AUTO, *ORIENTATIONS),
+            (AUTO, *ORIENTATION_CHOICES),
             initial_value=AUTO,
             hint="which way the performer faces, from this frame on",
         )
@@ -131,7 +155,7 @@ def build_controls(gui, n_frames: int) -> Controls:
     with tabs.add_tab("Joints"):
         joint = gui.add_dropdown(
             "Place",
-            (NO_JOINT, *JOINTS),
+            (NO_JOINT, *JOINT_CHOICES),
             initial_value=NO_JOINT,
             hint="choose a joint, then click where it is on the video frame",
         )
@@ -148,31 +172,13 @@ def build_controls(gui, n_frames: int) -> Controls:
     with tabs.add_tab("Stage"):
         stage, use_stage, stage_info = _stage_tab(gui)
         learned_eyes, show_landmarks = _eyes_controls(gui)
-    # folders, not tabs: used once, at the end, or seldom; a sixth tab wraps the tabs
-    with gui.add_folder("Export", expand_by_default=False):
-        foot_lock = gui.add_checkbox(
-            "Foot lock",
-            initial_value=False,
-            hint="keep each planted foot in place through its contact in the files downloaded",
-        )
-        downloads = {
-            f.label: gui.add_button(f.label, icon="download", disabled=True, hint=None if f.available() else f.needs)
-            for f in FORMATS.values()
-        }
-        gui.add_markdown(
-            "*HTML page*: the playback page, one HTML file that plays the "
-            "body in any browser, from disk, with no server."
-        )
-    with gui.add_folder("Help", expand_by_default=False):
-        help_page = gui.add_markdown(help_markdown(), image_root=STATIC)
-    with gui.add_folder("Keys", expand_by_default=False):
-        gui.add_markdown(HELP)
     commands = {
         action: gui.add_command(label, hotkey=key, modifier=mod) for action, (label, key, mod) in HOTKEYS.items()
     }
     return Controls(
         progress,
         status,
+        views,
         method,
         frame,
         frame_steps,

@@ -10,7 +10,8 @@ from app import saving
 from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
-from mocap.session import marks_from_fit
+from mocap.session import marks_from_fit, propose_keyframes
+from mocap.session.tracking import proposed_marks
 
 Change = Callable[[Annotations], Annotations]
 
@@ -23,6 +24,13 @@ def toggled_keyframe(notes: Annotations, frame: int, n_frames: int) -> Annotatio
     return replace(notes, keyframes=None if len(keys) == n_frames else tuple(sorted(keys)))
 
 
+def keyed(notes: Annotations, frame: int) -> Annotations:
+    """``notes`` with ``frame`` among the keyframes (an edited frame is lifted, not interpolated)."""
+    if notes.keyframes is None or frame in notes.keyframes:
+        return notes
+    return replace(notes, keyframes=tuple(sorted({*notes.keyframes, frame})))
+
+
 def placed(notes: Annotations, frame: int) -> dict[str, tuple[float, float]]:
     """The joint overrides of a frame (frame 0's: the tracking method's marks)."""
     return dict(notes.frames[frame].joints2d) if frame in notes.frames else {}
@@ -31,13 +39,16 @@ def placed(notes: Annotations, frame: int) -> dict[str, tuple[float, float]]:
 class Edits:
     """AppState's edits (a mixin: the state's lock, annotations, sessions, history)."""
 
-    def edit(self, frame: int, change: Change) -> bool:
-        """Apply ``change`` on behalf of ``frame``: saved, applied, undoable, shown; False if a no-op."""
+    def edit(self, frame: int, change: Change, key: bool = False) -> bool:
+        """Apply ``change`` on behalf of ``frame``: saved, applied, undoable, shown; False if a no-op.
+        ``key``: the frame becomes a keyframe too (in the same edit)."""
         with self._lock:
             before = self._annotations
             after = change(before)
             if after == before:
                 return False
+            if key:
+                after = keyed(after, frame)
             self._apply(after)
             self._history.record(before, after, frame)
             self._frame = frame
@@ -81,15 +92,15 @@ class Edits:
             value = "away" if session.inputs.signs[frame, SEGMENT_INDEX[segment]] > 0 else "toward"
             return notes.with_foreshortening(frame, segment, value)
 
-        return self.edit(frame, change)
+        return self.edit(frame, change, key=True)
 
     def set_orientation(self, frame: int, orientation: str | None) -> bool:
         """Say (or with None unsay) which way the performer faces from ``frame`` on."""
-        return self.edit(frame, lambda n: n.with_orientation(frame, orientation))
+        return self.edit(frame, lambda n: n.with_orientation(frame, orientation), key=True)
 
     def set_override(self, frame: int, joint: str, xy: tuple[float, float] | None) -> bool:
         """Fix (or with None release) a joint's 2D position on ``frame``."""
-        return self.edit(frame, lambda n: n.with_joint(frame, joint, xy))
+        return self.edit(frame, lambda n: n.with_joint(frame, joint, xy), key=xy is not None)
 
     def clear_overrides(self, frame: int, joint: str | None = None) -> bool:
         """Release ``joint`` on ``frame``, or with None every joint placed there (one edit)."""
@@ -105,8 +116,19 @@ class Edits:
         return self.edit(frame, change)
 
     def set_method(self, method: str) -> bool:
-        """Choose the silhouette ("silhouette") or the tracking ("track") method."""
-        return self.edit(self._frame, lambda n: n.with_method(method))
+        """Choose the silhouette ("silhouette") or the tracking ("track") method; tracking chosen with frame 0
+        unmarked places the marks the person model proposes there (proposed_marks), to correct and confirm."""
+        with self._lock:
+            fresh = method == "track" and self._fitted is not None and not placed(self._annotations, 0)
+            marks = (proposed_marks(self._fitted) if fresh else None) or {}
+
+        def change(notes: Annotations) -> Annotations:
+            notes = notes.with_method(method)
+            for name, xy in marks.items():
+                notes = notes.with_joint(0, name, xy)
+            return notes
+
+        return self.edit(self._frame, change)
 
     def marks_from_fit(self) -> bool:
         """Place all 16 marks on frame 0 where the silhouette fit has them (mocap.session.marks_from_fit)."""
@@ -136,6 +158,21 @@ class Edits:
         """The frame the tracking's joints are marked on: 0 until all 16 are marked there, then the
         current frame (a re-mark where the tracking lost the body seeds it anew)."""
         return self._frame if not self.unmarked(0) else 0
+
+    def _propose_keyframes(self, session) -> None:
+        """(Under the lock) a clip without keyframes takes the session's proposal
+        (mocap.session.propose_keyframes), saved as what the page shows: the state the clip opens
+        in, not an edit to undo (kept unsaved where the folder takes no file)."""
+        if self._annotations.keyframes is not None or not (keys := propose_keyframes(session)):
+            return
+        notes = replace(self._annotations, keyframes=tuple(keys))
+        try:
+            self._apply(notes)
+        except MocapError:
+            self._annotations = notes
+            for each in (self._fitted, self._tracked):
+                if each is not None:
+                    each.annotate(notes)
 
     def toggle_keyframe(self, frame: int) -> bool:
         """Mark ``frame`` as a keyframe, or unmark it."""

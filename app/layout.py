@@ -1,11 +1,12 @@
-"""Where the four panels sit in the y-up scene's plane z = 0 (a 2 x 2, 4 x 1 or 1 x 4 grid, whichever
-shows them largest) and where each tab's camera looks from: +z, as close as its canvas allows, with
-a top band left free for notifications."""
+"""Where the panels sit in the y-up scene's plane z = 0 and where a tab's camera looks from, for the
+tab's canvas: the grid (2 x 2, 4 x 1 or 1 x 4) that shows the four panels largest. A window narrower
+than viser's mobile breakpoint has the controls in a sheet along its bottom: the views fill the top,
+two at a time (``PAIRS``) where four would each be narrower than ``MIN_SHARE`` of the window, and the
+sheet starts below them (``sheet_top``), never over them."""
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,76 +14,105 @@ import numpy as np
 PANEL_HEIGHT = 1.9  # scene units (metres) of each panel: a 1.75 m body fits
 GAP = 0.3  # between panels, and above each row: room for its captions
 CAMERA_FOV = math.radians(30.0)
-# (columns, rows), in the order the panels fill them: video, silhouette, front, side
-ARRANGEMENTS = ((2, 2), (4, 1), (1, 4))
-# width / height of a usual window's 3D canvas less the notification band
-USUAL_CANVAS = 1.45
+PANELS = ("video", "silhouette", "front", "side")
+PAIRS = (("video", "front"), ("silhouette", "side"))  # what a phone shows two at a time
+# (columns, rows), filled in PANELS order
+GRIDS = ((2, 2), (4, 1), (1, 4))
+PAIR_GRIDS = ((2, 1), (1, 2))
 USUAL_CANVAS_PX = (892, 720)  # a new tab's camera before its canvas's size is known
-NOTICE_PX = 110  # the canvas's top band where a notification (3 lines) appears
 MARGIN_PX = 6  # around the panels, inside the canvas
-SETTLE_S = 3.0  # a new tab's camera is fitted on every update this long
+MOBILE_PX = 576  # viser's mobile breakpoint (36em): a window this narrow has the bottom sheet
+MIN_SHEET = 0.38  # of a phone window's height, left to the control sheet at least
+MIN_SHARE = 0.4  # of a phone window's width, the least each view shown gets
 CAPTION_CHARS = 30  # the longest caption fits a panel's width in this many characters
 
 
 @dataclass(frozen=True)
 class Layout:
-    """The panels' centres (x, y) in the scene, their size, and the grid they are on."""
+    """The panels' size in the scene, the grid, and each panel's centre (x, y); ``shown``: the
+    panels on view (a pair's partners share its cells, hidden)."""
 
     width: float
     height: float
     columns: int
     rows: int
-    video: tuple[float, float]
-    silhouette: tuple[float, float]
-    front: tuple[float, float]
-    side: tuple[float, float]
+    centres: tuple[tuple[float, float], ...]  # in PANELS order
+    shown: tuple[str, ...] = PANELS
 
     @classmethod
-    def for_video(cls, width_px: int, height_px: int, canvas: float = USUAL_CANVAS) -> "Layout":
-        """The grid that shows panels of the video's aspect largest on a canvas of aspect ``canvas``."""
+    def grid(cls, width_px: int, height_px: int, columns: int, rows: int, pair: int | None = None) -> "Layout":
+        """Panels of the video's aspect on a ``columns`` x ``rows`` grid centred on the origin: all
+        four, or with ``pair`` the two of PAIRS[pair] (the other two in their cells, hidden)."""
         w = PANEL_HEIGHT * width_px / height_px
-
-        def panel_size(grid: tuple[int, int]) -> float:
-            extent_w, extent_h = _extent(w, *grid)
-            return min(canvas / extent_w, 1.0 / extent_h)
-
-        columns, rows = max(ARRANGEMENTS, key=panel_size)
-        centres = [
+        cells = [
             (
                 (k % columns - (columns - 1) / 2) * (w + GAP),
                 ((rows - 1) / 2 - k // columns) * (PANEL_HEIGHT + GAP) - GAP / 2,
             )
-            for k in range(4)
+            for k in range(columns * rows)
         ]
-        return cls(w, PANEL_HEIGHT, columns, rows, *centres)
+        if pair is None:
+            return cls(w, PANEL_HEIGHT, columns, rows, tuple(cells))
+        centres = tuple(cells[next(p.index(n) for p in PAIRS if n in p)] for n in PANELS)
+        return cls(w, PANEL_HEIGHT, columns, rows, centres, PAIRS[pair])
+
+    @classmethod
+    def for_video(cls, width_px: int, height_px: int, canvas: tuple[int, int] = USUAL_CANVAS_PX, pair: int = 0):
+        """The layout that shows a video's panels largest on a canvas of ``canvas`` pixels (a phone's:
+        ``pair`` is the two shown when four would be too small)."""
+        grids = [cls.grid(width_px, height_px, *g) for g in GRIDS]
+        best = max(grids, key=lambda g: g.panel_px(*canvas))
+        if not is_phone(*canvas) or best.panel_px(*canvas) >= MIN_SHARE * canvas[0]:
+            return best
+        pairs = [cls.grid(width_px, height_px, *g, pair=pair) for g in PAIR_GRIDS]
+        return max(pairs, key=lambda g: g.panel_px(*canvas))
+
+    def __getattr__(self, name: str) -> tuple[float, float]:
+        """``layout.video`` etc.: a panel's centre."""
+        if name in PANELS:
+            return self.centres[PANELS.index(name)]
+        raise AttributeError(name)
 
     @property
     def extent(self) -> tuple[float, float]:
         """Width and height of the panels with their captions, centred on the origin."""
-        return _extent(self.width, self.columns, self.rows)
+        return self.columns * self.width + (self.columns - 1) * GAP, self.rows * (PANEL_HEIGHT + GAP)
 
     @property
     def caption_height(self) -> float:
         """Caption text height (scene units): at most GAP / 3, with CAPTION_CHARS fitting a panel's width."""
         return min(GAP / 3, self.width / (0.6 * CAPTION_CHARS))
 
+    def units_per_px(self, image_width: int, image_height: int) -> float:
+        """Scene units per canvas pixel where the panels are as large as the canvas's free region allows."""
+        free_w, free_h = views_region(image_width, image_height)
+        extent_w, extent_h = self.extent
+        return max(extent_w / free_w, extent_h / free_h)
+
+    def panel_px(self, image_width: int, image_height: int) -> float:
+        """A panel's width in canvas pixels on a canvas of that size."""
+        return self.width / self.units_per_px(image_width, image_height)
+
+    def sheet_top(self, image_width: int, image_height: int) -> int:
+        """On a phone's canvas, the pixel row where the control sheet starts: just below the views."""
+        return math.ceil(self.extent[1] / self.units_per_px(image_width, image_height)) + 2 * MARGIN_PX
+
     def camera(
         self, image_width: int, image_height: int, fov: float = CAMERA_FOV
     ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """(position, look_at) of a camera on +z that shows every panel and caption on a
-        canvas of ``image_width`` x ``image_height`` pixels, below its notification band."""
-        free_w = max(image_width - 2 * MARGIN_PX, 1)
-        free_h = max(image_height - NOTICE_PX - 2 * MARGIN_PX, 1)
-        extent_w, extent_h = self.extent
-        per_px = max(extent_w / free_w, extent_h / free_h)
+        """(position, look_at) of a camera on +z that shows every panel and caption on a canvas of
+        ``image_width`` x ``image_height`` pixels: centred, or on a phone along its top."""
+        per_px = self.units_per_px(image_width, image_height)
         distance = per_px * image_height / (2 * math.tan(fov / 2))
-        y = per_px * NOTICE_PX / 2  # the panels' centre sits below the band
+        y = 0.0
+        if is_phone(image_width, image_height):  # the views' centre sits above the canvas's
+            y = (self.sheet_top(image_width, image_height) - image_height) / 2 * per_px
         return (0.0, y, distance), (0.0, y, 0.0)
 
     def video_pixel(self, origin, direction, size: tuple[int, int]) -> tuple[float, float] | None:
         """Where a click ray meets the video panel, in pixels of an image of ``size`` (w, h); None if not."""
         o, d = np.asarray(origin, float), np.asarray(direction, float)
-        if abs(d[2]) < 1e-9:
+        if abs(d[2]) < 1e-9 or "video" not in self.shown:
             return None
         p = o - o[2] / d[2] * d
         u = (p[0] - self.video[0]) / self.width + 0.5
@@ -92,36 +122,12 @@ class Layout:
         return u * size[0], v * size[1]
 
 
-def _extent(width: float, columns: int, rows: int) -> tuple[float, float]:
-    """(width, height) of a grid of ``width`` x PANEL_HEIGHT panels, a GAP caption band above each row."""
-    return columns * width + (columns - 1) * GAP, rows * (PANEL_HEIGHT + GAP)
+def is_phone(image_width: int, image_height: int) -> bool:
+    """Whether a canvas is a window below viser's mobile breakpoint (its controls: a bottom sheet)."""
+    return 0 < image_width <= MOBILE_PX
 
 
-def place_cameras(server, layout: Layout) -> None:
-    """Look at the panels from +z: a new tab from where a usual canvas shows them all,
-    then from where its own canvas does, again whenever that canvas is resized."""
-    camera = server.initial_camera
-    camera.fov = CAMERA_FOV
-    camera.position, camera.look_at = layout.camera(*USUAL_CANVAS_PX)
-    camera.up = (0.0, 1.0, 0.0)
-    server.on_client_connect(lambda client: _fit_camera_of(client, layout))
-
-
-def _fit_camera_of(client, layout: Layout) -> None:
-    """Fit the tab's camera to its canvas on resize, and on every update in its first SETTLE_S (a new
-    page's start-up may put back an earlier pose)."""
-    fitted: list[tuple[int, int]] = []
-    settling_until = time.monotonic() + SETTLE_S
-
-    def fit(_camera) -> None:
-        camera = client.camera
-        size = (camera.image_width, camera.image_height)
-        if min(size) <= 0 or (fitted and fitted[-1] == size and time.monotonic() > settling_until):
-            return
-        fitted.append(size)
-        position, look_at = layout.camera(*size, fov=camera.fov)
-        if not (np.allclose(camera.position, position) and np.allclose(camera.look_at, look_at)):
-            with client.atomic():  # position moves look_at along: set it after
-                camera.position, camera.look_at = position, look_at
-
-    client.camera.on_update(fit)
+def views_region(image_width: int, image_height: int) -> tuple[float, float]:
+    """The canvas pixels the panels may fill: all but a margin, on a phone above the sheet's least share."""
+    height = image_height * (1 - MIN_SHEET) if is_phone(image_width, image_height) else image_height
+    return max(image_width - 2 * MARGIN_PX, 1), max(height - 2 * MARGIN_PX, 1)

@@ -1,37 +1,41 @@
-"""`mocap serve`: ``App`` wires the controls (``app.controls``) and scene (``app.views``) to one
-``AppState``; callbacks only call the state, and every change redraws what it changed (``refresh``)."""
+"""`mocap serve`: ``App`` wires the controls (``app.controls``) and scene (``app.scene``) to one
+``AppState``; callbacks only call the state, and every change redraws what it changed (``refresh``,
+``app.render``)."""
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Callable
 
-import numpy as np
 import viser
 
 from app.controls import (
-    AUTO,
     DOWNLOADS,
     EDITS,
     FRAME_STEPS,
     KEY_STEPS,
     METHOD_CHOICES,
     NO_JOINT,
+    VIEW_PAIRS,
     Controls,
     build_controls,
 )
-from app.enabling import control_states
-from app.layout import Layout, place_cameras
+from app.framing import Framing
+from app.layout import Layout
 from app.player import Player
-from app.state import AppState, FrameView
-from app.texts import eyes_text, frame_text, orientation_text, review_text, stage_text, tracking_text
-from app.views import FrameCache, SceneView, caption_image, silhouette_image, tracked_image, video_image
-from mocap.body import JOINT_INDEX
+from app.reel import Reel
+from app.render import Rendering
+from app.scene import SceneView, side_seen_from
+from app.state import AppState
+from app.views import FrameCache
+from app.words import JOINT_CHOICES, ORIENTATION_CHOICES, chosen, joint_label
 from mocap.errors import MocapError
 from mocap.person import DEFAULT_MODEL, NONE
 
+FLASH_S = 2.0  # how long a flipped segment flashes
 
-class App:
+
+class App(Rendering):
     """One video's app on one viser server."""
 
     def __init__(self, server: viser.ViserServer, state: AppState):
@@ -39,24 +43,41 @@ class App:
         self.frames = FrameCache(state.info, state.scale)
         height, width = self.frames.get(0).shape[:2]
         self.size = (width, height)
-        self.layout = Layout.for_video(width, height)
+        self._render_lock = threading.RLock()
+        self.controls: Controls = build_controls(server.gui, state.n_frames)
+        self.framing = Framing(server, self.size, self._relayout)
         self.scene = SceneView(
             server.scene,
-            self.layout,
+            self.framing.layout,
             self.size,
             self._image_clicked,
-            lambda segment, event: self._run(event.client, lambda: self._flip(segment)),
+            lambda segment, event: self._run(event.client, self._elsewhere(lambda: self._flip(segment))),
         )
-        self.controls: Controls = build_controls(server.gui, state.n_frames)
-        self.player = Player(state, lambda force: self.refresh(force=force))
-        self._render_lock = threading.RLock()
+        self.reel = Reel(self.scene, server.scene, state.info.fps, state.n_frames)
+        self.player = Player(state, lambda force: self.refresh(force=force), self._pick, self._ahead)
         self._shown: dict[str, object] = {}
         self._notices: dict[int, object] = {}  # client id -> its notification shown
         self._marking = 0  # the frame Mark joints marks the body on
+        self._flash: tuple[int, threading.Timer] | None = None  # (frame, its end) of a flipped segment
+        self._still_sent = 0.0  # when the panels' own images last changed
         self._wire()
-        place_cameras(server, self.layout)
         state.on_change(self.refresh)
         self.refresh()
+
+    @property
+    def layout(self) -> Layout:
+        """The panels' layout now (the last resized tab's, ``app.framing``)."""
+        return self.framing.layout
+
+    @property
+    def placing(self) -> str | None:
+        """The joint (the contract's name) a click on the video frame places, if any."""
+        return chosen(JOINT_CHOICES, self.controls.joint.value)
+
+    def _relayout(self, layout: Layout) -> None:
+        with self._render_lock:
+            self.scene.place(layout)
+            self.controls.views.visible = len(layout.shown) < 4
 
     # -- events -> state ----------------------------------------------------------
 
@@ -69,7 +90,7 @@ class App:
                 self._notify(client, str(exc))
 
     def _notify(self, client, text: str) -> None:
-        """Say ``text`` in the tab's one notification, replacing the last so none stack out of their band."""
+        """Say ``text`` in the tab's one notification, replacing the last so none stack."""
         with self._render_lock:
             last = self._notices.pop(client.client_id, None)
             if last is not None:
@@ -78,37 +99,50 @@ class App:
                 "Not done", text, color="red", auto_close_seconds=6.0
             )
 
-    def _on(self, action: Callable[[], object]) -> Callable:
-        """An event callback that runs ``action`` for the event's tab."""
-        return lambda event: self._run(event.client, action)
+    def _on(self, action: Callable[[], object], placing: bool = False) -> Callable:
+        """An event callback that runs ``action`` for the event's tab; one not of the Joints tab
+        (``placing`` False) ends the joint placing first."""
+        return lambda event: self._run(event.client, action if placing else self._elsewhere(action))
+
+    def _elsewhere(self, action: Callable[[], object]) -> Callable[[], object]:
+        """``action`` after ending the joint placing (the user has turned to other work)."""
+
+        def run():
+            if self.placing is not None:
+                self.controls.joint.value = NO_JOINT
+                self.refresh()
+            return action()
+
+        return run
 
     def _wire(self) -> None:
         c, state = self.controls, self.state
         actions: dict[str, Callable[[], object]] = {
             "prev_frame": lambda: state.go_to(state.frame - 1),
             "next_frame": lambda: state.go_to(state.frame + 1),
-            "prev_key": lambda: self._jump(state.keyframe_after(state.frame, -1)),
-            "next_key": lambda: self._jump(state.keyframe_after(state.frame, 1)),
+            "prev_key": lambda: self._jump(state.keyframe_after(state.frame, -1), "no keyframe before this frame"),
+            "next_key": lambda: self._jump(state.keyframe_after(state.frame, 1), "no keyframe after this frame"),
             "keyframe": self._toggle_keyframe,
             "doubtful": lambda: self._jump(state.next_doubtful(), "no doubtful frame"),
             "undo": lambda: self._jump(state.undo(), "nothing to undo"),
             "redo": lambda: self._jump(state.redo(), "nothing to redo"),
             "play": self.player.toggle,
         }
-        for action, command in c.commands.items():
-            command.on_trigger(self._on(actions[action]))
+        for action, command in c.commands.items():  # all but N are beside the tabs: placing goes on
+            command.on_trigger(self._on(actions[action], action != "doubtful"))
         for handle, action in ((c.keyframe, "keyframe"), (c.doubtful, "doubtful"), (c.play, "play")):
-            handle.on_click(self._on(actions[action]))
+            handle.on_click(self._on(actions[action], action != "doubtful"))
         for group, options, pair in (
             (c.frame_steps, FRAME_STEPS, ("prev_frame", "next_frame")),
             (c.key_steps, KEY_STEPS, ("prev_key", "next_key")),
             (c.edits, EDITS, ("undo", "redo")),
         ):
             group.on_click(lambda e, o=options, p=pair: self._run(e.client, actions[p[o.index(e.target.value)]]))
-        c.frame.on_update(self._from_client(lambda: state.go_to(int(c.frame.value))))
+        c.views.on_click(lambda e: self.framing.show_pair(VIEW_PAIRS.index(e.target.value)))
+        c.frame.on_update(self._from_client(lambda: state.go_to(int(c.frame.value)), placing=True))
         c.orientation.on_update(
             self._from_client(
-                lambda: state.set_orientation(state.frame, None if c.orientation.value == AUTO else c.orientation.value)
+                lambda: state.set_orientation(state.frame, chosen(ORIENTATION_CHOICES, c.orientation.value))
             )
         )
         c.joint.on_update(lambda _e: self.refresh())  # the ring shown, Clear override's state
@@ -119,7 +153,7 @@ class App:
         c.use_stage.on_click(self._on(lambda: state.set_background(c.stage.value)))
         c.learned_eyes.on_update(self._from_client(lambda: self._learned_eyes(c.learned_eyes.value)))
         c.show_landmarks.on_update(lambda _e: self.refresh())
-        c.clear_override.on_click(self._on(self._clear_override))
+        c.clear_override.on_click(self._on(self._clear_override, placing=True))
         for label, button in c.downloads.items():
             button.on_click(lambda e, key=DOWNLOADS[label]: self._run(e.client, lambda: self._download(e, key)))
         for segment, button in c.segments.items():
@@ -131,8 +165,9 @@ class App:
             raise MocapError(f"frame {self.state.frame} has no fit (not yet, or nobody found) to key")
         self.state.toggle_keyframe(self.state.frame)
 
-    def _from_client(self, action: Callable[[], object]) -> Callable:
+    def _from_client(self, action: Callable[[], object], placing: bool = False) -> Callable:
         """An on_update callback that ignores the server's own updates of the control."""
+        action = action if placing else self._elsewhere(action)
         return lambda e: self._run(e.client, action) if e.client is not None else None
 
     def _jump(self, frame: int | None, otherwise: str = "no such frame to go to") -> None:
@@ -141,13 +176,35 @@ class App:
         self.state.go_to(frame)
 
     def _flip(self, segment: str) -> None:
-        self.state.flip_sign(self.state.frame, segment)
+        """Flip a segment's foreshortening, then flash it, the side view turned to its side."""
+        frame = self.state.frame
+        before = self.state.view().pose3d
+        self.state.flip_sign(frame, segment)
+        after = self.state.view(frame).pose3d
+        with self._render_lock:
+            if self._flash is not None:
+                self._flash[1].cancel()
+            if after is None or self.player.playing:
+                return
+            self.scene.turn_side(side_seen_from(after, segment))
+            self.scene.flash(segment, before)
+            timer = threading.Timer(FLASH_S, self._end_flash)
+            timer.daemon = True
+            self._flash = (frame, timer)
+            timer.start()
+            self.refresh()
+
+    def _end_flash(self) -> None:
+        with self._render_lock:
+            self._flash = None
+            self.scene.unflash()
+            self.refresh()
 
     def _image_clicked(self, event) -> None:
-        joint = self.controls.joint.value
+        joint = self.placing
 
         def place() -> None:
-            if joint == NO_JOINT:
+            if joint is None:
                 raise MocapError(
                     "choose a joint under Joints > Place first (or press Mark joints "
                     "on the Tracking tab), then click where it is"
@@ -175,7 +232,7 @@ class App:
     def _next_mark(self) -> None:
         """Ask for the next joint not marked on the marking frame (none once all are)."""
         missing = self.state.unmarked(self._marking)
-        self.controls.joint.value = missing[0] if missing else NO_JOINT
+        self.controls.joint.value = joint_label(missing[0]) if missing else NO_JOINT
         self.refresh()
 
     def _learned_eyes(self, on: bool) -> None:
@@ -187,181 +244,19 @@ class App:
             self.refresh()  # a refused switch shows the checkbox as the fit has it again
 
     def _clear_override(self) -> None:
-        joint = self.controls.joint.value
-        self.state.clear_overrides(self.state.frame, None if joint == NO_JOINT else joint)
+        self.state.clear_overrides(self.state.frame, self.placing)
 
     def _download(self, event, key: str) -> None:
         name, data = self.state.export(key, self.controls.foot_lock.value)
         event.client.send_file_download(name, data, save_immediately=True)
 
-    # -- state -> page ------------------------------------------------------------
+    # -- playing ------------------------------------------------------------------
 
-    def refresh(self, force: bool = False) -> None:
-        """Show the current state: only what changed since the last time is sent."""
-        with self._render_lock:
-            if force:
-                self._shown.clear()
-            view = self.state.view()
-            self._show_images(view)
-            if self.player.playing and view.progress.ready:  # (a new fit stops it)
-                self._show_animation(view.index)
-            else:
-                self._show_pose(view)
-            self._show_controls(view)
+    def _pick(self, frame: int) -> int:
+        """The frame to show when the clock says ``frame``: its own once the reel has it in the
+        page, else the latest of the two before it the reel has (frames are dropped, not late)."""
+        return self.reel.latest_ready(frame)
 
-    def _changed(self, part: str, key: object) -> bool:
-        if self._shown.get(part) == key:
-            return False
-        self._shown[part] = key
-        return True
-
-    def _marks(self, view: FrameView) -> dict[str, tuple[float, float]]:
-        """Joints ringed on the video frame: the overrides, and the joint being placed."""
-        marks = dict(view.overrides)
-        joint = self.controls.joint.value
-        if joint != NO_JOINT and joint not in marks and view.joints2d is not None:
-            marks[joint] = tuple(view.joints2d[JOINT_INDEX[joint]])
-        return marks
-
-    def _show_images(self, view: FrameView) -> None:
-        marks = self._marks(view)
-        if self._changed("video", (view.index, sorted(marks.items()))):
-            self.scene.show_video(video_image(self.frames.get(view.index), marks, self.state.scale))
-        joints = None if view.joints2d is None else view.joints2d.tobytes()
-        # the silhouette's object: a refit (new stage, learned eyes) brings new ones
-        if self._changed(
-            "silhouette",
-            (
-                view.index,
-                view.method,
-                view.silhouette_ready,
-                joints,
-                view.sides_known,
-                sorted(view.overrides.items()),
-                id(view.silhouette),
-                self.state.person_model,
-                self.controls.show_landmarks.value,
-            ),
-        ):
-            self.scene.show_silhouette(self._silhouette_image(view))
-        joint = self.controls.joint.value
-        self.scene.caption("video", f"frame {view.index}" + (f" · click: {joint}" if joint != NO_JOINT else ""))
-        if view.method == "track":
-            self.scene.caption(
-                "silhouette", "tracked" + (f" · reliability {view.score:.2f}" if view.score is not None else "")
-            )
-        else:
-            self.scene.caption(
-                "silhouette", "silhouette" + (f" · S = {view.score:.2f}" if view.score is not None else "")
-            )
-
-    def _silhouette_image(self, view: FrameView) -> np.ndarray:
-        if view.method == "track":
-            if view.joints2d is None:
-                return caption_image(self.size, "not tracked yet")
-            return tracked_image(self.frames.get(view.index), view.joints2d, view.overrides, self.state.scale)
-        if not view.silhouette_ready:
-            return caption_image(self.size, "silhouette not found yet")
-        if view.silhouette is None:
-            return caption_image(self.size, "nobody found on this frame")
-        return silhouette_image(
-            view.silhouette,
-            view.joints2d,
-            view.sides_known,
-            view.overrides,
-            self.state.scale,
-            self.size,
-            self.controls.show_landmarks.value,
-            self.state.person_model != NONE,
-        )
-
-    def _show_pose(self, view: FrameView) -> None:
-        if self._changed("pose", None if view.pose3d is None else view.pose3d.tobytes()):
-            self.scene.show_pose(view.pose3d)
-        if view.pose3d is not None:
-            note = ""
-        elif not view.progress.ready:
-            note = " · not yet" if view.progress.error is None else " · none"
-        else:
-            note = " · nobody found"
-        self.scene.caption("front", "3D · camera's view" + note)
-        self.scene.caption("side", "3D · side view" + note)
-
-    def _show_animation(self, frame: int) -> None:
-        """Pose the 3D bodies as the playing animation has them on ``frame``."""
-        self.scene.show_pose(self.player.pose(frame))
-        self._shown.pop("pose", None)
-        self.scene.caption("front", f"3D · playing frame {frame}")
-        self.scene.caption("side", "3D · side view")
-
-    def _show_controls(self, view: FrameView) -> None:
-        c = self.controls
-        self._show_progress(view)
-        _set(c.frame, value=view.index)
-        _set(c.frame_info, content=frame_text(view))
-        _set(c.orientation, value=view.orientation if view.orientation_note == "set here" else AUTO)
-        _set(c.orientation_note, content=orientation_text(view))
-        for handle, props in control_states(c, self.state, view):
-            _set(handle, **props)
-        _set(
-            c.overrides,
-            content="  \n".join(f"**{j}** at ({x:.0f}, {y:.0f})" for j, (x, y) in view.overrides.items())
-            or "No override on this frame.",
-        )
-        _set(
-            c.play,
-            disabled=not view.progress.ready,
-            label="Pause" if self.player.playing else "Play",
-            icon="player-pause" if self.player.playing else "player-play",
-        )
-        _set(c.review, content=review_text(self.state))
-        _set(c.method, value=next(k for k, v in METHOD_CHOICES.items() if v == view.method))
-        _set(c.track_info, content=tracking_text(self.state))
-        _set(c.stage_info, content=stage_text(self.state))
-        _set(c.learned_eyes, value=self.state.person_model != NONE)
-
-    def _show_progress(self, view: FrameView) -> None:
-        p, c = view.progress, self.controls
-        # a stopped run's bar stays where it stopped, red and still, beside its error
-        _set(
-            c.progress,
-            value=100.0 * p.done / max(p.total, 1),
-            visible=not p.ready,
-            animated=p.error is None,
-            color=None if p.error is None else "red",
-        )
-        done = "tracked" if view.method == "track" else "fitted"
-        eyes = "" if view.method == "track" else f"  \n{eyes_text(self.state)}"
-        if p.error is not None:
-            text = f"**Stopped:** {p.error}{eyes}"
-        elif p.ready:
-            text = (
-                f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`.{eyes}"
-                + ("  \n" if eyes else " ")
-                + next_step(bool(self.state.review_stops()))
-            )
-            if view.method != "track" and self.state.background_warning:
-                text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."
-        elif view.method == "track" and not self.state.tracking:
-            missing = len(self.state.unmarked())
-            text = (
-                "Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."
-                if not missing
-                else f"Tracking: mark the 16 joints on frame 0 ({missing} to go; Tracking tab), then press Track."
-            )
-        else:
-            work = "Tracking" if view.method == "track" else "Preprocessing"
-            text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%{eyes}"
-        _set(c.status, content=text)
-
-
-def next_step(doubtful: bool) -> str:
-    """What a user who has the whole clip fitted does next."""
-    return "Next: check the doubtful frames (Review tab, key N), then Export." if doubtful else "Next: Export."
-
-
-def _set(handle, **props) -> None:
-    """Assign the props of a handle that differ (each assignment is a message)."""
-    for name, value in props.items():
-        if getattr(handle, name) != value:
-            setattr(handle, name, value)
+    def _ahead(self, frame: int, until: float) -> None:
+        """Load the reel with the frames after ``frame`` until the monotonic time ``until``."""
+        self.reel.load_ahead(frame, until, self._reel_images)

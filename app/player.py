@@ -1,6 +1,7 @@
 """Play: moves the state's current frame at the video's frame rate (``AppState.go_to``), so every tab
 shows what stepping would. Paced by the wall clock (a late tick skips frames); moving the frame plays
-on from there; playing stops at the last frame (Play there restarts from the first)."""
+on from there; playing stops at the last frame (Play there restarts from the first). Between ticks the
+frames to come are prepared (``ahead``), and each tick shows the frame ``pick`` gives for the clock's."""
 
 from __future__ import annotations
 
@@ -14,10 +15,18 @@ from app.state import AppState
 
 
 class Player:
-    """Plays ``state`` in a thread; ``refresh(force)`` redraws the page when playing starts or stops."""
+    """Plays ``state`` in a thread; ``refresh(force)`` redraws the page when playing starts or stops;
+    ``pick(frame)``: the frame to show when the clock says ``frame``; ``ahead(frame, until)``: prepare
+    the frames after ``frame`` until the monotonic time ``until``."""
 
-    def __init__(self, state: AppState, refresh: Callable[[bool], None]):
-        self.state, self._refresh = state, refresh
+    def __init__(
+        self,
+        state: AppState,
+        refresh: Callable[[bool], None],
+        pick: Callable[[int], int] = lambda frame: frame,
+        ahead: Callable[[int, float], None] = lambda frame, until: None,
+    ):
+        self.state, self._refresh, self._pick, self._ahead = state, refresh, pick, ahead
         self._lock = threading.Lock()  # start and stop come from any tab's callback thread
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -79,10 +88,11 @@ class Player:
             if frame >= state.n_frames:
                 state.go_to(state.n_frames - 1)
                 break
-            state.go_to(frame)
-            shown = frame
-            wait = start + (frame + 1 - origin) * period - time.monotonic()
-            if self._stop.wait(max(wait, 0.0)):
+            shown = self._pick(frame)
+            state.go_to(shown)
+            tick = start + (frame + 1 - origin) * period
+            self._ahead(frame, tick)
+            if self._stop.wait(max(tick - time.monotonic(), 0.0)):
                 return
         # not under the lock: a Pause holding it may be joining this thread right now
         if not self._stop.is_set():

@@ -104,6 +104,7 @@ class Preprocessing:
         with self._lock:
             session.annotate(self._annotations)  # edits made while fitting
             self._fitted = session
+            self._propose_keyframes(session)
             self._progress = Progress(2 * self.n_frames, 2 * self.n_frames, "ready")
         self._changed()
 
@@ -195,7 +196,9 @@ class Preprocessing:
     def _track(self, notes: Annotations) -> None:
         report = Throttle(lambda done, stage: self._track_step(done), self.n_frames)
         try:
-            session = open_session(self.info, notes, method="track", progress=lambda p: report(p.done, "tracking"))
+            session = open_session(
+                self.info, notes, method="track", progress=lambda p: report(p.done, "tracking"), person=self._person
+            )
             session.inputs  # noqa: B018 (the 3D worked out before the lock)
             with self._lock:
                 if self._annotations != notes:  # edits made while tracking

@@ -4,6 +4,7 @@ review queue and the tracking, in the words of the page (markdown)."""
 from __future__ import annotations
 
 from app.state import AppState, FrameView
+from app.words import joint_label, orientation_label
 from mocap.person import NONE
 
 REVIEW_LINES = 8  # doubtful frames listed on the page
@@ -23,7 +24,7 @@ def frame_text(view: FrameView) -> str:
         score = "Tracking reliability" if view.method == "track" else "Similarity S ="
         body = f"{score} **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
         body += "".join(
-            f"  \n↔ {', '.join(joints)} moved by the pin on frame {source}"
+            f"  \n↔ {', '.join(map(joint_label, joints))} moved by the pin on frame {source}"
             for source, joints in pins_by_frame(view.carried).items()
         )
     return f"{head}  \n{body}"
@@ -85,7 +86,7 @@ def orientation_text(view: FrameView) -> str:
     """Which way the performer faces on the frame, and who said so."""
     if view.orientation is None:
         return "Facing: not known yet."
-    return f"Facing **{view.orientation.replace('_', ' ')}** ({view.orientation_note})."
+    return f"Facing **{orientation_label(view.orientation)}** ({view.orientation_note})."
 
 
 def review_text(state: AppState) -> str:
@@ -120,8 +121,9 @@ def tracking_text(state: AppState) -> str:
     """The Tracking tab's state: the marks, whether they were tracked, the tracking."""
     missing = state.unmarked()
     if missing:
-        marks = f"**{16 - len(missing)} of 16** joints marked on frame 0; next: {', '.join(missing[:4])}" + (
-            "…" if len(missing) > 4 else ""
+        marks = (
+            f"**{16 - len(missing)} of 16** joints marked on frame 0; next: {', '.join(map(joint_label, missing[:4]))}"
+            + ("…" if len(missing) > 4 else "")
         )
     else:
         marks = "All 16 joints marked on frame 0."
@@ -129,7 +131,7 @@ def tracking_text(state: AppState) -> str:
     left = state.unmarked(again)
     if again and len(left) < 16:
         marks += (
-            f"  \n**{16 - len(left)} of 16** joints marked again on frame {again}; next: {left[0]}"
+            f"  \n**{16 - len(left)} of 16** joints marked again on frame {again}; next: {joint_label(left[0])}"
             if left
             else f"  \nAll 16 joints marked again on frame {again}."
         )

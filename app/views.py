@@ -1,63 +1,24 @@
-"""What the scene shows of a frame in the panels ``app.layout`` places: the video frame, the silhouette
-with the fitted model, and the 3D cylinder body from the camera and the side (OpenCV, viser handles)."""
+"""What the image panels show of a frame: the video frame with its joint marks, the silhouette with the
+fitted model, the tracked joints over the frame (OpenCV), and the decoded frames they are drawn on."""
 
 from __future__ import annotations
 
 import threading
 from collections import OrderedDict
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import cv2
 import numpy as np
-import trimesh
-from scipy.spatial.transform import Rotation
 
-from app.layout import Layout
-from mocap.body import BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, left_direction, semi_axes
-from mocap.image.draw import LANDMARK_BGR, LEARNED_BGR, draw_landmarks, draw_skeleton, segment_colour, silhouette_view
-from mocap.io.export.marks import FACING_MARKS, facing_marks
+from app.words import joint_label
+from mocap.image.draw import LANDMARK_BGR, LEARNED_BGR, draw_landmarks, draw_skeleton, silhouette_view
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.session import Silhouette
 
 DISPLAY_HEIGHT = 480  # px: smaller frames are shown enlarged to this height
-CENTRE_RGB = (150, 150, 160)  # torso and head in 3D (the scene is white)
-MARK_RGB = (40, 40, 48)  # the nose and the chest's mark (mocap.silhouette.facing)
-CONE = trimesh.creation.cone(radius=1.0, height=1.0, sections=16)  # base at z = 0, tip at z = 1
 MARK_BGR = (0, 230, 255)  # joint overrides and the joint being placed
 UNSIDED_BGR = (90, 200, 90)  # the 2D model before left and right are known
 UNSEEN_BGR = (170, 170, 170)  # the legend's line where the person model saw nobody
-AMBIENT = 1.2  # ambient light intensity beside the default lights
-UPRIGHT = (0.0, 1.0, 0.0, 0.0)  # half turn about x: viser images put row 0 at -y
-SIDE = tuple(Rotation.from_euler("y", 90, degrees=True).as_quat(scalar_first=True))
-_J = JOINT_INDEX
-
-
-def segment_transforms(joints3d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centres (10, 3), orientations (10, 4; w, x, y, z) and lengths (10,) of the
-    cylinders of a pose: each one's local z runs proximal -> distal, its local x
-    toward the body's left (the torso's ellipse lies across the shoulders)."""
-    ends = np.asarray(joints3d, float)[SEGMENT_JOINTS]
-    axis = ends[:, 1] - ends[:, 0]
-    length = np.linalg.norm(axis, axis=-1)
-    z = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 1.0, 0.0])
-    j = np.asarray(joints3d, float)
-    left = left_direction(j)
-    x = left[None] - (z @ left)[:, None] * z
-    # a segment along the body's left-right line: any direction across it will do
-    across = np.cross(z, np.eye(3)[np.argmin(np.abs(z), axis=1)])
-    x = np.where(np.linalg.norm(x, axis=-1, keepdims=True) > 1e-6, x, across)
-    x /= np.linalg.norm(x, axis=-1, keepdims=True)
-    frames = np.stack([x, np.cross(z, x), z], axis=-1)
-    wxyz = Rotation.from_matrix(frames).as_quat(scalar_first=True)
-    return (ends[:, 0] + ends[:, 1]) / 2, wxyz, length
-
-
-def segment_rgb(segment: str) -> tuple[int, int, int]:
-    """The 3D colour of a segment: the overlay's left/right colours, grey in the middle."""
-    if not segment.endswith(("_l", "_r")):
-        return CENTRE_RGB
-    b, g, r = segment_colour(segment)
-    return r, g, b
 
 
 def display_factor(height: int) -> float:
@@ -103,7 +64,7 @@ def mark_joints(image: np.ndarray, points: dict[str, tuple[float, float]], scale
         cv2.circle(image, centre, radius, MARK_BGR, 2, cv2.LINE_AA)
         cv2.putText(
             image,
-            name,
+            joint_label(name),
             (centre[0] + radius + 2, centre[1] - radius),
             cv2.FONT_HERSHEY_SIMPLEX,
             image.shape[0] / 800,
@@ -217,127 +178,3 @@ class FrameCache:
             self._reader = iter_frames(self.info, start=index, scale=self.scale)
         self._next = index + 1
         return next(self._reader)[1]
-
-
-class SceneView:
-    """The scene's panels and the handles that update them."""
-
-    def __init__(
-        self,
-        scene,
-        layout: Layout,
-        image_size: tuple[int, int],
-        on_image_click: Callable[[object], None],
-        on_segment_click: Callable[[str, object], None],
-    ):
-        self.layout, self.size = layout, image_size
-        scene.set_up_direction("+y")
-        # plain lights: the default image-based lighting is slow in software WebGL
-        scene.configure_environment_map(None)
-        scene.configure_default_lights(cast_shadow=False)
-        scene.add_light_ambient("/ambient", intensity=AMBIENT)
-        blank = caption_image(image_size, "loading")
-        self.video = self._image(scene, "/video", blank, layout.video)
-        self.silhouette = self._image(scene, "/silhouette", blank, layout.silhouette)
-        self.video.on_click(on_image_click)
-        self.captions = {
-            name: scene.add_label(
-                f"/captions/{name}",
-                "",
-                anchor="bottom-left",
-                font_size_mode="scene",
-                font_scene_height=layout.caption_height,
-                position=(at[0] - layout.width / 2, at[1] + layout.height / 2 + 0.02, 0.0),
-            )
-            for name, at in (
-                ("video", layout.video),
-                ("silhouette", layout.silhouette),
-                ("front", layout.front),
-                ("side", layout.side),
-            )
-        }
-        self.radii = semi_axes(BODY_HEIGHT_M)
-        views = (("front", layout.front, (1.0, 0.0, 0.0, 0.0)), ("side", layout.side, SIDE))
-        self.bodies = [self._body(scene, name, at, wxyz, on_segment_click) for name, at, wxyz in views]
-        self.marks = [self._marks(scene, name, on_segment_click) for name, _, _ in views]
-
-    def _image(self, scene, name: str, image: np.ndarray, at: tuple[float, float]):
-        return scene.add_image(
-            name,
-            image,
-            self.layout.width,
-            self.layout.height,
-            jpeg_quality=85,
-            wxyz=UPRIGHT,
-            position=(at[0], at[1], 0.0),
-            cast_shadow=False,
-            receive_shadow=False,
-        )
-
-    @staticmethod
-    def _body(scene, name: str, at: tuple[float, float], wxyz, on_click: Callable[[str, object], None]) -> list:
-        scene.add_frame(f"/body/{name}", show_axes=False, wxyz=wxyz, position=(at[0], at[1], 0.0))
-        handles = []
-        for segment in SEGMENT_NAMES:
-            handle = scene.add_cylinder(
-                f"/body/{name}/{segment}",
-                radius=1.0,
-                height=1.0,
-                color=segment_rgb(segment),
-                radial_segments=20,
-                cast_shadow=False,
-                receive_shadow=False,
-                visible=False,
-            )
-            handle.on_click(lambda event, s=segment: on_click(s, event))
-            handles.append(handle)
-        return handles
-
-    @staticmethod
-    def _marks(scene, name: str, on_click: Callable[[str, object], None]) -> list:
-        """The facing marks of a body (cones): a click on one is a click on its segment."""
-        handles = []
-        for mark, (segment, *_) in FACING_MARKS.items():
-            handle = scene.add_mesh_simple(
-                f"/body/{name}/{mark}",
-                CONE.vertices,
-                CONE.faces,
-                color=MARK_RGB,
-                flat_shading=True,
-                cast_shadow=False,
-                receive_shadow=False,
-                visible=False,
-            )
-            handle.on_click(lambda event, s=segment: on_click(s, event))
-            handles.append(handle)
-        return handles
-
-    def show_video(self, image: np.ndarray) -> None:
-        self.video.image = image
-
-    def show_silhouette(self, image: np.ndarray) -> None:
-        self.silhouette.image = image
-
-    def show_pose(self, joints3d: np.ndarray | None) -> None:
-        """Pose both 3D bodies (pelvis at their panel's centre), or hide them."""
-        if joints3d is None:
-            for handle in (h for body in self.bodies + self.marks for h in body):
-                handle.visible = False
-            return
-        joints3d = joints3d - joints3d[_J["pelvis"]]
-        centres, wxyz, lengths = segment_transforms(joints3d)
-        marks = facing_marks(joints3d)
-        turns = [Rotation.align_vectors([m[1]], [[0.0, 0.0, 1.0]])[0] for m in marks]  # cone's z out
-        for body, cones in zip(self.bodies, self.marks):
-            for k, handle in enumerate(body):
-                handle.position, handle.wxyz = centres[k], wxyz[k]
-                handle.scale = (float(self.radii[k, 0]), float(self.radii[k, 1]), float(lengths[k]))
-                handle.visible = True
-            for (base, _, (length, radius, _)), turn, handle in zip(marks, turns, cones):
-                handle.position, handle.wxyz = base, turn.as_quat(scalar_first=True)
-                handle.scale = (float(radius), float(radius), float(length))
-                handle.visible = True
-
-    def caption(self, name: str, text: str) -> None:
-        if self.captions[name].text != text:
-            self.captions[name].text = text

@@ -1,9 +1,11 @@
 """Latency of the browser app, server side, on a 640x480 video.
 
 From a user's action (the call its callback makes) to the update of the page having
-been sent: a foreshortening toggle to the new 3D pose (budget 50 ms), a frame change
-to all three views (video frame, silhouette and fit, 3D; budget 100 ms), and a joint
-override and an undo to every view they change. "Queued" is when the server has
+been sent: a foreshortening toggle (a sign click) to the new 3D pose (budget 100 ms:
+on a 300-frame clip: ``--seconds 10``), a frame change to all three views
+(video frame, silhouette and fit, 3D; budget 100 ms), and a joint override and an undo
+to every view they change; with the silhouette method, how many frames the clip solve
+(mocap.lift.solve) solved again for each. "Queued" is when the server has
 queued every message of the update; "received" is when a connected websocket client
 (what a browser tab's socket gets, without a browser) has received all of it: a
 marker label queued after the update says when.
@@ -47,6 +49,7 @@ from websockets.sync.client import connect
 from app.serve import SAMPLE, create
 from mocap.body import JOINTS, SEGMENT_NAMES
 from mocap.io.video import open_video
+from mocap.lift import solve
 from mocap.lift.taylor import depth_fractions
 from mocap.synth import render_clip
 from mocap.synth.walk import walk_cycle
@@ -103,7 +106,7 @@ def plan(app, rng: np.random.Generator) -> dict[str, tuple]:
 
     return {
         "frame change -> three views": (lambda f: lambda: state.go_to(f), 100.0),
-        "toggle -> 3D pose": (flip, 50.0),
+        "toggle -> 3D pose": (flip, 100.0),
         "joint override -> all views": (override, None),
         "undo -> all views": (lambda f: state.undo, None),
     }
@@ -124,6 +127,16 @@ def switch_to_tracking(state, marks: np.ndarray) -> None:
     print(f"tracking {state.n_frames} frames in the app: {time.perf_counter() - t0:.1f} s")
 
 
+class Counted(solve.Problem):
+    """mocap.lift.solve's problem, counting the frames it solves (``free``)."""
+
+    frames: list[int] = []
+
+    def __init__(self, clip, frames, base, free, *args):
+        Counted.frames.append(int(free.sum()))
+        super().__init__(clip, frames, base, free, *args)
+
+
 def bench(video: Path, repeats: int, seed: int = 0, marks: np.ndarray | None = None) -> None:
     app = create(video, port=0)
     app.state.start()
@@ -140,13 +153,23 @@ def bench(video: Path, repeats: int, seed: int = 0, marks: np.ndarray | None = N
         f"{info.width}x{info.height}, {info.frame_count} frames; {len(frames)} repeats, one connected websocket client"
     )
     print(f"{'action':30s} {'queued median':>13s} {'received median':>15s} {'p95':>7s} {'max':>7s} {'budget':>7s}")
+    solved = {}
     for name, (make, budget) in plan(app, rng).items():
-        queued, received = np.array([measure(app, receiver, marker, make(f)) for f in frames]).T
+        times, solved[name] = [], []
+        for f in frames:
+            action, Counted.frames = make(f), []
+            times.append(measure(app, receiver, marker, action))
+            solved[name].append(sum(Counted.frames))
+        queued, received = np.array(times).T
         verdict = "" if budget is None else f"{budget:5.0f} {'ok' if received.max() <= budget else 'OVER'}"
         print(
             f"{name:30s} {np.median(queued):11.1f}ms {np.median(received):13.1f}ms "
             f"{np.percentile(received, 95):5.1f}ms {received.max():5.1f}ms  {verdict}".rstrip()
         )
+    if app.state.method == "silhouette":
+        print("frames the clip solve solved again per action (median, max):")
+        for name, counts in solved.items():
+            print(f"  {name:28s} {np.median(counts):5.0f} {max(counts):5d} of {app.state.n_frames}")
     app.server.stop()
 
 
@@ -227,6 +250,7 @@ def bench_play(video: Path, repeats: int) -> None:
 
 
 def main() -> int:
+    solve.Problem = Counted  # the silhouette session's windows are counted
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--video", type=Path, default=SAMPLE)
     parser.add_argument("--seconds", type=float, default=None)

@@ -20,12 +20,33 @@ three-quarter view (640x480, 30 fps, orthographic), it prints:
       every sign change) and the paper's (sign changes + orientation; 12-21% of
       Taylor's).
 
+With ``--noise`` it prints instead the old per-frame lift beside the clip-level solve
+(mocap.lift.solve) on the static-camera development clips of
+../shared/data/clips (real motion capture, another renderer): their exact 2D joints
+(anatomical sides), plus Gaussian noise of 1, 2, 4 and 6 % of the body's height per
+coordinate, the true facing yaw and scale, no person model:
+
+  oracle signs     the true signs, held (as a user's) wherever a segment is out of the
+                   image plane (|dZ| > 0.25 length)
+  automatic signs  the first guess from the noisy 2D (orientation.guess_signs); the new
+                   lift then chooses its own sign paths
+
+  old  each frame lifted by Eq. 4-5 (taylor.lift_pose) at the lengths the product's
+       inputs take (FIT_LENGTH_PERCENTILE), depths smoothed over DEPTH_SMOOTH_S: the
+       silhouette session's 3D before the clip solve
+  new  lift_clip from the same lengths: the clip solved at once, then its sign paths,
+       then again
+
+PA-MPJPE in mm over every frame, signs right on segments out of the image plane.
+
     python benchmarks/bench_lift.py [--seconds 6]
+    python benchmarks/bench_lift.py --noise [--per-clip] [--seed 0]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 import time
@@ -33,10 +54,14 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_NAMES
 from mocap.io.annotations import Annotations
+from mocap.lift.clipdata import ClipArrays
+from mocap.lift.inputs import FIT_LENGTH_PERCENTILE
 from mocap.lift.orientation import NEGLIGIBLE, guess_signs
+from mocap.lift.solve import lift_clip
 from mocap.lift.taylor import (
     UNIT_M,
     clip_lengths,
@@ -50,11 +75,14 @@ from mocap.lift.taylor import (
 )
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session
+from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.synth import render_motion
 from mocap.synth.metrics import pa_mpjpe
 from mocap.synth.oracle import annotations_for_poses
 
 BVH = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "bvh"
+DEV_CLIPS = BVH.parent / "clips"
+NOISE = (0.0, 1.0, 2.0, 4.0, 6.0)  # % of the body's height, per coordinate
 CLIPS = (("walk", "cmu_walk.bvh"), ("walk", "walk01.bvh"), ("run", "cmu_run.bvh"), ("jumps", "cmu_01_01_jumps.bvh"))
 VIEWS = ("side", "three-quarter")
 TAYLOR_CLICKS, TAYLOR_KEY_EVERY = 14, 5
@@ -256,10 +284,108 @@ def print_table(rows: list[tuple[str, dict]]) -> None:
     print("paper (section 4): walking 60/290 = 21%, dancing 59/506 = 12%")
 
 
+# -- old and new lift against the 2D's noise (--noise) ---------------------------------
+
+
+def dev_truths() -> list[tuple[str, dict]]:
+    """(name, truth) of every static-camera development clip: joints2d (F, 16, 2), joints3d
+    (F, 16, 3), yaw (F,) degrees, body_px, fps."""
+    out = []
+    for folder in sorted(DEV_CLIPS.iterdir()):
+        path = folder / "truth.json"
+        if not path.is_file() or folder.name.startswith("track_"):
+            continue
+        doc = json.loads(path.read_text())
+        frames = doc["frames"]
+        truth = {
+            "joints2d": np.array([f["joints2d"] for f in frames], float),
+            "joints3d": np.array([f["joints3d"] for f in frames], float),
+            "yaw": np.array([f["facing_deg"] for f in frames], float),
+            "body_px": float(doc["body_height_px"]),
+            "fps": float(doc["video"]["fps"]),
+        }
+        out.append((folder.name, truth))
+    return out
+
+
+def old_lift(joints2d: np.ndarray, ppu: np.ndarray, yaw: np.ndarray, signs: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 16, 3) metres: each frame by Eq. 4-5 at the clip's fitted lengths, depths smoothed over time."""
+    lengths = clip_lengths(joints2d, ppu, FIT_LENGTH_PERCENTILE, pool=True)
+    poses = np.array([lift_pose(j, p, y, s, lengths) for j, p, y, s in zip(joints2d, ppu, yaw, signs)])
+    poses[..., 2] = gaussian_filter1d(poses[..., 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
+    return poses
+
+
+def first_guess(joints2d: np.ndarray, ppu: np.ndarray, yaw: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """(signs (F, 10), lengths (10,)) as resolve_inputs guesses them with no user input."""
+    lengths = clip_lengths(joints2d, ppu, FIT_LENGTH_PERCENTILE, pool=True)
+    judged = np.maximum(clip_lengths(joints2d, ppu), lengths)
+    return guess_signs(joints2d, ppu, yaw, judged, fps=fps), lengths
+
+
+def noise_row(truth: dict, percent: float, rng: np.random.Generator) -> dict:
+    """PA-MPJPE (m), sign accuracy and solve time of the old and new lift at one noise level."""
+    n, fps = len(truth["joints2d"]), truth["fps"]
+    joints2d = truth["joints2d"] + rng.normal(0.0, percent / 100 * truth["body_px"], truth["joints2d"].shape)
+    ppu, yaw = np.full(n, truth["body_px"] / BODY_HEIGHT), truth["yaw"]
+    true_signs = signs_of(truth["joints3d"])
+    out_of_plane = depth_fractions(truth["joints3d"]) > NEGLIGIBLE
+    guess, lengths = first_guess(joints2d, ppu, yaw, fps)
+    row = {}
+    for mode, signs, held in (("oracle", true_signs, np.where(out_of_plane, true_signs, 0)), ("auto", guess, None)):
+        old = old_lift(joints2d, ppu, yaw, signs, fps)
+        new = lift_clip(ClipArrays(joints2d, ppu, yaw, signs, lengths, held=held, fps=fps))
+        for name, poses in (("old", old), ("new", new.joints3d)):
+            row[f"{mode} {name}"] = pa_mpjpe(poses, truth["joints3d"])
+            row[f"{mode} {name} signs"] = float((signs_of(poses) == true_signs)[out_of_plane].mean())
+        row[f"{mode} seconds"] = new.seconds
+    return row
+
+
+def bench_noise(seed: int, per_clip: bool) -> None:
+    truths = dev_truths()
+    if not truths:
+        print(f"skipped: no development clips in {DEV_CLIPS}")
+        return
+    rng = np.random.default_rng(seed)
+    rows = {p: [] for p in NOISE}
+    for name, truth in truths:
+        for p in NOISE:
+            rows[p].append(noise_row(truth, p, rng))
+        if per_clip:
+            cells = " | ".join(
+                f"{1000 * r['oracle old']:5.1f} {1000 * r['oracle new']:5.1f}" for r in (rows[p][-1] for p in NOISE)
+            )
+            print(f"{name:18s} oracle old/new by noise: {cells}", flush=True)
+    print(f"PA-MPJPE in mm, mean over {len(truths)} development clips; signs right where |dZ| > {NEGLIGIBLE} length\n")
+    print(
+        f"{'2D noise':>9s} {'oracle signs: old':>17s} {'new':>6s} {'auto signs: old':>15s} {'new':>6s} "
+        f"{'signs old':>9s} {'new':>6s} {'solve s':>8s}"
+    )
+    mean = {p: {k: np.mean([r[k] for r in rows[p]]) for k in rows[p][0]} for p in NOISE}
+    for p in NOISE:
+        m = mean[p]
+        label = "exact" if p == 0 else f"{p:.0f} %"
+        print(
+            f"{label:>9s} {1000 * m['oracle old']:17.1f} {1000 * m['oracle new']:6.1f} {1000 * m['auto old']:15.1f} "
+            f"{1000 * m['auto new']:6.1f} {100 * m['auto old signs']:8.1f}% {100 * m['auto new signs']:5.1f}% "
+            f"{max(m['oracle seconds'], m['auto seconds']):8.2f}"
+        )
+    for mode in ("oracle", "auto"):
+        ratio = mean[4.0][f"{mode} new"] / mean[0.0][f"{mode} new"]
+        print(f"{mode} signs, new lift: 4 % noise / exact 2D = {ratio:.2f}")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=6.0, help="longest clip, seconds (default 6)")
+    parser.add_argument("--noise", action="store_true", help="old and new lift against the 2D's noise")
+    parser.add_argument("--per-clip", action="store_true", help="with --noise, each clip's oracle row too")
+    parser.add_argument("--seed", type=int, default=0, help="with --noise, the noise's seed")
     args = parser.parse_args()
+    if args.noise:
+        bench_noise(args.seed, args.per_clip)
+        return 0
     missing = [name for _, name in CLIPS if not (BVH / name).is_file()]
     if missing:
         print(f"skipped: {', '.join(missing)} absent from {BVH}")

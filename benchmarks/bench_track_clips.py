@@ -8,17 +8,22 @@ capture of ../shared/data/bvh where the body is hard to keep: laugh_arms_up (CMU
 a full spin), perspective camera, moving background, frame 0 marked from the truth.
 
 Each clip runs `mocap fit --method track VIDEO --annotations MARKS` in-process
-(mocap.pipeline.fit_video_to_file) and is scored with ../shared/bench/score.py. A
+(mocap.pipeline.fit_video_to_file), looking through the person model (--person-model,
+default mediapipe; none: the colours alone), and is scored with ../shared/bench/score.py.
+``--proposed`` leaves frame 0's joints out of the marks (its orientation kept): the person
+model proposes them (`mocap fit --method track VIDEO` without marks). A
 frame the tracker marks as lost carries no joints and counts there as a failure
 (the "failed" column); the 2D errors (% of body height) and PA-MPJPE (mm) are over
 the frames answered. "lost" counts the frames the motion file marks lost. "exact 2D"
 is the PA-MPJPE of the same 3D reconstruction (mocap.session.TrackSession, with the
-marks file's orientation and foreshortening) from the truth's 2D joints on every
-frame: what the 3D step costs alone, the rest of "PA-MPJPE mm" is what the 2D
+marks file's orientation and foreshortening, and the person model's facing, which
+releases a held orientation) from the truth's 2D joints on every frame: what the 3D step
+costs alone, the rest of "PA-MPJPE mm" is what the 2D
 tracking's errors cost. ``--joints`` adds each joint's PA-MPJPE from the tracked and
 from the exact 2D: which joints carry the 3D step's error and which the tracking's.
 
     python benchmarks/bench_track_clips.py [--clips track_salsa laugh_arms_up] [--keep DIR] [--joints]
+        [--person-model none] [--proposed]
 """
 
 from __future__ import annotations
@@ -41,13 +46,16 @@ from score import score  # noqa: E402
 
 from mocap.body import JOINTS  # noqa: E402
 from mocap.camera import default_camera  # noqa: E402
+from mocap.errors import MocapError  # noqa: E402
 from mocap.io.annotations import load_annotations  # noqa: E402
-from mocap.io.video import open_video  # noqa: E402
+from mocap.io.video import iter_frames, open_video, processing_scale  # noqa: E402
 from mocap.lift.taylor import orientation_of_yaw, yaw_of  # noqa: E402
+from mocap.person import open_person_model  # noqa: E402
 from mocap.pipeline import fit_video_to_file  # noqa: E402
 from mocap.session.tracking import TrackSession  # noqa: E402
 from mocap.synth import RenderOptions, render_motion  # noqa: E402
 from mocap.synth.metrics import procrustes_aligned  # noqa: E402
+from mocap.track.landmarks import facing_yaw  # noqa: E402
 from mocap.track.tracking import TrackResult  # noqa: E402
 
 SHARED = ("track_salsa", "track_walk")
@@ -104,9 +112,21 @@ def clip_files(name: str, folder: Path) -> tuple[Path, Path, Path]:
     return render(name, folder)
 
 
-def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> np.ndarray:
+def person_facing(info, person: str) -> np.ndarray:
+    """(F,) the ``person`` model's facing yaw on every frame, as the tracking takes it (landmarks.facing_yaw)."""
+    model = open_person_model(person)
+    if model is None:
+        return np.full(info.frame_count, np.nan)
+    try:
+        views = [model.observe(frame) for _, frame in iter_frames(info, scale=processing_scale(info))]
+    finally:
+        model.close()
+    return np.array([facing_yaw(None if view is None else view.landmarks) for view in views])
+
+
+def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path, person: str) -> np.ndarray:
     """(16,) each joint's PA-MPJPE (mm) of the tracking method's 3D from the truth's 2D
-    joints on every frame, with the annotations of ``marks``."""
+    joints on every frame, with the annotations of ``marks`` and the ``person`` model's facing."""
     info = open_video(video)
     frames = json.loads(truth.read_text())["frames"]
     joints2d = np.array([f["joints2d"] for f in frames])
@@ -119,6 +139,7 @@ def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> np.ndarray:
         default_camera(info.width, info.height).focal,
         ones,
         np.zeros(len(frames), bool),
+        person_facing(info, person),
     )
     session = TrackSession(info, tracked, load_annotations(marks, info.frame_count))
     joints3d = np.array([session.pose3d(f) for f in range(len(frames))])
@@ -127,18 +148,28 @@ def exact_2d_pa_mpjpe(video: Path, truth: Path, marks: Path) -> np.ndarray:
     return np.linalg.norm(aligned - truth3d, axis=-1).mean(axis=0) * 1000
 
 
-def run(name: str, folder: Path) -> dict:
-    """Track and score one clip."""
+def unmarked(marks: Path, folder: Path) -> Path:
+    """A copy of the marks file in ``folder`` without frame 0's joints (its orientation kept): the person model's."""
+    notes = json.loads(marks.read_text())
+    notes["frames"]["0"].pop("joints2d")
+    out = folder / f"{marks.parent.name}.{marks.stem}.unmarked.json"
+    out.write_text(json.dumps(notes))
+    return out
+
+
+def run(name: str, folder: Path, person: str, proposed: bool) -> dict:
+    """Track and score one clip looking through the ``person`` model, frame 0 marked by it if ``proposed``."""
     video, truth, marks = clip_files(name, folder)
     out = folder / f"{name}.track.json"
     start = time.perf_counter()
-    fit_video_to_file(video, {"json": out}, annotations=marks, method="track")
+    notes = unmarked(marks, folder) if proposed else marks
+    fit_video_to_file(video, {"json": out}, annotations=notes, method="track", person=person)
     seconds = time.perf_counter() - start
     result = score(out, truth)
     frames = json.loads(out.read_text())["frames"]
     result["lost"] = sum(bool(f.get("lost")) for f in frames)
     result["seconds"] = seconds
-    result["exact"] = exact_2d_pa_mpjpe(video, truth, marks)
+    result["exact"] = exact_2d_pa_mpjpe(video, truth, marks, person)
     return result
 
 
@@ -157,6 +188,10 @@ def main() -> None:
     parser.add_argument(
         "--joints", action="store_true", help="each joint's PA-MPJPE from the tracked and from the exact 2D"
     )
+    parser.add_argument("--person-model", default="mediapipe", help="the person model looked through (none: colours)")
+    parser.add_argument(
+        "--proposed", action="store_true", help="frame 0 marked by the person model instead of the truth"
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.keep or Path(tmp)
@@ -166,7 +201,11 @@ def main() -> None:
             f"{'PA-MPJPE mm':>11} {'exact 2D':>8} {'s':>5}"
         )
         for name in args.clips:
-            r = run(name, folder)
+            try:
+                r = run(name, folder, args.person_model, args.proposed)
+            except MocapError as error:
+                print(f"{name:<15} failed: {error}", flush=True)
+                continue
             print(
                 f"{name:<15} {r['frames']:>6} {r['failed']:>6} {r['lost']:>5} {r['err2d_median_pct']:>8.2f} "
                 f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['exact'].mean():>8.1f} {r['seconds']:>5.0f}",

@@ -80,20 +80,22 @@ def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = No
     return info, silhouette_passes(info, progress)[1]
 
 
-def person_model(name: str | None) -> str:
+def person_model(name: str | None, tracking: bool = False) -> str:
     """``name``, else $MOCAP_PERSON_MODEL, else the default; "none" (with a MocapWarning
     saying how to install it) where its package is missing."""
     name = check_name(name or os.environ.get("MOCAP_PERSON_MODEL") or DEFAULT_MODEL, " (MOCAP_PERSON_MODEL)")
     if name == NONE or available(name):
         return name
-    warnings.warn(f"no person model, fitting by silhouettes alone: {install_hint(name)}", MocapWarning, stacklevel=2)
+    alone = "tracking by colours alone" if tracking else "fitting by silhouettes alone"
+    warnings.warn(f"no person model, {alone}: {install_hint(name)}", MocapWarning, stacklevel=2)
     return NONE
 
 
-def tracked(info: VideoInfo, notes: Annotations, progress: Report | None = None) -> TrackResult:
-    """The tracking method's pass: the body marked in ``notes`` followed through the video."""
+def tracked(info: VideoInfo, notes: Annotations, progress: Report | None = None, person: str = NONE) -> TrackResult:
+    """The tracking method's pass: the body marked in ``notes`` (else the ``person`` model's) followed through the
+    video, the person model named looking on."""
     report = progress or _quiet
-    return tracked_video(info, notes, lambda done, total: report(Progress(done, total, TRACKING)))
+    return tracked_video(info, notes, lambda done, total: report(Progress(done, total, TRACKING)), person=person)
 
 
 def takes_tracking(method: str | None, notes: Annotations) -> bool:
@@ -113,11 +115,11 @@ def open_session(
 ) -> Session:
     """Run a method (None: the annotations', else silhouette) over a video; its session.
     ``background``: the empty scene (a photo or video, or first and last frames; None:
-    estimated); ``person``: the silhouette method's person model."""
+    estimated); ``person``: the person model either method looks through."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
     if takes_tracking(method, notes):
-        return TrackSession(info, tracked(info, notes, progress), notes, smooth)
+        return TrackSession(info, tracked(info, notes, progress, person), notes, smooth)
     scene = clip_background(info, processing_scale(info), background)
     silhouettes, fits = silhouette_passes(info, progress, scene, person)
     return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene, person=person)
@@ -162,7 +164,7 @@ def fit_video_to_file(
             raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
         check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
-    person = NONE if takes_tracking(method, notes) else person_model(person)
+    person = person_model(person, takes_tracking(method, notes))
     session = open_session(
         info, notes, method=method, smooth=smooth, background=plate, progress=progress, person=person
     )

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-DEPTH_SMOOTH_S = 0.1  # seconds: Gaussian sigma of the lifted depths over time (Inputs.smooth_depths)
+DEPTH_SMOOTH_S = (
+    0.1  # seconds: Gaussian sigma of reconstructed depths over time (track.perspective; the old per-frame lift)
+)
 
 
 def smoothest_states(

@@ -38,7 +38,6 @@ CHROMIUM_ARGS = [
 ]
 VIEWPORT = {"width": 1280, "height": 800}
 TIMEOUT_MS = 20_000
-PANELS = ("video", "silhouette", "front", "side")
 
 
 @pytest.fixture(scope="module")
@@ -97,11 +96,11 @@ def screen_point(page, app, world) -> tuple[float, float]:
 
 
 def panel_boxes(page, app, caption: bool = True) -> dict[str, tuple[float, float, float, float]]:
-    """name -> (left, top, right, bottom) page pixels of each panel, with the caption
+    """name -> (left, top, right, bottom) page pixels of each panel shown, with the caption
     band above it (or the panel's image alone: ``caption`` False)."""
     layout, boxes = app.layout, {}
     top = layout.height / 2 + (GAP if caption else 0.0)
-    for name in PANELS:
+    for name in layout.shown:
         x, y = getattr(layout, name)
         corners = [
             screen_point(page, app, (x + dx * layout.width / 2, y + dy, 0.0))
@@ -116,6 +115,21 @@ def panel_boxes(page, app, caption: bool = True) -> dict[str, tuple[float, float
 def box_of(locator) -> tuple[float, float, float, float]:
     b = locator.bounding_box()
     return b["x"], b["y"], b["x"] + b["width"], b["y"] + b["height"]
+
+
+def controls_box(page) -> tuple[float, float, float, float]:
+    """The box of the control panel (docked beside the canvas, or a phone's bottom sheet over it):
+    the outermost element around the tabs that does not hold the canvas."""
+    b = page.get_by_role("tablist").first.evaluate(
+        """tabs => {
+            const canvas = document.querySelector("canvas[data-engine]");
+            let box = tabs;
+            while (box.parentElement && !box.parentElement.contains(canvas)) box = box.parentElement;
+            const r = box.getBoundingClientRect();
+            return [r.left, r.top, r.right, r.bottom];
+        }"""
+    )
+    return tuple(b)
 
 
 def fitted_camera(app, page, before: set[int]) -> None:
@@ -143,12 +157,12 @@ def scene_meshes(app) -> tuple[trimesh.Trimesh, np.ndarray, dict]:
     as viser draws it) and every facing mark (views.CONE). One mesh; each face's owner,
     (view, segment index) for a cylinder or (view, -1 - mark number) for a mark; and
     each owner's 4x4 placing of its unit shape."""
-    from app.views import CONE, SIDE
+    from app.scene import CONE
 
     cylinder = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=20)
     meshes, owners, placings = [], [], {}
     for view, (body, marks, at, frame) in enumerate(
-        zip(app.scene.bodies, app.scene.marks, (app.layout.front, app.layout.side), ((1.0, 0.0, 0.0, 0.0), SIDE))
+        zip(app.scene.bodies, app.scene.marks, (app.layout.front, app.layout.side), app.scene.turns)
     ):
         panel = _transform(frame, at + (0.0,), (1.0, 1.0, 1.0))
         for shape, handles, first in ((cylinder, body, 0), (CONE, marks, -1)):
@@ -177,12 +191,14 @@ def unhidden_point(app, segment: str | None = None, mark: int | None = None) -> 
     return point
 
 
-def visible_point(app, segment: str | None = None, mark: int | None = None) -> np.ndarray | None:
+def visible_point(
+    app, segment: str | None = None, mark: int | None = None, views: tuple[int, ...] = (0, 1)
+) -> np.ndarray | None:
     """A scene point on a segment's cylinder (along its axis, middle first) or on facing
     mark number ``mark`` (along the cone's axis, halfway up first), in the camera or the
-    side view, that the tab's camera sees first: the ray from the camera through it,
-    and rays a canvas pixel around it (where a click lands, rounded to the pixel),
-    must each hit that mesh before any other of the scene's; None where there is none."""
+    side view (``views``: 0, 1), that the tab's camera sees first: the ray from the camera
+    through it, and rays a canvas pixel around it (where a click lands, rounded to the
+    pixel), must each hit that mesh before any other of the scene's; None where there is none."""
     from mocap.body import SEGMENT_INDEX
 
     camera = next(iter(app.server.get_clients().values())).camera
@@ -191,7 +207,7 @@ def visible_point(app, segment: str | None = None, mark: int | None = None) -> n
     want = SEGMENT_INDEX[segment] if mark is None else -1 - mark
     pixel = 2 * np.tan(camera.fov / 2) / camera.image_height  # a canvas pixel per unit of depth
     along = (0.0, -0.2, 0.2, -0.35, 0.35) if mark is None else (0.5, 0.3)
-    for view in range(len(app.scene.bodies)):
+    for view in views:
         if (view, want) not in placings:
             continue
         for t in along:

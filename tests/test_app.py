@@ -18,9 +18,10 @@ from helpers import render_walk, write_empty_scene
 from app.edits import toggled_keyframe
 from app.layout import Layout
 from app.saving import annotations_path
+from app.scene import segment_transforms
 from app.state import AppState
 from app.texts import REVIEW_LINES, review_text
-from app.views import DISPLAY_HEIGHT, segment_transforms, video_image
+from app.views import DISPLAY_HEIGHT, video_image
 from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
 from mocap.errors import MocapError
@@ -146,12 +147,13 @@ def test_flip_changes_the_pose_and_is_saved_and_restored(app):
 
 def test_edits_undo_redo_and_the_file_follows(app):
     state = app.state
+    opened = state.annotations  # the keyframes the fit proposed
     assert state.set_override(3, "wrist_r", (100.0, 120.0))
     assert state.set_orientation(6, "left")
     assert not state.set_orientation(6, "left")  # no change, no history entry
     assert state.undo() == 6 and state.frame == 6
     assert saved(state).frames[3].joints2d == {"wrist_r": (100.0, 120.0)} and 6 not in saved(state).frames
-    assert state.undo() == 3 and saved(state) == Annotations()
+    assert state.undo() == 3 and saved(state) == opened
     assert state.undo() is None
     assert state.redo() == 3 and saved(state).frames[3].joints2d["wrist_r"] == (100.0, 120.0)
     assert state.toggle_keyframe(2)  # a new edit drops the redo stack
@@ -183,13 +185,15 @@ def test_unsaveable_edit_is_refused_and_not_applied(app, monkeypatch):
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr("app.saving.save_annotations", refuse)
+    opened = app.state.annotations  # the fit's keyframes, saved
     with pytest.raises(MocapError, match="cannot save annotations"):
         app.state.set_orientation(0, "left")
-    assert app.state.annotations == Annotations() and not app.state.path.exists()
+    assert app.state.annotations == opened == saved(app.state)
 
 
 def test_concurrent_edits_never_corrupt_the_state(app):
     state = app.state
+    opened = state.annotations
     barrier = threading.Barrier(8)
 
     def work(t: int) -> None:
@@ -209,7 +213,7 @@ def test_concurrent_edits_never_corrupt_the_state(app):
     assert json.loads(state.path.read_text())["format"] == "mocap-annotations"
     while state.undo() is not None:
         pass
-    assert saved(state) == Annotations()
+    assert saved(state) == opened
 
 
 def test_annotation_file_lives_beside_the_video():

@@ -214,7 +214,7 @@ def test_a_pin_moves_the_frames_around_it_and_says_so(tracked):
     assert np.allclose([moved[i] for i in range(7, 14)], np.outer([0, 1, 2, 3, 2, 1, 0], [9.0, -6.0]) / 3)
     assert state.view(11).carried == {"ankle_l": 10} and state.view(10).carried == {}
     assert state.view(13).carried == {}
-    assert "ankle_l moved by the pin on frame 10" in frame_text(state.view(9))
+    assert "left ankle moved by the pin on frame 10" in frame_text(state.view(9))
     state.set_override(12, "ankle_l", tuple(before[12]))
     assert state.view(11).carried == {"ankle_l": 10} and state.view(13).carried == {"ankle_l": 12}
 

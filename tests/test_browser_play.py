@@ -1,9 +1,10 @@
 """Play in a real browser, for a 4:3, a 16:9 and a 9:16 clip: the slider, the video
 frame, the silhouette with its fit and the 3D bodies advance together at the video's
-frame rate, and playing stops at the last frame. Each screenshot's panels are told
-apart by which frame they show (the frame whose image the panel's pixels match best),
-so one screenshot proves the panels show one frame, the one the slider reads.
-Screenshots go to artifacts/browser/play_*.png."""
+frame rate, and playing stops at the last frame. Each screenshot reads the frame every
+view shows: the image panels' by the frame whose image their pixels match best, the 3D
+views' by the playhead bar above each (filled to the frame, sent with its pose), the
+slider's by its thumb: all four views within LATE frames of the slider in the same
+screenshot. Screenshots go to artifacts/browser/play_*.png."""
 
 from __future__ import annotations
 
@@ -16,21 +17,22 @@ from app_helpers import SHAPES, started_app
 from browser_helpers import (
     ARTIFACTS,
     SKIP_WITHOUT_CHROMIUM,
+    box_of,
     fitted_camera,
     open_page,
     panel_boxes,
+    screen_point,
     shot,
 )
 from helpers import render_walk
 
+from app.scene import BAR
 from app.views import video_image
 
 pytestmark = [pytest.mark.browser, SKIP_WITHOUT_CHROMIUM]
 FPS, FRAMES = 10.0, 30  # a 3 s clip: frames 100 ms apart, screenshots in between
 WINDOW = {"width": 1280, "height": 720}
-# frames the canvas may show behind the slider read just before the screenshot: a
-# loaded machine's software WebGL redraws the panels later than the page's controls
-LATE = int(FPS)
+LATE = 2  # frames a view may show away from the slider
 
 
 @pytest.fixture(scope="module", params=list(SHAPES))
@@ -85,6 +87,30 @@ def shown_frame(image: np.ndarray, box, refs: np.ndarray) -> tuple[int, float]:
     return int(np.argmin(errors)), float(second - best)
 
 
+def playhead_frame(image: np.ndarray, page, app, view: str) -> int:
+    """The frame a 3D view's playhead bar shows: its dark fill's share of the bar, times the
+    frame count, less one."""
+    layout = app.layout
+    x, y = getattr(layout, view)
+    y += layout.height / 2 + 0.02 + BAR / 2
+    (x0, row), (x1, _) = (screen_point(page, app, (x + dx * layout.width / 2, y, 0.0)) for dx in (-1, 1))
+    grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)[round(row), round(x0) : round(x1)].astype(float)
+    filled = np.flatnonzero(grey < 140)
+    width = (filled.max() + 1) if len(filled) else 0
+    return round(width / (x1 - x0) * app.state.n_frames) - 1
+
+
+def slider_frame(image: np.ndarray, page, n_frames: int) -> int:
+    """The frame the frame slider shows in a screenshot: where its thumb is along the track
+    (the blue bar from the track's left ends at the thumb's right edge)."""
+    x0, y0, x1, y1 = box_of(page.locator(".mantine-Slider-track").first)
+    t0, _, t1, _ = box_of(page.locator(".mantine-Slider-thumb").first)
+    row = image[round((y0 + y1) / 2), round(x0) : round(x1 + t1 - t0)].astype(int)
+    blue = np.flatnonzero((row[:, 0] > 150) & (row[:, 2] < 120))  # BGR
+    centre = (blue.max() + 1 if len(blue) else 0) - (t1 - t0) / 2
+    return round(centre / (x1 - x0) * (n_frames - 1))
+
+
 def sample(page) -> tuple[int, np.ndarray, int, float]:
     """(slider before, screenshot, slider after, seconds) while playing."""
     before, t = slider(page), time.monotonic()
@@ -121,18 +147,23 @@ def test_play_moves_every_panel_and_the_slider_together(chromium, shaped_app):  
         page.get_by_role("button", name="Play").click()
         page.get_by_role("button", name="Pause").wait_for()
         samples = []
-        for _ in range(2):
-            page.wait_for_timeout(500)
+        for _ in range(3):
+            page.wait_for_timeout(400)
             samples.append(sample(page))
         shown = []
         for low, image, high, _ in samples:
             frames = {name: shown_frame(image, boxes[name], refs[name]) for name in refs}
-            for name, (frame, margin) in frames.items():
+            for name, (_, margin) in frames.items():
                 assert margin > 0.5, f"{shape}: the {name} panel matches no frame clearly"
-                assert low - LATE <= frame <= high + 1, (shape, name, frame, low, high)
-            shown.append(min(frame for frame, _ in frames.values()))
-        (_, first, _, _), (_, second, high, t2) = samples
-        assert shown[1] > shown[0], f"{shape}: the panels did not advance ({shown})"
+            seen = {name: frame for name, (frame, _) in frames.items()}
+            seen |= {name: playhead_frame(image, page, app, name) for name in ("front", "side")}
+            slid = slider_frame(image, page, FRAMES)
+            assert low <= slid <= high, (shape, low, slid, high)
+            for name, frame in seen.items():  # every view on the slider's frame, give or take LATE
+                assert abs(frame - slid) <= LATE, (shape, name, frame, slid, seen)
+            shown.append(min(seen.values()))
+        (_, first, _, _), *_, (_, second, high, t2) = samples
+        assert shown[0] < shown[1] <= shown[2], f"{shape}: the panels did not advance ({shown})"
         for name in ("front", "side"):  # the 3D bodies moved with them
             change = np.abs(crop(first, boxes[name]) - crop(second, boxes[name])).mean()
             assert change > 0.2, f"{shape}: the {name} 3D panel did not move ({change:.2f})"

@@ -73,6 +73,11 @@ def button(page, name: str):
     return page.get_by_role("button", name=name, exact=True)
 
 
+def keyframe_button(page):
+    """Mark as keyframe, or Unmark keyframe on a keyframe."""
+    return page.get_by_role("button", name=re.compile("^(Mark as keyframe|Unmark keyframe)$"))
+
+
 def expect_enabled(page, enabled: bool, *controls) -> None:
     """Each control (a button's name, or (tab, name) for one on a tab) enabled or not;
     the Export folder is opened for the downloads."""
@@ -149,7 +154,7 @@ def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch): 
         wait_until(lambda: app.state.view(0).fitted)
         for segment in SEGMENT_NAMES:  # fitted in 2D, not yet lifted
             sync_api.expect(sign_of(page, segment)).to_be_disabled()
-        sync_api.expect(button(page, "Unmark keyframe")).to_be_enabled()
+        sync_api.expect(button(page, "Unmark keyframe")).to_be_enabled()  # every frame, until the fit proposes
         expect_enabled(
             page,
             False,
@@ -163,11 +168,11 @@ def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch): 
             ("Joints", "Clear override"),
         )
         app.state.go_to(25)  # not fitted yet
-        sync_api.expect(button(page, "Unmark keyframe")).to_be_disabled()
+        sync_api.expect(keyframe_button(page)).to_be_disabled()
         shot(page, "signs_disabled_preprocessing")
         gate.set()
         assert app.state.ready.wait(60)
-        sync_api.expect(button(page, "Unmark keyframe")).to_be_enabled()
+        sync_api.expect(keyframe_button(page)).to_be_enabled()
         expect_enabled(
             page,
             True,
@@ -188,7 +193,7 @@ def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch): 
         for segment in SEGMENT_NAMES:
             sync_api.expect(sign_of(page, segment)).to_be_disabled()
             sync_api.expect(sign_of(page, segment)).to_have_text(re.compile(rf"^\s*{segment_label(segment)}: –$"))
-        sync_api.expect(button(page, "Unmark keyframe")).to_be_disabled()
+        sync_api.expect(keyframe_button(page)).to_be_disabled()
         shot(page, "signs_disabled_nobody")
     finally:
         gate.set()

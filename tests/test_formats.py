@@ -1,6 +1,7 @@
 """Every export format from both faces: `mocap fit` writes each (--out, --bvh, --glb,
 --csv, --html) and the app's state offers each for download (AppState.export), the
-same bytes from the same video, each file read back by its own reader."""
+same bytes from the same video and annotations (the keyframes the app proposed, saved), each
+file read back by its own reader."""
 
 from __future__ import annotations
 
@@ -28,14 +29,15 @@ def both(tiny_video, tmp_path_factory):
     """{format key: (the file `mocap fit` wrote, the app's (name, bytes))}."""
     folder = tmp_path_factory.mktemp("formats")
     video = fresh_copy(tiny_video, folder)
-    paths = {key: folder / f"cli{fmt.suffix}" for key, fmt in FORMATS.items() if fmt.available()}
-    flags = [a for key, path in paths.items() for a in ("--out" if key == "json" else f"--{key}", path)]
-    assert main(["fit", str(video), "--quiet", *map(str, flags)]) == 0
-    locked = folder / "locked.motion.json"
-    assert main(["fit", str(video), "--quiet", "--foot-lock", "--out", str(locked)]) == 0
     state = AppState(video)
     state.start()
     assert state.ready.wait(60) and state.progress.error is None
+    notes = ["--annotations", str(state.path)]  # the keyframes the app proposed, saved
+    paths = {key: folder / f"cli{fmt.suffix}" for key, fmt in FORMATS.items() if fmt.available()}
+    flags = [a for key, path in paths.items() for a in ("--out" if key == "json" else f"--{key}", path)]
+    assert main(["fit", str(video), "--quiet", *notes, *map(str, flags)]) == 0
+    locked = folder / "locked.motion.json"
+    assert main(["fit", str(video), "--quiet", *notes, "--foot-lock", "--out", str(locked)]) == 0
     return {key: (paths[key], state.export(key)) for key in paths} | {
         "foot lock": (locked, state.export("json", foot_lock=True))
     }

@@ -16,6 +16,7 @@ from browser_helpers import SKIP_WITHOUT_CHROMIUM
 from helpers import page_data
 
 from app.controls import HELP_FILE, build_controls, help_markdown
+from app.words import orientation_label
 from mocap.body import ORIENTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,8 +85,9 @@ def test_help_explains_the_topics_with_a_picture():
         "keyboard shortcuts",
     ):
         assert topic in text, topic
-    for orientation in ORIENTATIONS:
-        assert orientation.replace("_", " ") in text, orientation
+    words = " ".join(text.split())
+    for orientation in ORIENTATIONS:  # in the Facing list's words, and the annotation file's
+        assert orientation_label(orientation).lower() in words and f"`{orientation}`" in words, orientation
     pictures = re.findall(r"!\[[^]]*\]\(([^)]+)\)", HELP_FILE.read_text())
     assert pictures and all((HELP_FILE.parent / p).is_file() for p in pictures)
     assert "data:image/svg+xml;base64," in help_markdown()

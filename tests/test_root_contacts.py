@@ -47,22 +47,23 @@ def test_foot_contacts_agree_with_the_true_ankles(tmp_path):
 
 
 def test_foot_lock_keeps_planted_feet_still_and_bones_whole():
-    """The procedural walk's planted feet slide (up to 0.9 m in a contact); locked, they
-    move no more than the legs' reach forces (a tenth of that), the bones unchanged."""
+    """The procedural walk's planted feet slide (up to 0.9 m in a contact); locked, no
+    planted ankle moves more than 2 cm in its contact (the body moved where a leg cannot
+    reach its pin), the locked motion says the contacts it held, the bones unchanged."""
     joints = walk_cycle(3.0, 30.0)
     pelvis = joints[:, JOINT_INDEX["pelvis"]]
     wobble = 0.01 * np.sin(np.arange(len(joints)) * 2.1)[:, None]  # a fit's jitter
     motion = build_motion(dict(enumerate(joints - pelvis[:, None] + wobble[:, None])), len(joints), 30.0, root=pelvis)
     locked = motion.foot_locked()
     contacts = motion.contacts
-    assert contacts.mean() > 0.3
-    slide = {"before": 0.0, "after": 0.0}
+    assert contacts.mean() > 0.3 and np.array_equal(locked.contacts, contacts)
+    slides = {"before": [], "after": []}
     for k, foot in enumerate(FEET):
         ankle = JOINT_INDEX[foot]
         for start, stop in _runs(contacts[:, k]):
-            slide["before"] += np.ptp(motion.world_joints[start:stop, ankle], axis=0).max()
-            slide["after"] += np.ptp(locked.world_joints[start:stop, ankle], axis=0).max()
-    assert slide["after"] < 0.15 * slide["before"]
+            slides["before"].append(np.ptp(motion.world_joints[start:stop, ankle], axis=0).max())
+            slides["after"].append(np.ptp(locked.world_joints[start:stop, ankle], axis=0).max())
+    assert max(slides["before"]) > 0.5 and max(slides["after"]) <= 0.02
     for m in (motion, locked):
         positions = forward_kinematics(m.offsets, m.rotations)
         lengths = np.linalg.norm(positions[:, 1:] - positions[:, PARENTS[1:]], axis=-1)

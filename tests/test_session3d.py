@@ -1,5 +1,6 @@
 """The whole pipeline in 3D: `mocap fit --annotations ... --bvh --glb --csv`, the
-Session that re-lifts only what an edit changes, and frames without a person."""
+Session whose edits are constraints of the clip's 3D and re-solve only windows around
+what they change, and frames without a person."""
 
 from __future__ import annotations
 
@@ -9,16 +10,16 @@ import numpy as np
 import pytest
 from helpers import render_walk, render_walk_with_exit
 
-from mocap.body import SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
 from mocap.io.export.motion_json import read_motion
-from mocap.lift import inputs as mocap_inputs
+from mocap.lift import solve
 from mocap.lift import taylor as lift
 from mocap.lift.orientation import NEGLIGIBLE
+from mocap.lift.solve import WINDOW_S
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session
-from mocap.smoothest import DEPTH_SMOOTH_S
 from mocap.synth.metrics import pa_mpjpe
 from mocap.synth.oracle import annotations_for_poses
 
@@ -81,27 +82,35 @@ def test_without_annotations_the_first_guess_is_used(walk):
     assert pa_mpjpe(session.motion().joints3d, truth.joints3d) < 0.150
 
 
-def test_a_sign_click_moves_its_frame_and_leaves_frames_beyond_the_smoothing(walk):
-    """A sign holds from its frame on (and the first guess may re-solve around it);
-    the lifted depths are smoothed over DEPTH_SMOOTH_S, so frames more than a few
-    sigmas from every frame whose signs changed keep their pose."""
-    _, truth, info, fits = walk
+def flip_deepest(session: Session, frame: int) -> tuple[int, int]:
+    """Click the sign of the segment most out of the image plane on ``frame``; (segment, new sign)."""
+    k = int(np.argmax(lift.depth_fractions(session.pose3d(frame))))
+    sign = -int(session.inputs.signs[frame, k])
+    session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], TOWARD_AWAY[sign]))
+    return k, sign
+
+
+TOWARD_AWAY = {1: "toward", -1: "away"}
+
+
+def test_a_sign_click_holds_on_its_frame_and_leaves_frames_beyond_its_windows(walk):
+    """The clicked sign is a hard constraint of the 3D on its frame, the page shows the 3D's
+    signs, and frames further than WINDOW_S from every frame the edit asks to solve keep their pose."""
+    _, _, info, fits = walk
     session = Session(info, fits)
     before = np.array([session.pose3d(i) for i in range(len(fits))])
-    signs_before = session.inputs.signs.copy()
+    clip_before, solution = session.clip_arrays(), session.solution()
     frame = 12
-    k = int(np.argmax(lift.depth_fractions(before[frame])))  # the segment most out of the image plane
-    segment = SEGMENT_NAMES[k]
-    flipped = "away" if session.inputs.signs[frame, k] > 0 else "toward"
-    session.annotate(session.annotations.with_foreshortening(frame, segment, flipped))
+    k, sign = flip_deepest(session, frame)
     after = np.array([session.pose3d(i) for i in range(len(fits))])
-    assert session.inputs.signs[frame, k] == (1 if flipped == "toward" else -1)
+    assert lift.signs_of(after[frame])[k] == sign == session.inputs.signs[frame, k]
+    assert (session.inputs.signs == lift.signs_of(after)).all()
     distal = SEGMENT_JOINTS[k][1]
     assert abs(after[frame, distal, 2] - before[frame, distal, 2]) > 0.02  # metres
-    reach = int(np.ceil(4 * DEPTH_SMOOTH_S * info.fps))
-    resigned = np.flatnonzero((session.inputs.signs != signs_before).any(axis=1))
-    far = np.abs(np.arange(len(fits))[:, None] - resigned[None]).min(axis=1) > reach
-    assert far.any() and np.allclose(after[far], before[far])
+    changed = solve.frames_to_solve(session.clip_arrays(), clip_before, solution)
+    reach = int(round(WINDOW_S * info.fps))
+    far = np.abs(np.arange(len(fits))[:, None] - np.flatnonzero(changed)[None]).min(axis=1) > reach
+    assert changed[frame] and far.any() and np.array_equal(after[far], before[far])
 
 
 def test_keyframes_from_annotations_and_the_rest_interpolated(walk):
@@ -140,33 +149,88 @@ def test_bad_annotations_stop_the_fit_before_it_starts(walk, tmp_path, capsys):
     assert not out.exists()
 
 
-def test_a_sign_click_lifts_only_the_frames_it_changes(walk, monkeypatch):
-    """A sign click re-lifts (Eq. 4-5) the frames whose lifting inputs it changed, its
-    own and those the sign guess re-solves around it, not the clip; the depths are
-    smoothed again, and the poses equal those of a session lifted afresh."""
+def test_a_sign_click_resolves_a_window_not_the_clip(walk, monkeypatch):
+    """A sign click solves again the frames within WINDOW_S of those whose inputs it changed
+    (its own, and those whose first guess changed where the 3D does not keep it), not the clip."""
     _, _, info, fits = walk
     session = Session(info, fits)
     session.lifted()
-    calls = []
-    real = mocap_inputs.lift_pose
+    solved = []
 
-    def counted(*args, **kwargs):
-        calls.append(1)
-        return real(*args, **kwargs)
+    class Counted(solve.Problem):
+        def __init__(self, clip, frames, base, free, *args):
+            solved.append(int(free.sum()))
+            super().__init__(clip, frames, base, free, *args)
 
-    monkeypatch.setattr(mocap_inputs, "lift_pose", counted)
-    before = session.inputs
+    monkeypatch.setattr(solve, "Problem", Counted)
+    clip_before, solution = session.clip_arrays(), session.solution()
     frame = 12
-    k = int(np.argmax(lift.depth_fractions(session.pose3d(frame))))
-    flipped = "away" if before.signs[frame, k] > 0 else "toward"
-    session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], flipped))
-    after = session.lifted()
-    touched = session.inputs.changed_frames(before)
-    assert touched[frame] and len(calls) == touched.sum() < len(fits)  # here 17 of 30
-    assert (
-        np.flatnonzero(touched).tolist() == np.flatnonzero((session.inputs.signs != before.signs).any(axis=1)).tolist()
+    flip_deepest(session, frame)
+    session.lifted()
+    changed = solve.frames_to_solve(session.clip_arrays(), clip_before, solution)
+    reach = int(round(WINDOW_S * info.fps))
+    near = np.abs(np.arange(len(fits))[:, None] - np.flatnonzero(changed)[None]).min(axis=1) <= reach
+    assert changed[frame] and sum(solved) == near.sum() < len(fits)  # 23 of 30 here
+
+
+def test_a_placed_joint_is_where_the_user_put_it(walk):
+    """A joint override is a constraint of the 3D: its frame's pose projects it within
+    1 % of the body's height of the click, wherever the fit had it."""
+    _, truth, info, fits = walk
+    session = Session(info, fits)
+    frame, wrist, pelvis = 20, JOINT_INDEX["wrist_l"], JOINT_INDEX["pelvis"]
+    click = session.inputs.joints2d[frame, wrist] + np.array([0.06, -0.04]) * truth.body_height_px
+    session.annotate(session.annotations.with_joint(frame, "wrist_l", tuple(click)))
+    inputs, pose = session.inputs, session.pose3d(frame)
+    metres_per_px = BODY_HEIGHT_M / (inputs.px_per_unit[frame] * BODY_HEIGHT)
+    seen = (click - inputs.joints2d[frame, pelvis]) * metres_per_px * np.array([1, -1])
+    assert np.linalg.norm(pose[wrist, :2] - seen) < 0.01 * BODY_HEIGHT_M
+
+
+def test_the_3d_keeps_every_held_sign(walk):
+    """A sign holds from its frame until its segment passes the image plane (held_user_signs):
+    on every frame it holds, the 3D has it, whatever the first guess and the clip's sign path say."""
+    _, _, info, fits = walk
+    session = Session(info, fits)
+    k, sign = flip_deepest(session, 2)
+    held = session.held_signs()
+    assert (held[:, k] == sign).sum() > 1
+    ends = np.array([session.pose3d(i) for i in range(len(fits))])[:, SEGMENT_JOINTS[:, :], 2]
+    depth = ends[..., 1] - ends[..., 0]
+    assert (depth * held > 0)[held != 0].all()
+
+
+def test_a_sign_set_back_or_undone_gives_the_3d_back(walk):
+    """Setting a clicked sign back to what the 3D had, or taking the click back, finds the earlier
+    solution again: the same 3D to the bit, nothing solved."""
+    _, _, info, fits = walk
+    session = Session(info, fits)
+    before, notes = session.lifted().copy(), session.annotations
+    frame = 12
+    k, sign = flip_deepest(session, frame)
+    assert not np.array_equal(session.lifted(), before)
+    session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], TOWARD_AWAY[-sign]))
+    np.testing.assert_array_equal(session.lifted(), before)
+    session.annotate(notes)
+    np.testing.assert_array_equal(session.lifted(), before)
+
+
+def test_a_fit_that_sees_no_hip_or_shoulder_width_still_lifts(walk):
+    """A fit seen from the front with its hips and shoulders on one spot (a silhouette
+    that shows no width, as over a moving background): the solve takes the widths no
+    narrower than half the body model's and answers every frame with finite joints."""
+    _, _, info, fits = walk
+    session = Session(info, fits, Annotations())
+    joints = session.inputs.joints2d.copy()
+    for a, b in (("hip_l", "hip_r"), ("shoulder_l", "shoulder_r")):
+        middle = joints[:, [JOINT_INDEX[a], JOINT_INDEX[b]], 0].mean(axis=1)
+        joints[:, JOINT_INDEX[a], 0] = joints[:, JOINT_INDEX[b], 0] = middle
+    clip = solve.ClipArrays(
+        joints,
+        session.inputs.px_per_unit,
+        np.zeros(len(joints)),
+        session.inputs.signs,
+        session.inputs.lengths,
+        fps=info.fps,
     )
-    calls.clear()
-    fresh = Session(info, fits, session.annotations).lifted()
-    assert len(calls) == len(fits)
-    np.testing.assert_allclose(after, fresh, atol=1e-12)
+    assert np.isfinite(solve.lift_clip(clip).joints3d).all()

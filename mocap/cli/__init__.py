@@ -22,8 +22,8 @@ def _add_fit(p) -> None:
         default=None,
         help="silhouette: fit the cylinder body to each frame's silhouette (static "
         "background); track: follow the joints marked on frame 0 (any background; "
-        "needs --annotations). Default: the annotations' method (the app saves "
-        "it), else silhouette",
+        "--annotations, else the person model's landmarks, mark them). Default: the "
+        "annotations' method (the app saves it), else silhouette",
     )
     p.add_argument(
         "--annotations",
@@ -64,9 +64,10 @@ def _add_person_model(p, switch: str = "") -> None:
         "--person-model",
         choices=PERSON_MODELS,
         default=None,
-        help="the learned person model the silhouette method also looks through (its "
-        "mask and joints); none: background subtraction alone, the paper's "
-        "classical path. Default: mediapipe where installed, else none" + switch,
+        help="the learned person model the methods also look through (its mask and "
+        "joints; the tracking method's marks where none are given, and the body where "
+        "the colours lose it); none: the paper's classical paths. Default: mediapipe "
+        "where installed, else none" + switch,
     )
 
 

@@ -1,6 +1,7 @@
 """Foot contacts and pinning: a foot is planted while its smoothed ankle is near the floor (a running
 low percentile of the lower ankle: a reconstructed floor drifts) and hardly moves across the image
-plane (depth is least certain); ``foot_lock`` holds it there by two-bone IK so exports do not slide."""
+plane (depth is least certain); ``foot_lock`` holds it there by two-bone IK, moving the body where
+the leg cannot reach, so exports do not slide."""
 
 from __future__ import annotations
 
@@ -20,6 +21,10 @@ MIN_RUN_S = 0.1  # shorter contacts and gaps are noise
 FLOOR_PERCENTILE = 10.0  # of the lower ankle's height around a frame: the floor's level
 FLOOR_WINDOW_S = 1.0  # that running window (a walk plants a foot several times in it)
 BLEND_S = 0.1  # a pin fades in and out over this much time around its contact
+# a pin beyond this share of its leg's length from the hip moves the body toward it (a leg at
+# full stretch has no knee left to bend), in rounds that settle two planted feet together
+REACH_SHARE = 0.999
+REACH_ROUNDS = 4
 
 
 def foot_contacts(world: np.ndarray, fps: float) -> np.ndarray:
@@ -75,11 +80,21 @@ def two_bone_ik(
     return new_knee, hip + along * dist_c
 
 
-def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
-    """World joints (F, 16, 3) with each planted ankle held through its contact (``two_bone_ik``)."""
-    out = world.copy()
-    for side, planted in zip("lr", contacts.T):
-        hip, knee, ankle = (JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle"))
-        target = pinned_targets(world[:, ankle], planted, fps)
-        out[:, knee], out[:, ankle] = two_bone_ik(world[:, hip], world[:, knee], world[:, ankle], target)
-    return out
+def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """(world joints (F, 16, 3), the body's shift (F, 3)): each planted ankle held through its contact
+    (``two_bone_ik``), the whole body moved the least that brings every pin within its leg's reach."""
+    legs = [tuple(JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle")) for side in "lr"]
+    targets = [pinned_targets(world[:, ankle], planted, fps) for (_, _, ankle), planted in zip(legs, contacts.T)]
+    shift = np.zeros((len(world), 3))
+    for _ in range(REACH_ROUNDS):
+        for (hip, knee, ankle), target in zip(legs, targets):
+            reach = np.linalg.norm(world[:, knee] - world[:, hip], axis=-1)
+            reach += np.linalg.norm(world[:, ankle] - world[:, knee], axis=-1)
+            away = target - (world[:, hip] + shift)
+            dist = np.linalg.norm(away, axis=-1)
+            beyond = np.maximum(dist - REACH_SHARE * reach, 0.0)
+            shift += away * (beyond / np.maximum(dist, 1e-12))[:, None]
+    out = world + shift[:, None]
+    for (hip, knee, ankle), target in zip(legs, targets):
+        out[:, knee], out[:, ankle] = two_bone_ik(out[:, hip], out[:, knee], out[:, ankle], target)
+    return out, shift

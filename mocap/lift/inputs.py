@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d, median_filter
+from scipy.ndimage import median_filter
 
 from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
 from mocap.camera import default_camera
@@ -29,11 +29,9 @@ from mocap.lift.taylor import (
     anatomical_joints,
     clip_lengths,
     exchange_legs,
-    lift_pose,
     orientation_of_yaw,
     runs,
 )
-from mocap.smoothest import DEPTH_SMOOTH_S
 
 # Segment lengths for Eq. 5 from the fitted clip: the median projected length (a high
 # percentile would measure the fit's scatter); the torso and head, mostly upright, where
@@ -53,62 +51,10 @@ class Inputs:
     swap: np.ndarray  # (F, 2) bool: image-left arms, legs are the right ones
     joints2d: np.ndarray  # (F, 16, 2) anatomical pixels, joint overrides applied
     px_per_unit: np.ndarray  # (F,) pixels per model unit (body height / 175)
-    signs: np.ndarray  # (F, 10) +1 toward, -1 away
+    signs: np.ndarray  # (F, 10) +1 toward, -1 away: the first guess under the held signs (or a 3D's)
     lengths: np.ndarray  # (10,) segment lengths in model units
     held: np.ndarray | None = None  # (F, 10) the user's signs where they hold, 0 elsewhere
     depths: np.ndarray | None = None  # (F, 10) |dZ| a person model sees (cues.world_depths), NaN where none
-
-    def lift(self, frame: int) -> np.ndarray:
-        """(16, 3) metres: the lifted pose of one frame (section 3.4, Eq. 4-5)."""
-        return lift_pose(
-            self.joints2d[frame],
-            self.px_per_unit[frame],
-            self.yaw[frame],
-            self.signs[frame],
-            self.lengths,
-            seen_depths=None if self.depths is None else self.depths[frame],
-        )
-
-    @property
-    def person(self) -> np.ndarray:
-        """(F,) bool: the frames with a person."""
-        return np.array([o is not None for o in self.orientation])
-
-    def lift_frames(self, frames: np.ndarray, before: np.ndarray | None = None) -> np.ndarray:
-        """(F, 16, 3) each frame of ``frames`` ((F,) bool) lifted by ``lift``, the
-        others' lifts taken from ``before`` (NaN without it, and where nobody is)."""
-        out = np.full(self.joints2d.shape[:2] + (3,), np.nan) if before is None else before.copy()
-        out[~self.person] = np.nan
-        for i in np.flatnonzero(frames):
-            out[i] = self.lift(i)
-        return out
-
-    def smooth_depths(self, lifted: np.ndarray, fps: float) -> np.ndarray:
-        """Lifts (F, 16, 3) with each joint's depth Gaussian-smoothed over DEPTH_SMOOTH_S within each
-        person stretch: Eq. 5 turns the fit's length scatter into depth jitter; real depths are smooth."""
-        out = lifted.copy()
-        for r in runs(self.person):
-            out[r, :, 2] = gaussian_filter1d(lifted[r, :, 2], DEPTH_SMOOTH_S * fps, axis=0, mode="nearest")
-        return out
-
-    def changed_frames(self, before: "Inputs") -> np.ndarray:
-        """(F,) bool: frames whose lift differs from ``before``'s (2D joints, scale, yaw or signs);
-        every person frame when the lengths or the person frames changed."""
-        person = self.person
-        if not np.array_equal(person, before.person) or not np.array_equal(self.lengths, before.lengths):
-            return person
-        same = (
-            _same(self.joints2d, before.joints2d).all(axis=(1, 2))
-            & _same(self.px_per_unit, before.px_per_unit)
-            & _same(self.yaw, before.yaw)
-            & (self.signs == before.signs).all(axis=1)
-        )
-        return person & ~same
-
-
-def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Elementwise equality, NaN equal to NaN."""
-    return (a == b) | (np.isnan(a) & np.isnan(b))
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,11 +85,13 @@ def resolve_inputs(
     away: np.ndarray | None = None,
     near: np.ndarray | None = None,
     cues: Cues | None = None,
+    facing: np.ndarray | None = None,
 ) -> Inputs:
     """Per-frame lifting inputs: the user's sticky orientation over ``guessed`` (None: guessed here);
     sides (sides.track_sides, orientation.legs_crossed); arms steadied; overrides put in; ``lengths``
     (None: the clip's); signs under the user's held ones. ``away`` (F,) the heads' look, ``near`` (F, 2)
-    the near limbs (mocap.silhouette.facing); ``cues``: person-model landmarks, first guesses where seen."""
+    the near limbs (mocap.silhouette.facing); ``cues``: person-model landmarks, first guesses where seen;
+    ``facing`` the clip's orientation.facing_evidence (None: worked out here; it needs no annotation)."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if cues is not None:
@@ -155,7 +103,9 @@ def resolve_inputs(
     orientation = [(s or g) if person[i] else None for i, (s, g) in enumerate(zip(said.orientation, guessed))]
     overrides = {i: o for i, o in said.overrides.items() if i < n and person[i]}
     facing_x = np.array([-1.0 if o and o.endswith("left") else 1.0 for o in orientation])
-    rule = rule_evidence(orientation, spread, facing_evidence(joints_image, body_px, fps, away))
+    if facing is None:
+        facing = facing_evidence(joints_image, body_px, fps, away)
+    rule = rule_evidence(orientation, spread, facing)
     rule = np.where([s is None for s in said.orientation], rule, 0.0)
     known = known_sides(said.orientation, overrides, joints_image)
     if cues is not None:

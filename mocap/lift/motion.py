@@ -5,7 +5,7 @@ camera's frame; the exports' world puts the floor at y = 0 below frame 0's pelvi
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
@@ -26,7 +26,8 @@ class Motion:
     """An animation of the contract body (F frames, B = len(BONES)): ``joints3d`` (F, 16, 3) metres,
     pelvis origin; ``root`` (F, 3) the pelvis (camera frame where known); ``keyframes`` (F,) bool;
     ``rotations`` (F, B, 4) local quaternions x y z w, sign-continuous; ``offsets`` (B, 3) in the
-    parent's frame; ``origin`` (3,) the exports' world origin (floor, below frame 0's pelvis)."""
+    parent's frame; ``origin`` (3,) the exports' world origin (floor, below frame 0's pelvis);
+    ``planted`` (F, 2) the contacts a foot lock held (None: found from the joints)."""
 
     fps: float
     joints3d: np.ndarray
@@ -35,6 +36,7 @@ class Motion:
     rotations: np.ndarray
     offsets: np.ndarray
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    planted: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -63,13 +65,18 @@ class Motion:
 
     @property
     def contacts(self) -> np.ndarray:
-        """(F, 2) bool: the left and right foot planted (``mocap.lift.contacts``)."""
-        return foot_contacts(self.world_joints, self.fps)
+        """(F, 2) bool: the left and right foot planted (``mocap.lift.contacts``; a locked motion's:
+        those it was locked on)."""
+        return foot_contacts(self.world_joints, self.fps) if self.planted is None else self.planted
 
     def foot_locked(self) -> "Motion":
-        """This motion with every planted foot kept in place through its contact."""
-        world = foot_lock(self.world_joints, self.contacts, self.fps)
-        return self.with_joints(world - self.world_root[:, None, :])
+        """This motion with every planted foot kept in place through its contact (the body moved
+        where a leg cannot reach its pin); its contacts are those."""
+        contacts = self.contacts
+        world, shift = foot_lock(self.world_joints, contacts, self.fps)
+        root = self.root + shift
+        locked = self.with_joints(world - (root - self.origin)[:, None, :])
+        return replace(locked, root=root, planted=contacts)
 
     def with_joints(self, joints3d: np.ndarray) -> "Motion":
         """This motion posed as pelvis-relative joints (F, 16, 3) (same body, root, origin, keyframes)."""

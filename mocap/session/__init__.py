@@ -3,6 +3,7 @@ command line and the app work through; ``mocap.pipeline.open_session`` opens one
 Beside them, the silhouette method's per-frame products a session hands out."""
 
 from mocap.session.base import Session
+from mocap.session.keys import propose_keyframes
 from mocap.session.silhouette import SilhouetteSession
 from mocap.session.tracking import (
     MARKS_NEEDED,
@@ -25,6 +26,7 @@ __all__ = [
     "check_tracking_marks",
     "marks_from_fit",
     "marks_of",
+    "propose_keyframes",
     "remarks_of",
     "tracked_video",
 ]

@@ -1,23 +1,28 @@
 """The silhouette method's session: per-frame 2D fits (section 3.3, ``mocap.silhouette.passes``)
 and the user's annotations, resolved into lifting inputs (the user's over the first guess of
-``mocap.lift.orientation``); keyframes lifted (section 3.4), the rest interpolated. An edit
-re-lifts only the frames whose inputs it changed (``SilhouetteSession.lifted``)."""
+``mocap.lift.orientation``); the clip's 3D solved at once (``mocap.lift.solve``, the user's signs
+and placed joints as constraints), keyframes taken from it, the rest interpolated. An edit
+re-solves windows around the frames whose inputs it changed (``SilhouetteSession.lifted``)."""
 
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
+from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
+from mocap.lift.clipdata import ClipArrays
 from mocap.lift.cues import Cues
 from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.motion import Motion
-from mocap.lift.orientation import guess_orientations
+from mocap.lift.orientation import facing_evidence, guess_orientations
+from mocap.lift.solve import Solution, lift_clip, resolve_edit
 from mocap.person import NONE
 from mocap.session.base import Session, said_of
 from mocap.silhouette.background import Background
@@ -25,9 +30,12 @@ from mocap.silhouette.facing import facing_away, near_limbs
 from mocap.silhouette.masks import held_warning, silhouette_confidence, write_masks, write_silhouettes
 from mocap.silhouette.passes import FrameFit, Silhouette, fit_arrays
 
+# earlier solutions an edit may start from: an undo or a sign set back finds its own again
+SOLUTIONS_KEPT = 8
+
 
 class SilhouetteSession(Session):
-    """A video's per-frame 2D fits and the user's annotations; lifts on demand."""
+    """A video's per-frame 2D fits and the user's annotations; the clip's 3D solved on demand."""
 
     method = "silhouette"
     score_name = "similarity S"
@@ -47,9 +55,9 @@ class SilhouetteSession(Session):
         self.fits = fits
         self.silhouettes, self.background = silhouettes, background
         self.person_model = person  # the person model the fit looked through (mocap.person)
-        self._inputs: Inputs | None = None
-        # the inputs lifted last, their frames' lifts, and those smoothed over time
-        self._lifted: tuple[Inputs, np.ndarray, np.ndarray] | None = None
+        self._resolved: Inputs | None = None
+        self._shown: tuple[Inputs, Inputs] | None = None  # the resolved inputs solved last, and as shown
+        self._solved: list[tuple[ClipArrays, Solution]] = []  # the latest first, SOLUTIONS_KEPT of them
 
     @cached_property
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -81,6 +89,12 @@ class SilhouetteSession(Session):
         """The orientations the fits and the heads' look suggest (once per session)."""
         joints, body_px, spread = self._arrays
         return guess_orientations(joints, body_px, spread, self.info.fps, self._away)
+
+    @cached_property
+    def _facing(self) -> np.ndarray:
+        """(F,) turned toward or away by the body's growth and the head's look (facing_evidence, once)."""
+        joints, body_px, _ = self._arrays
+        return facing_evidence(joints, body_px, self.info.fps, self._away)
 
     @cached_property
     def silhouette_confidence(self) -> np.ndarray | None:
@@ -121,13 +135,13 @@ class SilhouetteSession(Session):
 
     def annotate(self, annotations: Annotations) -> None:
         super().annotate(annotations)
-        self._inputs = None
+        self._resolved = None
 
-    @property
-    def inputs(self) -> Inputs:
-        if self._inputs is None:
+    def _resolve(self) -> Inputs:
+        """The user's annotations over the first guess (``resolve_inputs``), once per annotations."""
+        if self._resolved is None:
             joints, body_px, spread = self._arrays
-            self._inputs = resolve_inputs(
+            self._resolved = resolve_inputs(
                 joints,
                 body_px,
                 spread,
@@ -137,30 +151,57 @@ class SilhouetteSession(Session):
                 away=self._away,
                 near=self._near,
                 cues=self.cues,
+                facing=self._facing,
             )
-        return self._inputs
+        return self._resolved
+
+    @property
+    def inputs(self) -> Inputs:
+        """The resolved inputs with the signs of the solved 3D (what the page shows and flips)."""
+        return self._solve()
 
     def held_signs(self) -> np.ndarray:
-        return self.inputs.held
+        return self._resolve().held
 
     def pose3d(self, frame: int) -> np.ndarray | None:
-        """(16, 3) lifted joints of a frame (metres, contract frame); None without a person."""
+        """(16, 3) the solved joints of a frame (metres, contract frame); None without a person."""
         return self.lifted()[frame] if self.fits[frame].joints2d is not None else None
 
     def lifted(self) -> np.ndarray:
-        """(F, 16, 3) every frame with a person lifted (Inputs.lift_frames), depths smoothed over time
-        (Inputs.smooth_depths), NaN elsewhere. After an edit only Inputs.changed_frames are lifted
-        again; the smoothing is a convolution redone on all, so the result equals a full re-lift."""
-        inputs = self.inputs
-        if self._lifted is None:
-            lifts = inputs.lift_frames(inputs.person)
-        elif self._lifted[0] is not inputs:
-            before, lifts_before, _ = self._lifted
-            lifts = inputs.lift_frames(inputs.changed_frames(before), lifts_before)
-        else:
-            return self._lifted[2]
-        self._lifted = (inputs, lifts, inputs.smooth_depths(lifts, self.info.fps))
-        return self._lifted[2]
+        """(F, 16, 3) every frame with a person, solved as one clip (``lift_clip``), NaN elsewhere.
+        After an edit only windows around the frames whose inputs it changed are solved again
+        (``resolve_edit``), the rest kept."""
+        return self.solution().joints3d
+
+    def placed(self) -> np.ndarray:
+        """(F, 16) bool: the joints the user placed (overrides) on frames with a person."""
+        out = np.zeros((self.n_frames, len(JOINT_INDEX)), bool)
+        for i, points in self._annotations.overrides().items():
+            if i < self.n_frames and self.fits[i].joints2d is not None:
+                out[i, [JOINT_INDEX[j] for j in points]] = True
+        return out
+
+    def clip_arrays(self) -> ClipArrays:
+        """What the clip solve read for the current annotations (``mocap.lift.clipdata``)."""
+        self._solve()
+        return self._solved[0][0]
+
+    def solution(self) -> Solution:
+        """The clip's solved 3D for the current annotations (``mocap.lift.solve``)."""
+        self._solve()
+        return self._solved[0][1]
+
+    def _solve(self) -> Inputs:
+        """The inputs shown, the clip solved again first where the annotations changed: from scratch
+        the first time, after that from the nearest earlier solution (``resolve_edit``)."""
+        resolved = self._resolve()
+        if self._shown is None or self._shown[0] is not resolved:
+            clip = ClipArrays.of(resolved, self.info.fps, self.confidence(), self.placed())
+            solution = resolve_edit(clip, self._solved)[0] if self._solved else lift_clip(clip)
+            self._solved = [(clip, solution)] + self._solved[: SOLUTIONS_KEPT - 1]
+            signs = np.where(clip.person[:, None], solution.signs, resolved.signs)
+            self._shown = (resolved, replace(resolved, signs=signs))
+        return self._shown[1]
 
 
 class NearLimbs:

@@ -15,9 +15,12 @@ from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs
 from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
 from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
+from mocap.person import NONE, open_person_model
 from mocap.session.base import Session
+from mocap.session.silhouette import SilhouetteSession
 from mocap.track.calibration import UNIT_M, calibrate
 from mocap.track.keydepths import key_joints
+from mocap.track.landmarks import released, seed_marks
 from mocap.track.marks import check_marks, shoulders_as_hips
 from mocap.track.parts import far_arm
 from mocap.track.perspective import place_joints, sided_key, steady_depths, to_contract
@@ -34,7 +37,7 @@ from mocap.track.tracking import (
 
 MARKS_NEEDED = (
     "the tracking method needs the 16 joints marked on frame 0 (--annotations "
-    'with frames["0"].joints2d, or mark them in the app)'
+    'with frames["0"].joints2d, or mark them in the app) or a person model to propose them (--person-model)'
 )
 
 
@@ -56,16 +59,26 @@ def remarks_of(notes: Annotations) -> dict[int, dict[str, tuple[float, float]]]:
     }
 
 
-def tracked_video(info: VideoInfo, notes: Annotations, progress=None, focal_px: float | None = None) -> TrackResult:
-    """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of."""
-    return track_clip(
-        info,
-        marks_of(notes),
-        progress,
-        focal_px=focal_px,
-        orientation=notes.orientations(1)[0],
-        remarks=remarks_of(notes),
-    )
+def tracked_video(
+    info: VideoInfo, notes: Annotations, progress=None, focal_px: float | None = None, person: str = NONE
+) -> TrackResult:
+    """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of, looking
+    through the ``person`` model named (mocap.person), whose landmarks stand in for frame 0's marks if none."""
+    marks = marks_of(notes) if person == NONE or notes.frames.get(0) and notes.frames[0].joints2d else None
+    model = open_person_model(person)
+    try:
+        return track_clip(
+            info,
+            marks,
+            progress,
+            focal_px=focal_px,
+            orientation=notes.orientations(1)[0],
+            remarks=remarks_of(notes),
+            person=model,
+        )
+    finally:
+        if model is not None:
+            model.close()
 
 
 def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:
@@ -76,6 +89,16 @@ def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:
         raise MocapError("frame 0 has no silhouette fit to take the marks from")
     joints = shoulders_as_hips(fitted.inputs.joints2d[0])
     return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
+
+
+def proposed_marks(fitted: SilhouetteSession) -> dict[str, tuple[float, float]] | None:
+    """Frame 0's 16 joints as the person model the silhouette fit looked through saw them, as tracking marks to
+    0.1 px where it is sure of the trunk (mocap.track.landmarks.seed_marks), to correct; None otherwise."""
+    seen = fitted.fits[0].landmarks if fitted.fits else None
+    marks = seed_marks(seen, (fitted.info.height, fitted.info.width))
+    if marks is None:
+        return None
+    return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, marks)}
 
 
 def check_tracking_marks(info: VideoInfo, notes: Annotations) -> None:
@@ -175,10 +198,12 @@ class TrackSession(Session):
 
     def _reconstructed(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """((F, 16, 3) pinhole-frame joints, (F, 10) user signs where held): each trunk turned to its
-        held orientation (frame 0's default: the knees'), depth choices kept to held foreshortening."""
+        held orientation (frame 0's default: the knees') until the person model sees the body turn
+        (landmarks.released), depth choices kept to held foreshortening."""
         notes = self._annotations
         steady = steady_joints(joints, self.info.fps)
-        turns = [turn_of(o) for o in notes.orientations(len(joints))]
+        starts = sorted(f for f, note in notes.frames.items() if note.orientation is not None)
+        turns = released([turn_of(o) for o in notes.orientations(len(joints))], starts, self.tracked.facing)
         turns[0] = turns[0] or guessed_turn(joints, self.info.fps)
         key, free = self._free_placement(steady, turns)
         values, since = notes.held_signs(len(joints))

@@ -90,17 +90,19 @@ def reacquired(
     head_search: HeadSearch,
     trunk_search: TrunkSearch,
     score: Score,
+    trunks: np.ndarray | None = None,
 ) -> Found | None:
     """Head and trunk found again on ``frame``, or None: heads of ``starts`` (K, 5) at ZOOMS, the REFINED best
-    refined; under each matching REFOUND of ``usual`` (10,) the ``good`` (10, 5) trunk hung at each turn, the
-    TRUNKS_REFINED best refined; the pair whose worse ratio to ``usual`` is best, if at least REFOUND."""
+    refined; under each matching REFOUND of ``usual`` (10,) the ``good`` (10, 5) trunk hung at each turn and
+    ``trunks`` (T, 5), the TRUNKS_REFINED best refined; the pair whose worse ratio to ``usual`` is best, if at least
+    REFOUND."""
     heads = np.concatenate([zooms(start) for start in starts])
     best, best_ratio = None, -np.inf
     for start in heads[np.argsort(-score(frame, HEAD, heads))[:REFINED]]:
         head, s_head = head_search(frame, start)
         if s_head < REFOUND * usual[HEAD]:
             continue
-        hung = hung_trunks(good, head)
+        hung = hung_trunks(good, head) if trunks is None else np.concatenate([hung_trunks(good, head), trunks])
         order = np.argsort(-score(frame, TORSO, hung))[:TRUNKS_REFINED]
         trunk, s_trunk = max((trunk_search(frame, start, head) for start in hung[order]), key=lambda match: match[1])
         ratio = min(s_head / usual[HEAD], s_trunk / usual[TORSO])

@@ -1,54 +1,121 @@
-"""Tracking from the body marked again on later frames, beyond the paper: each seed is tracked forward and backward to
-its neighbours, each frame between taking the track that still holds the body (``merged``)."""
+"""Tracking from several seeds, beyond the paper: the body marked again on later frames, or seen by the person model
+(``Seer``) where the tracker has none yet or lost it (landmarks.seed_marks); each seed is tracked forward and backward
+to the frames before it, each frame taking the track that still holds the body (``merged``)."""
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Iterable
 from typing import NamedTuple
 
 import numpy as np
 
 from mocap.camera import Pinhole
+from mocap.errors import MocapError
+from mocap.person import Landmarks
+from mocap.track.landmarks import facing_yaw, seed_marks, side_of
 from mocap.track.parts import PARTS
 from mocap.track.tracker import BodyTracker
 
+Seer = Callable[[np.ndarray], Landmarks | None]  # the person model's view of each frame, in order
+NOBODY = "the person model sees nobody to track in the video: mark the 16 joints on a frame that shows the body"
+
 
 class Track(NamedTuple):
-    """One tracker run: (F, 16, 2) joints, (F, 10) S (inf on its seed), (F, 10) confidences, (F,) lost."""
+    """One tracker run: (F, 16, 2) joints, (F, 10) S (inf on its seed), (F, 10) confidences, (F,) lost, and (F,)
+    the person model's facing yaw (degrees, NaN where unsure or unseen: landmarks.facing_yaw)."""
 
     joints: np.ndarray
     similarity: np.ndarray
     confidence: np.ndarray
     lost: np.ndarray
+    facing: np.ndarray
 
 
-def run_tracker(
-    frames: Iterable[np.ndarray],
-    marks: np.ndarray,
-    tick: Callable[[], None],
-    camera: Pinhole | None,
-    turn: str | None,
-    fps: float,
-) -> Track:
-    """The tracker seeded with ``marks`` (16, 2) on the first of ``frames``, run through all (``tick`` each)."""
-    it = iter(frames)
-    tracker = BodyTracker(next(it), marks, camera, turn, fps)
-    rows = [(marks, np.full(len(PARTS), np.inf), np.ones(len(PARTS)), False)]
-    for frame in it:
-        found, s = tracker.step(frame)
-        rows.append((found, s, tracker.confidence, tracker.lost))
-        tick()
-    return Track(*(np.array(column) for column in zip(*rows)))
+Row = tuple[np.ndarray, np.ndarray, np.ndarray, bool]  # a frame's joints, S, confidences, lost
 
 
-def merged(forward: Track, backward: Track) -> Track:
-    """Frames a..b tracked ``forward`` from a and ``backward`` from b (in forward order): per frame the track not
-    lost, where both hold the body the nearer seed's, where neither the forward one."""
-    n = len(forward.lost)
-    nearer_back = np.arange(n) > (n - 1) / 2
-    take_back = ~backward.lost & (forward.lost | nearer_back)
-    take_back[0], take_back[-1] = False, True
-    return Track(*(np.where(take_back.reshape(-1, *[1] * (f.ndim - 1)), b, f) for f, b in zip(forward, backward)))
+def seed_row(marks: np.ndarray) -> Row:
+    """The row of a seed frame: its marks, S infinite, confident."""
+    return marks, np.full(len(PARTS), np.inf), np.ones(len(PARTS)), False
+
+
+def merged(forward: list[Row | None], backward: list[Row]) -> list[Row]:
+    """Frames a..b tracked ``forward`` from a (None: untracked) and ``backward`` from b (in forward order): per frame
+    the row not lost, where both hold the body the nearer seed's, where neither the forward one; b's own row back."""
+    n = len(forward)
+    out = []
+    for i, (f, b) in enumerate(zip(forward, backward)):
+        take_back = f is None or i == n - 1 or (i > 0 and not b[3] and (f[3] or i > (n - 1) / 2))
+        out.append(b if take_back else f)
+    return out
+
+
+class _Run:
+    """The seeds' trackers over frames fed in order (``add``): kept frames for the next backward pass, the rows."""
+
+    def __init__(
+        self, seeds: dict[int, np.ndarray], camera: Pinhole | None, turn: str | None, fps: float, guided: bool
+    ):
+        self.seeds, self.camera, self.turn, self.fps, self.guided = seeds, camera, turn, fps, guided
+        self.rows: list[Row | None] = []
+        self.facing: list[float] = []
+        self.kept: list[tuple[int, np.ndarray, Landmarks | None]] = []
+        self.tracker: BodyTracker | None = None
+        self.sure_before = False  # the person model sure of the body on the frame before (seed_marks)
+
+    def add(self, i: int, frame: np.ndarray, seen: Landmarks | None) -> None:
+        """Track frame ``i`` as seen by the person model (``seen``, None: unseen): from a user's seed there, else
+        on from the frame before, seeded anew by the landmarks where that lost the body (or none held it yet) and
+        the model is sure of it here and on the frame before (its first sight after a gap is a rough one)."""
+        self.facing.append(facing_yaw(seen))
+        row = None
+        if i not in self.seeds and self.tracker is not None:
+            found, s = self.tracker.step(frame, seen)
+            row = (found, s, self.tracker.confidence, self.tracker.lost)
+        seed, turn, sure = self.seeds.get(i), self.turn, seed_marks(seen, frame.shape)
+        if seed is None and self.sure_before and (row is None or row[3]):
+            seed, turn = sure, side_of(self.facing[-1])
+        self.sure_before = sure is not None
+        tracker = None if seed is None else self._seeded(frame, seed, turn, i in self.seeds)
+        if tracker is not None:
+            self._backward(copy.deepcopy(tracker), seed)
+            self.tracker = tracker
+            self.rows.append(seed_row(seed))
+            self.kept = [(i, frame, seen)]
+            return
+        self.rows.append(row)
+        self.kept.append((i, frame, seen))
+        if row is not None and not row[3] and not any(f > i for f in self.seeds):
+            self.kept = self.kept[-1:]  # the body held: a later seed's backward pass stops here
+
+    def _seeded(self, frame: np.ndarray, seed: np.ndarray, turn: str | None, marked: bool) -> BodyTracker | None:
+        """A tracker seeded on ``frame``; None for landmarks no trunk fits (a user's ``marked`` seed raises)."""
+        try:
+            return BodyTracker(frame, seed, self.camera, turn, self.fps, self.guided)
+        except MocapError:
+            if marked:
+                raise
+            return None
+
+    def _backward(self, tracker: BodyTracker, seed: np.ndarray) -> None:
+        """The kept frames tracked back by a fresh ``tracker`` from ``seed`` and merged with their forward rows."""
+        if not self.kept:
+            return
+        back = [seed_row(seed)]
+        for _, earlier, view in self.kept[::-1]:
+            found, s = tracker.step(earlier, view)
+            back.append((found, s, tracker.confidence, tracker.lost))
+        first = self.kept[0][0]
+        rows = merged([*self.rows[first:], seed_row(seed)], back[::-1])
+        self.rows[first:] = rows[:-1]
+
+    def track(self) -> Track:
+        """The rows so far as a Track; a MocapError (NOBODY) where no seed was ever found."""
+        if self.tracker is None:
+            raise MocapError(NOBODY)
+        columns = [np.array(column) for column in zip(*self.rows)]
+        return Track(*columns, np.array(self.facing))
 
 
 def track_seeded(
@@ -58,25 +125,13 @@ def track_seeded(
     camera: Pinhole | None,
     turn: str | None,
     fps: float,
+    seer: Seer | None = None,
 ) -> Track:
-    """Track ``frames`` from every seed (frame -> (16, 2) marks, frame 0 among them), forward and backward between
-    seeds, ``merged``; ``progress(done)`` counts every pass's frames."""
-    keys = sorted(seeds)
-    done = [0]
-
-    def tick() -> None:
-        done[0] += 1
+    """Track ``frames`` from every seed (frame -> (16, 2) marks) and where ``seer`` seeds a body none holds, forward
+    and backward between seeds, ``merged``; ``progress(done)`` after every frame."""
+    run = _Run(seeds, camera, turn, fps, seer is not None)
+    for i, frame in enumerate(frames):
+        run.add(i, frame, seer(frame) if seer else None)
         if progress:
-            progress(done[0] + 1)
-
-    it = iter(frames)
-    if len(keys) == 1:
-        return run_tracker(it, seeds[0], tick, camera, turn, fps)
-    kept = [next(it) for _ in range(keys[-1] + 1)]
-    parts = []
-    for a, b in zip(keys, keys[1:]):
-        forward = run_tracker(kept[a : b + 1], seeds[a], tick, camera, turn, fps)
-        backward = run_tracker(kept[b : a - 1 if a else None : -1], seeds[b], tick, camera, turn, fps)
-        parts.append(merged(forward, Track(*(x[::-1] for x in backward))))
-    rest = run_tracker([kept[-1], *it], seeds[keys[-1]], tick, camera, turn, fps)
-    return Track(*(np.concatenate([*(p[i][:-1] for p in parts), rest[i]]) for i in range(4)))
+            progress(i + 1)
+    return run.track()

@@ -10,9 +10,11 @@ import numpy as np
 from mocap.body import JOINT_INDEX
 from mocap.camera import Pinhole, default_camera
 from mocap.image.edges import Edges
+from mocap.person import Landmarks
 from mocap.track import blocks
 from mocap.track.blocks import THETA, M, N, X, Y, block_end, from_block, to_block
 from mocap.track.headmotion import P_START, adapt_threshold, head_displacement
+from mocap.track.landmarks import seed_marks
 from mocap.track.limbs import (
     HEAD_COST,
     LEG_OUTLINE_COST,
@@ -31,6 +33,7 @@ from mocap.track.limbs import (
 )
 from mocap.track.loss import DISTINCT, body_lost, part_confidence
 from mocap.track.marks import body_scale
+from mocap.track.opinion import landmark_block, limb_opinion, second_opinion, trunk_apart
 from mocap.track.parts import (
     ARMS,
     HEAD,
@@ -62,11 +65,13 @@ ZOOM_RANGE = (0.5, 2.0)  # of the marked head's length: the head's (the body's) 
 HEAD_RETRY = 0.3  # of the head's median S: a worse match is searched again (_track_head)
 FAR_UPPER_WEIGHT = 0.3  # of its 1/S: what the far arm's upper arm's match weighs around its root
 FAR_UPPER_SCALES = (1.0, 0.9)  # of its usual length: the far arm's upper arm's lengths tried there
+ELSEWHERE = 2.0  # trunk radii (opinion.trunk_apart): landmarks this far off see the body elsewhere
 
 
 class BodyTracker:
     """State carried between frames: blocks (10, 5) and velocities, colour models, recent S, the head's threshold p,
-    the trunk in 3D (``TrunkDepth``; ``camera`` default the frame's) and the parts' confidence at ``fps``."""
+    the trunk in 3D (``TrunkDepth``; ``camera`` default the frame's) and the parts' confidence at ``fps``;
+    ``guided``: a person model's landmarks come with the frames (``step``), finding a body the colours lose."""
 
     def __init__(
         self,
@@ -75,9 +80,10 @@ class BodyTracker:
         camera: Pinhole | None = None,
         turn: str | None = None,
         fps: float = 25.0,
+        guided: bool = False,
     ):
         scale = body_scale(marks)
-        self.fps = fps
+        self.fps, self.guided = fps, guided
         self.trunk = TrunkDepth(marks, camera or default_camera(frame0.shape[1], frame0.shape[0]), turn)
         self.limb_costs: dict[int, tuple[blocks.Penalty, blocks.Penalty]] = {}
         self.blocks = blocks.between(marks[PART_JOINTS[:, 0]], marks[PART_JOINTS[:, 1]], part_widths(marks, scale))
@@ -105,45 +111,94 @@ class BodyTracker:
         self.p = P_START
         self.frame = frame0
 
-    def step(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Track the next frame: its (16, 2) joints and the (10,) similarities S."""
+    def step(self, frame: np.ndarray, seen: Landmarks | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Track the next frame (``seen``: the person model's landmarks there): its (16, 2) joints and (10,) S."""
         predicted = self._predicted()
         new, s = predicted.copy(), np.zeros(len(PARTS))
         new[HEAD], s[HEAD] = self._track_head(frame, predicted[HEAD])
+        if seen is not None:
+            second_opinion(HEAD, new, s, seen, lambda start: self._head_search(frame, start))
         predicted[TORSO, :2] = block_end(new[HEAD])
         new[TORSO], s[TORSO] = self._track_torso(frame, predicted[TORSO], new[HEAD])
-        refound = self.lost and self._reacquire(frame, new, s)
-        self.limb_costs = self._limb_costs(new, Edges.of_frame(frame))
+        if seen is not None:
+            zoom = self._zoom(new[HEAD])
+            second_opinion(TORSO, new, s, seen, lambda start: self._search(frame, TORSO, start, zoom))
+        refound = self.lost and self._reacquire(frame, new, s, seen)
+        edges = Edges.of_frame(frame)
+        new = self._limbs(frame, new, s, seen, edges)
+        lost = self._judged_lost(frame, new, s, refound, seen)
+        if lost and not self.lost and self.guided and self._reacquire(frame, new, s, seen, scan=False):
+            new = self._limbs(frame, new, s, seen, edges)  # the landmarks find the body the colours just lost
+            lost = self._judged_lost(frame, new, s, True, seen)
+        self.lost = lost
+        self._update(frame, new, s, self.lost)
+        return skeleton(new, self.chest), s
+
+    def _limbs(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, seen: Landmarks | None, edges: Edges):
+        """``new`` with the limbs tracked from its head and trunk (the landmarks' second opinion where their trunk
+        is the tracked one), kept sane; the parts' confidence taken."""
+        self.limb_costs = self._limb_costs(new, edges)
         for k in LIMBS:
             self._track_limb(frame, new, s, k, self._avoided(k, new))
         for twins in TWINS:
             self._part_twins(frame, new, s, twins)
+        if seen is not None and trunk_apart(seen, skeleton(new, self.chest), new[TORSO]) <= 1.0:
+            for k in LIMBS:
+                limb_opinion(k, new, s, seen, lambda lower, k=k: self._hung_from(frame, new, s, k, lower))
         new = self._bounded(new, frame.shape)
         self.confidence = self._confidence(new, s, frame.shape)
-        self.lost = self._judged_lost(frame, new, s, refound)
-        self._update(frame, new, s, self.lost)
-        return skeleton(new, self.chest), s
+        return new
 
-    def _judged_lost(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, refound: bool) -> bool:
+    def _judged_lost(
+        self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, refound: bool, seen: Landmarks | None
+    ) -> bool:
         """Whether the body is lost on a frame tracked to ``new`` (``refound``: re-acquired): once lost, until
-        re-acquired; a held (``_held``) frame is judged without the usual S, which a changed background lowers."""
+        re-acquired; a held (``_held``) frame is judged without the usual S, which a changed background lowers; a
+        body held or re-acquired by colours alone is lost where the person model sees it elsewhere (``seen``)."""
         lost = self.lost and not refound or bool(body_lost(self.confidence, self.lost))
+        doubtful = refound or lost
         self.held = lost and self._held(frame, new)
-        if not self.held:
-            return lost
-        self.confidence = self._confidence(new, s, frame.shape, np.full(len(PARTS), np.inf))
-        return bool(body_lost(self.confidence))
+        if self.held:
+            self.confidence = self._confidence(new, s, frame.shape, np.full(len(PARTS), np.inf))
+            lost = bool(body_lost(self.confidence))
+        return lost or doubtful and self._contradicted(new, seen)
+
+    def _contradicted(self, new: np.ndarray, seen: Landmarks | None) -> bool:
+        """Whether the person model is sure of a body (landmarks.seed_marks) whose trunk is not ``new``'s."""
+        if seen is None or seed_marks(seen, self.frame.shape) is None:
+            return False
+        return trunk_apart(seen, skeleton(new, self.chest), new[TORSO]) > ELSEWHERE
 
     def _held(self, frame: np.ndarray, new: np.ndarray) -> bool:
         """Whether head and trunk of ``new`` each match DISTINCT times better where they lie than anywhere else."""
         return all(distinctness(frame, self._model(k), self.grids[k], new[k]) >= DISTINCT for k in (HEAD, TORSO))
 
-    def _reacquire(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray) -> bool:
-        """Whether a lost body's head and trunk are found again (into ``new``, ``s``; limbs from the good pose)."""
-        starts = np.concatenate(
-            [new[[HEAD]], self.good[[HEAD]], scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD])]
+    def _reacquire(
+        self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, seen: Landmarks | None, scan: bool = True
+    ) -> bool:
+        """Whether a lost body's head and trunk are found again (into ``new``, ``s``; limbs from the good pose): from
+        the landmarks' (``seen``) and, with ``scan``, the last head, the good one and the scan's."""
+        shown = [None if seen is None else landmark_block(seen, k, self.good[k, N]) for k in (HEAD, TORSO)]
+        starts = [b[None] for b in shown[:1] if b is not None]
+        if scan:
+            starts += [
+                new[[HEAD]],
+                self.good[[HEAD]],
+                scan_heads(frame, self._model(HEAD), self.grids[HEAD], self.good[HEAD]),
+            ]
+        if not starts:
+            return False
+        trunks = None if shown[1] is None else shown[1][None]
+        found = reacquired(
+            frame,
+            np.concatenate(starts),
+            self.good,
+            self._usual(),
+            self._head_search,
+            self._track_torso,
+            self._score,
+            trunks,
         )
-        found = reacquired(frame, starts, self.good, self._usual(), self._head_search, self._track_torso, self._score)
         if found is None:
             return False
         self.blocks = carried(self.good, found.blocks[1])
@@ -245,6 +300,16 @@ class BodyTracker:
         penalty = added(penalty, lower_cost)
         lower = around_root(image, root, *parts, penalty, upper_cost, *self._upper_trust(k))
         self._hang(image, new, s, k, root, lower, penalty)
+
+    def _hung_from(self, frame: np.ndarray, new: np.ndarray, s: np.ndarray, k: int, lower: np.ndarray):
+        """(blocks, S): copies of ``new``, ``s`` with limb k hung from its root to a lower part searched from
+        ``lower`` (5,) and kept near it."""
+        root = self._root(k, new)
+        length = self.lengths[k + 1] * new[HEAD, N] / self.head_width
+        penalty = added(limb_penalty(root, new[k, N], lower, length, self._avoided(k, new)), self.limb_costs[k][1])
+        placed, similarity = new.copy(), s.copy()
+        self._hang(frame, placed, similarity, k, root, lower, penalty)
+        return placed, similarity
 
     def _upper_trust(self, k: int) -> tuple[float, tuple[float, ...]]:
         """Limb k's upper-block 1/S weight and lengths tried around its root: less and shorter for the far arm."""

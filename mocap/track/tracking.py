@@ -1,6 +1,7 @@
 """The tracking method (Pan, Zhuang and Liu 2000) as one call: frame 0 marked, every frame tracked, unreliable
 stretches interpolated, 3D reconstructed under perspective. Frames are streamed at video.processing_scale; results
-are in the original frame's pixels. ``track_clip("clip.mp4", marks)`` with marks (16, 2) or {joint: (x, y)}."""
+are in the original frame's pixels. ``track_clip("clip.mp4", marks)`` with marks (16, 2) or {joint: (x, y)}; with a
+person model (mocap.person) its landmarks propose the marks, seed a lost body anew and guide the limbs."""
 
 from __future__ import annotations
 
@@ -15,12 +16,13 @@ from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, li
 from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
+from mocap.person import PersonModel
 from mocap.track.keydepths import Turns
 from mocap.track.loss import GAP_S, bridged, joint_confidence
 from mocap.track.marks import check_marks
 from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO
 from mocap.track.perspective import reconstruct, steady_depths, to_contract
-from mocap.track.reseed import Track, track_seeded
+from mocap.track.reseed import Seer, Track, track_seeded
 
 Progress = Callable[[int, int], None]
 LOW_RELIABILITY = 0.5  # a part matched this much worse than usual is taken as hidden
@@ -53,7 +55,8 @@ class TrackResult:
     """What the tracking found: ``joints2d`` (F, 16, 2) original pixels, sides as marked, unreliable stretches
     interpolated; ``reliability`` (F, 16) in [0, 1], S over the part's median (1 on frame 0); ``joints3d``
     (F, 16, 3) metres, CONTRACT.md's frame; ``focal_px``; ``confidence`` (F, 16) in [0, 1] (loss.joint_confidence);
-    ``lost`` (F,) bool, frames whose joints are no answer."""
+    ``lost`` (F,) bool, frames whose joints are no answer; ``facing`` (F,) the person model's facing yaw (degrees,
+    NaN where unsure or without one: landmarks.facing_yaw)."""
 
     info: VideoInfo
     joints2d: np.ndarray
@@ -62,20 +65,23 @@ class TrackResult:
     focal_px: float
     confidence: np.ndarray
     lost: np.ndarray
+    facing: np.ndarray
 
 
 def track_frames(
     frames: Iterable[np.ndarray],
-    marks: np.ndarray,
+    marks: np.ndarray | None,
     progress: Callable[[int], None] | None = None,
     camera: Pinhole | None = None,
     turn: str | None = None,
     fps: float = 25.0,
     remarks: dict[int, np.ndarray] | None = None,
+    seer: Seer | None = None,
 ) -> Track:
-    """Track ``marks`` (16, 2) of frame 0 and ``remarks`` (frame -> marks) through BGR ``frames``: (F, 16, 2) joints,
-    (F, 10) S (inf where marked), (F, 10) confidence (1 where marked) and (F,) lost."""
-    return track_seeded(frames, {**(remarks or {}), 0: marks}, progress, camera, turn, fps)
+    """Track ``marks`` (16, 2) of frame 0 (None: the ``seer``'s) and ``remarks`` (frame -> marks) through BGR
+    ``frames`` (reseed.track_seeded)."""
+    seeds = {**(remarks or {}), **({} if marks is None else {0: marks})}
+    return track_seeded(frames, seeds, progress, camera, turn, fps, seer)
 
 
 def joint_reliability(similarity: np.ndarray) -> np.ndarray:
@@ -178,32 +184,49 @@ def track_clip(
     focal_px: float | None = None,
     orientation: str | None = None,
     remarks: dict | None = None,
+    person: PersonModel | None = None,
 ) -> TrackResult:
     """Track a video (path or VideoInfo) from its 16 joints marked on frame 0 and reconstruct 3D. ``marks``: (16, 2)
-    in JOINTS order or joint -> (x, y) (bad ones raise MocapError); ``focal_px`` default the frame width;
-    ``orientation``: CONTRACT.md's word for frame 0, whose side tells the turn (None: ``guessed_turn``);
-    ``remarks``: frame -> joints marked again (mocap.track.reseed); ``progress(done, total)`` after every frame."""
+    in JOINTS order or joint -> (x, y) (bad ones raise MocapError), None: the ``person`` model's first sure ones;
+    ``focal_px`` default the frame width; ``orientation``: CONTRACT.md's word for frame 0, whose side tells the turn
+    (None: ``guessed_turn``); ``remarks``: frame -> joints marked again (mocap.track.reseed); ``person``: a fresh
+    person model seeding the body where none holds and guiding the limbs; ``progress(done, total)`` after every
+    frame."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
-    marks, scale = check_marks(marks, info.width, info.height), processing_scale(info)
+    scale = processing_scale(info)
+    if marks is not None:
+        marks = (check_marks(marks, info.width, info.height) + 0.5) * scale - 0.5
     seeds = {
         f: (check_marks(m, info.width, info.height) + 0.5) * scale - 0.5
         for f, m in (remarks or {}).items()
         if 0 < f < info.frame_count
     }
     turn = turn_of(orientation)
-    step = (lambda done: progress(done, info.frame_count + max(seeds, default=0))) if progress else None
+    step = (lambda done: progress(done, info.frame_count)) if progress else None
     frames = (frame for _, frame in iter_frames(info, scale=scale))
     camera = default_camera(info.width, info.height, focal_px)
-    joints, similarity, parts, lost = track_frames(
-        frames, (marks + 0.5) * scale - 0.5, step, camera.scaled(scale), turn, info.fps, seeds
+    seer = None if person is None else lambda frame: _landmarks(person, frame)
+    joints, similarity, parts, lost, facing = track_frames(
+        frames, marks, step, camera.scaled(scale), turn, info.fps, seeds, seer
     )
     joints = (joints + 0.5) / scale - 0.5
     reliability = joint_reliability(similarity)
     joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
     joints2d = fill_unreliable(joints, reliability)
     turn = turn or guessed_turn(joints2d, info.fps)
-    joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps, ~lost))
-    return TrackResult(info, joints2d, reliability, joints3d, camera.focal, joint_confidence(parts), lost)
+    try:
+        joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps, ~lost))
+    except MocapError as error:
+        if marks is not None:
+            raise
+        raise MocapError(f"frame 0 as the person model's landmarks placed it: {error}; mark the 16 joints") from None
+    return TrackResult(info, joints2d, reliability, joints3d, camera.focal, joint_confidence(parts), lost, facing)
+
+
+def _landmarks(person: PersonModel, frame: np.ndarray):
+    """The person model's landmarks on ``frame`` (its pixels), None where it sees nobody."""
+    view = person.observe(frame)
+    return None if view is None else view.landmarks
 
 
 def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
