@@ -71,6 +71,15 @@ def side_seen_from(joints3d: np.ndarray, segment: str) -> int:
     return -1 if middle[0] > joints3d[_J["pelvis"]][0] else 1
 
 
+HIDDEN = {"cast_shadow": False, "receive_shadow": False, "visible": False}  # a body part until a frame poses it
+
+
+def clicked_as(handle, segment: str, on_click: Callable[[str, object], None]):
+    """``handle`` with a click on it reported as a click on ``segment``."""
+    handle.on_click(lambda event: on_click(segment, event))
+    return handle
+
+
 class SceneView:
     """The scene's panels and the handles that update them."""
 
@@ -158,12 +167,9 @@ class SceneView:
                 height=1.0,
                 color=segment_rgb(segment),
                 radial_segments=20,
-                cast_shadow=False,
-                receive_shadow=False,
-                visible=False,
+                **HIDDEN,
             )
-            handle.on_click(lambda event, s=segment: on_click(s, event))
-            handles.append(handle)
+            handles.append(clicked_as(handle, segment, on_click))
         return handles
 
     @staticmethod
@@ -172,17 +178,9 @@ class SceneView:
         handles = []
         for mark, (segment, *_) in FACING_MARKS.items():
             handle = scene.add_mesh_simple(
-                f"/{name}/body/{mark}",
-                CONE.vertices,
-                CONE.faces,
-                color=MARK_RGB,
-                flat_shading=True,
-                cast_shadow=False,
-                receive_shadow=False,
-                visible=False,
+                f"/{name}/body/{mark}", CONE.vertices, CONE.faces, color=MARK_RGB, flat_shading=True, **HIDDEN
             )
-            handle.on_click(lambda event, s=segment: on_click(s, event))
-            handles.append(handle)
+            handles.append(clicked_as(handle, segment, on_click))
         return handles
 
     def _playhead(self, scene, name: str) -> tuple[object, object]:

@@ -36,6 +36,22 @@ def render_walk(path: str | Path, view: str = "side", seed: int = 1, **overrides
     return synth.render_clip(joints, path, view=view, seed=seed, **opts)
 
 
+def render_tracked_walk(path: str | Path, **overrides) -> Truth:
+    """The tracking method's walk: 320x240, three-quarter, a pinhole camera and a panning,
+    cluttered background (``overrides``: render_clip's other settings, e.g. shape)."""
+    return synth.render_clip(
+        walk_cycle(1.6, 15.0),
+        path,
+        size=(320, 240),
+        fps=15.0,
+        yaw=45.0,
+        perspective=400.0,
+        moving_background=True,
+        seed=3,
+        **overrides,
+    )
+
+
 def render_walk_with_exit(path: str | Path, gone: slice, seed: int = 2, regraded: bool = False, **overrides) -> Truth:
     """The walk with the performer stepped far out of the frame (20 m to the image
     right) on the frames of `gone`; the camera frames the walk as if they had stayed.

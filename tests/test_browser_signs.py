@@ -41,6 +41,18 @@ FRAME = 6
 NOSE = list(FACING_MARKS).index("nose")
 
 
+# the controls that wait for the whole clip's fit
+AFTER_THE_FIT = (
+    "Play",
+    "BVH",
+    "GLB",
+    "CSV",
+    "HTML page",
+    ("Review", "Next doubtful frame"),
+    ("Tracking", "Marks from the silhouette fit"),
+)
+
+
 def sign_of(page, segment: str):
     """A segment's button (its label starts with the segment's name)."""
     return page.get_by_role("button", name=re.compile(f"^{segment_label(segment)}:"))
@@ -155,35 +167,14 @@ def test_controls_that_cannot_act_are_disabled(browser, tmp_path, monkeypatch): 
         for segment in SEGMENT_NAMES:  # fitted in 2D, not yet lifted
             sync_api.expect(sign_of(page, segment)).to_be_disabled()
         sync_api.expect(button(page, "Unmark keyframe")).to_be_enabled()  # every frame, until the fit proposes
-        expect_enabled(
-            page,
-            False,
-            "Play",
-            "BVH",
-            "GLB",
-            "CSV",
-            "HTML page",
-            ("Review", "Next doubtful frame"),
-            ("Tracking", "Marks from the silhouette fit"),
-            ("Joints", "Clear override"),
-        )
+        expect_enabled(page, False, *AFTER_THE_FIT, ("Joints", "Clear override"))
         app.state.go_to(25)  # not fitted yet
         sync_api.expect(keyframe_button(page)).to_be_disabled()
         shot(page, "signs_disabled_preprocessing")
         gate.set()
         assert app.state.ready.wait(60)
         sync_api.expect(keyframe_button(page)).to_be_enabled()
-        expect_enabled(
-            page,
-            True,
-            "Play",
-            "BVH",
-            "GLB",
-            "CSV",
-            "HTML page",
-            ("Review", "Next doubtful frame"),
-            ("Tracking", "Marks from the silhouette fit"),
-        )
+        expect_enabled(page, True, *AFTER_THE_FIT)
         fbx = sync_api.expect(button(page, "FBX"))  # only with Blender installed (the fbx extra)
         fbx.to_be_enabled() if FORMATS["fbx"].available() else fbx.to_be_disabled()
         page.get_by_role("tab", name="Body").click()

@@ -7,6 +7,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from helpers import render_tracked_walk
 from scipy.spatial.transform import Rotation
 
 from mocap import synth
@@ -53,16 +54,7 @@ from mocap.track.tracking import (
 def walk(tmp_path_factory):
     """A 320x240 three-quarter walk, pinhole camera, panning cluttered background."""
     video = tmp_path_factory.mktemp("track") / "walk.mp4"
-    truth = synth.render_clip(
-        walk_cycle(1.6, 15.0),
-        video,
-        size=(320, 240),
-        fps=15.0,
-        yaw=45.0,
-        perspective=400.0,
-        moving_background=True,
-        seed=3,
-    )
+    truth = render_tracked_walk(video)
     return video, truth
 
 
@@ -529,17 +521,7 @@ def test_a_slim_or_broad_body_is_tracked(shape, tmp_path):
     one 1.6% and 6.0%, its pelvis sliding up to 10% up the trunk over the last
     frames)."""
     video = tmp_path / f"{shape}.mp4"
-    truth = synth.render_clip(
-        walk_cycle(1.6, 15.0),
-        video,
-        size=(320, 240),
-        fps=15.0,
-        yaw=45.0,
-        perspective=400.0,
-        moving_background=True,
-        seed=3,
-        shape=shape,
-    )
+    truth = render_tracked_walk(video, shape=shape)
     result = track_clip(video, truth.joints2d[0], orientation="forward_right")
     err = np.linalg.norm(result.joints2d - truth.joints2d, axis=-1) / truth.body_height_px
     trunk = [JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis")]

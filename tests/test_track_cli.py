@@ -8,8 +8,9 @@ import json
 
 import numpy as np
 import pytest
+from helpers import render_tracked_walk
 
-from mocap import pipeline, synth
+from mocap import pipeline
 from mocap.body import JOINTS, SEGMENT_INDEX
 from mocap.cli import main
 from mocap.io.annotations import Annotations
@@ -18,7 +19,6 @@ from mocap.io.video import open_video
 from mocap.lift import taylor as lift
 from mocap.lift.orientation import NEGLIGIBLE
 from mocap.session import TrackSession
-from mocap.synth.walk import walk_cycle
 from mocap.track.tracking import guessed_turn, track_clip
 
 IN_PLANE = 0.1  # |dZ| / length: a segment this flat shows no sign
@@ -28,16 +28,7 @@ IN_PLANE = 0.1  # |dZ| / length: a segment this flat shows no sign
 def clip(tmp_path_factory):
     folder = tmp_path_factory.mktemp("track")
     video = folder / "walk.avi"
-    truth = synth.render_clip(
-        walk_cycle(1.6, 15.0),
-        video,
-        size=(320, 240),
-        fps=15.0,
-        yaw=45.0,
-        perspective=400.0,
-        moving_background=True,
-        seed=3,
-    )
+    truth = render_tracked_walk(video)
     return video, truth
 
 
