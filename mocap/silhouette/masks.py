@@ -21,13 +21,14 @@ DOUBTFUL = 0.8  # a frame's silhouette confidence below this is worth a look
 
 
 def silhouette_confidence(silhouettes: list, background: Background) -> np.ndarray:
-    """(F,) each frame's share of silhouette told from the seen scene; NaN where nobody is."""
+    """(F,) each frame's share of silhouette told from the seen scene or by the person model; NaN where
+    nobody is."""
     out = np.full(len(silhouettes), np.nan)
     for i, sil in enumerate(silhouettes):
         if sil is None:
             continue
         mask = sil.mask() > 0
-        if background.held is None:
+        if background.held is None or sil.learned is not None:  # fused: held pixels are the model's (fused_mask)
             out[i] = 1.0
             continue
         x0, y0, x1, y1 = sil.box
