@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -80,13 +79,11 @@ def test_keyframes_default_to_every_frame_and_orientation_holds_until_changed():
     assert notes.orientations(9) == [None] * 3 + ["left"] * 4 + ["backward_right"] * 2
 
 
-def test_a_held_sign_ends_where_its_segment_passes_the_image_plane():
-    values = np.zeros((8, 10), int)
-    since = np.full((8, 10), -1)
-    values[2:, 0], since[2:, 0] = 1, 2
-    negligible = np.zeros((8, 10), bool)
-    negligible[5, 0] = True
-    assert held_user_signs(values, since, negligible)[:, 0].tolist() == [0, 0, 1, 1, 1, 0, 0, 0]
+def test_a_held_sign_holds_until_a_later_entry_changes_it():
+    """Sticky, as CONTRACT.md has it: frame 2's "toward" holds until frame 6 says "away"."""
+    notes = Annotations().with_foreshortening(2, "torso", "toward").with_foreshortening(6, "torso", "away")
+    values, since = notes.held_signs(9)
+    assert held_user_signs(values, since)[:, 0].tolist() == [0, 0, 1, 1, 1, 1, -1, -1, -1]
 
 
 @pytest.mark.parametrize(

@@ -12,7 +12,6 @@ from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEG
 from mocap.camera import default_camera
 from mocap.lift.cues import Cues, side_evidence, with_landmarks, world_depths, world_signs, world_yaws
 from mocap.lift.orientation import (
-    NEGLIGIBLE,
     facing_evidence,
     guess_orientations,
     guess_signs,
@@ -20,7 +19,6 @@ from mocap.lift.orientation import (
     legs_crossed,
     looks_away,
     rule_evidence,
-    segment_vectors,
     yaws,
 )
 from mocap.lift.sides import known_sides, track_sides
@@ -119,7 +117,7 @@ def resolve_inputs(
     joints = exchange_legs(anatomical_joints(joints_image, swap), names[:, 2])
     if person.any():
         seen = clip_lengths(joints_image[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
-        held = _held_signs(joints, ppu, seen, values, since, person)
+        held = _held_signs(values, since, person)
         placed = np.array(
             [any(j.startswith(LIMB_JOINTS["leg"][1:]) for j in overrides.get(i, ())) for i in range(n)], bool
         )
@@ -142,7 +140,7 @@ def resolve_inputs(
     # makes a segment look unforeshortened they still keep the two depths apart
     judged = clip_lengths(joints[person], ppu[person]) if person.any() else lengths
     signs = np.ones((n, len(SEGMENT_NAMES)), int)
-    fixed = _held_signs(joints, ppu, lengths, values, since, person)
+    fixed = _held_signs(values, since, person)
     for r in runs(person):
         signs[r] = guess_signs(joints[r], ppu[r], yaw[r], np.maximum(judged, lengths), fixed[r], fps)
     depths = None
@@ -164,15 +162,9 @@ def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndar
     return out
 
 
-def _held_signs(
-    joints: np.ndarray, ppu: np.ndarray, lengths: np.ndarray, values: np.ndarray, since: np.ndarray, person: np.ndarray
-) -> np.ndarray:
-    """(F, 10) the user's signs where they hold (orientation.held_user_signs), 0 elsewhere."""
-    held = np.zeros(values.shape, int)
-    for r in runs(person):
-        _, depth = segment_vectors(joints[r], ppu[r], lengths)
-        held[r] = held_user_signs(values[r], since[r] - r.start, depth <= NEGLIGIBLE * lengths)
-    return held
+def _held_signs(values: np.ndarray, since: np.ndarray, person: np.ndarray) -> np.ndarray:
+    """(F, 10) the user's signs where they hold (orientation.held_user_signs) and a person is, 0 elsewhere."""
+    return np.where(person[:, None], held_user_signs(values, since), 0).astype(int)
 
 
 def root_track(

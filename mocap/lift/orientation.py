@@ -263,14 +263,11 @@ def yaws(orientations: list[str | None], spread: np.ndarray) -> np.ndarray:
     return np.array([np.nan if o is None else facing_yaw(o, s) for o, s in zip(orientations, spread)])
 
 
-def held_user_signs(values: np.ndarray, since: np.ndarray, negligible: np.ndarray) -> np.ndarray:
-    """(F, 10) the user's signs where they hold, else 0: from the entry's frame until a later entry
-    or the segment next passes the image plane (``negligible`` (F, 10))."""
-    passes = np.cumsum(negligible, axis=0)
+def held_user_signs(values: np.ndarray, since: np.ndarray) -> np.ndarray:
+    """(F, 10) the user's signs where they hold, else 0: sticky, as the contract has it, from the entry's
+    frame (``since``, -1 none) until a later entry changes it (``values``: the latest entry's sign)."""
     frames = np.arange(len(values))[:, None]
-    at_entry = np.take_along_axis(passes, np.clip(since, 0, len(values) - 1), axis=0)
-    holds = (since >= 0) & (since <= frames) & (passes == at_entry)
-    return np.where(holds, values, 0)
+    return np.where((since >= 0) & (since <= frames), values, 0)
 
 
 # -- which leg is which, from the user's signs ---------------------------------------

@@ -98,7 +98,7 @@ class Session(ABC):
     @abstractmethod
     def held_signs(self) -> np.ndarray:
         """(F, 10) the user's signs where they hold (+1 toward, -1 away; an entry holds
-        until its segment next passes through the image plane: held_user_signs), 0 elsewhere."""
+        until a later entry changes it: held_user_signs), 0 elsewhere."""
 
     def sign_sources(self, frame: int) -> tuple[str, ...]:
         """Where each segment's sign on ``frame`` comes from: "set here", "held from frame K" or "guessed"."""

@@ -13,8 +13,8 @@ from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs
-from mocap.lift.orientation import NEGLIGIBLE, held_user_signs
-from mocap.lift.taylor import depth_fractions, orientation_of_yaw, signs_of, yaw_of
+from mocap.lift.orientation import held_user_signs
+from mocap.lift.taylor import orientation_of_yaw, signs_of, yaw_of
 from mocap.person import NONE, open_person_model
 from mocap.session.base import Session
 from mocap.session.silhouette import SilhouetteSession
@@ -207,7 +207,7 @@ class TrackSession(Session):
         turns[0] = turns[0] or guessed_turn(joints, self.info.fps)
         key, free = self._free_placement(steady, turns)
         values, since = notes.held_signs(len(joints))
-        fixed = held_user_signs(values, since, depth_fractions(free) <= NEGLIGIBLE)
+        fixed = held_user_signs(values, since)
         return (free if not fixed.any() else self._placed_joints(steady, key, fixed)), fixed
 
     def _placed_joints(self, steady: np.ndarray, key: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
