@@ -243,12 +243,6 @@ def to_contract(model: np.ndarray) -> np.ndarray:
     return (model - model[:, [PELVIS]]) * UNIT_M
 
 
-def pose_signs(model: np.ndarray) -> np.ndarray:
-    """(F, 10) +1 / -1: each segment's foreshortening in poses (F, 16, 3) (0 depth: toward)."""
-    z = model[..., 2]
-    return np.where(z[:, SEGMENT_JOINTS[:, 1]] >= z[:, SEGMENT_JOINTS[:, 0]], 1, -1)
-
-
 def with_signs(model: np.ndarray, signs: np.ndarray) -> np.ndarray:
     """(F, 16, 3) ``model`` with each segment's depth step turned to ``signs`` (F, 10) (its |dZ|
     kept), the joints hanging from it moved along, the trunk first."""

@@ -19,7 +19,6 @@ from mocap.lift.clipdata import (
     ClipArrays,
     Weights,
     clip_bone_lengths,
-    pose_signs,
     start_pose,
     to_contract,
     with_signs,
@@ -27,7 +26,7 @@ from mocap.lift.clipdata import (
 from mocap.lift.levmar import levenberg_marquardt
 from mocap.lift.problem import Problem
 from mocap.lift.signpath import sign_paths
-from mocap.lift.taylor import runs
+from mocap.lift.taylor import runs, signs_of
 
 # seconds each side of an edited frame that its re-solve frees (the acceleration ties a frame to
 # its neighbours, the sign path to the stretch around it)
@@ -50,7 +49,7 @@ class Solution:
     @property
     def signs(self) -> np.ndarray:
         """(F, 10) +1 toward / -1 away: each segment's sign in the solved poses."""
-        return pose_signs(self.model)
+        return signs_of(self.model)
 
 
 def solve_clip(
@@ -108,7 +107,7 @@ def solve_window(clip: ClipArrays, solution: Solution, window: slice, weights: W
         free = np.zeros(around.stop - around.start, bool)
         free[a - around.start : b - around.start] = True
         part, base = clip.frames(around), model[around]
-        walls = np.where(free[:, None], 0, pose_signs(base))
+        walls = np.where(free[:, None], 0, signs_of(base))
         paths = sign_paths(part, base, solution.lengths, weights, walls)
         base = with_signs(base, paths)
         problem = Problem(replace(part, signs=paths), slice(0, len(free)), base, free, solution.lengths, False, weights)
