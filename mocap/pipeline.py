@@ -18,7 +18,7 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.person import DEFAULT_MODEL, NONE, available, check_name, install_hint, open_person_model
+from mocap.person import DEFAULT_MODEL, NONE, available, check_name, install_hint, opened_model
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.session.review import Doubt
 from mocap.silhouette import Background, FrameFit, Silhouette, clip_background, fit_clip
@@ -66,12 +66,8 @@ def silhouette_passes(
         stage = FITTING if isinstance(product, FrameFit) else SILHOUETTES
         report(Progress(done[0], total, stage, frame=frame, product=product, final=final))
 
-    model = open_person_model(person)
-    try:
+    with opened_model(person) as model:
         return fit_clip(info, background, model, shown)
-    finally:
-        if model is not None:
-            model.close()
 
 
 def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:

@@ -4,6 +4,8 @@ silhouette method's fit and lift. ``PersonModel`` is the interface, ``MODELS`` t
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -80,6 +82,17 @@ def open_person_model(name: str = DEFAULT_MODEL) -> PersonModel | None:
     import importlib
 
     return importlib.import_module(MODELS[name].module).Model()
+
+
+@contextlib.contextmanager
+def opened_model(name: str) -> Iterator[PersonModel | None]:
+    """``open_person_model(name)`` for a ``with`` block, closed after it."""
+    model = open_person_model(name)
+    try:
+        yield model
+    finally:
+        if model is not None:
+            model.close()
 
 
 def available(name: str = DEFAULT_MODEL) -> bool:

@@ -15,7 +15,7 @@ from mocap.io.video import VideoInfo
 from mocap.lift.inputs import Inputs
 from mocap.lift.orientation import held_user_signs
 from mocap.lift.taylor import orientation_of_yaw, signs_of, yaw_of
-from mocap.person import NONE, open_person_model
+from mocap.person import NONE, opened_model
 from mocap.session.base import Session
 from mocap.session.silhouette import SilhouetteSession
 from mocap.track.calibration import UNIT_M, calibrate
@@ -65,8 +65,7 @@ def tracked_video(
     """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of, looking
     through the ``person`` model named (mocap.person), whose landmarks stand in for frame 0's marks if none."""
     marks = marks_of(notes) if person == NONE or notes.frames.get(0) and notes.frames[0].joints2d else None
-    model = open_person_model(person)
-    try:
+    with opened_model(person) as model:
         return track_clip(
             info,
             marks,
@@ -76,9 +75,6 @@ def tracked_video(
             remarks=remarks_of(notes),
             person=model,
         )
-    finally:
-        if model is not None:
-            model.close()
 
 
 def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:

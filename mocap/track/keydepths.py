@@ -42,11 +42,16 @@ def triangle_yaw(key: np.ndarray) -> np.ndarray:
     return np.degrees(np.arctan2(forward[..., 0], -forward[..., 2]))
 
 
+def side_of(yaw: float) -> str | None:
+    """ "left" or "right": the side a yaw (degrees) clearly (SIDE_MARGIN_DEG) faces; None near 0 and 180 or NaN."""
+    if not SIDE_MARGIN_DEG < abs(yaw) < 180.0 - SIDE_MARGIN_DEG:
+        return None
+    return "right" if yaw > 0 else "left"
+
+
 def turned_against(key: np.ndarray, turn: str | None) -> bool:
-    """Whether key joints (3, 3) face clearly (SIDE_MARGIN_DEG) to the other side than ``turn`` (None: either)."""
-    yaw = float(triangle_yaw(key))
-    clear = SIDE_MARGIN_DEG < abs(yaw) < 180.0 - SIDE_MARGIN_DEG
-    return turn is not None and clear and (yaw > 0) != (turn == "right")
+    """Whether key joints (3, 3) face clearly (``side_of``) to the other side than ``turn`` (None: either)."""
+    return turn is not None and side_of(float(triangle_yaw(key))) not in (None, turn)
 
 
 def frame_key_depths(rays: np.ndarray, depths: np.ndarray, sides: np.ndarray, turn: str | None) -> np.ndarray:

@@ -10,7 +10,7 @@ from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.person import SURE, Landmarks
 from mocap.track.calibration import KEY
-from mocap.track.keydepths import SIDE_MARGIN_DEG, triangle_yaw
+from mocap.track.keydepths import side_of, triangle_yaw
 from mocap.track.marks import check_key_triangle
 
 # the joints the head and trunk blocks and the key triangle rest on: a seed needs them seen
@@ -41,13 +41,6 @@ def facing_yaw(seen: Landmarks | None) -> float:
     if seen is None or (seen.confidence[list(KEY)] < SURE).any():
         return float("nan")
     return float(triangle_yaw(seen.world[list(KEY)] * TO_PINHOLE))
-
-
-def side_of(yaw: float) -> str | None:
-    """ "left" or "right": the side a yaw (degrees) clearly (SIDE_MARGIN_DEG) faces; None near 0 and 180 or NaN."""
-    if not SIDE_MARGIN_DEG < abs(yaw) < 180.0 - SIDE_MARGIN_DEG:
-        return None
-    return "right" if yaw > 0 else "left"
 
 
 def released(turns: list[str | None], starts: list[int], facing: np.ndarray) -> list[str | None]:

@@ -13,7 +13,8 @@ import numpy as np
 from mocap.camera import Pinhole
 from mocap.errors import MocapError
 from mocap.person import Landmarks
-from mocap.track.landmarks import facing_yaw, seed_marks, side_of
+from mocap.track.keydepths import side_of
+from mocap.track.landmarks import facing_yaw, seed_marks
 from mocap.track.parts import PARTS
 from mocap.track.tracker import BodyTracker
 
