@@ -53,9 +53,9 @@ class Player:
 
     def pose(self, frame: int) -> np.ndarray | None:
         """The animation's (16, 3) joints on ``frame``, made again after an edit."""
-        notes = self.state.annotations
-        if self._animation is None or self._animation[0] is not notes:
-            self._animation = (notes, self.state.animation()[0])
+        made = self.state.made_from
+        if self._animation is None or any(a is not b for a, b in zip(self._animation[0], made)):
+            self._animation = (made, self.state.animation()[0])
         joints = self._animation[1][frame]
         return None if not np.isfinite(joints).all() else joints
 

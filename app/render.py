@@ -34,7 +34,7 @@ class Rendering:
                 self._flash = None
                 self.scene.unflash()
             playing = self.player.playing and view.progress.ready  # (a new fit stops it)
-            self.reel.key = (self.state.annotations, self.placing, self.controls.show_landmarks.value, view.method)
+            self.reel.key = (*self.state.made_from, self.placing, self.controls.show_landmarks.value, view.method)
             with self.server.atomic():  # the images of a frame arrive with its 3D
                 if playing:  # from the reel (a picture sent now would only show after playing)
                     self.reel.show(view.index, keep=True)

@@ -185,6 +185,12 @@ class AppState(Preprocessing, Edits):
         with self._lock:
             return [] if self._session is None else self._session.review_stops()
 
+    @property
+    def made_from(self) -> tuple:
+        """What the animation and the pictures are made from: the annotations and the sessions (a refit,
+        with the person model switched or the same stage given again, makes new ones)."""
+        return self._annotations, self._fitted, self._tracked
+
     def animation(self) -> tuple[np.ndarray, float]:
         """The current animation: (F, 16, 3) pelvis-centred joints and the frame rate."""
         with self._lock:

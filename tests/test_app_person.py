@@ -74,9 +74,12 @@ def test_the_switch_refits_with_and_without_the_person_model(app, monkeypatch):
     with pytest.raises(MocapError, match="unknown person model"):
         state.set_person_model("openpose")
 
+    played = app.player.pose(0)  # Play's animation, before the refit
     app._learned_eyes(False)  # the checkbox's callback: off
     wait_refit(app)
     assert state.person_model == state._fitted.person_model == "none"
+    np.testing.assert_array_equal(app.player.pose(0), state.animation()[0][0])  # Play's, made anew
+    assert not np.array_equal(app.player.pose(0), played)
     assert all(s is None or (s.landmarks is None and s.learned is None) for s in state._silhouettes)
     assert "Eyes: silhouettes only" in c.status.content and "person model (" not in c.status.content
     assert c.learned_eyes.value is False and state.view().pose3d is not None
