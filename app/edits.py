@@ -31,6 +31,13 @@ def keyed(notes: Annotations, frame: int) -> Annotations:
     return replace(notes, keyframes=tuple(sorted({*notes.keyframes, frame})))
 
 
+def with_marks(notes: Annotations, marks: dict[str, tuple[float, float]]) -> Annotations:
+    """``notes`` with ``marks`` (joint -> (x, y)) placed on frame 0, the tracking method's marks."""
+    for name, xy in marks.items():
+        notes = notes.with_joint(0, name, xy)
+    return notes
+
+
 def placed(notes: Annotations, frame: int) -> dict[str, tuple[float, float]]:
     """The joint overrides of a frame (frame 0's: the tracking method's marks)."""
     return dict(notes.frames[frame].joints2d) if frame in notes.frames else {}
@@ -58,6 +65,10 @@ class Edits:
     def _apply(self, notes: Annotations) -> None:
         """Save first (atomically), then use: what is shown is on disk."""
         saving.save(self.path, notes)
+        self._use(notes)
+
+    def _use(self, notes: Annotations) -> None:
+        """(Under the lock) make ``notes`` the annotations the sessions work from."""
         self._annotations = notes
         for session in (self._fitted, self._tracked):
             if session is not None:
@@ -123,10 +134,7 @@ class Edits:
             marks = (proposed_marks(self._fitted) if fresh else None) or {}
 
         def change(notes: Annotations) -> Annotations:
-            notes = notes.with_method(method)
-            for name, xy in marks.items():
-                notes = notes.with_joint(0, name, xy)
-            return notes
+            return with_marks(notes.with_method(method), marks)
 
         return self.edit(self._frame, change)
 
@@ -137,12 +145,7 @@ class Edits:
                 raise MocapError("frame 0 has no silhouette fit to take the marks from yet")
             marks = marks_from_fit(self._fitted)
 
-        def change(notes: Annotations) -> Annotations:
-            for name, xy in marks.items():
-                notes = notes.with_joint(0, name, xy)
-            return notes
-
-        return self.edit(0, change)
+        return self.edit(0, lambda notes: with_marks(notes, marks))
 
     @property
     def silhouette_fitted(self) -> bool:
@@ -169,10 +172,7 @@ class Edits:
         try:
             self._apply(notes)
         except MocapError:
-            self._annotations = notes
-            for each in (self._fitted, self._tracked):
-                if each is not None:
-                    each.annotate(notes)
+            self._use(notes)
 
     def toggle_keyframe(self, frame: int) -> bool:
         """Mark ``frame`` as a keyframe, or unmark it."""

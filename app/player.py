@@ -23,15 +23,15 @@ class Player:
         self,
         state: AppState,
         refresh: Callable[[bool], None],
-        pick: Callable[[int], int] = lambda frame: frame,
-        ahead: Callable[[int, float], None] = lambda frame, until: None,
+        pick: Callable[[int], int],
+        ahead: Callable[[int, float], None],
     ):
         self.state, self._refresh, self._pick, self._ahead = state, refresh, pick, ahead
         self._lock = threading.Lock()  # start and stop come from any tab's callback thread
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._playing = False
-        self._animation: tuple[object, np.ndarray] | None = None  # (annotations, joints3d)
+        self._animation: tuple[tuple, np.ndarray] | None = None  # (state.made_from, joints3d)
 
     @property
     def playing(self) -> bool:

@@ -4,7 +4,7 @@ review queue and the tracking, in the words of the page (markdown)."""
 from __future__ import annotations
 
 from app.state import AppState, FrameView
-from app.words import joint_label, orientation_label
+from app.words import SIDE_WORDS, joint_label, orientation_label
 from mocap.person import NONE
 
 REVIEW_LINES = 8  # doubtful frames listed on the page
@@ -110,7 +110,7 @@ def far_arm_text(state: AppState) -> str:
     side = state.far_arm()
     if side is None:
         return ""
-    name = {"l": "left", "r": "right"}[side]
+    name = SIDE_WORDS[side]
     return (
         f"The tracker loses the **far arm** most: at each stop, check the **{name}** "
         f"elbow and wrist first (the performer's {name}, farther from the camera).\n\n"
