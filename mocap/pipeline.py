@@ -155,12 +155,13 @@ def fit_video_to_file(
     notes = load_annotations(annotations, info.frame_count) if annotations else Annotations()
     paths = {"json": Path(video).with_suffix(".motion.json")} | exports
     check_writable(*paths.values())
+    tracking = takes_tracking(method, notes)
     if masks is not None:
-        if takes_tracking(method, notes):
+        if tracking:
             raise MocapError("--masks needs the silhouette method (the tracking method finds no silhouettes)")
         check_writable_folder(masks)
     plate = background if background is not None else notes.background_source(annotations)
-    person = person_model(person, takes_tracking(method, notes))
+    person = person_model(person, tracking)
     session = open_session(
         info, notes, method=method, smooth=smooth, background=plate, progress=progress, person=person
     )
