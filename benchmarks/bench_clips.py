@@ -151,7 +151,7 @@ def mask_silhouettes(clip: Path, masks: Path, grow: int = 0, person: str = NONE)
 
     info = open_video(clip / "video.mp4")
     scale = processing_scale(info)
-    model, silhouettes = open_person_model(person), []
+    model, silhouettes = open_person_model(person, filtered=False), []
     try:
         for index, frame in iter_frames(info, scale=scale):
             path = masks / f"{index:06d}.png"
@@ -181,8 +181,8 @@ def mediapipe_clip(name: str, out_dir: Path) -> float:
 
 def mediapipe_motion(video: Path, out: Path, masks: Path | None = None) -> int:
     """MediaPipe Pose alone over a video's frames in order (cv2.VideoCapture, the model's
-    video mode), written to ``out`` as a mocap-motion file (CONTRACT.md): its landmarks
-    mapped to the 16 joints (mocap.person.mediapipe_pose) as joints2d and confidence, its
+    video mode with its own landmark smoothing, as it comes), written to ``out`` as a
+    mocap-motion file (CONTRACT.md): its landmarks mapped to the 16 joints (mocap.person.mediapipe_pose) as joints2d and confidence, its
     world landmarks as joints3d, every frame a keyframe; a frame where it sees nobody
     with null joints. With ``masks``, its mask (probability > 0.5) as each frame's
     silhouette there (empty where it sees nobody). The number of frames."""

@@ -66,7 +66,7 @@ def silhouette_passes(
         stage = FITTING if isinstance(product, FrameFit) else SILHOUETTES
         report(Progress(done[0], total, stage, frame=frame, product=product, final=final))
 
-    with opened_model(person) as model:
+    with opened_model(person, filtered=False) as model:  # the lift smooths the clip's landmarks both ways
         return fit_clip(info, background, model, shown)
 
 

@@ -133,3 +133,20 @@ def test_a_wrist_that_slips_on_one_frame_is_steadied_and_a_swing_is_kept():
     assert np.abs(wrist[keep, 0] - swing[keep]).max() < 1e-9
     assert np.array_equal(out[:, JOINT_INDEX["knee_l"]], joints[:, JOINT_INDEX["knee_l"]], equal_nan=True)
     assert np.isnan(out[25]).all()
+
+
+def test_landmarks_smoothed_both_ways_keep_a_steady_motion_and_halve_jitter():
+    """The person model's landmarks over a clip (lift.cues.smoothed): a joint moving steadily keeps its
+    place on every frame, the runs' ends included (no lag); a jittered one comes closer to its path; a frame
+    where nobody was seen stays unseen and the runs either side do not mix."""
+    from mocap.lift.cues import smoothed
+
+    path = np.arange(40.0)[:, None, None] * np.array([3.0, -1.5])
+    steady = path.copy()
+    steady[15:18] = np.nan
+    out = smoothed(steady, fps=25.0)
+    assert np.isnan(out[15:18]).all()
+    assert np.nanmax(np.abs(out - steady)) < 1e-9
+    jitter = path + np.random.default_rng(1).normal(0.0, 2.0, path.shape)
+    before = np.abs(jitter - path).mean()
+    assert np.abs(smoothed(jitter, fps=25.0) - path).mean() < 0.7 * before

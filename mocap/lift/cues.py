@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, SEGMENT_JOINTS
 from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, yaw_of
@@ -13,6 +14,7 @@ from mocap.smoothest import two_state_path
 
 SWITCH = 2.0  # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05  # limb lengths: evidence below this per frame says nothing
+SMOOTH_S = 0.04  # seconds: the spread of the landmarks' smoothing over time, about a frame of 25 fps
 DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from the fit's
 # joints (median) is one the person model got wrong
 _J = JOINT_INDEX
@@ -29,8 +31,9 @@ class Cues:
     world: np.ndarray
 
     @classmethod
-    def of(cls, landmarks: list) -> "Cues | None":
-        """The cues of per-frame ``mocap.person.Landmarks`` (None: nobody); None when none has any."""
+    def of(cls, landmarks: list, fps: float) -> "Cues | None":
+        """The cues of per-frame ``mocap.person.Landmarks`` (None: nobody), smoothed over time (``smoothed``);
+        None when none has any."""
         if all(m is None for m in landmarks):
             return None
         n = len(landmarks)
@@ -38,7 +41,7 @@ class Cues:
         for i, m in enumerate(landmarks):
             if m is not None:
                 joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
-        return cls(joints, conf, world)
+        return cls(smoothed(joints, fps), conf, smoothed(world, fps))
 
     def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
         """These cues less frames whose landmarks lie DISAGREE body heights (median, pairs either way)
@@ -58,6 +61,23 @@ class Cues:
     def seen(self) -> np.ndarray:
         """(F,) bool: frames where the model saw somebody."""
         return np.isfinite(self.joints2d).all(axis=(1, 2))
+
+
+def smoothed(points: np.ndarray, fps: float) -> np.ndarray:
+    """(F, ...) per-frame points, NaN where unseen, smoothed over time within each run of seen frames by a
+    Gaussian of SMOOTH_S seconds, both ways: the person model's per-frame jitter averaged out without the lag of
+    its own one-way filter (mocap.person reads each frame alone). A run's ends are extended point-symmetrically,
+    so a steady motion keeps its ends."""
+    sigma = SMOOTH_S * fps
+    seen = np.isfinite(points).reshape(len(points), -1).all(axis=1)
+    out = points.copy()
+    edges = np.flatnonzero(np.diff(np.r_[0, seen.astype(np.int8), 0]))
+    for start, stop in zip(edges[::2], edges[1::2]):
+        run = points[start:stop]
+        pad = min(len(run) - 1, int(np.ceil(4 * sigma)))
+        ext = np.concatenate([2 * run[0] - run[pad:0:-1], run, 2 * run[-1] - run[-2 : -pad - 2 : -1]])
+        out[start:stop] = gaussian_filter1d(ext, sigma, axis=0, mode="nearest")[pad : pad + len(run)]
+    return out
 
 
 def side_evidence(joints_image: np.ndarray, cues: Cues, limb_px: float) -> np.ndarray:

@@ -73,21 +73,23 @@ def check_name(name: str, where: str = "") -> str:
     return name
 
 
-def open_person_model(name: str = DEFAULT_MODEL) -> PersonModel | None:
-    """A fresh person model by name (None for "none"); a one-line MocapError if unknown or absent."""
+def open_person_model(name: str = DEFAULT_MODEL, filtered: bool = True) -> PersonModel | None:
+    """A fresh person model by name (None for "none"); a one-line MocapError if unknown or absent. ``filtered``:
+    its landmarks smoothed by the model's own one-way filter, for a reader of one frame at a time (the tracker);
+    off, each frame read alone, for one who smooths the clip's both ways (lift.cues)."""
     if check_name(name) == NONE:
         return None
     if not available(name):
         raise MocapError(install_hint(name))
     import importlib
 
-    return importlib.import_module(MODELS[name].module).Model()
+    return importlib.import_module(MODELS[name].module).Model(filtered)
 
 
 @contextlib.contextmanager
-def opened_model(name: str) -> Iterator[PersonModel | None]:
-    """``open_person_model(name)`` for a ``with`` block, closed after it."""
-    model = open_person_model(name)
+def opened_model(name: str, filtered: bool = True) -> Iterator[PersonModel | None]:
+    """``open_person_model(name, filtered)`` for a ``with`` block, closed after it."""
+    model = open_person_model(name, filtered)
     try:
         yield model
     finally:

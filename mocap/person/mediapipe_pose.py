@@ -40,11 +40,12 @@ _EARS, _SHOULDERS, _HIPS = (7, 8), (11, 12), (23, 24)
 
 
 class Model:
-    """MediaPipe Pose over one video's frames in order (``PersonModel``)."""
+    """MediaPipe Pose over one video's frames in order (``PersonModel``); ``filtered``: its landmarks smoothed
+    by its own one-way filter (mocap.person.open_person_model)."""
 
     name = "mediapipe"
 
-    def __init__(self):
+    def __init__(self, filtered: bool = True):
         NativeLogFilter.hold()
         try:
             with warnings.catch_warnings():
@@ -54,7 +55,7 @@ class Model:
                 self._pose = pose.Pose(
                     static_image_mode=False,
                     model_complexity=1,
-                    smooth_landmarks=True,
+                    smooth_landmarks=filtered,
                     enable_segmentation=True,
                     smooth_segmentation=True,
                 )
