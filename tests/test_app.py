@@ -238,11 +238,13 @@ def test_doubt_signs_on_made_up_joints():
 
 
 def test_doubts_name_segments_as_the_body_tab_does():
-    end_on = np.zeros(10, bool)
+    end_on, close = np.zeros(10, bool), np.zeros(10, bool)
     end_on[SEGMENT_INDEX["upper_arm_l"]] = True
+    close[SEGMENT_INDEX["lower_leg_r"]] = True
     limits = np.array([True, False, False, True])  # waist, and the right hip
-    assert review._reasons("S 0.9", False, end_on, limits, np.zeros(2, bool)) == (
+    assert review._reasons("S 0.9", False, end_on, close, limits, np.zeros(2, bool)) == (
         "upper arm L seen end-on",
+        "lower leg R: toward or away, a close call",
         "torso outside its joint limit",
         "upper leg R outside its joint limit",
     )

@@ -466,3 +466,24 @@ def test_short_runs_at_the_start_take_the_first_long_runs_name():
     names = ["right", "forward_right"] + ["right"] * 20 + ["forward_right"] * 3 + ["right"] * 20
     assert merge_short_runs(names, 12) == ["right"] * len(names)
     assert merge_short_runs([None, "left"] + ["backward_left"] * 15, 12) == [None] + ["backward_left"] * 16
+
+
+def test_min_marginals_are_the_best_path_through_each_state():
+    """signpath.min_marginals against every path of a small chain: the least total cost through each
+    state on each frame, and its least over the states is the Viterbi path's cost."""
+    import itertools
+
+    from mocap.lift.signpath import min_marginals, viterbi
+
+    rng = np.random.default_rng(3)
+    emission, transition = rng.uniform(0, 5, (5, 3)), rng.uniform(0, 5, (4, 3, 3))
+
+    def cost(path) -> float:
+        return emission[np.arange(5), path].sum() + sum(transition[f, path[f], path[f + 1]] for f in range(4))
+
+    paths = list(itertools.product(range(3), repeat=5))
+    through = min_marginals(emission, transition)
+    for f in range(5):
+        for s in range(3):
+            assert through[f, s] == pytest.approx(min(cost(p) for p in paths if p[f] == s))
+    assert through.min(axis=1) == pytest.approx(np.full(5, cost(viterbi(emission, transition))))

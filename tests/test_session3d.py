@@ -10,16 +10,18 @@ import numpy as np
 import pytest
 from helpers import render_walk, render_walk_with_exit
 
-from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES, segment_label
 from mocap.cli import main
 from mocap.io.annotations import Annotations, save_annotations
 from mocap.io.export.motion_json import read_motion
 from mocap.lift import solve
 from mocap.lift import taylor as lift
 from mocap.lift.orientation import NEGLIGIBLE
+from mocap.lift.signpath import WALL
 from mocap.lift.solve import WINDOW_S
 from mocap.pipeline import fit_video
 from mocap.session import SilhouetteSession as Session
+from mocap.session import review
 from mocap.synth.metrics import pa_mpjpe
 from mocap.synth.oracle import annotations_for_poses
 
@@ -188,7 +190,7 @@ def test_a_placed_joint_is_where_the_user_put_it(walk):
 
 
 def test_the_3d_keeps_every_held_sign(walk):
-    """A sign holds from its frame until its segment passes the image plane (held_user_signs):
+    """A sign holds from its frame until the user's next entry for it (held_user_signs, CONTRACT.md):
     on every frame it holds, the 3D has it, whatever the first guess and the clip's sign path say."""
     _, _, info, fits = walk
     session = Session(info, fits)
@@ -230,3 +232,23 @@ def test_a_fit_that_sees_no_hip_or_shoulder_width_still_lifts(walk):
         fps=info.fps,
     )
     assert np.isfinite(solve.lift_clip(clip).joints3d).all()
+
+
+def test_close_sign_calls_are_reviewed_and_a_sign_the_user_holds_is_none(walk, monkeypatch):
+    """The review names a segment whose two signs the clip solve finds nearly as good (its cost
+    margin, signpath.sign_margins, under CLOSE_CALL, here the clip's median); once the user holds
+    that sign the margin is a wall and the reason goes."""
+    _, _, info, fits = walk
+    session = Session(info, fits)
+    margins, person = session.sign_margins(), session.person
+    assert np.isfinite(margins[person]).all() and (margins[person] >= 0).all()
+    monkeypatch.setattr(review, "CLOSE_CALL", float(np.median(margins[person])))
+    inputs = session.inputs
+    close = review.close_calls(margins, review.seen_fractions(inputs.joints2d, inputs.px_per_unit, inputs.lengths))
+    frame, k = (int(v) for v in np.argwhere(close)[len(np.argwhere(close)) // 2])
+    words = f"{segment_label(SEGMENT_NAMES[k])}: toward or away, a close call"
+    assert words in next(d.reasons for d in session.review_queue() if d.frame == frame)
+    sign = TOWARD_AWAY[int(session.inputs.signs[frame, k])]
+    session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], sign))
+    assert session.sign_margins()[frame, k] >= WALL
+    assert not any(words in d.reasons for d in session.review_queue() if d.frame == frame)

@@ -24,6 +24,7 @@ LIMB_SEGMENTS = tuple(
     for side in "lr"
 )
 _PAIRS = ((0, 0), (0, 1), (1, 0), (1, 1))  # a limb's states: (upper, lower), 0 toward, 1 away
+_STATES = {1: ((0,), (1,)), 2: _PAIRS}  # a chain's states by its number of segments
 
 
 def sign_paths(
@@ -32,12 +33,38 @@ def sign_paths(
     """(F, 10) +1 / -1 over every person stretch of ``clip``, each segment's |dZ| taken from ``model``
     (F, 16, 3) model units at class lengths ``lengths``; ``walls`` (F, 10) signs that must hold beside
     the user's (0: free)."""
-    w, h = weights, BODY_HEIGHT
     out = np.where(np.asarray(clip.signs) < 0, -1, 1).astype(int)
+    for frames, segments, cost, flip in _chains(clip, model, lengths, weights, walls):
+        path = np.array(_STATES[len(segments)])[viterbi(cost, flip)]
+        out[frames, list(segments)] = np.where(path == 0, 1, -1)
+    return out
+
+
+def sign_margins(clip: ClipArrays, model: np.ndarray, lengths: np.ndarray, weights: Weights) -> np.ndarray:
+    """(F, 10) how much more the best sign paths (``sign_paths``) cost with each segment's sign on each
+    frame the other way: near 0 where toward and away explain the clip alike (a close call for the
+    user to look at), WALL and above where the user holds it; NaN without a person."""
+    out = np.full(clip.signs.shape, np.nan)
+    for frames, segments, cost, flip in _chains(clip, model, lengths, weights):
+        through = min_marginals(cost, flip)  # (n, S)
+        states = np.array(_STATES[len(segments)])  # (S, len(segments)) 0 toward, 1 away
+        for col, k in enumerate(segments):
+            toward = np.where(states[:, col] == 0, through, np.inf).min(axis=1)
+            away = np.where(states[:, col] == 1, through, np.inf).min(axis=1)
+            out[frames, k] = np.abs(toward - away)
+    return out
+
+
+def _chains(clip: ClipArrays, model: np.ndarray, lengths: np.ndarray, weights: Weights, walls=None):
+    """(frames, segments, cost (n, S), transition (n - 1, S, S)) of each sign chain of every person
+    stretch: the torso and the head alone (states _STATES[1]), each limb's two segments together
+    (_STATES[2]); the cost of a state its disagreement with the person model's signed depth (or
+    the first guess), a limb's also the hinge limit it breaks, a flip the accelerations it makes."""
+    w, h = weights, BODY_HEIGHT
     vec = model[:, SEGMENT_JOINTS[:, 1]] - model[:, SEGMENT_JOINTS[:, 0]]  # (F, 10, 3)
     size = np.abs(vec[..., 2])
     held = clip.held_signs() if walls is None else np.where(clip.held_signs() != 0, clip.held_signs(), walls)
-    measured = np.full(out.shape, np.nan)
+    measured = np.full(clip.signs.shape, np.nan)
     if clip.depths is not None:
         measured = np.where(held != 0, np.nan, clip.signs) * clip.depths * depth_scale(clip, lengths)
     sa = w.accel / (UNIT_M * clip.fps**2)
@@ -60,8 +87,7 @@ def sign_paths(
 
     for r in runs(clip.person):
         for k in (SEGMENT_INDEX["torso"], SEGMENT_INDEX["head"]):
-            path = viterbi(emission(k, r), flips(k, r)[:, None, None] * (1 - np.eye(2))[None])
-            out[r, k] = np.where(path == 0, 1, -1)
+            yield r, (k,), emission(k, r), flips(k, r)[:, None, None] * (1 - np.eye(2))[None]
         for upper, lower, hinge in LIMB_SEGMENTS:
             eu, el = emission(upper, r), emission(lower, r)
             cost = np.stack([eu[:, a] + el[:, b] for a, b in _PAIRS], axis=1)
@@ -70,9 +96,7 @@ def sign_paths(
             flip = np.stack(
                 [np.stack([fu * (a != c) + fl * (b != d) for c, d in _PAIRS], axis=1) for a, b in _PAIRS], axis=1
             )
-            path = np.array(_PAIRS)[viterbi(cost, flip)]
-            out[r, upper], out[r, lower] = np.where(path == 0, 1, -1).T
-    return out
+            yield r, (upper, lower), cost, flip
 
 
 def _hinge_costs(model, vec, size, lengths, upper: int, lower: int, hinge: int, w: Weights) -> np.ndarray:
@@ -91,6 +115,17 @@ def _hinge_costs(model, vec, size, lengths, upper: int, lower: int, hinge: int, 
         gap = np.maximum(-bend * np.einsum("fi,fi->f", np.cross(t, u), axis) / scale, 0.0)
         out[:, col] = 0.5 * (gap / sigma) ** 2
     return out
+
+
+def min_marginals(emission: np.ndarray, transition: np.ndarray) -> np.ndarray:
+    """(F, S) the least total cost of a path through each state on each frame (``viterbi``'s costs):
+    the least cost of reaching it plus that of going on from it."""
+    ahead, behind = emission.copy(), np.zeros(emission.shape)
+    for f in range(1, len(emission)):
+        ahead[f] += (ahead[f - 1][:, None] + transition[f - 1]).min(axis=0)
+    for f in range(len(emission) - 2, -1, -1):
+        behind[f] = (transition[f] + (emission[f + 1] + behind[f + 1])[None]).min(axis=1)
+    return ahead + behind
 
 
 def viterbi(emission: np.ndarray, transition: np.ndarray) -> np.ndarray:

@@ -152,6 +152,11 @@ class Session(ABC):
         """(F,) each frame's silhouette confidence (the silhouette method's), or None."""
         return None
 
+    def sign_margins(self) -> np.ndarray | None:
+        """(F, 10) how much the clip solve's cost rises with each sign the other way (the silhouette
+        method's, mocap.lift.signpath.sign_margins), or None."""
+        return None
+
     @property
     def background_warning(self) -> str | None:
         """What the user should know about the background (the silhouette method's)."""

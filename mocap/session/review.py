@@ -1,9 +1,10 @@
 """The review queue (the app's Review): which frames' fits deserve a look, and why.
 
 Signs of doubt over a session's resolved 2D joints: a low score (S of Eq. 3, or the tracking's
-reliability), a segment seen end-on (its direction and Eq. 5 depth least sure), a Table 1 joint
-limit broken, a likely left/right swap of hands or feet, a silhouette partly from a guessed
-background. Lost tracking stretches come first (``lost_stretches``); the tracking method
+reliability), a segment seen end-on (its direction and Eq. 5 depth least sure), a foreshortening
+sign the clip solve found a close call (toward and away cost nearly alike, on a segment whose depth
+is at stake), a Table 1 joint limit broken, a likely left/right swap of hands or feet, a
+silhouette partly from a guessed background; the closer a frame's closest call, the higher it ranks. Lost tracking stretches come first (``lost_stretches``); the tracking method
 otherwise stops evenly (``covering``).
 """
 
@@ -28,6 +29,9 @@ from mocap.track.loss import stretches
 
 LOW_SCORE = 0.7  # S below this is a doubtful fit
 END_ON_RATIO = 0.3  # seen length / length below this: the segment points at the camera
+AT_STAKE_RATIO = 0.95  # seen length / length below this: its sign moves the 3D (|dZ| >= 0.3 length)
+CLOSE_CALL = 2.0  # a sign's cost margin (signpath.sign_margins) below this: the two choices are
+# within a likelihood ratio of e^2 of each other
 SWAP_MARGIN = 0.5  # crossed distances below this fraction of the kept ones: a swap
 SWAP_MIN_MOVE = 0.03  # of the body height: smaller motions say nothing about sides
 REASON_WEIGHT = 0.3  # doubt added by each reason beyond the score's own 1 - S
@@ -44,11 +48,18 @@ class Doubt:
     reasons: tuple[str, ...]
 
 
-def end_on_segments(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """(F, 10) bool: segments seen shorter than END_ON_RATIO of their length."""
+def seen_fractions(joints2d: np.ndarray, px_per_unit: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(F, 10) each segment's length in the image over its length."""
     ends = joints2d[:, SEGMENT_JOINTS]
-    seen = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) / px_per_unit[:, None]
-    return seen < END_ON_RATIO * lengths
+    return np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=-1) / px_per_unit[:, None] / lengths
+
+
+def close_calls(margins: np.ndarray | None, seen: np.ndarray) -> np.ndarray:
+    """(F, 10) bool: signs whose cost ``margins`` are below CLOSE_CALL on segments at stake (``seen``
+    fractions below AT_STAKE_RATIO); none without margins."""
+    if margins is None:
+        return np.zeros(seen.shape, bool)
+    return (np.nan_to_num(margins, nan=np.inf) < CLOSE_CALL) & (seen < AT_STAKE_RATIO)
 
 
 def broken_limits(joints2d: np.ndarray) -> np.ndarray:
@@ -93,8 +104,12 @@ def review_queue(session) -> list[Doubt]:
     """Every doubtful frame with a person of a session, most doubtful first, after ``lost_stretches``."""
     inputs = session.inputs
     scores = session.scores
+    seen = seen_fractions(inputs.joints2d, inputs.px_per_unit, inputs.lengths)
+    margins = session.sign_margins()
+    close = close_calls(margins, seen)
     signs = (
-        end_on_segments(inputs.joints2d, inputs.px_per_unit, inputs.lengths),
+        seen < END_ON_RATIO,
+        close,
         broken_limits(inputs.joints2d),
         likely_swaps(inputs.joints2d, inputs.px_per_unit),
     )
@@ -105,8 +120,10 @@ def review_queue(session) -> list[Doubt]:
         reasons = _reasons(
             f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE, *(sign[i] for sign in signs)
         ) + (GUESSED,) * bool(guessed[i])
+        closest = 1.0 - margins[i][close[i]].min() / CLOSE_CALL if close[i].any() else 0.0
         if reasons:
-            queue.append(Doubt(int(i), float(1.0 - scores[i] + REASON_WEIGHT * len(reasons)), reasons))
+            value = 1.0 - scores[i] + REASON_WEIGHT * (len(reasons) + closest)
+            queue.append(Doubt(int(i), float(value), reasons))
     return lost_stretches(session) + sorted(queue, key=lambda d: (-d.value, d.frame))
 
 
@@ -135,11 +152,14 @@ def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:
     return lost + sorted(stops, key=lambda d: (-d.value, d.frame))
 
 
-def _reasons(score: str, low: bool, end_on: np.ndarray, limits: np.ndarray, swaps: np.ndarray) -> tuple[str, ...]:
+def _reasons(
+    score: str, low: bool, end_on: np.ndarray, close: np.ndarray, limits: np.ndarray, swaps: np.ndarray
+) -> tuple[str, ...]:
     """One frame's doubts in words (``score``: the frame's score, named)."""
     return (
         (f"low {score}",) * bool(low)
         + tuple(f"{segment_label(SEGMENT_NAMES[k])} seen end-on" for k in np.flatnonzero(end_on))
+        + tuple(f"{segment_label(SEGMENT_NAMES[k])}: toward or away, a close call" for k in np.flatnonzero(close))
         + tuple(f"{segment_label(name)} outside its joint limit" for name, bad in zip(ANGLE_LIMITS, limits) if bad)
         + tuple(f"{('hands', 'feet')[p]} may have swapped sides" for p in np.flatnonzero(swaps))
     )

@@ -17,11 +17,12 @@ from mocap.body import JOINT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
-from mocap.lift.clipdata import ClipArrays
+from mocap.lift.clipdata import ClipArrays, Weights
 from mocap.lift.cues import Cues
 from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.motion import Motion
 from mocap.lift.orientation import facing_evidence, guess_orientations
+from mocap.lift.signpath import sign_margins
 from mocap.lift.solve import Solution, lift_clip, resolve_edit
 from mocap.person import NONE
 from mocap.session.base import Session, said_of
@@ -190,6 +191,12 @@ class SilhouetteSession(Session):
         """The clip's solved 3D for the current annotations (``mocap.lift.solve``)."""
         self._solve()
         return self._solved[0][1]
+
+    def sign_margins(self) -> np.ndarray:
+        """(F, 10) the cost gaps of the solved signs (mocap.lift.signpath.sign_margins): small where
+        toward and away explain the clip alike."""
+        solution = self.solution()
+        return sign_margins(self.clip_arrays(), solution.model, solution.lengths, Weights())
 
     def _solve(self) -> Inputs:
         """The inputs shown, the clip solved again first where the annotations changed: from scratch
