@@ -4,8 +4,9 @@ Signs of doubt over a session's resolved 2D joints: a low score (S of Eq. 3, or 
 reliability), a segment seen end-on (its direction and Eq. 5 depth least sure), a foreshortening
 sign the clip solve found a close call (toward and away cost nearly alike, on a segment whose depth
 is at stake), a Table 1 joint limit broken, a likely left/right swap of hands or feet, a
-silhouette partly from a guessed background; the closer a frame's closest call, the higher it ranks. Lost tracking stretches come first (``lost_stretches``); the tracking method
-otherwise stops evenly (``covering``).
+silhouette partly from a guessed background; the closer a frame's closest call, the higher it
+ranks. Lost tracking stretches come first (``lost_stretches``); the tracking method otherwise stops
+evenly (``covering``).
 """
 
 from __future__ import annotations
