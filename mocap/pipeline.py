@@ -18,7 +18,7 @@ from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
 from mocap.io.fileio import check_writable, check_writable_folder
 from mocap.io.video import VideoInfo, open_video, processing_scale
-from mocap.person import DEFAULT_MODEL, NONE, available, check_name, install_hint, opened_model
+from mocap.person import DEFAULT_MODEL, NONE, PersonModel, available, check_name, install_hint, opened_model
 from mocap.session import Session, SilhouetteSession, TrackSession, tracked_video
 from mocap.session.review import Doubt
 from mocap.silhouette import Background, FrameFit, Silhouette, clip_background, fit_clip
@@ -55,10 +55,13 @@ def _quiet(_: Progress) -> None:
 
 
 def silhouette_passes(
-    info: VideoInfo, progress: Report | None = None, background: Background | None = None, person: str = NONE
+    info: VideoInfo,
+    progress: Report | None = None,
+    background: Background | None = None,
+    model: PersonModel | None = None,
 ) -> tuple[list[Silhouette | None], list[FrameFit]]:
-    """The silhouette method over a video, also seen by the ``person`` model named ("none":
-    background subtraction alone); each silhouette and fit reported as it comes."""
+    """The silhouette method over a video, also seen by the person ``model`` (None: background
+    subtraction alone); each silhouette and fit reported as it comes."""
     report, total, done = progress or _quiet, 2 * info.frame_count, [0]
 
     def shown(product: Silhouette | FrameFit | None, frame: int, final: bool) -> None:
@@ -66,8 +69,7 @@ def silhouette_passes(
         stage = FITTING if isinstance(product, FrameFit) else SILHOUETTES
         report(Progress(done[0], total, stage, frame=frame, product=product, final=final))
 
-    with opened_model(person, filtered=False) as model:  # the lift smooths the clip's landmarks both ways
-        return fit_clip(info, background, model, shown)
+    return fit_clip(info, background, model, shown)
 
 
 def fit_video(video: str | os.PathLike | VideoInfo, progress: Report | None = None) -> tuple[VideoInfo, list[FrameFit]]:
@@ -116,8 +118,10 @@ def open_session(
     notes = notes or Annotations()
     if takes_tracking(method, notes):
         return TrackSession(info, tracked(info, notes, progress, person), notes, smooth)
-    scene = clip_background(info, processing_scale(info), background)
-    silhouettes, fits = silhouette_passes(info, progress, scene, person)
+    # the model in its own process, loading while the background is read; unfiltered: the lift smooths both ways
+    with opened_model(person, filtered=False, apart=True) as model:
+        scene = clip_background(info, processing_scale(info), background)
+        silhouettes, fits = silhouette_passes(info, progress, scene, model)
     return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene, person=person)
 
 

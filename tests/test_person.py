@@ -23,7 +23,8 @@ from mocap.body import JOINT_INDEX
 from mocap.cli import main
 from mocap.errors import MocapError
 from mocap.io.export.motion_json import read_motion
-from mocap.person import CHOICES, DEFAULT_MODEL, NONE, PersonView, available, open_person_model
+from mocap.person import CHOICES, DEFAULT_MODEL, NONE, PersonView, available, open_person_model, watched
+from mocap.person.worker import Apart as Worker
 from mocap.synth import RenderOptions
 from mocap.synth.metrics import side_matched_errors
 from mocap.synth.walk import walk_cycle
@@ -122,6 +123,36 @@ def test_mediapipe_loads_offline_and_sees_the_performer(offline):
         assert np.allclose(marks.world[JOINT_INDEX["pelvis"]], 0.0)
         assert 0.4 < up[JOINT_INDEX["head_top"]] < 1.0
         assert -1.0 < up[[JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].max() < -0.4
+
+
+@pytest.mark.filterwarnings("ignore:SymbolDatabase.GetPrototype:UserWarning")  # mediapipe on protobuf 4.25
+def test_the_model_in_its_own_process_sees_what_it_sees_here():
+    """The person model opened apart (mocap.person.worker, the silhouette method's way: frames sent ahead of
+    their views) gives the views, frame for frame, that the same model gives in this process."""
+    pytest.importorskip("mediapipe", reason=f"mediapipe is not installed ({INSTALL} installs it)")
+    scene = synth.plan_scene(walk_cycle(CLIP["seconds"], SEEN.fps), SEEN)
+    frames = [synth.draw_frame(scene, i) for i in range(FRAMES)]
+    here, apart = open_person_model("mediapipe", filtered=False), Worker("mediapipe", filtered=False)
+    try:
+        near = [here.observe(f) for f in frames]
+        far = list(watched(apart, iter(frames)))
+    finally:
+        here.close()
+        apart.close()
+    assert [f is frame for (f, _), frame in zip(far, frames)] == [True] * FRAMES
+    assert all(v is not None for v in near)
+    for a, (_, b) in zip(near, far):
+        np.testing.assert_array_equal(a.mask, b.mask)
+        np.testing.assert_array_equal(a.landmarks.joints2d, b.landmarks.joints2d)
+
+
+def test_a_model_that_fails_in_its_own_process_says_why_in_one_line():
+    apart = Worker("bogus", filtered=False)
+    try:
+        with pytest.raises(MocapError, match="unknown person model 'bogus'"):
+            apart.observe(np.zeros((48, 64, 3), np.uint8))
+    finally:
+        apart.close()
 
 
 # -- without mediapipe ----------------------------------------------------------------------

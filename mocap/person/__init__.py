@@ -5,7 +5,9 @@ silhouette method's fit and lift. ``PersonModel`` is the interface, ``MODELS`` t
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+import multiprocessing
+import os
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -73,28 +75,44 @@ def check_name(name: str, where: str = "") -> str:
     return name
 
 
-def open_person_model(name: str = DEFAULT_MODEL, filtered: bool = True) -> PersonModel | None:
+def open_person_model(name: str = DEFAULT_MODEL, filtered: bool = True, apart: bool = False) -> PersonModel | None:
     """A fresh person model by name (None for "none"); a one-line MocapError if unknown or absent. ``filtered``:
     its landmarks smoothed by the model's own one-way filter, for a reader of one frame at a time (the tracker);
-    off, each frame read alone, for one who smooths the clip's both ways (lift.cues)."""
+    off, each frame read alone, for one who smooths the clip's both ways (lift.cues). ``apart``: in a process of
+    its own (person.worker) where there is a core to spare and this process may start one."""
     if check_name(name) == NONE:
         return None
     if not available(name):
         raise MocapError(install_hint(name))
+    if apart and (os.cpu_count() or 1) > 1 and not multiprocessing.current_process().daemon:
+        from mocap.person.worker import Apart
+
+        return Apart(name, filtered)
     import importlib
 
     return importlib.import_module(MODELS[name].module).Model(filtered)
 
 
 @contextlib.contextmanager
-def opened_model(name: str, filtered: bool = True) -> Iterator[PersonModel | None]:
-    """``open_person_model(name, filtered)`` for a ``with`` block, closed after it."""
-    model = open_person_model(name, filtered)
+def opened_model(name: str, filtered: bool = True, apart: bool = False) -> Iterator[PersonModel | None]:
+    """``open_person_model(name, filtered, apart)`` for a ``with`` block, closed after it."""
+    model = open_person_model(name, filtered, apart)
     try:
         yield model
     finally:
         if model is not None:
             model.close()
+
+
+def watched(model: PersonModel | None, frames: Iterable[np.ndarray]) -> Iterator[tuple[np.ndarray, PersonView | None]]:
+    """Each frame with the ``model``'s view of it (None: nobody, or no model); a model that can look ahead
+    (``watch``) is sent frames before their views are awaited."""
+    if model is None:
+        yield from ((frame, None) for frame in frames)
+    elif hasattr(model, "watch"):
+        yield from model.watch(frames)
+    else:
+        yield from ((frame, model.observe(frame)) for frame in frames)
 
 
 def available(name: str = DEFAULT_MODEL) -> bool:

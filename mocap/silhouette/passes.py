@@ -13,7 +13,7 @@ import numpy as np
 from mocap.body import BODY_HEIGHT, JOINTS, STANDING_PERCENTILE, reported_joints
 from mocap.image.percentile import nanpercentile, percentile
 from mocap.io.video import VideoInfo, iter_frames
-from mocap.person import Landmarks, PersonModel
+from mocap.person import Landmarks, PersonModel, watched
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.eyes import centred_on, fit_targets, fused_mask
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
@@ -99,9 +99,8 @@ def iter_silhouettes(
     """Pass one (section 3.2): each frame's Silhouette or None (background: ``plate.clip_background`` unless
     given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``)."""
     background = background or clip_background(info, scale)
-    for _, frame in iter_frames(info, scale=scale):
+    for frame, view in watched(person, (frame for _, frame in iter_frames(info, scale=scale))):
         classical = extract_silhouette(frame, background)
-        view = None if person is None else person.observe(frame)
         fused = None if view is None else fused_mask(classical, view.mask, background.held)
         if fused is None:
             yield Silhouette.from_mask(classical, frame)

@@ -1,0 +1,137 @@
+"""A person model in a process of its own (``Apart``), so that it looks at the next frames while this process
+fits the last: the model's graph holds a core, the silhouette method's fit the other. The process is a fresh
+interpreter running this module (never a fork of one that runs threads, nor a re-run of the caller's script);
+frames go to it and views come back pickled through its standard input and output. It is started at once and
+loads while the caller reads the background."""
+
+from __future__ import annotations
+
+import contextlib
+import pickle
+import queue
+import subprocess
+import sys
+import threading
+from collections import deque
+from collections.abc import Iterable, Iterator
+
+import numpy as np
+
+from mocap.errors import MocapError
+from mocap.person import PersonView
+
+AHEAD = 2  # frames sent before the first view is awaited: enough to keep the model busy
+PIPE_BYTES = 1 << 20  # Linux's default most for a pipe's buffer: a 640x480 frame, or its answer
+
+
+class Apart:
+    """The person model named, opened with ``filtered`` in a child process (``PersonModel``)."""
+
+    def __init__(self, name: str, filtered: bool):
+        self.name = name
+        self._child = subprocess.Popen(
+            [sys.executable, "-m", __name__, name, str(int(filtered))], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+        )
+        for pipe in (self._child.stdin, self._child.stdout):
+            _widen(pipe)
+        # frames are written by a thread of their own: a frame and an answer each fill a pipe, and the child
+        # writing an answer while this process writes the next frame would wait on each other
+        self._outbox: queue.Queue = queue.Queue()
+        self._writer = threading.Thread(target=self._write, name=f"person-{name}", daemon=True)
+        self._writer.start()
+
+    def observe(self, frame: np.ndarray) -> PersonView | None:
+        """Its view of the video's next BGR frame, None if it sees nobody."""
+        self._send(frame)
+        return self._receive()
+
+    def watch(self, frames: Iterable[np.ndarray]) -> Iterator[tuple[np.ndarray, PersonView | None]]:
+        """Each frame with its view, AHEAD frames sent before their views are awaited."""
+        sent: deque = deque()
+        for frame in frames:
+            self._send(frame)
+            sent.append(frame)
+            if len(sent) > AHEAD:
+                yield sent.popleft(), self._receive()
+        while sent:
+            yield sent.popleft(), self._receive()
+
+    def close(self) -> None:
+        """Its pipes closed (it reads the end of its input, or cannot write an answer left unread) and it ended."""
+        self._outbox.put(None)
+        with contextlib.suppress(OSError):
+            self._child.stdout.close()
+        self._writer.join(timeout=5.0)
+        try:
+            self._child.wait(timeout=5.0)
+        except subprocess.TimeoutExpired:
+            self._child.kill()
+            self._child.wait()
+
+    def _send(self, frame: np.ndarray) -> None:
+        self._outbox.put(np.ascontiguousarray(frame))
+
+    def _write(self) -> None:
+        """The writer thread: each frame put to the child's input, which is closed after the last (None)."""
+        try:
+            while (frame := self._outbox.get()) is not None:
+                pickle.dump(frame, self._child.stdin, protocol=5)
+                self._child.stdin.flush()
+        except (OSError, ValueError):  # it ended: the reader hears why, or that it stopped
+            pass
+        finally:
+            with contextlib.suppress(OSError):
+                self._child.stdin.close()
+
+    def _receive(self) -> PersonView | None:
+        """The next answer; the child's failure as a one-line MocapError."""
+        try:
+            answer = pickle.load(self._child.stdout)
+        except (EOFError, OSError, pickle.UnpicklingError):
+            raise self._stopped() from None
+        if isinstance(answer, MocapError):
+            raise answer
+        return answer
+
+    def _stopped(self) -> MocapError:
+        return MocapError(f"the person model {self.name!r} stopped (its process ended)")
+
+
+def _widen(pipe) -> None:
+    """The pipe's buffer grown to PIPE_BYTES where the system allows (Linux): a frame then goes in one write,
+    not in pieces, each of which the writer thread would wait for the interpreter to resume."""
+    with contextlib.suppress(ImportError, AttributeError, OSError):
+        import fcntl
+
+        fcntl.fcntl(pipe.fileno(), fcntl.F_SETPIPE_SZ, PIPE_BYTES)
+
+
+def serve(name: str, filtered: bool) -> None:
+    """The child: open the model, then answer every frame read from standard input with its view on standard
+    output, until the input ends; a failure is answered with a MocapError."""
+    from mocap.person import open_person_model
+
+    inbox, outbox = sys.stdin.buffer, sys.stdout.buffer
+    sys.stdout = sys.stderr  # nothing else may write into the answers
+    try:
+        model = open_person_model(name, filtered)
+    except MocapError as error:
+        pickle.dump(error, outbox)
+        outbox.flush()
+        return
+    try:
+        while True:
+            pickle.dump(model.observe(pickle.load(inbox)), outbox, protocol=5)
+            outbox.flush()
+    except (EOFError, BrokenPipeError):
+        pass
+    except Exception as error:  # the parent says it in one line
+        pickle.dump(MocapError(f"the person model {name!r} failed: {error}"), outbox)
+        outbox.flush()
+    finally:
+        model.close()
+
+
+if __name__ == "__main__":
+    with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C reaches the whole process group: the parent says it
+        serve(sys.argv[1], bool(int(sys.argv[2])))
