@@ -87,7 +87,7 @@ def open_person_model(name: str = DEFAULT_MODEL, filtered: bool = True, apart: b
     if apart and (os.cpu_count() or 1) > 1 and not multiprocessing.current_process().daemon:
         from mocap.person.worker import Apart
 
-        return Apart(name, filtered)
+        return Apart(name, MODELS[name].module, filtered)
     import importlib
 
     return importlib.import_module(MODELS[name].module).Model(filtered)

@@ -14,23 +14,26 @@ import sys
 import threading
 from collections import deque
 from collections.abc import Iterable, Iterator
+from typing import Any
 
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.person import PersonView
 
 AHEAD = 2  # frames sent before the first view is awaited: enough to keep the model busy
 PIPE_BYTES = 1 << 20  # Linux's default most for a pipe's buffer: a 640x480 frame, or its answer
 
 
 class Apart:
-    """The person model named, opened with ``filtered`` in a child process (``PersonModel``)."""
+    """The person model ``name``, the ``Model`` class of ``module`` opened with ``filtered`` in a child process
+    (mocap.person.PersonModel; its views are mocap.person.PersonView)."""
 
-    def __init__(self, name: str, filtered: bool):
+    def __init__(self, name: str, module: str, filtered: bool):
         self.name = name
         self._child = subprocess.Popen(
-            [sys.executable, "-m", __name__, name, str(int(filtered))], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+            [sys.executable, "-m", __name__, name, module, str(int(filtered))],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
         )
         for pipe in (self._child.stdin, self._child.stdout):
             _widen(pipe)
@@ -40,12 +43,12 @@ class Apart:
         self._writer = threading.Thread(target=self._write, name=f"person-{name}", daemon=True)
         self._writer.start()
 
-    def observe(self, frame: np.ndarray) -> PersonView | None:
+    def observe(self, frame: np.ndarray) -> Any:
         """Its view of the video's next BGR frame, None if it sees nobody."""
         self._send(frame)
         return self._receive()
 
-    def watch(self, frames: Iterable[np.ndarray]) -> Iterator[tuple[np.ndarray, PersonView | None]]:
+    def watch(self, frames: Iterable[np.ndarray]) -> Iterator[tuple[np.ndarray, Any]]:
         """Each frame with its view, AHEAD frames sent before their views are awaited."""
         sent: deque = deque()
         for frame in frames:
@@ -83,7 +86,7 @@ class Apart:
             with contextlib.suppress(OSError):
                 self._child.stdin.close()
 
-    def _receive(self) -> PersonView | None:
+    def _receive(self) -> Any:
         """The next answer; the child's failure as a one-line MocapError."""
         try:
             answer = pickle.load(self._child.stdout)
@@ -106,32 +109,34 @@ def _widen(pipe) -> None:
         fcntl.fcntl(pipe.fileno(), fcntl.F_SETPIPE_SZ, PIPE_BYTES)
 
 
-def serve(name: str, filtered: bool) -> None:
+def serve(name: str, module: str, filtered: bool) -> None:
     """The child: open the model, then answer every frame read from standard input with its view on standard
     output, until the input ends; a failure is answered with a MocapError."""
-    from mocap.person import open_person_model
+    import importlib
 
     inbox, outbox = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # nothing else may write into the answers
     try:
-        model = open_person_model(name, filtered)
-    except MocapError as error:
-        pickle.dump(error, outbox)
-        outbox.flush()
+        model = importlib.import_module(module).Model(filtered)
+    except Exception as error:
+        _answer(outbox, error if isinstance(error, MocapError) else MocapError(f"{name!r} does not load: {error}"))
         return
     try:
         while True:
-            pickle.dump(model.observe(pickle.load(inbox)), outbox, protocol=5)
-            outbox.flush()
+            _answer(outbox, model.observe(pickle.load(inbox)))
     except (EOFError, BrokenPipeError):
         pass
     except Exception as error:  # the parent says it in one line
-        pickle.dump(MocapError(f"the person model {name!r} failed: {error}"), outbox)
-        outbox.flush()
+        _answer(outbox, MocapError(f"the person model {name!r} failed: {error}"))
     finally:
         model.close()
 
 
+def _answer(outbox, answer) -> None:
+    pickle.dump(answer, outbox, protocol=5)
+    outbox.flush()
+
+
 if __name__ == "__main__":
     with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C reaches the whole process group: the parent says it
-        serve(sys.argv[1], bool(int(sys.argv[2])))
+        serve(sys.argv[1], sys.argv[2], bool(int(sys.argv[3])))

@@ -65,7 +65,7 @@ def tracked_video(
     """The video tracked from the marks of ``notes`` (marks_of, frame 0's orientation) and remarks_of, looking
     through the ``person`` model named (mocap.person), whose landmarks stand in for frame 0's marks if none."""
     marks = marks_of(notes) if person == NONE or notes.frames.get(0) and notes.frames[0].joints2d else None
-    with opened_model(person) as model:
+    with opened_model(person, apart=True) as model:  # in its own process, looking ahead of the tracker
         return track_clip(
             info,
             marks,

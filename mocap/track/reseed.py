@@ -1,11 +1,12 @@
 """Tracking from several seeds, beyond the paper: the body marked again on later frames, or seen by the person model
-(``Seer``) where the tracker has none yet or lost it (landmarks.seed_marks); each seed is tracked forward and backward
-to the frames before it, each frame taking the track that still holds the body (``merged``)."""
+where the tracker has none yet or lost it (landmarks.seed_marks); each seed is tracked forward and backward to the
+frames before it, each frame taking the track that still holds the body (``merged``)."""
 
 from __future__ import annotations
 
 import copy
 from collections.abc import Callable, Iterable
+from itertools import repeat
 from typing import NamedTuple
 
 import numpy as np
@@ -18,7 +19,6 @@ from mocap.track.landmarks import facing_yaw, seed_marks
 from mocap.track.parts import PARTS
 from mocap.track.tracker import BodyTracker
 
-Seer = Callable[[np.ndarray], Landmarks | None]  # the person model's view of each frame, in order
 NOBODY = "the person model sees nobody to track in the video: mark the 16 joints on a frame that shows the body"
 
 
@@ -126,13 +126,14 @@ def track_seeded(
     camera: Pinhole | None,
     turn: str | None,
     fps: float,
-    seer: Seer | None = None,
+    views: Iterable[Landmarks | None] | None = None,
 ) -> Track:
-    """Track ``frames`` from every seed (frame -> (16, 2) marks) and where ``seer`` seeds a body none holds, forward
-    and backward between seeds, ``merged``; ``progress(done)`` after every frame."""
-    run = _Run(seeds, camera, turn, fps, seer is not None)
-    for i, frame in enumerate(frames):
-        run.add(i, frame, seer(frame) if seer else None)
+    """Track ``frames`` from every seed (frame -> (16, 2) marks) and where the person model's ``views`` (each
+    frame's landmarks, None: nobody; None: no model) seed a body none holds, forward and backward between seeds,
+    ``merged``; ``progress(done)`` after every frame."""
+    run = _Run(seeds, camera, turn, fps, views is not None)
+    for i, (frame, seen) in enumerate(zip(frames, repeat(None) if views is None else views)):
+        run.add(i, frame, seen)
         if progress:
             progress(i + 1)
     return run.track()

@@ -5,8 +5,9 @@ person model (mocap.person) its landmarks propose the marks, seed a lost body an
 
 from __future__ import annotations
 
+import itertools
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,13 +17,13 @@ from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, li
 from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
-from mocap.person import PersonModel
+from mocap.person import Landmarks, PersonModel, watched
 from mocap.track.keydepths import Turns
 from mocap.track.loss import GAP_S, bridged, joint_confidence
 from mocap.track.marks import check_marks
 from mocap.track.parts import HEAD, LIMBS, PART_JOINTS, PARTS, TORSO
 from mocap.track.perspective import reconstruct, steady_depths, to_contract
-from mocap.track.reseed import Seer, Track, track_seeded
+from mocap.track.reseed import Track, track_seeded
 
 Progress = Callable[[int, int], None]
 LOW_RELIABILITY = 0.5  # a part matched this much worse than usual is taken as hidden
@@ -76,12 +77,12 @@ def track_frames(
     turn: str | None = None,
     fps: float = 25.0,
     remarks: dict[int, np.ndarray] | None = None,
-    seer: Seer | None = None,
+    views: Iterable[Landmarks | None] | None = None,
 ) -> Track:
-    """Track ``marks`` (16, 2) of frame 0 (None: the ``seer``'s) and ``remarks`` (frame -> marks) through BGR
-    ``frames`` (reseed.track_seeded)."""
+    """Track ``marks`` (16, 2) of frame 0 (None: the person model's ``views``) and ``remarks`` (frame -> marks)
+    through BGR ``frames`` (reseed.track_seeded)."""
     seeds = {**(remarks or {}), **({} if marks is None else {0: marks})}
-    return track_seeded(frames, seeds, progress, camera, turn, fps, seer)
+    return track_seeded(frames, seeds, progress, camera, turn, fps, views)
 
 
 def joint_reliability(similarity: np.ndarray) -> np.ndarray:
@@ -203,11 +204,10 @@ def track_clip(
     }
     turn = turn_of(orientation)
     step = (lambda done: progress(done, info.frame_count)) if progress else None
-    frames = (frame for _, frame in iter_frames(info, scale=scale))
+    frames, views = _looked_at(person, (frame for _, frame in iter_frames(info, scale=scale)))
     camera = default_camera(info.width, info.height, focal_px)
-    seer = None if person is None else lambda frame: _landmarks(person, frame)
     joints, similarity, parts, lost, facing = track_frames(
-        frames, marks, step, camera.scaled(scale), turn, info.fps, seeds, seer
+        frames, marks, step, camera.scaled(scale), turn, info.fps, seeds, views
     )
     joints = (joints + 0.5) / scale - 0.5
     reliability = joint_reliability(similarity)
@@ -223,10 +223,13 @@ def track_clip(
     return TrackResult(info, joints2d, reliability, joints3d, camera.focal, joint_confidence(parts), lost, facing)
 
 
-def _landmarks(person: PersonModel, frame: np.ndarray):
-    """The person model's landmarks on ``frame`` (its pixels), None where it sees nobody."""
-    view = person.observe(frame)
-    return None if view is None else view.landmarks
+def _looked_at(person: PersonModel | None, frames: Iterator[np.ndarray]) -> tuple[Iterator, Iterator | None]:
+    """``frames`` and, in step with them, the ``person`` model's landmarks on each (None: nobody), the model
+    looking ahead where it can (person.watched); no landmarks without a model."""
+    if person is None:
+        return frames, None
+    a, b = itertools.tee(watched(person, frames))
+    return (frame for frame, _ in a), (None if view is None else view.landmarks for _, view in b)
 
 
 def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
