@@ -5,8 +5,7 @@ shows its state by icon and word (circle-dot "toward": the far end points at the
 from __future__ import annotations
 
 from app.state import FrameView
-from app.words import segment_label
-from mocap.body import AWAY, SEGMENT_INDEX, SEGMENT_NAMES, SIDES, TOWARD, limb
+from mocap.body import AWAY, SEGMENT_INDEX, SEGMENT_NAMES, SIDES, TOWARD, limb, segment_label
 
 # sign -> (word, icon, colour)
 SIGN_LOOK = {TOWARD: ("toward", "circle-dot", (94, 60, 153)), AWAY: ("away", "circle-x", (240, 200, 60))}

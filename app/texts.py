@@ -4,7 +4,8 @@ review queue and the tracking, in the words of the page (markdown)."""
 from __future__ import annotations
 
 from app.state import AppState, FrameView
-from app.words import SIDE_WORDS, joint_label, orientation_label
+from app.words import joint_label, orientation_label
+from mocap.body import SIDE_WORDS
 from mocap.person import NONE
 
 REVIEW_LINES = 8  # doubtful frames listed on the page

@@ -1,12 +1,11 @@
-"""The page's plain words for the contract's names: joints ("wrist_l" -> "left wrist"), segments
-("upper_arm_l" -> "left upper arm") and orientations ("forward_left" -> "front, turned to image left");
-the dropdowns show these and map the choice back (``chosen``)."""
+"""The page's plain words for the contract's names: joints ("wrist_l" -> "left wrist") and orientations
+("forward_left" -> "front, turned to image left"; segments: mocap.body.segment_label, which the review's reasons
+share); the dropdowns show these and map the choice back (``chosen``)."""
 
 from __future__ import annotations
 
-from mocap.body import JOINTS, ORIENTATIONS
+from mocap.body import JOINTS, ORIENTATIONS, sided_label
 
-SIDE_WORDS = {"l": "left", "r": "right"}
 JOINT_WORDS = {"head_top": "top of the head"}
 ORIENTATION_WORDS = {
     "left": "side-on, facing image left",
@@ -18,21 +17,9 @@ ORIENTATION_WORDS = {
 }
 
 
-def _sided(name: str) -> str:
-    """'upper_arm_l' -> 'left upper arm'; 'torso' -> 'torso'."""
-    if name.endswith(("_l", "_r")):
-        return f"{SIDE_WORDS[name[-1]]} {name[:-2].replace('_', ' ')}"
-    return name.replace("_", " ")
-
-
 def joint_label(joint: str) -> str:
     """A joint's name for people: 'wrist_l' -> 'left wrist' (the performer's left)."""
-    return JOINT_WORDS.get(joint) or _sided(joint)
-
-
-def segment_label(segment: str) -> str:
-    """A segment's name for people: 'lower_arm_l' -> 'left lower arm'."""
-    return _sided(segment)
+    return JOINT_WORDS.get(joint) or sided_label(joint)
 
 
 def orientation_label(orientation: str) -> str:

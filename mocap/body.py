@@ -63,10 +63,19 @@ def segment_kind(segment: str) -> str:
     return segment[:-2] if segment.endswith(("_l", "_r")) else segment
 
 
+SIDE_WORDS = {"l": "left", "r": "right"}  # the performer's own sides
+
+
+def sided_label(name: str) -> str:
+    """A joint's or segment's name for people: 'upper_arm_l' -> 'left upper arm'; 'torso' -> 'torso'."""
+    if name.endswith(("_l", "_r")):
+        return f"{SIDE_WORDS[name[-1]]} {name[:-2].replace('_', ' ')}"
+    return name.replace("_", " ")
+
+
 def segment_label(segment: str) -> str:
-    """A segment's name for people: 'upper_arm_l' -> 'upper arm L'; 'torso' -> 'torso'."""
-    kind = segment_kind(segment).replace("_", " ")
-    return kind if kind == segment else f"{kind} {segment[-1].upper()}"
+    """A segment's name for people, as the app's buttons and the review's reasons say it: 'left upper arm'."""
+    return sided_label(segment)
 
 
 LENGTH = np.array([_KIND_LENGTH[segment_kind(s)] for s in SEGMENT_NAMES])

@@ -243,10 +243,10 @@ def test_doubts_name_segments_as_the_body_tab_does():
     close[SEGMENT_INDEX["lower_leg_r"]] = True
     limits = np.array([True, False, False, True])  # waist, and the right hip
     assert review._reasons("S 0.9", False, end_on, close, limits, np.zeros(2, bool)) == (
-        "upper arm L seen end-on",
-        "lower leg R: toward or away, a close call",
+        "left upper arm seen end-on",
+        "right lower leg: toward or away, a close call",
         "torso outside its joint limit",
-        "upper leg R outside its joint limit",
+        "right upper leg outside its joint limit",
     )
 
 

@@ -15,8 +15,8 @@ from app_helpers import TINY_FRAMES, app, tiny_video  # noqa: F401
 from app.controls import NO_JOINT
 from app.layout import MIN_SHARE, MIN_SHEET, PAIRS, PANELS, Layout, is_phone
 from app.reel import LEAD_S
-from app.words import JOINT_CHOICES, ORIENTATION_CHOICES, joint_label, orientation_label, segment_label
-from mocap.body import JOINTS, ORIENTATIONS
+from app.words import JOINT_CHOICES, ORIENTATION_CHOICES, joint_label, orientation_label
+from mocap.body import JOINTS, ORIENTATIONS, segment_label
 
 SHAPES = {"4x3": (320, 240), "16x9": (384, 216), "9x16": (216, 384)}
 
