@@ -7,6 +7,7 @@ loads while the caller reads the background."""
 from __future__ import annotations
 
 import contextlib
+import os
 import pickle
 import queue
 import subprocess
@@ -114,12 +115,14 @@ def serve(name: str, module: str, filtered: bool) -> None:
     output, until the input ends; a failure is answered with a MocapError."""
     import importlib
 
-    inbox, outbox = sys.stdin.buffer, sys.stdout.buffer
-    sys.stdout = sys.stderr  # nothing else may write into the answers
+    inbox, outbox = sys.stdin.buffer, os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)  # what else writes to standard output, Python or native, goes to standard error, not the answers
+    sys.stdout = sys.stderr
     try:
         model = importlib.import_module(module).Model(filtered)
     except Exception as error:
-        _answer(outbox, error if isinstance(error, MocapError) else MocapError(f"{name!r} does not load: {error}"))
+        said = f"the person model {name!r} does not load: {error}"
+        _answer(outbox, error if isinstance(error, MocapError) else MocapError(said))
         return
     try:
         while True:
