@@ -7,6 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# The pinhole's axes (x right, y down, z away from the camera) against CONTRACT.md's (x right, y up, z toward
+# the camera): a point's coordinates times FLIP_YZ are the other frame's, either way.
+FLIP_YZ = np.array([1.0, -1.0, -1.0])
+
 
 @dataclass(frozen=True)
 class Pinhole:

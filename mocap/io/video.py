@@ -84,6 +84,12 @@ def iter_frames(
         reader.close()
 
 
+def rescaled(points: np.ndarray, factor: float) -> np.ndarray:
+    """Pixel coordinates (..., 2) in a frame ``factor`` times as large: pixel centres stay pixel centres (a
+    point at 0 is the first pixel's centre, whose left edge is -0.5)."""
+    return (np.asarray(points, float) + 0.5) * factor - 0.5
+
+
 def read_frame(info: VideoInfo, index: int, scale: float = 1.0) -> np.ndarray:
     """Frame `index` (random access: seek, or decode forward when seeking is unreliable)."""
     if not 0 <= index < info.frame_count:

@@ -14,6 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from mocap.errors import MocapError
+from mocap.io.video import rescaled
 
 DEFAULT_MODEL = "mediapipe"
 NONE = "none"  # the paper's classical path: no person model
@@ -32,7 +33,7 @@ class Landmarks:
 
     def scaled(self, factor: float) -> "Landmarks":
         """The same landmarks with the 2D in pixels of a frame ``factor`` times as large."""
-        return Landmarks((self.joints2d + 0.5) * factor - 0.5, self.confidence, self.world)
+        return Landmarks(rescaled(self.joints2d, factor), self.confidence, self.world)
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, JOINTS, SEGMENT_JOINTS, STANDING_PERCENTILE
-from mocap.camera import default_camera
+from mocap.camera import FLIP_YZ, default_camera
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo
@@ -216,7 +216,7 @@ class TrackSession(Session):
         """(inputs with orientation, signs and lengths read back from the 3D; joints pelvis-centred in
         the contract frame; the pelvis in the camera frame, the root)."""
         joints3d = to_contract(camera)
-        root = camera[:, JOINT_INDEX["pelvis"]] * np.array([1.0, -1.0, -1.0])
+        root = camera[:, JOINT_INDEX["pelvis"]] * FLIP_YZ
         n = len(joints)
         yaw = np.array([yaw_of(pose) for pose in joints3d])
         ends = joints3d[:, SEGMENT_JOINTS]

@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS
-from mocap.camera import Pinhole
+from mocap.camera import FLIP_YZ, Pinhole
 from mocap.errors import MocapError
 from mocap.track.marks import KEY_TRIANGLE, turned_apart
 
@@ -28,7 +28,7 @@ CHEST_RANGE = (0.45, 0.85)
 MAX_CALIBRATION_ERROR = 0.03  # of the marked body's size: a worse fit is refused
 NEWTON_STEPS = 30
 # body frame -> pinhole frame facing the camera (left to image right, up to image up, forward to the camera)
-FACING_CAMERA = np.diag([1.0, -1.0, -1.0])
+FACING_CAMERA = np.diag(FLIP_YZ)
 
 
 def model_skeleton() -> np.ndarray:

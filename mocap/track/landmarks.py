@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.camera import FLIP_YZ
 from mocap.errors import MocapError
 from mocap.person import SURE, Landmarks
 from mocap.track.calibration import KEY
@@ -17,7 +18,6 @@ from mocap.track.marks import check_key_triangle
 SEED_JOINTS = tuple(
     JOINT_INDEX[j] for j in ("head_top", "neck", "chest", "pelvis", "shoulder_l", "shoulder_r", "hip_l", "hip_r")
 )
-TO_PINHOLE = np.array([1.0, -1.0, -1.0])  # CONTRACT.md's 3D (y up, z toward the camera) -> the camera's
 
 
 def seed_marks(seen: Landmarks | None, shape: tuple) -> np.ndarray | None:
@@ -40,7 +40,7 @@ def facing_yaw(seen: Landmarks | None) -> float:
     """The facing yaw in degrees (as Calibration.yaw) of the model's 3D key triangle, NaN where unsure of it."""
     if seen is None or (seen.confidence[list(KEY)] < SURE).any():
         return float("nan")
-    return float(triangle_yaw(seen.world[list(KEY)] * TO_PINHOLE))
+    return float(triangle_yaw(seen.world[list(KEY)] * FLIP_YZ))
 
 
 def released(turns: list[str | None], starts: list[int], facing: np.ndarray) -> list[str | None]:

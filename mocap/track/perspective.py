@@ -9,7 +9,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from mocap import body
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_JOINTS
-from mocap.camera import Pinhole
+from mocap.camera import FLIP_YZ, Pinhole
 from mocap.smoothest import DEPTH_SMOOTH_S, two_state_path
 from mocap.track.calibration import KEY, MODEL, UNIT_M
 from mocap.track.keydepths import Turns, body_axes, key_joints, mirror_images, turned_against
@@ -251,5 +251,5 @@ def steady_depths(points: np.ndarray, fps: float) -> np.ndarray:
 
 def to_contract(points: np.ndarray) -> np.ndarray:
     """Pinhole joints (..., 16, 3) -> CONTRACT.md's frame: metres, pelvis origin, x right, y up, z to camera."""
-    out = points * np.array([1.0, -1.0, -1.0])
+    out = points * FLIP_YZ
     return out - out[..., JOINT_INDEX["pelvis"] : JOINT_INDEX["pelvis"] + 1, :]

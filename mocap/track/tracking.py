@@ -16,7 +16,7 @@ from scipy.ndimage import gaussian_filter1d
 from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, limb
 from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
-from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale
+from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale, rescaled
 from mocap.person import Landmarks, PersonModel, watched
 from mocap.track.keydepths import Turns
 from mocap.track.loss import GAP_S, bridged, joint_confidence
@@ -196,9 +196,9 @@ def track_clip(
     info = video if isinstance(video, VideoInfo) else open_video(video)
     scale = processing_scale(info)
     if marks is not None:
-        marks = (check_marks(marks, info.width, info.height) + 0.5) * scale - 0.5
+        marks = rescaled(check_marks(marks, info.width, info.height), scale)
     seeds = {
-        f: (check_marks(m, info.width, info.height) + 0.5) * scale - 0.5
+        f: rescaled(check_marks(m, info.width, info.height), scale)
         for f, m in (remarks or {}).items()
         if 0 < f < info.frame_count
     }
@@ -209,7 +209,7 @@ def track_clip(
     joints, similarity, parts, lost, facing = track_frames(
         frames, marks, step, camera.scaled(scale), turn, info.fps, seeds, views
     )
-    joints = (joints + 0.5) / scale - 0.5
+    joints = rescaled(joints, 1.0 / scale)
     reliability = joint_reliability(similarity)
     joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
     joints2d = fill_unreliable(joints, reliability)
