@@ -35,6 +35,7 @@ class Apart:
             [sys.executable, "-m", __name__, name, module, str(int(filtered))],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
+            env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)},  # the modules seen here
         )
         for pipe in (self._child.stdin, self._child.stdout):
             _widen(pipe)
