@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -56,23 +57,44 @@ class Edits:
                 return False
             if key:
                 after = keyed(after, frame)
-            self._apply(after)
+            self._apply(after, frame)
             self._history.record(before, after, frame)
             self._frame = frame
         self._changed()
+        self._settle_soon()
         return True
 
-    def _apply(self, notes: Annotations) -> None:
+    def _apply(self, notes: Annotations, focus: int | None = None) -> None:
         """Save first (atomically), then use: what is shown is on disk."""
         saving.save(self.path, notes)
-        self._use(notes)
+        self._use(notes, focus)
 
-    def _use(self, notes: Annotations) -> None:
-        """(Under the lock) make ``notes`` the annotations the sessions work from."""
+    def _use(self, notes: Annotations, focus: int | None = None) -> None:
+        """(Under the lock) make ``notes`` the annotations the sessions work from, resolved around ``focus``
+        (the edited frame) first: the rest waits for ``_settle_soon``."""
         self._annotations = notes
         for session in (self._fitted, self._tracked):
             if session is not None:
-                session.annotate(notes)
+                session.annotate(notes, focus)
+
+    _settler: threading.Thread | None = None
+
+    def _settle_soon(self) -> None:
+        """What an edit left for later (the clip solve's windows away from its frame) solved on a thread of its
+        own, the page shown again once it is done."""
+        self._settler = threading.Thread(target=self._settle, daemon=True, name="mocap-settle")
+        self._settler.start()
+
+    def wait_settled(self, timeout: float | None = None) -> None:
+        """Return once what the last edit left for later is solved (or ``timeout`` seconds passed)."""
+        if self._settler is not None:
+            self._settler.join(timeout)
+
+    def _settle(self) -> None:
+        with self._lock:
+            settled = [session.settle() for session in (self._fitted, self._tracked) if session is not None]
+        if any(settled):
+            self._changed()
 
     def undo(self) -> int | None:
         """Undo the last edit; returns its frame (now current), None if nothing to undo."""
@@ -87,10 +109,11 @@ class Edits:
             step = self._history.peek(back)
             if step is None:
                 return None
-            self._apply(step[0])
+            self._apply(step[0], step[1])
             self._history.move(back)
             self._frame = step[1]
         self._changed()
+        self._settle_soon()
         return step[1]
 
     def flip_sign(self, frame: int, segment: str) -> bool:

@@ -252,3 +252,33 @@ def test_close_sign_calls_are_reviewed_and_a_sign_the_user_holds_is_none(walk, m
     session.annotate(session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], sign))
     assert session.sign_margins()[frame, k] >= WALL
     assert not any(words in d.reasons for d in session.review_queue() if d.frame == frame)
+
+
+def test_an_edit_solves_around_its_frame_first_and_the_rest_when_settled(walk, monkeypatch):
+    """With the frame the user looks at (annotate's focus), a sign held from frame 5 on is solved within
+    WINDOW_S of that frame at once, the frames beyond when the session settles (the app does it on a thread):
+    then the 3D keeps the sign on every frame it holds, and nothing is left."""
+    _, _, info, fits = walk
+    session = Session(info, fits)
+    session.lifted()
+    solved = []
+
+    class Counted(solve.Problem):
+        def __init__(self, clip, frames, base, free, *args):
+            solved.append(int(free.sum()))
+            super().__init__(clip, frames, base, free, *args)
+
+    monkeypatch.setattr(solve, "Problem", Counted)
+    frame = 5
+    k = int(np.argmax(lift.depth_fractions(session.pose3d(frame))))
+    sign = -int(session.inputs.signs[frame, k])
+    notes = session.annotations.with_foreshortening(frame, SEGMENT_NAMES[k], TOWARD_AWAY[sign])
+    session.annotate(notes, focus=frame)
+    assert lift.signs_of(session.pose3d(frame))[k] == sign
+    reach = int(round(WINDOW_S * info.fps))
+    assert 0 < sum(solved) <= 2 * reach + 1
+    assert session.settle() and not session.settle()
+    held = session.held_signs()
+    assert (held[:, k] == sign).sum() > 2 * reach + 1
+    ends = session.lifted()[:, SEGMENT_JOINTS, 2]
+    assert ((ends[..., 1] - ends[..., 0]) * held > 0)[held != 0].all()

@@ -134,25 +134,39 @@ def frames_to_solve(
 
 
 def resolve_edit(
-    clip: ClipArrays, solved: list[tuple[ClipArrays, Solution]], weights: Weights = Weights()
-) -> tuple[Solution, np.ndarray]:
-    """(solution, (F,) bool the frames solved again) of ``clip`` after edits, from the earlier
-    (clip, solution) of ``solved`` that asks the fewest frames to solve again (``frames_to_solve``;
-    the first of equals): windows of WINDOW_S either side of those frames (``solve_window``), none
-    when one already holds (an undo, a sign set back), the whole clip (``lift_clip``) when none
-    has the same person frames."""
+    clip: ClipArrays, solved: list[tuple[ClipArrays, Solution]], weights: Weights = Weights(), focus: int | None = None
+) -> tuple[Solution, list[slice]]:
+    """(solution, the windows left to solve) of ``clip`` after edits, from the earlier (clip, solution)
+    of ``solved`` that asks the fewest frames to solve again (``frames_to_solve``; the first of equals):
+    windows of WINDOW_S either side of those frames (``solve_window``), none when one already holds (an
+    undo, a sign set back), the whole clip (``lift_clip``) when none has the same person frames. With
+    ``focus`` (the frame the user looks at) only WINDOW_S either side of it is solved now, the rest left
+    (``solve_windows`` finishes them): a sign held from a frame on may ask for the rest of the clip."""
     best = None
     for before, solution in solved:
         frames = frames_to_solve(clip, before, solution, weights)
         if frames is not None and (best is None or frames.sum() < best[1].sum()):
             best = (solution, frames)
     if best is None:
-        return lift_clip(clip, weights), clip.person
+        return lift_clip(clip, weights), []
     solution, frames = best
-    if not frames.any():
-        return solution, frames
     reach = max(1, int(round(WINDOW_S * clip.fps)))
-    frames = binary_dilation(frames, iterations=reach) & clip.person
-    for window in runs(frames):
+    windows = runs(binary_dilation(frames, iterations=reach) & clip.person) if frames.any() else []
+    if focus is None:
+        return solve_windows(clip, solution, windows, weights), []
+    now, later = [], []
+    for w in windows:
+        if not w.start <= focus < w.stop:
+            later.append(w)
+            continue
+        near = slice(max(w.start, focus - reach), min(w.stop, focus + reach + 1))
+        now.append(near)
+        later += [part for part in (slice(w.start, near.start), slice(near.stop, w.stop)) if part.stop > part.start]
+    return solve_windows(clip, solution, now, weights), later
+
+
+def solve_windows(clip: ClipArrays, solution: Solution, windows: list[slice], weights: Weights = Weights()) -> Solution:
+    """``solution`` with each of ``windows`` solved again in turn (``solve_window``)."""
+    for window in windows:
         solution = solve_window(clip, solution, window, weights)
-    return solution, frames
+    return solution

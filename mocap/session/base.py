@@ -34,6 +34,7 @@ class Session(ABC):
         self.info, self.smooth = info, smooth
         self._annotations = annotations or Annotations()
         self._queue: list[Doubt] | None = None
+        self._focus: int | None = None  # the frame the last edit was made on (annotate)
 
     @property
     def annotations(self) -> Annotations:
@@ -43,9 +44,14 @@ class Session(ABC):
     def n_frames(self) -> int:
         return self.info.frame_count
 
-    def annotate(self, annotations: Annotations) -> None:
-        """Take new annotations; what they change is resolved again when next needed."""
-        self._annotations, self._queue = annotations, None
+    def annotate(self, annotations: Annotations, focus: int | None = None) -> None:
+        """Take new annotations; what they change is resolved again when next needed, around ``focus`` (the
+        frame the user looks at) first where the method can, the rest at ``settle``."""
+        self._annotations, self._queue, self._focus = annotations, None, focus
+
+    def settle(self) -> bool:
+        """Finish what an edit left for later (``annotate``'s focus); whether there was anything."""
+        return False
 
     @property
     @abstractmethod
@@ -139,7 +145,8 @@ class Session(ABC):
         return [k for k in self._annotations.keyframe_indices(self.n_frames) if person[k]]
 
     def motion(self) -> Motion:
-        """Keyframes' 3D, the frames between interpolated (mocap.lift.motion)."""
+        """Keyframes' 3D, the frames between interpolated (mocap.lift.motion), every edit settled."""
+        self.settle()
         keys = self.keyframes()
         if not keys:
             raise MocapError(f"{self.info.path}: no keyframe shows a person, nothing to lift")

@@ -23,7 +23,7 @@ from mocap.lift.inputs import Inputs, resolve_inputs
 from mocap.lift.motion import Motion
 from mocap.lift.orientation import facing_evidence, guess_orientations
 from mocap.lift.signpath import sign_margins
-from mocap.lift.solve import Solution, lift_clip, resolve_edit
+from mocap.lift.solve import Solution, lift_clip, resolve_edit, solve_windows
 from mocap.person import NONE
 from mocap.session.base import Session, said_of
 from mocap.silhouette.background import Background
@@ -59,6 +59,7 @@ class SilhouetteSession(Session):
         self._resolved: Inputs | None = None
         self._shown: tuple[Inputs, Inputs] | None = None  # the resolved inputs solved last, and as shown
         self._solved: list[tuple[ClipArrays, Solution]] = []  # the latest first, SOLUTIONS_KEPT of them
+        self._later: list[slice] = []  # windows of the latest solution an edit left for settle()
 
     @cached_property
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -134,8 +135,8 @@ class SilhouetteSession(Session):
         """(F,) each frame's fit score (Eq. 3's S), NaN where nobody was found."""
         return np.array([np.nan if f.score is None else f.score for f in self.fits], float)
 
-    def annotate(self, annotations: Annotations) -> None:
-        super().annotate(annotations)
+    def annotate(self, annotations: Annotations, focus: int | None = None) -> None:
+        super().annotate(annotations, focus)
         self._resolved = None
 
     def _resolve(self) -> Inputs:
@@ -198,17 +199,36 @@ class SilhouetteSession(Session):
         solution = self.solution()
         return sign_margins(self.clip_arrays(), solution.model, solution.lengths, Weights())
 
+    def settle(self) -> bool:
+        """Solve the windows an edit left for later (``annotate``'s focus); whether there were any."""
+        self._solve()
+        if not self._later:
+            return False
+        clip, solution = self._solved[0]
+        self._solved[0] = (clip, solve_windows(clip, solution, self._later))
+        self._later, self._queue = [], None
+        self._show(self._shown[0], clip, self._solved[0][1])
+        return True
+
     def _solve(self) -> Inputs:
         """The inputs shown, the clip solved again first where the annotations changed: from scratch
-        the first time, after that from the nearest earlier solution (``resolve_edit``)."""
+        the first time, after that from the nearest earlier solution (``resolve_edit``; with the edit's
+        focus, its window now and the rest at ``settle``)."""
         resolved = self._resolve()
         if self._shown is None or self._shown[0] is not resolved:
             clip = ClipArrays.of(resolved, self.info.fps, self.confidence(), self.placed())
-            solution = resolve_edit(clip, self._solved)[0] if self._solved else lift_clip(clip)
+            if self._solved:
+                solution, self._later = resolve_edit(clip, self._solved, focus=self._focus)
+            else:
+                solution, self._later = lift_clip(clip), []
             self._solved = [(clip, solution)] + self._solved[: SOLUTIONS_KEPT - 1]
-            signs = np.where(clip.person[:, None], solution.signs, resolved.signs)
-            self._shown = (resolved, replace(resolved, signs=signs))
+            self._show(resolved, clip, solution)
         return self._shown[1]
+
+    def _show(self, resolved: Inputs, clip: ClipArrays, solution: Solution) -> None:
+        """The inputs shown: ``resolved`` with the signs of ``solution``'s 3D."""
+        signs = np.where(clip.person[:, None], solution.signs, resolved.signs)
+        self._shown = (resolved, replace(resolved, signs=signs))
 
 
 class NearLimbs:

@@ -143,9 +143,9 @@ class TrackSession(Session):
         the body (mocap.track.loss.joint_confidence)."""
         return self.tracked.confidence.astype(float)
 
-    def annotate(self, annotations: Annotations) -> None:
+    def annotate(self, annotations: Annotations, focus: int | None = None) -> None:
         """Take new annotations; new marks (frame 0 or a re-mark) need a new session (tracked_video)."""
-        super().annotate(annotations)
+        super().annotate(annotations, focus)
         self._resolution = None
 
     def far_arm(self) -> str | None:
