@@ -91,9 +91,16 @@ class Edits:
             self._settler.join(timeout)
 
     def _settle(self) -> None:
-        with self._lock:
-            settled = [session.settle() for session in (self._fitted, self._tracked) if session is not None]
-        if any(settled):
+        """Settle the sessions a piece at a time, the lock let go between pieces (a frame change waits for one
+        piece at most), then show the page again."""
+        settled = False
+        while True:
+            with self._lock:
+                pieces = [session.settle(most=1) for session in (self._fitted, self._tracked) if session is not None]
+            if not any(pieces):
+                break
+            settled = True
+        if settled:
             self._changed()
 
     def undo(self) -> int | None:

@@ -32,6 +32,8 @@ from mocap.lift.taylor import runs, signs_of
 # its neighbours, the sign path to the stretch around it)
 WINDOW_S = 0.2
 # frames either side of a window held in its problem: the acceleration reaches two frames
+LATER_FRAMES = 30  # frames of the windows left for later solved at a time: about 60 ms, which the app
+# holds its lock for (a frame change waits no longer)
 CONTEXT = 2
 
 
@@ -161,8 +163,9 @@ def resolve_edit(
             continue
         near = slice(max(w.start, focus - reach), min(w.stop, focus + reach + 1))
         now.append(near)
-        later += [part for part in (slice(w.start, near.start), slice(near.stop, w.stop)) if part.stop > part.start]
-    return solve_windows(clip, solution, now, weights), later
+        later += [slice(w.start, near.start), slice(near.stop, w.stop)]
+    pieces = [slice(a, min(a + LATER_FRAMES, w.stop)) for w in later for a in range(w.start, w.stop, LATER_FRAMES)]
+    return solve_windows(clip, solution, now, weights), pieces
 
 
 def solve_windows(clip: ClipArrays, solution: Solution, windows: list[slice], weights: Weights = Weights()) -> Solution:

@@ -49,8 +49,9 @@ class Session(ABC):
         frame the user looks at) first where the method can, the rest at ``settle``."""
         self._annotations, self._queue, self._focus = annotations, None, focus
 
-    def settle(self) -> bool:
-        """Finish what an edit left for later (``annotate``'s focus); whether there was anything."""
+    def settle(self, most: int | None = None) -> bool:
+        """Finish what an edit left for later (``annotate``'s focus), at most ``most`` pieces of it (None: all);
+        whether there was anything."""
         return False
 
     @property

@@ -199,14 +199,16 @@ class SilhouetteSession(Session):
         solution = self.solution()
         return sign_margins(self.clip_arrays(), solution.model, solution.lengths, Weights())
 
-    def settle(self) -> bool:
-        """Solve the windows an edit left for later (``annotate``'s focus); whether there were any."""
+    def settle(self, most: int | None = None) -> bool:
+        """Solve the windows an edit left for later (``annotate``'s focus), at most ``most`` of them (None:
+        all); whether there were any."""
         self._solve()
         if not self._later:
             return False
+        now, self._later = self._later[:most], self._later[len(self._later[:most]) :]
         clip, solution = self._solved[0]
-        self._solved[0] = (clip, solve_windows(clip, solution, self._later))
-        self._later, self._queue = [], None
+        self._solved[0] = (clip, solve_windows(clip, solution, now))
+        self._queue = None
         self._show(self._shown[0], clip, self._solved[0][1])
         return True
 
