@@ -32,9 +32,9 @@ from mocap.lift.taylor import runs, signs_of
 # its neighbours, the sign path to the stretch around it)
 WINDOW_S = 0.2
 # frames either side of a window held in its problem: the acceleration reaches two frames
+CONTEXT = 2
 LATER_FRAMES = 30  # frames of the windows left for later solved at a time: about 60 ms, which the app
 # holds its lock for (a frame change waits no longer)
-CONTEXT = 2
 
 
 @dataclass(frozen=True, eq=False)
