@@ -36,6 +36,20 @@ def walk(tmp_path_factory):
     return video, truth, info, fits
 
 
+@pytest.fixture
+def solved_frames(monkeypatch) -> list[int]:
+    """The number of frames each of the clip solve's problems (mocap.lift.solve.Problem) solves, from here on."""
+    solved: list[int] = []
+
+    class Counted(solve.Problem):
+        def __init__(self, clip, frames, base, free, *args):
+            solved.append(int(free.sum()))
+            super().__init__(clip, frames, base, free, *args)
+
+    monkeypatch.setattr(solve, "Problem", Counted)
+    return solved
+
+
 def test_fit_with_annotations_writes_3d_and_every_export(walk, tmp_path):
     video, truth, _, _ = walk
     notes = tmp_path / "a.json"
@@ -151,20 +165,14 @@ def test_bad_annotations_stop_the_fit_before_it_starts(walk, tmp_path, capsys):
     assert not out.exists()
 
 
-def test_a_sign_click_resolves_a_window_not_the_clip(walk, monkeypatch):
+def test_a_sign_click_resolves_a_window_not_the_clip(walk, solved_frames):
     """A sign click solves again the frames within WINDOW_S of those whose inputs it changed
     (its own, and those whose first guess changed where the 3D does not keep it), not the clip."""
     _, _, info, fits = walk
     session = Session(info, fits)
     session.lifted()
-    solved = []
-
-    class Counted(solve.Problem):
-        def __init__(self, clip, frames, base, free, *args):
-            solved.append(int(free.sum()))
-            super().__init__(clip, frames, base, free, *args)
-
-    monkeypatch.setattr(solve, "Problem", Counted)
+    solved = solved_frames
+    solved.clear()  # what the edit below solves, not the first lift above
     clip_before, solution = session.clip_arrays(), session.solution()
     frame = 12
     flip_deepest(session, frame)
@@ -254,21 +262,15 @@ def test_close_sign_calls_are_reviewed_and_a_sign_the_user_holds_is_none(walk, m
     assert not any(words in d.reasons for d in session.review_queue() if d.frame == frame)
 
 
-def test_an_edit_solves_around_its_frame_first_and_the_rest_when_settled(walk, monkeypatch):
+def test_an_edit_solves_around_its_frame_first_and_the_rest_when_settled(walk, solved_frames):
     """With the frame the user looks at (annotate's focus), a sign held from frame 5 on is solved within
     WINDOW_S of that frame at once, the frames beyond when the session settles (the app does it on a thread, a
     piece of LATER_FRAMES at a time): then the 3D keeps the sign on every frame it holds, and nothing is left."""
     _, _, info, fits = walk
     session = Session(info, fits)
     session.lifted()
-    solved = []
-
-    class Counted(solve.Problem):
-        def __init__(self, clip, frames, base, free, *args):
-            solved.append(int(free.sum()))
-            super().__init__(clip, frames, base, free, *args)
-
-    monkeypatch.setattr(solve, "Problem", Counted)
+    solved = solved_frames
+    solved.clear()  # what the edit below solves, not the first lift above
     frame = 5
     k = int(np.argmax(lift.depth_fractions(session.pose3d(frame))))
     sign = -int(session.inputs.signs[frame, k])
