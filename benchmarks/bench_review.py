@@ -21,21 +21,22 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.body import SEGMENT_JOINTS
 from mocap.pipeline import open_session
 from mocap.session.review import close_calls, seen_fractions
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 CLIPS = SHARED / "data" / "clips"
-COUNTED = 0.1  # the scorer's SIGN_MIN_RATIO: signs of segments flatter than this are not scored
 
 
 def true_signs(clip: Path) -> tuple[np.ndarray, np.ndarray]:
-    """(F, 10) the truth's signs (+1 toward) and (F, 10) bool, which the scorer counts."""
+    """(F, 10) the truth's signs (+1 toward) and (F, 10) bool, which the scorer counts (its own contract.signs
+    and SIGN_MIN_RATIO, from ../shared/bench)."""
+    sys.path.insert(0, str(SHARED / "bench"))
+    from contract import SIGN_MIN_RATIO, signs
+
     joints = np.array([f["joints3d"] for f in json.loads((clip / "truth.json").read_text())["frames"]], float)
-    vec = joints[:, SEGMENT_JOINTS[:, 1]] - joints[:, SEGMENT_JOINTS[:, 0]]
-    ratio = np.abs(vec[..., 2]) / np.linalg.norm(vec, axis=-1)
-    return np.where(vec[..., 2] >= 0, 1, -1), ratio >= COUNTED
+    toward, ratio = signs(joints)
+    return np.where(toward, 1, -1), ratio >= SIGN_MIN_RATIO
 
 
 def row(clip: Path) -> dict:
