@@ -150,3 +150,25 @@ def test_landmarks_smoothed_both_ways_keep_a_steady_motion_and_halve_jitter():
     jitter = path + np.random.default_rng(1).normal(0.0, 2.0, path.shape)
     before = np.abs(jitter - path).mean()
     assert np.abs(smoothed(jitter, fps=25.0) - path).mean() < 0.7 * before
+
+
+@pytest.mark.skipif(not CMU_WALK.exists(), reason="needs ../shared/data/bvh (real motion capture)")
+@pytest.mark.parametrize("view", ["front", "three-quarter", "side"])
+def test_a_stretch_the_person_model_saw_as_its_mirror_image_is_put_right(view):
+    """A person model that takes a back for a front gives the depth mirror image (left and right exchanged,
+    depths negated) for a stretch of frames (lift.cues.Cues.unmirrored): a real walk's landmarks with a third
+    of a second so read come back as they were, and the walk as seen is left alone."""
+    from mocap.body import MIRROR_JOINTS
+    from mocap.lift.cues import Cues
+
+    fps = 30.0
+    truth = seen(contract_joints(read_bvh(CMU_WALK))[::4], view, fps)
+    given = Cues(truth.joints2d, np.ones(truth.joints2d.shape[:2]), truth.joints3d)
+    assert given.unmirrored(fps) is given
+    stretch = slice(40, 50)
+    joints, world = truth.joints2d.copy(), truth.joints3d.copy()
+    joints[stretch] = joints[stretch][:, MIRROR_JOINTS]
+    world[stretch] = world[stretch][:, MIRROR_JOINTS] * [1.0, 1.0, -1.0]
+    put_right = Cues(joints, given.confidence, world).unmirrored(fps)
+    assert np.allclose(put_right.joints2d, truth.joints2d)
+    assert np.allclose(put_right.world, truth.joints3d)

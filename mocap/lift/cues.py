@@ -8,16 +8,19 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from mocap.body import JOINT_INDEX, LIMB_JOINTS, SEGMENT_JOINTS
-from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, yaw_of
-from mocap.smoothest import two_state_path
+from mocap.body import JOINT_INDEX, LIMB_JOINTS, MIRROR_JOINTS, SEGMENT_JOINTS
+from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, runs, yaw_of
+from mocap.smoothest import smoothest_states, two_state_path
 
 SWITCH = 2.0  # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05  # limb lengths: evidence below this per frame says nothing
 SMOOTH_S = 0.04  # seconds: the spread of the landmarks' smoothing over time, about a frame of 25 fps
 DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from the fit's
 # joints (median) is one the person model got wrong
+MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror image costs, in the units of
+# Cues.unmirrored's acceleration (radians of facing, limb lengths of limb joints, per frame squared)
 _J = JOINT_INDEX
+_LIMB_JOINTS = np.array([_J[f"{j}_{s}"] for j in ("elbow", "wrist", "knee", "ankle") for s in "lr"])
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
 
 
@@ -41,7 +44,8 @@ class Cues:
         for i, m in enumerate(landmarks):
             if m is not None:
                 joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
-        return cls(smoothed(joints, fps), conf, smoothed(world, fps))
+        raw = cls(joints, conf, world).unmirrored(fps)
+        return cls(smoothed(raw.joints2d, fps), raw.confidence, smoothed(raw.world, fps))
 
     def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
         """These cues less frames whose landmarks lie DISAGREE body heights (median, pairs either way)
@@ -57,6 +61,40 @@ class Cues:
             np.where(wrong[:, None, None], np.nan, self.world),
         )
 
+    def unmirrored(self, fps: float) -> "Cues":
+        """These cues with the frames the model saw from the wrong side put right. A person model that takes a
+        back for a front sees the depth mirror image, which projects alike: its facing yaw becomes 180 - yaw and
+        its left and right are exchanged. Now and then it does so for a stretch of frames, and the body seems to
+        make a half turn in a frame and its limbs to jump between sides. Within each run of seen frames each
+        frame is read as given or as its mirror image, whichever path is smoothest (``smoothest_states``: the
+        least acceleration of the facing direction, in radians, and of the limb joints, in limb lengths); a
+        frame read as a mirror image costs MIRRORED_COST_S per second, so only such jumps are undone."""
+        seen = self.seen
+        mirrored = np.zeros(len(seen), bool)
+        if not seen.any():
+            return self
+        limb = 0.5 * float(np.median(np.ptp(self.joints2d[seen, :, 1], axis=1)))  # half the body's height
+        yaw = np.radians(world_yaws(self))
+        for r in runs(seen):
+            if r.stop - r.start < 3:
+                continue
+            facing = np.stack([yaw[r], np.pi - yaw[r]], axis=1)
+            limbs = self.joints2d[r][:, [_LIMB_JOINTS, MIRROR_JOINTS[_LIMB_JOINTS]]] / max(limb, 1e-6)
+            values = np.concatenate(
+                [np.stack([np.cos(facing), np.sin(facing)], axis=-1), limbs.reshape(len(facing), 2, -1)], axis=-1
+            )
+            cost = np.zeros((len(facing), 2))
+            cost[:, 1] = MIRRORED_COST_S / fps
+            mirrored[r] = smoothest_states(values, cost) == 1
+        if not mirrored.any():
+            return self
+        world = self.world.copy()
+        world[mirrored] = world[mirrored][:, MIRROR_JOINTS] * np.array([1.0, 1.0, -1.0])
+        joints, confidence = self.joints2d.copy(), self.confidence.copy()
+        joints[mirrored] = joints[mirrored][:, MIRROR_JOINTS]
+        confidence[mirrored] = confidence[mirrored][:, MIRROR_JOINTS]
+        return Cues(joints, confidence, world)
+
     @property
     def seen(self) -> np.ndarray:
         """(F,) bool: frames where the model saw somebody."""
@@ -71,12 +109,11 @@ def smoothed(points: np.ndarray, fps: float) -> np.ndarray:
     sigma = SMOOTH_S * fps
     seen = np.isfinite(points).reshape(len(points), -1).all(axis=1)
     out = points.copy()
-    edges = np.flatnonzero(np.diff(np.r_[0, seen.astype(np.int8), 0]))
-    for start, stop in zip(edges[::2], edges[1::2]):
-        run = points[start:stop]
+    for r in runs(seen):
+        run = points[r]
         pad = min(len(run) - 1, int(np.ceil(4 * sigma)))
         ext = np.concatenate([2 * run[0] - run[pad:0:-1], run, 2 * run[-1] - run[-2 : -pad - 2 : -1]])
-        out[start:stop] = gaussian_filter1d(ext, sigma, axis=0, mode="nearest")[pad : pad + len(run)]
+        out[r] = gaussian_filter1d(ext, sigma, axis=0, mode="nearest")[pad : pad + len(run)]
     return out
 
 
