@@ -32,7 +32,7 @@ GONE = slice(15, 30)  # frames the performer is out of the picture
 class FakeModel:
     """A person model that sees the truth's joints on the frames of ``seen`` (sure of all 16), nobody elsewhere."""
 
-    name = "fake"
+    name, filtered = "fake", True
 
     def __init__(self, truth, seen):
         self.truth, self.seen, self.frame = truth, set(seen), 0

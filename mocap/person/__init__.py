@@ -45,9 +45,11 @@ class PersonView:
 
 
 class PersonModel(Protocol):
-    """A person model over one video: ``observe`` each BGR uint8 frame in order (None: nobody seen)."""
+    """A person model over one video: ``observe`` each BGR uint8 frame in order (None: nobody seen); ``filtered``
+    as opened (``open_person_model``)."""
 
     name: str
+    filtered: bool
 
     def observe(self, frame: np.ndarray) -> PersonView | None: ...
 

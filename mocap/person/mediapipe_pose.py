@@ -46,6 +46,7 @@ class Model:
     name = "mediapipe"
 
     def __init__(self, filtered: bool = True):
+        self.filtered = filtered
         NativeLogFilter.hold()
         try:
             with warnings.catch_warnings():

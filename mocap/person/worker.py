@@ -30,7 +30,7 @@ class Apart:
     (mocap.person.PersonModel; its views are mocap.person.PersonView)."""
 
     def __init__(self, name: str, module: str, filtered: bool):
-        self.name = name
+        self.name, self.filtered = name, filtered
         self._child = subprocess.Popen(
             [sys.executable, "-m", __name__, name, module, str(int(filtered))],
             stdin=subprocess.PIPE,

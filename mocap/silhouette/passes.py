@@ -13,7 +13,8 @@ import numpy as np
 from mocap.body import BODY_HEIGHT, JOINTS, STANDING_PERCENTILE, reported_joints
 from mocap.image.percentile import nanpercentile, percentile
 from mocap.io.video import VideoInfo, iter_frames
-from mocap.person import Landmarks, PersonModel, watched
+from mocap.person import Landmarks, PersonModel, open_person_model, watched
+from mocap.person.steady import steadied
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.eyes import centred_on, fit_targets, fused_mask
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
@@ -97,9 +98,13 @@ def iter_silhouettes(
     info: VideoInfo, scale: float, background: Background | None = None, person: PersonModel | None = None
 ) -> Iterator[Silhouette | None]:
     """Pass one (section 3.2): each frame's Silhouette or None (background: ``plate.clip_background`` unless
-    given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``)."""
+    given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``), its sight steadied
+    (``person.steady.steadied``)."""
     background = background or clip_background(info, scale)
-    for frame, view in watched(person, (frame for _, frame in iter_frames(info, scale=scale))):
+    seen = watched(person, (frame for _, frame in iter_frames(info, scale=scale)))
+    if person is not None:
+        seen = steadied(seen, info.fps, lambda: open_person_model(person.name, person.filtered))
+    for frame, view in seen:
         classical = extract_silhouette(frame, background)
         fused = None if view is None else fused_mask(classical, view.mask, background.held)
         if fused is None:

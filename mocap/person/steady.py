@@ -1,0 +1,70 @@
+"""A person model's sight over a clip, steadied: a body it keeps for less than MIN_RUN_S is taken for a patch of
+the scene it mistook (a figure bent over, head down, that it does not see), and a body it keeps is looked for
+backward from where it was first found, as a model that tracks in video mode follows a body it could not find.
+(MediaPipe Pose finds a body by its face and then follows it: from behind it finds nobody until the performer
+turns, then follows them turned away again.)"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator
+
+import numpy as np
+
+from mocap.person import PersonModel, PersonView
+
+MIN_RUN_S = 0.5  # seconds a body must be kept for the model's sight of it to count
+LOOK_BACK_S = 10.0  # seconds of frames without a body kept for a backward look (their memory's bound)
+
+Seen = tuple[np.ndarray, PersonView | None]
+
+
+def steadied(seen: Iterable[Seen], fps: float, fresh: Callable[[], PersonModel]) -> Iterator[Seen]:
+    """Each (frame, view) of ``seen`` in order, later than it came: views in a run of seen frames shorter than
+    MIN_RUN_S dropped, unless the run touches the clip's start or end (cut by it, its length tells nothing); and
+    before each run kept, up to LOOK_BACK_S of frames seen as nobody given the views of a ``fresh`` model fed the
+    run's first frame and then those frames backward, until it too sees nobody."""
+    least, most = max(1, round(MIN_RUN_S * fps)), max(1, round(LOOK_BACK_S * fps))
+    held: list[list] = []  # [frame, view] not yet given out: frames seen as nobody, then the current run
+    run = 0  # frames of the run at held's end, not yet kept
+    kept = False  # whether the run going on is kept (its frames go out as they come)
+    start = True  # whether held begins at the clip's first frame
+    for frame, view in seen:
+        if view is not None and kept:
+            yield frame, view
+            continue
+        if view is None:
+            if run and not (start and run == len(held)):  # a short run ended, not at the clip's start: a mistake
+                for item in held[-run:]:
+                    item[1] = None
+            run, kept = 0, False
+            held.append([frame, view])
+        else:
+            run += 1
+            held.append([frame, view])
+            if run >= least or start and run == len(held):
+                looked_back(held, run, fresh)
+                yield from map(tuple, held)
+                held, run, kept, start = [], 0, True, False
+                continue
+        while len(held) - run > most:
+            yield tuple(held.pop(0))
+            start = False
+    yield from map(tuple, held)
+
+
+def looked_back(held: list[list], run: int, fresh: Callable[[], PersonModel]) -> None:
+    """``held``'s frames before its last ``run`` (seen) given the views of a ``fresh`` model fed the run's first
+    frame, then them from the last back, until it sees nobody."""
+    first = len(held) - run
+    if first == 0:
+        return
+    model = fresh()
+    try:
+        if model.observe(held[first][0]) is None:
+            return
+        for item in reversed(held[:first]):
+            item[1] = model.observe(item[0])
+            if item[1] is None:
+                return
+    finally:
+        model.close()
