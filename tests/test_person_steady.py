@@ -24,8 +24,9 @@ class Fresh:
         self.seen, self.fed, self.closed = set(seen), [], False
 
     def observe(self, frame):
-        self.fed.append(int(frame))
-        return f"back {int(frame)}" if int(frame) in self.seen else None
+        number = int(np.ravel(frame)[0])  # a frame is its number, or an image filled with it
+        self.fed.append(number)
+        return f"back {number}" if number in self.seen else None
 
     def close(self):
         self.closed = True
@@ -77,6 +78,26 @@ def test_the_look_back_reaches_look_back_s_at_most(monkeypatch):
     monkeypatch.setattr("mocap.person.steady.LOOK_BACK_S", 0.3)
     views, opened = steady("........xxxxx", back=range(0, 9))
     assert views[:5] == [None] * 5 and views[5:8] == ["back 5", "back 6", "back 7"]
+
+
+def test_the_look_back_holds_no_more_than_look_back_bytes_of_frames(monkeypatch):
+    """Frames of 1000 bytes with 3000 to hold: only the last three frames before the kept run are looked at."""
+    monkeypatch.setattr("mocap.person.steady.LOOK_BACK_BYTES", 3000)
+    frames = [np.full(1000, i, np.uint8) for i in range(12)]
+    seen = [(f, "view" if i >= 7 else None) for i, f in enumerate(frames)]
+    opened = []
+
+    def fresh():
+        opened.append(Fresh(range(12)))
+        return opened[-1]
+
+    out = list(steadied(iter((f, v) for f, v in seen), FPS, fresh))
+    assert [int(f[0]) for f, _ in out] == list(range(12))
+    assert opened[0].fed == [7, 6, 5, 4] and [v for _, v in out][:4] == [None] * 4
+
+
+def test_an_empty_clip_gives_nothing():
+    assert list(steadied(iter(()), FPS, lambda: None)) == []
 
 
 CLIP = SHARED_DATA / "clips" / "sword_back34"

@@ -6,6 +6,7 @@ turns, then follows them turned away again.)"""
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
@@ -13,7 +14,8 @@ import numpy as np
 from mocap.person import PersonModel, PersonView
 
 MIN_RUN_S = 0.5  # seconds a body must be kept for the model's sight of it to count
-LOOK_BACK_S = 10.0  # seconds of frames without a body kept for a backward look (their memory's bound)
+LOOK_BACK_S = 10.0  # seconds of frames without a body kept for a backward look
+LOOK_BACK_BYTES = 300 << 20  # ... and at most this much memory of them (3.6 s of 1280x720 frames at 30/s)
 
 Seen = tuple[np.ndarray, PersonView | None]
 
@@ -21,14 +23,19 @@ Seen = tuple[np.ndarray, PersonView | None]
 def steadied(seen: Iterable[Seen], fps: float, fresh: Callable[[], PersonModel]) -> Iterator[Seen]:
     """Each (frame, view) of ``seen`` in order, later than it came: views in a run of seen frames shorter than
     MIN_RUN_S dropped, unless the run touches the clip's start or end (cut by it, its length tells nothing); and
-    before each run kept, up to LOOK_BACK_S of frames seen as nobody given the views of a ``fresh`` model fed the
-    run's first frame and then those frames backward, until it too sees nobody."""
-    least, most = max(1, round(MIN_RUN_S * fps)), max(1, round(LOOK_BACK_S * fps))
+    before each run kept, up to LOOK_BACK_S (and LOOK_BACK_BYTES) of frames seen as nobody given the views of a
+    ``fresh`` model fed the run's first frame and then those frames backward, until it too sees nobody."""
+    seen = iter(seen)
+    first = next(seen, None)
+    if first is None:
+        return
+    least = max(1, round(MIN_RUN_S * fps))
+    most = max(1, min(round(LOOK_BACK_S * fps), LOOK_BACK_BYTES // max(first[0].nbytes, 1)))
     held: list[list] = []  # [frame, view] not yet given out: frames seen as nobody, then the current run
     run = 0  # frames of the run at held's end, not yet kept
     kept = False  # whether the run going on is kept (its frames go out as they come)
     start = True  # whether held begins at the clip's first frame
-    for frame, view in seen:
+    for frame, view in itertools.chain([first], seen):
         if view is not None and kept:
             yield frame, view
             continue
