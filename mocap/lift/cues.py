@@ -70,9 +70,9 @@ class Cues:
         least acceleration of the facing direction, in radians, and of the limb joints, in limb lengths); a
         frame read as a mirror image costs MIRRORED_COST_S per second, so only such jumps are undone."""
         seen = self.seen
-        mirrored = np.zeros(len(seen), bool)
         if not seen.any():
             return self
+        mirrored = np.zeros(len(seen), bool)
         limb = 0.5 * float(np.median(np.ptp(self.joints2d[seen, :, 1], axis=1)))  # half the body's height
         yaw = np.radians(world_yaws(self))
         for r in runs(seen):

@@ -1,8 +1,8 @@
-"""A person model's sight over a clip, steadied: a body it keeps for less than MIN_RUN_S is taken for a patch of
-the scene it mistook (a figure bent over, head down, that it does not see), and a body it keeps is looked for
-backward from where it was first found, as a model that tracks in video mode follows a body it could not find.
-(MediaPipe Pose finds a body by its face and then follows it: from behind it finds nobody until the performer
-turns, then follows them turned away again.)"""
+"""A person model's sight over a clip, steadied. A body it keeps for less than MIN_RUN_S is a patch of the scene
+it took for one (on a clip whose performer it does not see, bent over and head down, it finds such patches), and a
+body it keeps is looked for backward from where it was first found: a model that tracks in video mode follows a
+body it could not have found. (MediaPipe Pose finds a body by its face and then follows it: from behind it finds
+nobody until the performer turns, then follows them turned away again.)"""
 
 from __future__ import annotations
 
