@@ -20,8 +20,8 @@ DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from 
 MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror image costs, in the units of
 # Cues.unmirrored's acceleration (radians of facing, limb lengths of limb joints, per frame squared)
 _J = JOINT_INDEX
-_LIMB_JOINTS = np.array([_J[f"{j}_{s}"] for j in ("elbow", "wrist", "knee", "ankle") for s in "lr"])
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
+_LIMB_JOINTS = np.array([_J[n] for pairs in _LIMBS.values() for pair in pairs for n in pair])  # elbows to ankles
 
 
 @dataclass(frozen=True)
