@@ -16,6 +16,7 @@ from mocap.silhouette.model2d import Pose2D
 PERSON_LEVEL = 0.5  # a person-mask probability from which a pixel is the performer
 EDGE_BAND = 0.01  # of the person mask's height: the band outside it where background
 # subtraction may add pixels (its edges follow the frame's)
+HEAD_REACH = 2.0  # of the landmarks' neck -> head top: how far along it the silhouette's crown is looked for
 APART = 0.04  # of the body height: shoulders or hips this far apart in x
 # tell the image-left limb from the image-right one
 _J = JOINT_INDEX
@@ -41,6 +42,27 @@ def fused_mask(
         grown &= ~held
     mask = inside | (grown & found)
     return np.where(mask, 255, 0).astype(np.uint8), inside & ~found
+
+
+def crowned(landmarks: Landmarks, mask: np.ndarray) -> Landmarks:
+    """``landmarks`` with the head's top where the silhouette ``mask`` (uint8, 0/255) ends along the neck -> head
+    top line, searched from the line's middle (about the ears) out to HEAD_REACH times its length. A person
+    model has no point on the crown: its head top is the ears' line extended by a body's proportions, which
+    heads and hair do not keep; the silhouette shows the crown itself. Kept as given where the middle is not on
+    the silhouette or the silhouette runs on past the reach (a hand over the head) or out of the frame."""
+    neck, top = (landmarks.joints2d[_J[j]] for j in ("neck", "head_top"))
+    length = float(np.hypot(*(top - neck)))
+    steps = np.arange(0.5 * length, HEAD_REACH * length, 1.0) / max(length, 1e-9)
+    points = np.round(neck + steps[:, None] * (top - neck)).astype(int)
+    h, w = mask.shape
+    inside = (points[:, 0] >= 0) & (points[:, 0] < w) & (points[:, 1] >= 0) & (points[:, 1] < h)
+    on = np.ones(len(points), bool)  # past the frame's edge the silhouette may go on
+    on[inside] = mask[points[inside, 1], points[inside, 0]] > 0
+    if not len(on) or not on[0] or on.all():
+        return landmarks
+    joints = landmarks.joints2d.copy()
+    joints[_J["head_top"]] = points[np.argmin(on) - 1]
+    return replace(landmarks, joints2d=joints)
 
 
 @dataclass(frozen=True)
