@@ -1,5 +1,5 @@
-"""What the silhouette method takes from a person model's view (mocap.silhouette.eyes): the head's top read off
-the silhouette along the landmarks' neck -> head top line."""
+"""What the silhouette method takes from a person model's view (mocap.silhouette.eyes): the head's top and the
+ankles read off the silhouette along the landmarks' neck -> head top and knee -> ankle lines."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import cv2
 import numpy as np
 import pytest
 
-from mocap.body import JOINT_INDEX
+from mocap.body import FOOT_LENGTH, JOINT_INDEX, LENGTH, SEGMENT_INDEX
 from mocap.person import Landmarks
-from mocap.silhouette.eyes import crowned
+from mocap.silhouette.eyes import crowned, soled
 
 _HEAD_TOP, _NECK = JOINT_INDEX["head_top"], JOINT_INDEX["neck"]
 
@@ -50,3 +50,35 @@ def test_the_head_top_is_kept_where_the_silhouette_cannot_tell():
     elsewhere = crowned(head_landmarks((160, 85), (160, 30)), mask)  # the line's middle off the silhouette
     for landmarks, silhouette in ((head_landmarks((100, 85), (100, 30)), raised), (elsewhere, mask)):
         assert np.array_equal(crowned(landmarks, silhouette).joints2d, landmarks.joints2d)
+
+
+def standing_landmarks(ankle_y: float, scale: float) -> Landmarks:
+    """Upright landmarks, ``scale`` pixels per model unit, pelvis at (100, 100), both ankles at row ``ankle_y``."""
+    joints = np.zeros((16, 2))
+    leg = LENGTH[SEGMENT_INDEX["upper_leg_l"]] * scale
+    for side, x in (("l", 110.0), ("r", 90.0)):
+        joints[JOINT_INDEX[f"hip_{side}"]] = (x, 100.0)
+        joints[JOINT_INDEX[f"knee_{side}"]] = (x, 100.0 + leg)
+        joints[JOINT_INDEX[f"ankle_{side}"]] = (x, ankle_y)
+    joints[JOINT_INDEX["pelvis"]] = (100.0, 100.0)
+    joints[_NECK] = (100.0, 100.0 - LENGTH[SEGMENT_INDEX["torso"]] * scale)
+    return Landmarks(joints, np.ones(16), np.zeros((16, 3)))
+
+
+def test_each_ankle_is_a_foot_height_above_its_sole():
+    scale = 1.0  # pixels per model unit: the trunk and thighs at full length, the knees at row 146, soles at 205
+    mask = np.zeros((260, 200), np.uint8)
+    mask[95:206, 80:121] = 255
+    for given in (190.0, 200.0):  # a shoe's outline made the ankle high, or a low one
+        ankles = soled(standing_landmarks(given, scale), mask).joints2d[
+            [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]
+        ]
+        assert np.allclose(ankles[:, 1], 205 - FOOT_LENGTH * scale, atol=1.0), (given, ankles)
+        assert np.allclose(ankles[:, 0], (110, 90))
+
+
+def test_an_ankle_is_kept_where_the_silhouette_runs_on_below_it():
+    mask = np.zeros((260, 200), np.uint8)
+    mask[95:260, 80:121] = 255  # the legs go on out of the frame
+    landmarks = standing_landmarks(190.0, 1.0)
+    assert np.array_equal(soled(landmarks, mask).joints2d, landmarks.joints2d)

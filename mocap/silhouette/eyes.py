@@ -1,6 +1,7 @@
 """What a person model (mocap.person) gives the silhouette method: the silhouette where background subtraction
 cannot see (``fused_mask``), and landmarks the 2D fit's searches draw toward (``fit_targets``), renamed from
-anatomical to image sides (section 3.3: ``image_sided``)."""
+anatomical to image sides (section 3.3: ``image_sided``); where the landmarks only guess at the body's ends,
+the silhouette places them (``crowned``: the head's top, ``soled``: the ankles)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_INDEX, SEGMENTS, model_joints
+from mocap.body import BODY_HEIGHT, FOOT_LENGTH, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENTS, model_joints
 from mocap.person import SURE, Landmarks
 from mocap.silhouette.model2d import Pose2D
 
@@ -17,6 +18,7 @@ PERSON_LEVEL = 0.5  # a person-mask probability from which a pixel is the perfor
 EDGE_BAND = 0.01  # of the person mask's height: the band outside it where background
 # subtraction may add pixels (its edges follow the frame's)
 HEAD_REACH = 2.0  # of the landmarks' neck -> head top: how far along it the silhouette's crown is looked for
+SOLE_REACH = 3.0  # ankle heights below the ankle: how far along the lower leg its sole is looked for
 APART = 0.04  # of the body height: shoulders or hips this far apart in x
 # tell the image-left limb from the image-right one
 _J = JOINT_INDEX
@@ -51,17 +53,57 @@ def crowned(landmarks: Landmarks, mask: np.ndarray) -> Landmarks:
     heads and hair do not keep; the silhouette shows the crown itself. Kept as given where the middle is not on
     the silhouette or the silhouette runs on past the reach (a hand over the head) or out of the frame."""
     neck, top = (landmarks.joints2d[_J[j]] for j in ("neck", "head_top"))
-    length = float(np.hypot(*(top - neck)))
-    steps = np.arange(0.5 * length, HEAD_REACH * length, 1.0) / max(length, 1e-9)
-    points = np.round(neck + steps[:, None] * (top - neck)).astype(int)
+    end = silhouette_end(mask, neck, top, 0.5, HEAD_REACH)
+    return landmarks if end is None else moved(landmarks, "head_top", end)
+
+
+def soled(landmarks: Landmarks, mask: np.ndarray) -> Landmarks:
+    """``landmarks`` with each ankle FOOT_LENGTH above where the silhouette ``mask`` ends along its knee -> ankle
+    line (the sole under a standing foot), in the landmarks' own scale (``seen_scale``): the ankle is where
+    people's ankles are over their soles, whatever a shoe makes of its outline. Searched from the ankle out to
+    SOLE_REACH ankle heights; an ankle is kept where it is off the silhouette or the silhouette runs on (a foot
+    along the shin, another leg below, the frame's edge)."""
+    out, foot = landmarks, FOOT_LENGTH * seen_scale(landmarks.joints2d)
+    for side in "lr":
+        knee, ankle = (landmarks.joints2d[_J[f"{j}_{side}"]] for j in ("knee", "ankle"))
+        shin = max(float(np.hypot(*(ankle - knee))), 1e-9)
+        end = silhouette_end(mask, knee, ankle, 1.0, 1.0 + SOLE_REACH * foot / shin)
+        if end is not None:
+            out = moved(out, f"ankle_{side}", end - foot / shin * (ankle - knee))
+    return out
+
+
+def seen_scale(joints: np.ndarray) -> float:
+    """Pixels per model unit of 2D joints (16, 2): the largest of the trunk's and the legs' seen lengths over
+    the model's, since turning a segment from the image plane only shortens it."""
+    ratios = [
+        np.hypot(*(joints[_J[b]] - joints[_J[a]])) / LENGTH[SEGMENT_INDEX[s]]
+        for s in ("torso", "upper_leg_l", "upper_leg_r", "lower_leg_l", "lower_leg_r")
+        for a, b in (SEGMENTS[s],)
+    ]
+    return float(max(ratios))
+
+
+def silhouette_end(mask: np.ndarray, start: np.ndarray, through: np.ndarray, first: float, last: float):
+    """The last pixel of ``mask`` (uint8, 0/255) on the line from ``start`` through ``through``, walked pixel by
+    pixel from ``first`` to ``last`` times their distance: None where the walk starts off the silhouette or
+    never leaves it (past the frame's edge it may go on)."""
+    length = float(np.hypot(*(through - start)))
+    steps = np.arange(first * length, last * length, 1.0) / max(length, 1e-9)
+    points = np.round(start + steps[:, None] * (through - start)).astype(int)
     h, w = mask.shape
     inside = (points[:, 0] >= 0) & (points[:, 0] < w) & (points[:, 1] >= 0) & (points[:, 1] < h)
-    on = np.ones(len(points), bool)  # past the frame's edge the silhouette may go on
+    on = np.ones(len(points), bool)
     on[inside] = mask[points[inside, 1], points[inside, 0]] > 0
     if not len(on) or not on[0] or on.all():
-        return landmarks
+        return None
+    return points[np.argmin(on) - 1].astype(float)
+
+
+def moved(landmarks: Landmarks, joint: str, to: np.ndarray) -> Landmarks:
+    """``landmarks`` with one joint's 2D at ``to``."""
     joints = landmarks.joints2d.copy()
-    joints[_J["head_top"]] = points[np.argmin(on) - 1]
+    joints[_J[joint]] = to
     return replace(landmarks, joints2d=joints)
 
 

@@ -16,7 +16,7 @@ from mocap.io.video import VideoInfo, iter_frames
 from mocap.person import Landmarks, PersonModel, open_person_model, watched
 from mocap.person.steady import steadied
 from mocap.silhouette.background import Background, extract_silhouette
-from mocap.silhouette.eyes import centred_on, crowned, fit_targets, fused_mask
+from mocap.silhouette.eyes import centred_on, crowned, fit_targets, fused_mask, soled
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.legchain import LAG_S, LegChain
 from mocap.silhouette.plate import clip_background
@@ -110,7 +110,7 @@ def iter_silhouettes(
         if fused is None:
             yield Silhouette.from_mask(classical, frame)
         else:
-            yield Silhouette.from_mask(fused[0], frame, crowned(view.landmarks, fused[0]), fused[1])
+            yield Silhouette.from_mask(fused[0], frame, soled(crowned(view.landmarks, fused[0]), fused[0]), fused[1])
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
