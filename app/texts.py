@@ -58,7 +58,8 @@ PERSON_MODEL_NAMES = {"mediapipe": "MediaPipe"}  # a person model's name as the 
 
 
 def eyes_text(state) -> str:
-    """What the silhouette method looks through, and on how many frames the person model saw somebody."""
+    """What the silhouette method looks through, on how many frames the person model saw somebody and on how many
+    the silhouettes alone answer."""
     name = state.person_model
     if name == NONE:
         return "Eyes: silhouettes only (the difference from the empty stage)."
@@ -66,6 +67,8 @@ def eyes_text(state) -> str:
     text = f"Eyes: person model ({PERSON_MODEL_NAMES.get(name, name)}) + silhouettes"
     if done:
         text += f"; it saw the performer on {seen} of {done} frames"
+        if seen < done:
+            text += f", the silhouettes alone answer the other {done - seen}"
     return text + "."
 
 

@@ -67,7 +67,10 @@ def test_the_switch_refits_with_and_without_the_person_model(app, monkeypatch):
     # by default: the person model, where it is installed
     assert state.person_model == state._fitted.person_model == "mediapipe"
     assert any(s is not None and s.landmarks is not None for s in state._silhouettes)
-    assert "Eyes: person model (MediaPipe) + silhouettes; it saw the performer on" in c.status.content
+    seen, done = state.eyes_seen()
+    said = f"Eyes: person model (MediaPipe) + silhouettes; it saw the performer on {seen} of {done} frames"
+    assert said in c.status.content
+    assert (f"the silhouettes alone answer the other {done - seen}." in c.status.content) == (seen < done)
     assert c.learned_eyes.value is True and c.learned_eyes.disabled is False
     with pytest.raises(MocapError, match="already looks through the person model 'mediapipe'"):
         state.set_person_model("mediapipe")
