@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -25,6 +26,12 @@ class Grid:
     along: np.ndarray
     across: np.ndarray
     weights: np.ndarray
+
+    @cached_property
+    def basis(self) -> np.ndarray:
+        """(3, R*C) every sub-pixel's (1, along, across), rows first: what a block's origin and axes weigh there."""
+        along, across = np.meshgrid(self.along, self.across, indexing="ij")
+        return np.stack([np.ones(along.size), along.ravel(), across.ravel()])
 
 
 def make_grid(m: float, n: float, beyond: float = 0.0) -> Grid:
@@ -74,14 +81,15 @@ def turned(offset, block: np.ndarray) -> np.ndarray:
 
 
 def block_points(blocks: np.ndarray, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
-    """Pixel coordinates (x, y), each (B*R, C) float32, of every block's sub-pixels."""
+    """Pixel coordinates (x, y), each (B*R, C) float32, of every block's sub-pixels: each block's origin and its
+    axes (m along the middle line, n across it) times the grid's ``basis``, one matrix product for all blocks
+    (a broadcast sum loops over rows only C long)."""
     cos, sin = np.cos(blocks[:, THETA]), np.sin(blocks[:, THETA])
-    down = grid.along[None, :, None] * blocks[:, M, None, None]  # along the middle line
-    side = grid.across[None, None, :] * blocks[:, N, None, None]  # across it
-    x = blocks[:, X, None, None] + down * cos[:, None, None] - side * sin[:, None, None]
-    y = blocks[:, Y, None, None] + down * sin[:, None, None] + side * cos[:, None, None]
+    m, n = blocks[:, M], blocks[:, N]
+    axes = np.array([[blocks[:, X], m * cos, -n * sin], [blocks[:, Y], m * sin, n * cos]])  # (2, 3, B)
+    x, y = (axes.transpose(0, 2, 1) @ grid.basis).astype(np.float32)
     shape = (-1, len(grid.across))
-    return x.reshape(shape).astype(np.float32), y.reshape(shape).astype(np.float32)
+    return x.reshape(shape), y.reshape(shape)
 
 
 def sample_blocks(image: np.ndarray, blocks: np.ndarray, grid: Grid) -> np.ndarray:
