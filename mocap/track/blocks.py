@@ -3,6 +3,7 @@ a row (x, y, theta, m, n), (x, y) where a short side meets the middle line, thet
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
@@ -16,6 +17,9 @@ CHANNEL_WEIGHTS = np.full(3, 1 / 3, np.float32)  # W_R, W_G, W_B of Eq. 3
 CENTRE_WEIGHT, MARGIN_WEIGHT = 2.0, 1.0  # W_1 > W_2 of Eq. 4
 Penalty = Callable[[np.ndarray], np.ndarray]  # blocks (K, 5) -> grey levels (K,)
 MIN_DIFF = 1.0  # grey levels: keeps S = 1/D finite for a perfect match
+# candidates of Fig. 6's path scored in one call at most (search): a call costs about this many candidates' worth
+# apart from them, with the penalties of a limb's lower part
+BATCH = 256
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,20 +167,42 @@ def search(
     penalty: Penalty | None = None,
 ) -> tuple[np.ndarray, float]:
     """The best block and its S on Fig. 6's path: all morphs at each point of a circle, on while a circle improves, up
-    to ``max_ring`` circles ``step`` px apart (0: position fixed); ``penalty`` added to 1/S."""
+    to ``max_ring`` circles ``step`` px apart (0: position fixed); ``penalty`` added to 1/S. Runs of circles
+    (``circle_runs``) are scored in one call each, then walked circle by circle."""
     shapes = morphs(start, d_theta, d_m, zoom)
     best, best_s = start, -1.0
-    for radius in range(max_ring + 1):
-        offsets = ring(radius) * step
-        cands = np.repeat(shapes[None], len(offsets), axis=0)
-        cands[..., :2] += offsets[:, None, :]
-        cands = cands.reshape(-1, 5)
+    for radii in circle_runs(max_ring, len(shapes)):
+        cands, bounds = on_circles(shapes, radii, step)
         s = penalised(score(image, model, grid, cands), cands, penalty)
-        k = int(np.argmax(s))
-        if s[k] <= best_s:
-            break
-        best, best_s = cands[k], float(s[k])
+        for a, b in itertools.pairwise(bounds):
+            k = a + int(np.argmax(s[a:b]))
+            if s[k] <= best_s:
+                return best, best_s
+            best, best_s = cands[k], float(s[k])
     return best, best_s
+
+
+def circle_runs(max_ring: int, shapes: int) -> list[range]:
+    """Circles 0..max_ring of a path with ``shapes`` morphs in runs of radii, each as many as hold at most BATCH
+    candidates (or one circle): a call's own cost (the penalties' most) is spared where a path goes on, at the
+    price of a run's later circles where it stops."""
+    runs, first, size = [], 0, 0
+    for radius in range(max_ring + 1):
+        n = shapes * max(8 * radius, 1)
+        if size and size + n > BATCH:
+            runs.append(range(first, radius))
+            first, size = radius, 0
+        size += n
+    return [*runs, range(first, max_ring + 1)]
+
+
+def on_circles(shapes: np.ndarray, radii: range, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Blocks (K, 5): the morphs ``shapes`` (S, 5) at every point of the circles ``radii`` ``step`` px apart, circle
+    by circle; and (len(radii) + 1,) where each circle's blocks start in them, then their end."""
+    offsets = [ring(radius) * step for radius in radii]
+    cands = np.repeat(shapes[None], sum(map(len, offsets)), axis=0)
+    cands[..., :2] += np.concatenate(offsets)[:, None, :]
+    return cands.reshape(-1, 5), np.cumsum([0, *(len(o) * len(shapes) for o in offsets)])
 
 
 def lengthen(
