@@ -100,6 +100,7 @@ class Preprocessing:
             progress=step,
             background=notes.background_source(self.path),
             person=person,
+            focal=self.focal,
         )
         with self._lock:
             session.annotate(self._annotations)  # edits made while fitting

@@ -25,10 +25,12 @@ def create(
     port: int = 8080,
     annotations: str | Path | None = None,
     person: str | None = None,
+    focal: float | None = None,
 ) -> App:
     """The app on ``video`` (default: the sample) on a new viser server, edits saved to ``annotations``
-    (default: beside the video), ``person`` as AppState takes it; start with ``app.state.start()``."""
-    state = AppState(video or SAMPLE, annotations, person)
+    (default: beside the video), ``person`` and ``focal`` as AppState takes them; start with
+    ``app.state.start()``."""
+    state = AppState(video or SAMPLE, annotations, person, focal)
     check_port(host, port)
     server = viser.ViserServer(host=host, port=port, verbose=False)
     if port and server.get_port() != port:  # taken between the check and viser's bind
@@ -65,10 +67,11 @@ def main(
     progress: Callable[[int, int], None] | None = None,
     annotations: str | Path | None = None,
     person: str | None = None,
+    focal: float | None = None,
 ) -> None:
     """Serve until interrupted: print the page's address, then preprocess with
     ``progress(done, total)`` reporting each step."""
-    app = create(video, host=host, port=port, annotations=annotations, person=person)
+    app = create(video, host=host, port=port, annotations=annotations, person=person, focal=focal)
     print(f"mocap: serving {app.state.info.path} at http://{host}:{app.server.get_port()}/", flush=True)
     app.state.start(progress)
     try:

@@ -57,10 +57,15 @@ class AppState(Preprocessing, Edits):
     """A video, its preprocessing, its sessions and annotations, the current frame."""
 
     def __init__(
-        self, video: str | os.PathLike, annotations: str | os.PathLike | None = None, person: str | None = None
+        self,
+        video: str | os.PathLike,
+        annotations: str | os.PathLike | None = None,
+        person: str | None = None,
+        focal: float | None = None,
     ):
         """``person``: the silhouette method's person model (mocap.person's name; "none": silhouettes
-        alone; None: the default where installed, else a MocapWarning and none)."""
+        alone; None: the default where installed, else a MocapWarning and none); ``focal``: the camera's
+        focal length in pixels, the silhouette method's 3D solved through it (None: scaled orthography)."""
         self.info = open_video(video)
         self.scale = processing_scale(self.info)
         self.path = Path(annotations) if annotations else saving.annotations_path(video)
@@ -72,6 +77,7 @@ class AppState(Preprocessing, Edits):
         self._fits: list[FrameFit | None] = [None] * n
         self._progress = Progress(0, 2 * n, "waiting")
         self._person = person_model(person)
+        self.focal = focal
         self._fitted: SilhouetteSession | None = None  # the silhouette method's
         self._tracked: TrackSession | None = None  # the tracking method's, once tracked
         self._tracked_from: dict | None = None  # the marks it was tracked from

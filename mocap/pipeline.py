@@ -110,10 +110,12 @@ def open_session(
     background: str | os.PathLike | tuple[int, int] | None = None,
     progress: Report | None = None,
     person: str = NONE,
+    focal: float | None = None,
 ) -> Session:
     """Run a method (None: the annotations', else silhouette) over a video; its session.
     ``background``: the empty scene (a photo or video, or first and last frames; None:
-    estimated); ``person``: the person model either method looks through."""
+    estimated); ``person``: the person model either method looks through; ``focal``: the
+    camera's focal length in pixels (silhouette method; None: scaled orthography)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
     if takes_tracking(method, notes):
@@ -122,7 +124,9 @@ def open_session(
     with opened_model(person, filtered=False, apart=True) as model:
         scene = clip_background(info, processing_scale(info), background)
         silhouettes, fits = silhouette_passes(info, progress, scene, model)
-    return SilhouetteSession(info, fits, notes, smooth, silhouettes=silhouettes, background=scene, person=person)
+    return SilhouetteSession(
+        info, fits, notes, smooth, silhouettes=silhouettes, background=scene, person=person, focal=focal
+    )
 
 
 @dataclass(frozen=True)
@@ -146,11 +150,13 @@ def fit_video_to_file(
     foot_lock: bool = False,
     progress: Report | None = None,
     person: str | None = None,
+    focal: float | None = None,
 ) -> Written:
     """`mocap fit`: fit or track, lift, and write ``exports`` ({format key: path}; "json" always,
     VIDEO.motion.json unless given). ``background``: the empty scene (else the annotations');
     ``masks``: a folder for the silhouettes; ``foot_lock``: planted feet kept in place; ``person``:
-    None for ``person_model``'s. Unwritable formats are refused before reading; a background
+    None for ``person_model``'s; ``focal``: the camera's focal length in pixels (None: scaled
+    orthography). Unwritable formats are refused before reading; a background
     holding the performer is a MocapWarning."""
     for key, path in exports.items():
         require(key)
@@ -167,7 +173,7 @@ def fit_video_to_file(
     plate = background if background is not None else notes.background_source(annotations)
     person = person_model(person, tracking)
     session = open_session(
-        info, notes, method=method, smooth=smooth, background=plate, progress=progress, person=person
+        info, notes, method=method, smooth=smooth, background=plate, progress=progress, person=person, focal=focal
     )
     if session.background_warning:
         warnings.warn(session.background_warning, MocapWarning, stacklevel=2)

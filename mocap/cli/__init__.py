@@ -7,7 +7,7 @@ import os
 import sys
 import warnings
 
-from mocap.cli.options import add_smooth, smooth_of
+from mocap.cli.options import add_focal, add_smooth, focal_of, smooth_of
 from mocap.cli.progress import Bar
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.export.formats import FORMATS
@@ -54,6 +54,7 @@ def _add_fit(p) -> None:
         "says which frames: contacts), in every file written",
     )
     add_smooth(p, "keyframes kept (default 0)")
+    add_focal(p)
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(run=_run_fit)
 
@@ -88,6 +89,7 @@ def _run_fit(args) -> None:
         masks=args.masks,
         foot_lock=args.foot_lock,
         person=args.person_model,
+        focal=focal_of(args),
         progress=_progress.step,
     )
     print("wrote " + ", ".join(str(p) for p in written.paths))
@@ -135,6 +137,7 @@ def _add_serve(p) -> None:
     )
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
     _add_person_model(p, "; the app's Stage tab switches it (Learned eyes)")
+    add_focal(p)
 
     def run(args) -> None:
         try:  # the app package, imported only here: mocap itself never needs viser
@@ -145,7 +148,15 @@ def _add_serve(p) -> None:
 
         target = review_target(args.video) if args.video else None
         video, notes = target or (args.video, None)
-        serve(video, args.port, args.host, progress=_progress, annotations=notes, person=args.person_model)
+        serve(
+            video,
+            args.port,
+            args.host,
+            progress=_progress,
+            annotations=notes,
+            person=args.person_model,
+            focal=focal_of(args),
+        )
 
     p.set_defaults(run=run)
 

@@ -16,6 +16,26 @@ def add_smooth(parser, note: str) -> None:
     )
 
 
+def add_focal(parser) -> None:
+    """``--focal PX``: the camera's focal length, for the 3D under perspective (mocap.lift.problem)."""
+    parser.add_argument(
+        "--focal",
+        type=float,
+        default=None,
+        metavar="PX",
+        help="the camera's focal length in pixels of the video (its width times the lens's 35 mm "
+        "equivalent over 36 mm): the 3D is solved through that pinhole, as the video was filmed "
+        "(silhouette method; default: scaled orthography, as for a camera far away)",
+    )
+
+
+def focal_of(args) -> float | None:
+    """The ``--focal`` given, refused unless above 0."""
+    if args.focal is not None and not args.focal > 0:
+        raise MocapError(f"--focal must be a focal length in pixels above 0, got {args.focal}")
+    return args.focal
+
+
 def smooth_of(args) -> float:
     """The ``--smooth`` given, refused below 0."""
     if args.smooth < 0:

@@ -25,6 +25,7 @@ from mocap.body import (
     SHOULDER_HALF_SPAN,
     segment_kind,
 )
+from mocap.camera import Pinhole
 from mocap.lift.taylor import UNIT_M, lift_pose, runs
 
 # seconds: Gaussian sigma of the projected bone lengths over time before the person model's depths
@@ -110,7 +111,8 @@ class ClipArrays:
     (F,); ``yaw`` (F,) degrees; ``signs`` (F, 10) +1 toward, -1 away (the first guess); ``lengths``
     (10,) the lift's segment lengths (model units, the unit of ``depths``); ``depths`` (F, 10) a
     person model's |dZ| or NaN; ``held`` (F, 10) the user's signs or 0; ``confidence`` (F, 16) in
-    [0, 1]; ``placed`` (F, 16) bool, joints the user placed; ``fps``."""
+    [0, 1]; ``placed`` (F, 16) bool, joints the user placed; ``fps``; ``camera`` the pinhole the video
+    was filmed with, where its focal length is known (None: scaled orthography, as the paper)."""
 
     joints2d: np.ndarray
     px_per_unit: np.ndarray
@@ -122,9 +124,10 @@ class ClipArrays:
     confidence: np.ndarray | None = None
     placed: np.ndarray | None = None
     fps: float = 25.0
+    camera: Pinhole | None = None
 
     @classmethod
-    def of(cls, inputs, fps: float, confidence=None, placed=None) -> "ClipArrays":
+    def of(cls, inputs, fps: float, confidence=None, placed=None, camera: Pinhole | None = None) -> "ClipArrays":
         """From a ``mocap.lift.inputs.Inputs`` (read by attribute)."""
         return cls(
             inputs.joints2d,
@@ -137,6 +140,7 @@ class ClipArrays:
             confidence,
             placed,
             fps,
+            camera,
         )
 
     def frames(self, stretch: slice) -> "ClipArrays":

@@ -4,8 +4,8 @@ Jacobian.
 Unknowns: every joint's x, y, z on the free frames (model units about the frame's observed 2D
 pelvis; the pelvis's z stays 0, which orthography cannot see) and, with ``free_lengths``, one length
 per bone class after them. Residuals, each over the error it allows (``Weights``): the 2D
-reprojection under scaled orthography, weighted by each joint's confidence (a placed joint at
-``sigma_placed``); joint accelerations about the pelvis; the pelvis between the hips and the neck
+reprojection under scaled orthography, or through the clip's pinhole camera where it has one
+(``Perspective``), weighted by each joint's confidence (a placed joint at ``sigma_placed``); joint accelerations about the pelvis; the pelvis between the hips and the neck
 between the shoulders in depth; the person model's |dZ| with the frame's sign; the hips' and
 shoulders' depths from the yaw; the clip's lengths about their estimate (all linear); bone lengths;
 held and guessed signs (one-sided); knees and elbows bending one way (hinges)."""
@@ -34,6 +34,7 @@ from mocap.lift.taylor import UNIT_M, lateral_axis
 
 _J = JOINT_INDEX
 MIN_CONFIDENCE = 0.05  # a joint's confidence counts at least this much
+NEAREST = 0.9  # of the pelvis's depth: how far toward the camera a joint may come
 
 
 class Problem:
@@ -65,6 +66,7 @@ class Problem:
         self.n_x = self.n_p + (len(CLASSES) if free_lengths else 0)
         self._rows, self._cols, self._vals, self._flat, self._b, self._robust = [], [], [], [], [], []
         self._row = 0
+        self.view = None if clip.camera is None else Perspective.of(clip, f)
         self._image_rows(clip, f)
         self._motion_rows(clip.fps)
         target = self._depth_rows(clip, f)
@@ -90,6 +92,9 @@ class Problem:
         weight = np.sqrt(np.clip(conf, MIN_CONFIDENCE, 1.0)) / (w.sigma_2d * BODY_HEIGHT)
         if clip.placed is not None:
             weight = np.where(clip.placed[f], 1.0 / (w.sigma_placed * BODY_HEIGHT), weight)
+        if self.view is not None:
+            self.view.seen, self.view.weight = seen, weight
+            return
         for c in range(2):
             self._linear([(np.arange(n)[:, None], np.arange(N_JOINTS)[None], c, weight)], weight * seen[..., c], True)
 
@@ -181,6 +186,8 @@ class Problem:
         free = cols >= 0
         self.n_lin = self._row
         self.robust = np.concatenate(self._robust)
+        if self.view is not None:  # the reprojection, first of the nonlinear rows, is robust too
+            self.robust = np.concatenate([self.robust, np.ones(self.view.seen.size, bool)])
         self.A = sparse.csr_matrix((vals[free], (rows[free], cols[free])), shape=(self.n_lin, self.n_x))
         held = self.base.reshape(-1)[flat[~free]]
         self.b = np.concatenate(self._b) - np.bincount(rows[~free], vals[~free] * held, minlength=self.n_lin)
@@ -216,6 +223,13 @@ class Problem:
                 cols.append(self.cols[frames, joints, c].ravel())
                 vals.append(np.ravel(grads[..., c]))
 
+        if self.view is not None:
+            r, grads = self.view.residuals(p)
+            out.append(r.ravel())
+            if jac:
+                rid = row + np.arange(r.size).reshape(r.shape)
+                entries(rid, np.broadcast_to(np.arange(N_JOINTS)[None, :, None], r.shape), grads)
+            row += r.size
         # bone lengths
         d = p[:, BONE_TO] - p[:, BONE_FROM]  # (n, B, 3)
         norm = np.maximum(np.linalg.norm(d, axis=-1), 1e-9)
@@ -264,3 +278,38 @@ class Problem:
         shape = (row - self.n_lin, self.n_x)
         nonlinear = sparse.csr_matrix((vals[keep], (rows[keep] - self.n_lin, cols[keep])), shape=shape)
         return res, sparse.vstack([self.A, nonlinear], format="csr")
+
+
+class Perspective:
+    """The 2D reprojection through a pinhole camera (``ClipArrays.camera``), in the problem's terms: each frame's
+    pelvis at depth ``depth`` = focal / px_per_unit (model units) and ``offset`` (n, 2) model units, x right, y up,
+    from the principal point's ray; a joint at (x, y, z) about the pelvis is seen at depth / (depth - z) times
+    its offset, less the pelvis's, the orthographic row's perspective. ``seen`` (n, 16, 2) and ``weight``
+    (n, 16) as the orthographic rows'."""
+
+    def __init__(self, depth: np.ndarray, offset: np.ndarray):
+        self.depth, self.offset = depth, offset
+        self.seen = self.weight = np.zeros(0)
+
+    @classmethod
+    def of(cls, clip: ClipArrays, f: np.ndarray) -> "Perspective":
+        """The frames ``f`` of ``clip``, whose camera is known."""
+        cam, ppu = clip.camera, clip.px_per_unit[f]
+        pelvis = clip.joints2d[f, PELVIS]
+        offset = np.stack([(pelvis[:, 0] - cam.cx) / ppu, (cam.cy - pelvis[:, 1]) / ppu], axis=-1)
+        return cls(cam.focal / ppu, offset)
+
+    def residuals(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """((n, 16, 2) weighted reprojection residuals of poses ``p`` (n, 16, 3), (n, 16, 2, 3) their gradients
+        in each joint's x, y, z)."""
+        depth = self.depth[:, None]
+        near = np.minimum(p[..., 2], NEAREST * depth)  # no joint at or behind the camera
+        k = depth / (depth - near)  # (n, 16)
+        ray = self.offset[:, None, :] + p[..., :2]  # (n, 16, 2)
+        w = self.weight[..., None]
+        r = w * (k[..., None] * ray - self.offset[:, None, :] - self.seen)
+        grads = np.zeros(r.shape + (3,))
+        for c in range(2):
+            grads[..., c, c] = w[..., 0] * k
+            grads[..., c, 2] = np.where(p[..., 2] < NEAREST * depth, w[..., 0] * ray[..., c] * k * k / depth, 0.0)
+        return r, grads

@@ -30,6 +30,8 @@ class Session(ABC):
     score_name: str  # what ``scores`` are, for the page
     review_spacing = 0  # frames around a listed doubtful frame the review skips
 
+    focal: float | None = None  # the camera's focal length in pixels, where the user gave it
+
     def __init__(self, info: VideoInfo, annotations: Annotations | None = None, smooth: float = 0.0):
         self.info, self.smooth = info, smooth
         self._annotations = annotations or Annotations()
@@ -75,9 +77,10 @@ class Session(ABC):
 
     def root(self) -> np.ndarray:
         """(F, 3) pelvis in metres, camera frame (CONTRACT.md's ``root``), NaN without a person;
-        here its depth comes from the body's image scale (lift.inputs.root_track)."""
+        here its depth comes from the body's image scale (lift.inputs.root_track) through the camera's focal
+        length where it is known (``focal``)."""
         inputs = self.inputs
-        return root_track(inputs.joints2d, inputs.px_per_unit, (self.info.width, self.info.height))
+        return root_track(inputs.joints2d, inputs.px_per_unit, (self.info.width, self.info.height), self.focal)
 
     def joint_scores(self) -> np.ndarray:
         """(F, 16) what the method knows of each joint in [0, 1]: here the frame's score."""

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
@@ -51,8 +52,10 @@ class SilhouetteSession(Session):
         silhouettes: list[Silhouette | None] | None = None,
         background: Background | None = None,
         person: str = NONE,
+        focal: float | None = None,
     ):
         super().__init__(info, annotations, smooth)
+        self.focal = focal  # the camera's focal length in pixels; None: scaled orthography
         self.fits = fits
         self.silhouettes, self.background = silhouettes, background
         self.person_model = person  # the person model the fit looked through (mocap.person)
@@ -60,6 +63,11 @@ class SilhouetteSession(Session):
         self._shown: tuple[Inputs, Inputs] | None = None  # the resolved inputs solved last, and as shown
         self._solved: list[tuple[ClipArrays, Solution]] = []  # the latest first, SOLUTIONS_KEPT of them
         self._later: list[slice] = []  # windows of the latest solution an edit left for settle()
+
+    @property
+    def camera(self) -> Pinhole | None:
+        """The pinhole the 3D is solved through: the video's, centred, where its focal length is known."""
+        return None if self.focal is None else default_camera(self.info.width, self.info.height, self.focal)
 
     @cached_property
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -218,7 +226,7 @@ class SilhouetteSession(Session):
         focus, its window now and the rest at ``settle``)."""
         resolved = self._resolve()
         if self._shown is None or self._shown[0] is not resolved:
-            clip = ClipArrays.of(resolved, self.info.fps, self.confidence(), self.placed())
+            clip = ClipArrays.of(resolved, self.info.fps, self.confidence(), self.placed(), self.camera)
             if self._solved:
                 solution, self._later = resolve_edit(clip, self._solved, focus=self._focus)
             else:
