@@ -39,8 +39,16 @@ coordinate, the true facing yaw and scale, no person model:
 
 PA-MPJPE in mm over every frame, signs right on segments out of the image plane.
 
+With ``--perspective`` it prints instead the clip solve through scaled orthography beside the
+solve through the camera's pinhole (``ClipArrays.camera``, `mocap fit --focal`) on the
+perspective development clips (track_*: a camera 3.5 m away), from their exact 2D joints plus
+0, 2 and 4 % noise, the true facing yaw, signs (the first guess) and scale, each segment's true
+|dZ| / length plus Gaussian noise of 0.15 as the person model's depths (the solve sees through
+the pinhole only with them: ``ClipArrays.camera``).
+
     python benchmarks/bench_lift.py [--seconds 6]
     python benchmarks/bench_lift.py --noise [--per-clip] [--seed 0]
+    python benchmarks/bench_lift.py --perspective [--seed 0]
 """
 
 from __future__ import annotations
@@ -56,7 +64,8 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_NAMES
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.camera import Pinhole
 from mocap.io.annotations import Annotations
 from mocap.lift.clipdata import ClipArrays
 from mocap.lift.inputs import FIT_LENGTH_PERCENTILE
@@ -376,13 +385,73 @@ def bench_noise(seed: int, per_clip: bool) -> None:
         print(f"{mode} signs, new lift: 4 % noise / exact 2D = {ratio:.2f}")
 
 
+PERSPECTIVE_NOISE = (0.0, 2.0, 4.0)  # % of the body's height, per coordinate
+DEPTH_NOISE = 0.15  # of a segment's length: the person model's |dZ| error, about MediaPipe's
+
+
+def perspective_truths() -> list[tuple[str, dict]]:
+    """(name, truth) of the perspective development clips: joints2d, joints3d, yaw, body_px, the camera
+    (Pinhole) and px_per_unit (F,) from the pelvis's true depth."""
+    out = []
+    for folder in sorted(DEV_CLIPS.glob("track_*")):
+        doc = json.loads((folder / "truth.json").read_text())
+        cam, frames = doc["camera"], doc["frames"]
+        depth_m = np.abs([f["pelvis_cam"][2] for f in frames])
+        truth = {
+            "joints2d": np.array([f["joints2d"] for f in frames], float),
+            "joints3d": np.array([f["joints3d"] for f in frames], float),
+            "yaw": np.array([f["facing_deg"] for f in frames], float),
+            "body_px": float(doc["body_height_px"]),
+            "camera": Pinhole(cam["fx"], cam["cx"], cam["cy"]),
+            "px_per_unit": cam["fx"] * UNIT_M / depth_m,
+        }
+        out.append((folder.name, truth))
+    return out
+
+
+def perspective_row(truth: dict, percent: float, rng: np.random.Generator) -> dict:
+    """PA-MPJPE (mm) of the orthographic and the pinhole solve, with person-model depths."""
+    joints2d = truth["joints2d"] + rng.normal(0.0, percent / 100 * truth["body_px"], truth["joints2d"].shape)
+    ppu, yaw = truth["px_per_unit"], truth["yaw"]
+    signs, lengths = first_guess(joints2d, ppu, yaw, 25.0)
+    v = truth["joints3d"][:, SEGMENT_JOINTS[:, 1]] - truth["joints3d"][:, SEGMENT_JOINTS[:, 0]]
+    share = np.abs(v[..., 2]) / np.linalg.norm(v, axis=-1)
+    depths = np.clip(share + rng.normal(0.0, DEPTH_NOISE, share.shape), 0.0, 1.0) * lengths
+    row = {}
+    for name, camera in (("orthography", None), ("pinhole", truth["camera"])):
+        clip = ClipArrays(joints2d, ppu, yaw, signs, lengths, depths=depths, fps=25.0, camera=camera)
+        row[name] = 1000 * pa_mpjpe(lift_clip(clip).joints3d, truth["joints3d"])
+    return row
+
+
+def bench_perspective(seed: int) -> None:
+    truths = perspective_truths()
+    if not truths:
+        print(f"skipped: no perspective development clips (track_*) in {DEV_CLIPS}")
+        return
+    rng = np.random.default_rng(seed)
+    print("PA-MPJPE in mm: the clip solve through scaled orthography and through the camera's pinhole\n")
+    print(f"{'clip':14s} {'2D noise':>8s} {'orthography':>12s} {'pinhole':>8s}")
+    rows = []
+    for name, truth in truths:
+        for p in PERSPECTIVE_NOISE:
+            rows.append(perspective_row(truth, p, rng))
+            print(f"{name:14s} {p:7.0f}% {rows[-1]['orthography']:12.1f} {rows[-1]['pinhole']:8.1f}", flush=True)
+    mean = {k: np.mean([r[k] for r in rows]) for k in rows[0]}
+    print(f"{'mean':14s} {'':8s} {mean['orthography']:12.1f} {mean['pinhole']:8.1f}")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=6.0, help="longest clip, seconds (default 6)")
     parser.add_argument("--noise", action="store_true", help="old and new lift against the 2D's noise")
     parser.add_argument("--per-clip", action="store_true", help="with --noise, each clip's oracle row too")
-    parser.add_argument("--seed", type=int, default=0, help="with --noise, the noise's seed")
+    parser.add_argument("--perspective", action="store_true", help="orthographic and pinhole solve, track clips")
+    parser.add_argument("--seed", type=int, default=0, help="with --noise or --perspective, the noise's seed")
     args = parser.parse_args()
+    if args.perspective:
+        bench_perspective(args.seed)
+        return 0
     if args.noise:
         bench_noise(args.seed, args.per_clip)
         return 0

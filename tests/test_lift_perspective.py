@@ -75,3 +75,10 @@ def test_fit_takes_the_focal_length_for_the_root_depth_and_refuses_a_bad_one(tmp
     assert depths[1] == pytest.approx(2 * depths[0], rel=1e-6) and depths[0] < 0
     code, err = run(capsys, "fit", video, "--out", tmp_path / "bad.json", "--quiet", "--focal", "-5")
     assert (code, err) == (2, ["mocap: error: --focal must be a focal length in pixels above 0, got -5.0"])
+
+
+def test_without_the_person_models_depths_the_solve_keeps_orthography(tmp_path):
+    t, clip = close_walk(tmp_path, "side")
+    flat = ClipArrays(**{**clip.__dict__, "depths": None})
+    through = ClipArrays(**{**flat.__dict__, "camera": Pinhole(FOCAL, 160.0, 120.0)})
+    assert np.array_equal(lift_clip(flat).joints3d, lift_clip(through).joints3d)

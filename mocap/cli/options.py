@@ -24,8 +24,9 @@ def add_focal(parser) -> None:
         default=None,
         metavar="PX",
         help="the camera's focal length in pixels of the video (its width times the lens's 35 mm "
-        "equivalent over 36 mm): the 3D is solved through that pinhole, as the video was filmed "
-        "(silhouette method; default: scaled orthography, as for a camera far away)",
+        "equivalent over 36 mm): the silhouette method's 3D is solved through that pinhole where "
+        "the person model gives depths, and the root's depth follows it (default: scaled "
+        "orthography, as for a camera far away)",
     )
 
 

@@ -112,7 +112,9 @@ class ClipArrays:
     (10,) the lift's segment lengths (model units, the unit of ``depths``); ``depths`` (F, 10) a
     person model's |dZ| or NaN; ``held`` (F, 10) the user's signs or 0; ``confidence`` (F, 16) in
     [0, 1]; ``placed`` (F, 16) bool, joints the user placed; ``fps``; ``camera`` the pinhole the video
-    was filmed with, where its focal length is known (None: scaled orthography, as the paper)."""
+    was filmed with, where its focal length is known (None: scaled orthography, as the paper); the solve
+    sees through it where ``depths`` are given: without them the lengths are read off the 2D alone, and a
+    pinhole lets the 2D's noise move joints in depth (its depth cue is a few units' shift of the 2D)."""
 
     joints2d: np.ndarray
     px_per_unit: np.ndarray

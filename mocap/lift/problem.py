@@ -4,8 +4,8 @@ Jacobian.
 Unknowns: every joint's x, y, z on the free frames (model units about the frame's observed 2D
 pelvis; the pelvis's z stays 0, which orthography cannot see) and, with ``free_lengths``, one length
 per bone class after them. Residuals, each over the error it allows (``Weights``): the 2D
-reprojection under scaled orthography, or through the clip's pinhole camera where it has one
-(``Perspective``), weighted by each joint's confidence (a placed joint at ``sigma_placed``); joint accelerations about the pelvis; the pelvis between the hips and the neck
+reprojection under scaled orthography, or through the clip's pinhole camera where it has one and
+the person model's depths (``Perspective``), weighted by each joint's confidence (a placed joint at ``sigma_placed``); joint accelerations about the pelvis; the pelvis between the hips and the neck
 between the shoulders in depth; the person model's |dZ| with the frame's sign; the hips' and
 shoulders' depths from the yaw; the clip's lengths about their estimate (all linear); bone lengths;
 held and guessed signs (one-sided); knees and elbows bending one way (hinges)."""
@@ -66,7 +66,7 @@ class Problem:
         self.n_x = self.n_p + (len(CLASSES) if free_lengths else 0)
         self._rows, self._cols, self._vals, self._flat, self._b, self._robust = [], [], [], [], [], []
         self._row = 0
-        self.view = None if clip.camera is None else Perspective.of(clip, f)
+        self.view = None if clip.camera is None or clip.depths is None else Perspective.of(clip, f)
         self._image_rows(clip, f)
         self._motion_rows(clip.fps)
         target = self._depth_rows(clip, f)
@@ -281,11 +281,11 @@ class Problem:
 
 
 class Perspective:
-    """The 2D reprojection through a pinhole camera (``ClipArrays.camera``), in the problem's terms: each frame's
-    pelvis at depth ``depth`` = focal / px_per_unit (model units) and ``offset`` (n, 2) model units, x right, y up,
-    from the principal point's ray; a joint at (x, y, z) about the pelvis is seen at depth / (depth - z) times
-    its offset, less the pelvis's, the orthographic row's perspective. ``seen`` (n, 16, 2) and ``weight``
-    (n, 16) as the orthographic rows'."""
+    """The 2D reprojection through a pinhole camera (``ClipArrays.camera``, with the person model's depths), in
+    the problem's terms: each frame's pelvis at depth ``depth`` = focal / px_per_unit (model units) and
+    ``offset`` (n, 2) model units, x right, y up, from the principal point's ray; a joint at (x, y, z) about the
+    pelvis is seen at depth / (depth - z) times its offset, less the pelvis's: the orthographic row's
+    perspective. ``seen`` (n, 16, 2) and ``weight`` (n, 16) as the orthographic rows'."""
 
     def __init__(self, depth: np.ndarray, offset: np.ndarray):
         self.depth, self.offset = depth, offset
