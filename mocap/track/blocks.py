@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 
 import cv2
 import numpy as np
@@ -120,20 +120,25 @@ def score(image: np.ndarray, model: np.ndarray, grid: Grid, blocks: np.ndarray) 
     return similarity(model, sample_blocks(image, blocks, grid), grid)
 
 
+@cache
 def ring(radius: int) -> np.ndarray:
-    """Integer offsets (8r, 2) on the square ring of radius r, one circle of Fig. 6's path (r = 0: the centre)."""
+    """Integer offsets (8r, 2) on the square ring of radius r, one circle of Fig. 6's path (r = 0: the centre); made
+    once per radius (every search walks the same few), read-only."""
     if radius == 0:
-        return np.zeros((1, 2))
-    r = radius
-    side = np.arange(-r, r)
-    return np.concatenate(
-        [
-            np.c_[side, np.full(2 * r, -r)],
-            np.c_[np.full(2 * r, r), side],
-            np.c_[-side, np.full(2 * r, r)],
-            np.c_[np.full(2 * r, -r), -side],
-        ]
-    )
+        out = np.zeros((1, 2))
+    else:
+        r = radius
+        side = np.arange(-r, r)
+        out = np.concatenate(
+            [
+                np.c_[side, np.full(2 * r, -r)],
+                np.c_[np.full(2 * r, r), side],
+                np.c_[-side, np.full(2 * r, r)],
+                np.c_[np.full(2 * r, -r), -side],
+            ]
+        )
+    out.flags.writeable = False
+    return out
 
 
 def morphs(block: np.ndarray, d_theta: np.ndarray, d_m: np.ndarray, zoom: bool) -> np.ndarray:
