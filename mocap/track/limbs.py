@@ -31,18 +31,20 @@ KNEE_STEPS = 3  # ... that many steps up and down the shin, one to either side
 ARM_M = tuple(float(LENGTH[SEGMENT_INDEX[f"{kind}_arm_l"]]) * UNIT_M for kind in ("upper", "lower"))
 
 
-def overlap(lowers: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """How much each block of ``lowers`` (K, 5) lies on ``other`` (5,) (or K blocks), in [0, 1]: the mean of
-    max(1 - d / n, 0) along its middle line, d the distance to other's middle line, n other's width."""
+def overlap(lowers: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """How much each block of ``lowers`` (K, 5) lies on ``others``: one block (5,), K blocks or stacks of K (..., K, 5),
+    (..., K) in [0, 1]: the mean of max(1 - d / n, 0) along its middle line, d the distance to the other's middle
+    line, n the other's width. The lowers' points are placed once for every stack."""
     t = (np.arange(OVERLAP_POINTS) + 0.5) / OVERLAP_POINTS
     length = lowers[:, M, None] * t  # (K, P)
-    other = np.broadcast_to(other, lowers.shape)
-    cos, sin = np.cos(other[:, THETA])[:, None], np.sin(other[:, THETA])[:, None]
-    dx = lowers[:, X, None] + length * np.cos(lowers[:, THETA])[:, None] - other[:, X, None]
-    dy = lowers[:, Y, None] + length * np.sin(lowers[:, THETA])[:, None] - other[:, Y, None]
-    along = np.clip(dx * cos + dy * sin, 0.0, other[:, M, None])
+    x = lowers[:, X, None] + length * np.cos(lowers[:, THETA])[:, None]
+    y = lowers[:, Y, None] + length * np.sin(lowers[:, THETA])[:, None]
+    others = np.broadcast_to(others, np.broadcast_shapes(np.shape(others), lowers.shape))
+    cos, sin = np.cos(others[..., THETA])[..., None], np.sin(others[..., THETA])[..., None]
+    dx, dy = x - others[..., X, None], y - others[..., Y, None]
+    along = np.clip(dx * cos + dy * sin, 0.0, others[..., M, None])
     distance = np.hypot(dx - along * cos, dy - along * sin)
-    return np.maximum(1.0 - distance / other[:, N, None], 0.0).mean(axis=1)
+    return np.maximum(1.0 - distance / others[..., N, None], 0.0).mean(axis=-1)
 
 
 def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
@@ -53,18 +55,15 @@ def twin_overlap(lower_a: np.ndarray, lower_b: np.ndarray) -> float:
 def limb_penalty(root: np.ndarray, width: float, last: np.ndarray, length: float, avoid: tuple = ()) -> blocks.Penalty:
     """Penalty of lower blocks whose upper part (``width``) runs from ``root``: FOLD_COST per overlap with it,
     ``cost`` per overlap with each (cost, block) of ``avoid``, JUMP_COST per ``length`` moved from ``last``."""
+    last_end = block_end(last)
 
     def penalty(lowers: np.ndarray) -> np.ndarray:
         uppers = blocks.between(np.broadcast_to(root, (len(lowers), 2)), lowers[:, :2], width)
         jump = (
-            np.linalg.norm(lowers[:, :2] - last[:2], axis=-1)
-            + np.linalg.norm(block_end(lowers) - block_end(last), axis=-1)
+            np.linalg.norm(lowers[:, :2] - last[:2], axis=-1) + np.linalg.norm(block_end(lowers) - last_end, axis=-1)
         ) / length
-        return (
-            FOLD_COST * overlap(lowers, uppers)
-            + JUMP_COST * jump
-            + sum(cost * overlap(lowers, block) for cost, block in avoid)
-        )
+        laps = overlap(lowers, np.stack([uppers, *(np.broadcast_to(block, uppers.shape) for _, block in avoid)]))
+        return FOLD_COST * laps[0] + JUMP_COST * jump + sum(cost * lap for (cost, _), lap in zip(avoid, laps[1:]))
 
     return penalty
 
