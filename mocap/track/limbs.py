@@ -146,9 +146,43 @@ def limits_cost(
     return penalty
 
 
-def added(*penalties: blocks.Penalty) -> blocks.Penalty:
-    """The sum of penalties."""
-    return lambda candidates: sum(penalty(candidates) for penalty in penalties)
+class Summed:
+    """Penalties added in turn (a blocks.Penalty), kept apart so that ``least`` can leave the later ones out."""
+
+    def __init__(self, parts: tuple):
+        self.parts = parts
+
+    def __call__(self, candidates: np.ndarray) -> np.ndarray:
+        total = self.parts[0](candidates)
+        for part in self.parts[1:]:
+            total = total + part(candidates)
+        return total
+
+
+def added(*penalties: blocks.Penalty) -> Summed:
+    """The sum of penalties, sums among them taken apart (``parts``)."""
+    return Summed(tuple(part for penalty in penalties for part in parts(penalty)))
+
+
+def parts(penalty: blocks.Penalty) -> tuple:
+    """The penalties a penalty adds up: a Summed's parts, else itself alone."""
+    return penalty.parts if isinstance(penalty, Summed) else (penalty,)
+
+
+def least(base: np.ndarray, candidates: np.ndarray, penalty: blocks.Penalty) -> int:
+    """The index of the least ``base`` (K,) plus ``penalty(candidates)`` (K, 5), the penalty's parts after the first
+    worked out only where the sum so far is at most the full cost of the least so far: penalties are never negative,
+    so elsewhere none can come down to it (around a root the first, a limb's fold and jump, leaves a few percent)."""
+    first, *rest = parts(penalty)
+    cost = base + first(candidates)
+    guess = int(np.argmin(cost))
+    ceiling = cost[guess]
+    for part in rest:
+        ceiling = ceiling + part(candidates[guess : guess + 1])[0]
+    kept = np.flatnonzero(cost <= ceiling)
+    for part in rest:
+        cost[kept] = cost[kept] + part(candidates[kept])
+    return int(kept[np.argmin(cost[kept])])
 
 
 def limb_cost(s: np.ndarray, k: int) -> float:
@@ -180,10 +214,8 @@ def around_root(
     upper_cost = upper_weight / blocks.score(image, model_u, grid_u, uppers)
     if upper_penalty is not None:
         upper_cost += upper_penalty(uppers)
-    cost = upper_cost[:, None] + (1.0 / blocks.score(image, model_l, grid_l, lowers) + penalty(lowers)).reshape(
-        len(uppers), -1
-    )
-    return lowers[int(np.argmin(cost))]
+    lower_cost = 1.0 / blocks.score(image, model_l, grid_l, lowers)
+    return lowers[least(np.repeat(upper_cost, len(angles)) + lower_cost, lowers, penalty)]
 
 
 def settled_knee(
