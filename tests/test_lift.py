@@ -172,3 +172,26 @@ def test_a_stretch_the_person_model_saw_as_its_mirror_image_is_put_right(view):
     put_right = Cues(joints, given.confidence, world).unmirrored(fps)
     assert np.allclose(put_right.joints2d, truth.joints2d)
     assert np.allclose(put_right.world, truth.joints3d)
+
+
+@pytest.mark.skipif(not CMU_WALK.exists(), reason="needs ../shared/data/bvh (real motion capture)")
+@pytest.mark.parametrize("view", ["front", "three-quarter"])
+def test_a_walk_seen_whole_as_its_mirror_image_is_put_right_by_the_heads_look(view):
+    """Read as its mirror image from start to end, a walk is as smooth as it was: the head's look (a face toward
+    the camera: ``away`` below 0) tells which reading is right (lift.cues.Cues.unmirrored), and where the head
+    tells nothing the reading is left as given."""
+    from mocap.body import MIRROR_JOINTS
+    from mocap.lift.cues import Cues
+
+    fps = 30.0
+    truth = seen(contract_joints(read_bvh(CMU_WALK))[::4], view, fps)
+    mirrored = Cues(
+        truth.joints2d[:, MIRROR_JOINTS],
+        np.ones(truth.joints2d.shape[:2]),
+        truth.joints3d[:, MIRROR_JOINTS] * [1.0, 1.0, -1.0],
+    )
+    n = len(truth.joints2d)
+    assert mirrored.unmirrored(fps, np.zeros(n)) is mirrored
+    put_right = mirrored.unmirrored(fps, np.full(n, -1.0))
+    assert np.allclose(put_right.joints2d, truth.joints2d)
+    assert np.allclose(put_right.world, truth.joints3d)

@@ -19,6 +19,7 @@ DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from 
 # joints (median) is one the person model got wrong
 MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror image costs, in the units of
 # Cues.unmirrored's acceleration (radians of facing, limb lengths of limb joints, per frame squared)
+LOOK_COST_S = 2 * MIRRORED_COST_S  # what a second of frames costs whose facing the head's look, sure, denies
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
 _LIMB_JOINTS = np.array([_J[n] for pairs in _LIMBS.values() for pair in pairs for n in pair])  # elbows to ankles
@@ -34,9 +35,10 @@ class Cues:
     world: np.ndarray
 
     @classmethod
-    def of(cls, landmarks: list, fps: float) -> "Cues | None":
-        """The cues of per-frame ``mocap.person.Landmarks`` (None: nobody), smoothed over time (``smoothed``);
-        None when none has any."""
+    def of(cls, landmarks: list, fps: float, away: np.ndarray | None = None) -> "Cues | None":
+        """The cues of per-frame ``mocap.person.Landmarks`` (None: nobody), the frames seen as a mirror image put
+        right (``unmirrored``, with the head's look ``away``), smoothed over time (``smoothed``); None when none
+        has any."""
         if all(m is None for m in landmarks):
             return None
         n = len(landmarks)
@@ -44,7 +46,7 @@ class Cues:
         for i, m in enumerate(landmarks):
             if m is not None:
                 joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
-        raw = cls(joints, conf, world).unmirrored(fps)
+        raw = cls(joints, conf, world).unmirrored(fps, away)
         return cls(smoothed(raw.joints2d, fps), raw.confidence, smoothed(raw.world, fps))
 
     def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
@@ -61,14 +63,18 @@ class Cues:
             np.where(wrong[:, None, None], np.nan, self.world),
         )
 
-    def unmirrored(self, fps: float) -> "Cues":
+    def unmirrored(self, fps: float, away: np.ndarray | None = None) -> "Cues":
         """These cues with the frames the model saw from the wrong side put right. A person model that takes a
         back for a front sees the depth mirror image, which projects alike: its facing yaw becomes 180 - yaw and
         its left and right are exchanged. Now and then it does so for a stretch of frames, and the body seems to
         make a half turn in a frame and its limbs to jump between sides. Within each run of seen frames each
         frame is read as given or as its mirror image, whichever path is smoothest (``smoothest_states``: the
         least acceleration of the facing direction, in radians, and of the limb joints, in limb lengths); a
-        frame read as a mirror image costs MIRRORED_COST_S per second, so only such jumps are undone."""
+        frame read as a mirror image costs MIRRORED_COST_S per second, so only such jumps are undone. A smooth
+        turn reads smoothly either way (a yaw passing 180 or bouncing back from 90); there the head's look
+        decides: ``away`` (F,) in [-1, 1], the silhouette method's evidence that the performer faces away
+        (mocap.silhouette.facing.facing_away), makes a frame whose reading faces the other way cost up to
+        LOOK_COST_S per second, by how squarely it faces the camera or its back (|cos yaw|)."""
         seen = self.seen
         if not seen.any():
             return self
@@ -85,6 +91,8 @@ class Cues:
             )
             cost = np.zeros((len(facing), 2))
             cost[:, 1] = MIRRORED_COST_S / fps
+            if away is not None:
+                cost += LOOK_COST_S / fps * np.maximum(0.0, away[r, None] * np.cos(facing))
             mirrored[r] = smoothest_states(values, cost) == 1
         if not mirrored.any():
             return self

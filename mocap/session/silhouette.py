@@ -92,7 +92,7 @@ class SilhouetteSession(Session):
     @cached_property
     def cues(self) -> Cues | None:
         """The person model's landmarks over the clip (mocap.lift.cues); None if the fit used none."""
-        return Cues.of([f.landmarks for f in self.fits], self.info.fps)
+        return Cues.of([f.landmarks for f in self.fits], self.info.fps, self._away)
 
     @cached_property
     def _guessed(self) -> list[str | None]:
