@@ -41,9 +41,10 @@ def seed_row(marks: np.ndarray) -> Row:
     return marks, np.full(len(PARTS), np.inf), np.ones(len(PARTS)), False
 
 
-def merged(forward: list[Row | None], backward: list[Row]) -> list[Row]:
+def merged(forward: list[Row | None], backward: list[Row | None]) -> list[Row]:
     """Frames a..b tracked ``forward`` from a (None: untracked) and ``backward`` from b (in forward order): per frame
-    the row not lost, where both hold the body the nearer seed's, where neither the forward one; b's own row back."""
+    the row not lost, where both hold the body the nearer seed's, where neither the forward one; b's own row back.
+    Frame a keeps a forward row it has: its backward one is not looked at then (None: not tracked back)."""
     n = len(forward)
     out = []
     for i, (f, b) in enumerate(zip(forward, backward)):
@@ -100,14 +101,18 @@ class _Run:
             return None
 
     def _backward(self, tracker: BodyTracker, seed: np.ndarray) -> None:
-        """The kept frames tracked back by a fresh ``tracker`` from ``seed`` and merged with their forward rows."""
+        """The kept frames tracked back by a fresh ``tracker`` from ``seed`` and merged with their forward rows; the
+        first of them, where the body was last held or seeded, keeps its forward row (merged), so it is tracked back
+        only where it has none (before any seed)."""
         if not self.kept:
             return
-        back = [seed_row(seed)]
-        for _, earlier, view in self.kept[::-1]:
+        first = self.kept[0][0]
+        tracked_back = self.kept[self.rows[first] is not None :]
+        back: list[Row | None] = [seed_row(seed)]
+        for _, earlier, view in tracked_back[::-1]:
             found, s = tracker.step(earlier, view)
             back.append((found, s, tracker.confidence, tracker.lost))
-        first = self.kept[0][0]
+        back += [None] * (len(self.kept) - len(tracked_back))
         rows = merged([*self.rows[first:], seed_row(seed)], back[::-1])
         self.rows[first:] = rows[:-1]
 
