@@ -15,10 +15,10 @@ X, Y, THETA, M, N = range(5)
 ROWS, COLS = 14, 7  # largest sub-pixel grid of a block
 CHANNEL_WEIGHTS = np.full(3, 1 / 3, np.float32)  # W_R, W_G, W_B of Eq. 3
 CENTRE_WEIGHT, MARGIN_WEIGHT = 2.0, 1.0  # W_1 > W_2 of Eq. 4
-Penalty = Callable[[np.ndarray], np.ndarray]  # blocks (K, 5) -> grey levels (K,)
+Penalty = Callable[[np.ndarray], np.ndarray]  # blocks (K, 5) -> grey levels (K,), never negative
 MIN_DIFF = 1.0  # grey levels: keeps S = 1/D finite for a perfect match
-# candidates of Fig. 6's path scored in one call at most (search): a call costs about this many candidates' worth
-# apart from them, with the penalties of a limb's lower part
+# candidates of Fig. 6's path scored in one call at most (search): with a lower part's penalties, a call costs about
+# as much as this many candidates on top of them
 BATCH = 256
 
 
@@ -117,7 +117,7 @@ def similarity(model: np.ndarray, samples: np.ndarray, grid: Grid) -> np.ndarray
         return np.max([similarity(one, samples, grid) for one in model], axis=0)
     weights = (grid.weights[:, :, None] * CHANNEL_WEIGHTS).ravel()  # W_1 or W_2 times W_c
     diff = np.subtract(samples, model, dtype=np.float32)  # samples as sampled or float32
-    np.abs(diff, out=diff)  # in place: numpy's abs into a new array costs ten times the subtraction
+    np.abs(diff, out=diff)  # in place: a second array this large came fresh from the system, ten times slower
     return 1.0 / np.maximum(diff.reshape(len(samples), -1) @ weights, MIN_DIFF)  # (B, R * C * 3) @ weights
 
 
