@@ -1,7 +1,7 @@
 """Foot contacts and pinning: a foot is planted while its smoothed ankle is near the floor (a running
 low percentile of the lower ankle: a reconstructed floor drifts) and hardly moves across the image
-plane (depth is least certain); ``foot_lock`` holds it there by two-bone IK, moving the body where
-the leg cannot reach, so exports do not slide."""
+plane (depth is least certain); ``foot_lock`` moves the body to where its planted feet ask, then holds
+each there by two-bone IK, moving the body where the leg cannot reach, so exports do not slide."""
 
 from __future__ import annotations
 
@@ -46,16 +46,22 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
+def pin_weight(start: int, stop: int, n: int, fps: float) -> np.ndarray:
+    """(n,) how much of a contact's pin (frames start..stop-1) each frame takes: 1 on the contact, fading out
+    over BLEND_S either side."""
+    blend = max(1, int(round(BLEND_S * fps)))
+    frames = np.arange(n)
+    return np.clip(1 - np.maximum(start - frames, frames - (stop - 1)) / (blend + 1), 0, 1)
+
+
 def pinned_targets(ankle: np.ndarray, planted: np.ndarray, fps: float) -> np.ndarray:
     """(F, 3) where an ankle (F, 3) should be: each contact's mean position, fading out over BLEND_S."""
     shift = np.zeros_like(ankle)
     weight = np.zeros(len(ankle))
-    blend = max(1, int(round(BLEND_S * fps)))
     frames = np.arange(len(ankle))
     for start, stop in _runs(planted):
         pin = ankle[start:stop].mean(axis=0)
-        # how much of this pin each frame takes: 1 on the contact, fading outside it
-        w = np.clip(1 - np.maximum(start - frames, frames - (stop - 1)) / (blend + 1), 0, 1)
+        w = pin_weight(start, stop, len(ankle), fps)
         near = w > weight
         shift[near] = (pin - ankle[np.clip(frames[near], start, stop - 1)]) * w[near, None]
         weight[near] = w[near]
@@ -80,12 +86,27 @@ def two_bone_ik(
     return new_knee, hip + along * dist_c
 
 
+def planted_shift(world: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 3) the body's move that meets its planted feet's pins on average: each contact asks the ankle's
+    way to its pin (``pinned_targets``' mean), by ``pin_weight``. The root's depth is read off the body's image
+    height, which wavers; the feet on the floor say where the body is better than that."""
+    asked, weight = np.zeros((len(world), 3)), np.zeros(len(world))
+    for ankle, planted in zip(_ANKLES, contacts.T):
+        for start, stop in _runs(planted):
+            w = pin_weight(start, stop, len(world), fps)
+            asked += w[:, None] * (world[start:stop, ankle].mean(axis=0) - world[:, ankle])
+            weight += w
+    return asked / np.maximum(weight, 1e-12)[:, None]
+
+
 def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray]:
-    """(world joints (F, 16, 3), the body's shift (F, 3)): each planted ankle held through its contact
-    (``two_bone_ik``), the whole body moved the least that brings every pin within its leg's reach."""
+    """(world joints (F, 16, 3), the body's shift (F, 3)): the body moved where its planted feet ask
+    (``planted_shift``), then each planted ankle held through its contact (``two_bone_ik``), the whole body
+    moved the least that brings every pin within its leg's reach."""
     legs = [tuple(JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle")) for side in "lr"]
-    targets = [pinned_targets(world[:, ankle], planted, fps) for (_, _, ankle), planted in zip(legs, contacts.T)]
-    shift = np.zeros((len(world), 3))
+    shift = planted_shift(world, contacts, fps)
+    moved = world + shift[:, None]
+    targets = [pinned_targets(moved[:, ankle], planted, fps) for (_, _, ankle), planted in zip(legs, contacts.T)]
     for _ in range(REACH_ROUNDS):
         for (hip, knee, ankle), target in zip(legs, targets):
             reach = np.linalg.norm(world[:, knee] - world[:, hip], axis=-1)
