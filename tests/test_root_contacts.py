@@ -74,3 +74,20 @@ def test_foot_lock_keeps_planted_feet_still_and_bones_whole():
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
     edges = np.diff(np.concatenate([[0], flags.astype(int), [0]]))
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def test_a_body_standing_still_is_moved_back_under_its_planted_feet():
+    """A performer standing on both feet whose root's depth wavers (read off the image height): the foot lock
+    moves the body back where its feet are (lift.contacts.planted_shift) and leaves the pose alone."""
+    from mocap.lift.contacts import foot_lock, planted_shift
+
+    standing = walk_cycle(0.1, 30.0)[:1].repeat(60, axis=0)
+    standing[..., 1] -= standing[:, [JOINT_INDEX[f] for f in FEET], 1].min()  # the soles' joints on the floor
+    waver = np.zeros((60, 3))
+    waver[:, 2] = 0.2 * np.sin(np.arange(60) / 5.0)  # 20 cm to and fro in depth
+    world = standing + waver[:, None]
+    contacts = np.ones((60, 2), bool)
+    shift = planted_shift(world, contacts, 30.0)
+    assert np.abs(world + shift[:, None] - (standing + waver.mean(axis=0))).max() < 1e-9
+    locked, _ = foot_lock(world, contacts, 30.0)
+    assert np.abs(locked - locked[:1]).max() < 1e-6  # nothing moves: no leg was bent to a pin
