@@ -5,7 +5,8 @@ Unknowns: every joint's x, y, z on the free frames (model units about the frame'
 pelvis; the pelvis's z stays 0, which orthography cannot see) and, with ``free_lengths``, one length
 per bone class after them. Residuals, each over the error it allows (``Weights``): the 2D
 reprojection under scaled orthography, or through the clip's pinhole camera where it has one and
-the person model's depths (``Perspective``), weighted by each joint's confidence (a placed joint at ``sigma_placed``); joint accelerations about the pelvis; the pelvis between the hips and the neck
+the person model's depths (``Perspective``), weighted by each joint's confidence (a placed joint at
+``sigma_placed``); joint accelerations about the pelvis; the pelvis between the hips and the neck
 between the shoulders in depth; the person model's |dZ| with the frame's sign; the hips' and
 shoulders' depths from the yaw; the clip's lengths about their estimate (all linear); bone lengths;
 held and guessed signs (one-sided); knees and elbows bending one way (hinges)."""

@@ -76,15 +76,14 @@ def soled(landmarks: Landmarks, mask: np.ndarray) -> Landmarks:
 def seen_scale(joints: np.ndarray) -> float:
     """Pixels per model unit of 2D joints (16, 2): the largest of the trunk's and the legs' seen lengths over
     the model's, since turning a segment from the image plane only shortens it."""
-    ratios = [
-        np.hypot(*(joints[_J[b]] - joints[_J[a]])) / LENGTH[SEGMENT_INDEX[s]]
-        for s in ("torso", "upper_leg_l", "upper_leg_r", "lower_leg_l", "lower_leg_r")
-        for a, b in (SEGMENTS[s],)
-    ]
-    return float(max(ratios))
+    segments = ("torso", "upper_leg_l", "upper_leg_r", "lower_leg_l", "lower_leg_r")
+    seen = [np.hypot(*(joints[_J[SEGMENTS[s][1]]] - joints[_J[SEGMENTS[s][0]]])) for s in segments]
+    return float(max(length / LENGTH[SEGMENT_INDEX[s]] for s, length in zip(segments, seen)))
 
 
-def silhouette_end(mask: np.ndarray, start: np.ndarray, through: np.ndarray, first: float, last: float):
+def silhouette_end(
+    mask: np.ndarray, start: np.ndarray, through: np.ndarray, first: float, last: float
+) -> np.ndarray | None:
     """The last pixel of ``mask`` (uint8, 0/255) on the line from ``start`` through ``through``, walked pixel by
     pixel from ``first`` to ``last`` times their distance: None where the walk starts off the silhouette or
     never leaves it (past the frame's edge it may go on)."""
