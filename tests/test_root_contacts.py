@@ -91,3 +91,6 @@ def test_a_body_standing_still_is_moved_back_under_its_planted_feet():
     assert np.abs(world + shift[:, None] - (standing + waver.mean(axis=0))).max() < 1e-9
     locked, _ = foot_lock(world, contacts, 30.0)
     assert np.abs(locked - locked[:1]).max() < 1e-6  # nothing moves: no leg was bent to a pin
+    contacts[30:] = False  # the feet lift: the body's move fades out with the pins, it does not jump
+    shift = planted_shift(world, contacts, 30.0)
+    assert np.abs(shift[34:]).max() == 0 and np.abs(np.diff(shift, axis=0)).max() < 0.06

@@ -88,15 +88,16 @@ def two_bone_ik(
 
 def planted_shift(world: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
     """(F, 3) the body's move that meets its planted feet's pins on average: each contact asks the ankle's
-    way to its pin (``pinned_targets``' mean), by ``pin_weight``. The root's depth is read off the body's image
-    height, which wavers; the feet on the floor say where the body is better than that."""
+    way to its pin (``pinned_targets``' mean), by ``pin_weight``; fading with the pins where they fade, so the
+    body does not jump as a contact ends. The root's depth is read off the body's image height, which wavers;
+    the feet on the floor say where the body is better than that."""
     asked, weight = np.zeros((len(world), 3)), np.zeros(len(world))
     for ankle, planted in zip(_ANKLES, contacts.T):
         for start, stop in _runs(planted):
             w = pin_weight(start, stop, len(world), fps)
             asked += w[:, None] * (world[start:stop, ankle].mean(axis=0) - world[:, ankle])
             weight += w
-    return asked / np.maximum(weight, 1e-12)[:, None]
+    return asked / np.maximum(weight, 1.0)[:, None]
 
 
 def foot_lock(world: np.ndarray, contacts: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray]:
