@@ -72,24 +72,33 @@ class Said:
         return cls([None] * n, {}, np.zeros((n, len(SEGMENT_NAMES)), np.int8), np.full((n, len(SEGMENT_NAMES)), -1))
 
 
-def resolve_inputs(
+@dataclass(frozen=True, eq=False)
+class Named:
+    """What of the inputs the user's signs leave alone (``name_limbs``): ``orientation`` (F,) the user's over the
+    guess, ``yaw`` (F,) degrees, ``names`` (F, 3) the limbs' naming (sides.track_sides), ``cues`` the person
+    model's landmarks on the frames they agree with the fit (None: no person model)."""
+
+    orientation: list[str | None]
+    yaw: np.ndarray
+    names: np.ndarray
+    cues: Cues | None
+
+
+def name_limbs(
     joints_image: np.ndarray,
     body_px: np.ndarray,
     spread: np.ndarray,
     fps: float,
     said: Said,
-    lengths: np.ndarray | None = None,
     guessed: list[str | None] | None = None,
     away: np.ndarray | None = None,
     near: np.ndarray | None = None,
     cues: Cues | None = None,
     facing: np.ndarray | None = None,
-) -> Inputs:
-    """Per-frame lifting inputs: the user's sticky orientation over ``guessed`` (None: guessed here);
-    sides (sides.track_sides, orientation.legs_crossed); arms steadied; overrides put in; ``lengths``
-    (None: the clip's); signs under the user's held ones. ``away`` (F,) the heads' look, ``near`` (F, 2)
-    the near limbs (mocap.silhouette.facing); ``cues``: person-model landmarks, first guesses where seen;
-    ``facing`` the clip's orientation.facing_evidence (None: worked out here; it needs no annotation)."""
+) -> Named:
+    """The orientation, yaw and limb naming of every frame, as ``resolve_inputs`` takes them: the user's sticky
+    orientation over ``guessed`` (None: guessed here) or the person model's yaw, sides by sides.track_sides.
+    They read the user's orientations and joint overrides, never their signs, so a sign click keeps them."""
     n = len(joints_image)
     person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
     if cues is not None:
@@ -109,10 +118,37 @@ def resolve_inputs(
     if cues is not None:
         known = np.where(known >= 0, known, side_evidence(joints_image, cues, 0.5 * np.nanmedian(body_px)))
     names = track_sides(joints_image, known, facing_x, fps, looks_away(away, fps, n), near, rule)
-    swap = names[:, :2]
-    ppu = body_px / BODY_HEIGHT
     yaw = yaws(orientation, np.where(np.isfinite(spread), spread, 1.0))
     yaw = np.where(np.isfinite(world_yaw) & np.array([s is None for s in said.orientation]), world_yaw, yaw)
+    return Named(orientation, yaw, names, cues)
+
+
+def resolve_inputs(
+    joints_image: np.ndarray,
+    body_px: np.ndarray,
+    spread: np.ndarray,
+    fps: float,
+    said: Said,
+    lengths: np.ndarray | None = None,
+    guessed: list[str | None] | None = None,
+    away: np.ndarray | None = None,
+    near: np.ndarray | None = None,
+    cues: Cues | None = None,
+    facing: np.ndarray | None = None,
+    named: Named | None = None,
+) -> Inputs:
+    """Per-frame lifting inputs: the orientation, yaw and sides (``named``, else ``name_limbs``), legs crossed
+    (orientation.legs_crossed); arms steadied; overrides put in; ``lengths`` (None: the clip's); signs under
+    the user's held ones. ``away`` (F,) the heads' look, ``near`` (F, 2) the near limbs
+    (mocap.silhouette.facing); ``cues``: person-model landmarks, first guesses where seen; ``facing`` the
+    clip's orientation.facing_evidence (None: worked out here; it needs no annotation)."""
+    named = named or name_limbs(joints_image, body_px, spread, fps, said, guessed, away, near, cues, facing)
+    orientation, yaw, names, cues = named.orientation, named.yaw, named.names, named.cues
+    n = len(joints_image)
+    person = np.isfinite(joints_image).all(axis=(1, 2)) & np.isfinite(body_px)
+    overrides = {i: o for i, o in said.overrides.items() if i < n and person[i]}
+    swap = names[:, :2]
+    ppu = body_px / BODY_HEIGHT
     values, since = said.signs, said.since
     joints = exchange_legs(anatomical_joints(joints_image, swap), names[:, 2])
     if person.any():

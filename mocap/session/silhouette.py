@@ -20,7 +20,7 @@ from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
 from mocap.lift.clipdata import ClipArrays, Weights
 from mocap.lift.cues import Cues
-from mocap.lift.inputs import Inputs, resolve_inputs
+from mocap.lift.inputs import Inputs, Named, Said, name_limbs, resolve_inputs
 from mocap.lift.motion import Motion
 from mocap.lift.orientation import facing_evidence, guess_orientations
 from mocap.lift.signpath import sign_margins
@@ -60,6 +60,7 @@ class SilhouetteSession(Session):
         self.silhouettes, self.background = silhouettes, background
         self.person_model = person  # the person model the fit looked through (mocap.person)
         self._resolved: Inputs | None = None
+        self._named: tuple[tuple, Named] | None = None  # name_limbs' answer and what the user said it for
         self._shown: tuple[Inputs, Inputs] | None = None  # the resolved inputs solved last, and as shown
         self._solved: list[tuple[ClipArrays, Solution]] = []  # the latest first, SOLUTIONS_KEPT of them
         self._later: list[slice] = []  # windows of the latest solution an edit left for settle()
@@ -151,19 +152,30 @@ class SilhouetteSession(Session):
         """The user's annotations over the first guess (``resolve_inputs``), once per annotations."""
         if self._resolved is None:
             joints, body_px, spread = self._arrays
-            self._resolved = resolve_inputs(
+            said = said_of(self._annotations, len(joints))
+            self._resolved = resolve_inputs(joints, body_px, spread, self.info.fps, said, named=self._named_for(said))
+        return self._resolved
+
+    def _named_for(self, said: Said) -> Named:
+        """``name_limbs`` for what the user said, kept while their orientations and joint overrides stay: a sign
+        click, the commonest edit, does not name the limbs again."""
+        key = (tuple(said.orientation), repr(sorted(said.overrides.items())))
+        if self._named is None or self._named[0] != key:
+            joints, body_px, spread = self._arrays
+            named = name_limbs(
                 joints,
                 body_px,
                 spread,
                 self.info.fps,
-                said_of(self._annotations, len(joints)),
+                said,
                 guessed=self._guessed,
                 away=self._away,
                 near=self._near,
                 cues=self.cues,
                 facing=self._facing,
             )
-        return self._resolved
+            self._named = (key, named)
+        return self._named[1]
 
     @property
     def inputs(self) -> Inputs:
