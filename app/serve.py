@@ -13,6 +13,7 @@ import viser
 
 from app.main import App
 from app.state import AppState
+from mocap.camera import Focal
 from mocap.errors import MocapError
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
@@ -25,7 +26,7 @@ def create(
     port: int = 8080,
     annotations: str | Path | None = None,
     person: str | None = None,
-    focal: float | None = None,
+    focal: Focal | None = None,
 ) -> App:
     """The app on ``video`` (default: the sample) on a new viser server, edits saved to ``annotations``
     (default: beside the video), ``person`` and ``focal`` as AppState takes them; start with
@@ -67,7 +68,7 @@ def main(
     progress: Callable[[int, int], None] | None = None,
     annotations: str | Path | None = None,
     person: str | None = None,
-    focal: float | None = None,
+    focal: Focal | None = None,
 ) -> None:
     """Serve until interrupted: print the page's address, then preprocess with
     ``progress(done, total)`` reporting each step."""

@@ -18,6 +18,7 @@ from app import saving
 from app.edits import Edits, placed
 from app.history import History
 from app.preprocess import Preprocessing
+from mocap.camera import Focal
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import open_video, processing_scale
@@ -61,11 +62,11 @@ class AppState(Preprocessing, Edits):
         video: str | os.PathLike,
         annotations: str | os.PathLike | None = None,
         person: str | None = None,
-        focal: float | None = None,
+        focal: Focal | None = None,
     ):
         """``person``: the silhouette method's person model (mocap.person's name; "none": silhouettes
         alone; None: the default where installed, else a MocapWarning and none); ``focal``: the camera's
-        focal length in pixels, the silhouette method's 3D solved through it (None: scaled orthography)."""
+        focal length, the silhouette method's 3D solved through it (None: scaled orthography)."""
         self.info = open_video(video)
         self.scale = processing_scale(self.info)
         self.path = Path(annotations) if annotations else saving.annotations_path(video)

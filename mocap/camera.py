@@ -10,6 +10,7 @@ import numpy as np
 # The pinhole's axes (x right, y down, z away from the camera) against CONTRACT.md's (x right, y up, z toward
 # the camera): a point's coordinates times FLIP_YZ are the other frame's, either way.
 FLIP_YZ = np.array([1.0, -1.0, -1.0])
+FULL_FRAME_DIAGONAL_MM = float(np.hypot(36.0, 24.0))  # a 35 mm film frame's: what "35 mm equivalent" refers to
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,36 @@ class Pinhole:
     def scaled(self, factor: float) -> "Pinhole":
         """The camera of the frames resized by ``factor``."""
         return Pinhole(self.focal * factor, self.cx * factor, self.cy * factor)
+
+
+@dataclass(frozen=True)
+class Focal:
+    """A camera's focal length as the user gives it (`--focal`): ``value`` pixels of the video, or with
+    ``equivalent`` the lens's 35 mm-equivalent millimetres, which phones and cameras print (a phone's main
+    camera: about 26 mm)."""
+
+    value: float
+    equivalent: bool = False
+
+    @classmethod
+    def parse(cls, text: str) -> "Focal":
+        """``"1390"`` (pixels) or ``"26mm"`` (35 mm equivalent); a ValueError saying what is wrong otherwise."""
+        number = text.strip().lower()
+        equivalent = number.endswith("mm")
+        try:
+            value = float(number[:-2] if equivalent else number)
+        except ValueError:
+            raise ValueError(
+                f"expected pixels (e.g. 1390) or a 35 mm-equivalent length (e.g. 26mm), got {text!r}"
+            ) from None
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"a focal length is a number above 0, got {text!r}")
+        return cls(value, equivalent)
+
+    def pixels(self, width: int, height: int) -> float:
+        """In pixels of a ``width`` x ``height`` video: a 35 mm-equivalent length is over a 35 mm frame's diagonal
+        what the focal length in pixels is over the video's."""
+        return self.value * float(np.hypot(width, height)) / FULL_FRAME_DIAGONAL_MM if self.equivalent else self.value
 
 
 def default_camera(width: int, height: int, focal_px: float | None = None) -> Pinhole:

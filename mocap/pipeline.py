@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from mocap.camera import Focal
 from mocap.errors import MocapError, MocapWarning
 from mocap.io.annotations import Annotations, load_annotations
 from mocap.io.export.formats import check_ending, require, write_format
@@ -110,12 +111,12 @@ def open_session(
     background: str | os.PathLike | tuple[int, int] | None = None,
     progress: Report | None = None,
     person: str = NONE,
-    focal: float | None = None,
+    focal: Focal | None = None,
 ) -> Session:
     """Run a method (None: the annotations', else silhouette) over a video; its session.
     ``background``: the empty scene (a photo or video, or first and last frames; None:
     estimated); ``person``: the person model either method looks through; ``focal``: the
-    camera's focal length in pixels (silhouette method; None: scaled orthography)."""
+    camera's focal length (silhouette method; None: scaled orthography)."""
     info = video if isinstance(video, VideoInfo) else open_video(video)
     notes = notes or Annotations()
     if takes_tracking(method, notes):
@@ -150,13 +151,12 @@ def fit_video_to_file(
     foot_lock: bool = False,
     progress: Report | None = None,
     person: str | None = None,
-    focal: float | None = None,
+    focal: Focal | None = None,
 ) -> Written:
     """`mocap fit`: fit or track, lift, and write ``exports`` ({format key: path}; "json" always,
     VIDEO.motion.json unless given). ``background``: the empty scene (else the annotations');
     ``masks``: a folder for the silhouettes; ``foot_lock``: planted feet kept in place; ``person``:
-    None for ``person_model``'s; ``focal``: the camera's focal length in pixels (None: scaled
-    orthography). Unwritable formats are refused before reading; a background
+    None for ``person_model``'s; ``focal``: the camera's focal length (None: scaled orthography). Unwritable formats are refused before reading; a background
     holding the performer is a MocapWarning."""
     for key, path in exports.items():
         require(key)

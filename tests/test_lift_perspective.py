@@ -10,7 +10,7 @@ from helpers import render_walk
 from helpers import run_cli as run
 
 from mocap.body import SEGMENT_JOINTS
-from mocap.camera import Pinhole
+from mocap.camera import Focal, Pinhole
 from mocap.io.export.motion_json import read_motion
 from mocap.lift.clipdata import ClipArrays
 from mocap.lift.inputs import FIT_LENGTH_PERCENTILE
@@ -73,8 +73,19 @@ def test_fit_takes_the_focal_length_for_the_root_depth_and_refuses_a_bad_one(tmp
         assert code == 0
         depths.append(np.nanmedian([f["root"][2] for f in read_motion(out)["frames"] if f.get("root") is not None]))
     assert depths[1] == pytest.approx(2 * depths[0], rel=1e-6) and depths[0] < 0
-    code, err = run(capsys, "fit", video, "--out", tmp_path / "bad.json", "--quiet", "--focal", "-5")
-    assert (code, err) == (2, ["mocap: error: --focal must be a focal length in pixels above 0, got -5.0"])
+    for bad, why in (("-5", "a focal length is a number above 0, got '-5'"), ("wide", "expected pixels")):
+        code, err = run(capsys, "fit", video, "--out", tmp_path / "bad.json", "--quiet", "--focal", bad)
+        assert code == 2 and len(err) == 1 and err[0].startswith(f"mocap: error: --focal: {why}"), err
+
+
+def test_a_35mm_equivalent_focal_length_is_read_in_the_videos_pixels():
+    """26 mm on a 35 mm frame's 43.3 mm diagonal is 26 / 43.27 of a video's diagonal in pixels (1920x1080:
+    about 1324 px)."""
+    assert Focal.parse("26mm").pixels(1920, 1080) == pytest.approx(26 * np.hypot(1920, 1080) / np.hypot(36, 24))
+    assert Focal.parse(" 1390 ").pixels(1920, 1080) == 1390.0
+    for bad in ("0", "nan", "inf", "mm", "26 cm"):
+        with pytest.raises(ValueError):
+            Focal.parse(bad)
 
 
 def test_without_the_person_models_depths_the_solve_keeps_orthography(tmp_path):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from mocap.camera import Focal
 from mocap.errors import MocapError
 
 
@@ -17,24 +18,26 @@ def add_smooth(parser, note: str) -> None:
 
 
 def add_focal(parser) -> None:
-    """``--focal PX``: the camera's focal length, for the 3D under perspective (mocap.lift.problem)."""
+    """``--focal PX|MMmm``: the camera's focal length, for the 3D under perspective (mocap.lift.problem)."""
     parser.add_argument(
         "--focal",
-        type=float,
         default=None,
-        metavar="PX",
-        help="the camera's focal length in pixels of the video (its width times the lens's 35 mm "
-        "equivalent over 36 mm): the silhouette method's 3D is solved through that pinhole where "
-        "the person model gives depths, and the root's depth follows it (default: scaled "
-        "orthography, as for a camera far away)",
+        metavar="PX|MMmm",
+        help="the camera's focal length, in pixels of the video (1390) or as the lens's 35 mm "
+        "equivalent (26mm: a phone's main camera): the silhouette method's 3D is solved through "
+        "that pinhole where the person model gives depths, and the root's depth follows it "
+        "(default: scaled orthography, as for a camera far away)",
     )
 
 
-def focal_of(args) -> float | None:
-    """The ``--focal`` given, refused unless above 0."""
-    if args.focal is not None and not args.focal > 0:
-        raise MocapError(f"--focal must be a focal length in pixels above 0, got {args.focal}")
-    return args.focal
+def focal_of(args) -> Focal | None:
+    """The ``--focal`` given (camera.Focal), refused in one line if it is not a focal length."""
+    if args.focal is None:
+        return None
+    try:
+        return Focal.parse(args.focal)
+    except ValueError as error:
+        raise MocapError(f"--focal: {error}") from None
 
 
 def smooth_of(args) -> float:

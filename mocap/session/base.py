@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap.body import JOINT_INDEX
+from mocap.camera import Focal
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, FrameNote
 from mocap.io.export.formats import Clip, export_file
@@ -30,7 +31,7 @@ class Session(ABC):
     score_name: str  # what ``scores`` are, for the page
     review_spacing = 0  # frames around a listed doubtful frame the review skips
 
-    focal: float | None = None  # the camera's focal length in pixels, where the user gave it
+    focal: Focal | None = None  # the camera's focal length, where the user gave it
 
     def __init__(self, info: VideoInfo, annotations: Annotations | None = None, smooth: float = 0.0):
         self.info, self.smooth = info, smooth
@@ -80,7 +81,8 @@ class Session(ABC):
         here its depth comes from the body's image scale (lift.inputs.root_track) through the camera's focal
         length where it is known (``focal``)."""
         inputs = self.inputs
-        return root_track(inputs.joints2d, inputs.px_per_unit, (self.info.width, self.info.height), self.focal)
+        size = (self.info.width, self.info.height)
+        return root_track(inputs.joints2d, inputs.px_per_unit, size, self.focal and self.focal.pixels(*size))
 
     def joint_scores(self) -> np.ndarray:
         """(F, 16) what the method knows of each joint in [0, 1]: here the frame's score."""

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap.body import JOINT_INDEX
-from mocap.camera import Pinhole, default_camera
+from mocap.camera import Focal, Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import VideoInfo, processing_scale
@@ -52,10 +52,10 @@ class SilhouetteSession(Session):
         silhouettes: list[Silhouette | None] | None = None,
         background: Background | None = None,
         person: str = NONE,
-        focal: float | None = None,
+        focal: Focal | None = None,
     ):
         super().__init__(info, annotations, smooth)
-        self.focal = focal  # the camera's focal length in pixels; None: scaled orthography
+        self.focal = focal  # the camera's focal length; None: scaled orthography
         self.fits = fits
         self.silhouettes, self.background = silhouettes, background
         self.person_model = person  # the person model the fit looked through (mocap.person)
@@ -68,7 +68,8 @@ class SilhouetteSession(Session):
     @property
     def camera(self) -> Pinhole | None:
         """The pinhole the 3D is solved through: the video's, centred, where its focal length is known."""
-        return None if self.focal is None else default_camera(self.info.width, self.info.height, self.focal)
+        size = (self.info.width, self.info.height)
+        return None if self.focal is None else default_camera(*size, self.focal.pixels(*size))
 
     @cached_property
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
