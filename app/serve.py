@@ -13,8 +13,8 @@ import viser
 
 from app.main import App
 from app.state import AppState
-from mocap.camera import Focal
 from mocap.errors import MocapError
+from mocap.pipeline import Focal
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "walk.mp4"
 

@@ -18,11 +18,10 @@ from app import saving
 from app.edits import Edits, placed
 from app.history import History
 from app.preprocess import Preprocessing
-from mocap.camera import Focal
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.io.video import open_video, processing_scale
-from mocap.pipeline import Progress, person_model
+from mocap.pipeline import Focal, Progress, person_model
 from mocap.session import FrameFit, Session, Silhouette, SilhouetteSession, TrackSession, remarks_of
 from mocap.session.review import Doubt
 
