@@ -156,8 +156,9 @@ def fit_video_to_file(
     """`mocap fit`: fit or track, lift, and write ``exports`` ({format key: path}; "json" always,
     VIDEO.motion.json unless given). ``background``: the empty scene (else the annotations');
     ``masks``: a folder for the silhouettes; ``foot_lock``: planted feet kept in place; ``person``:
-    None for ``person_model``'s; ``focal``: the camera's focal length (None: scaled orthography). Unwritable formats are refused before reading; a background
-    holding the performer is a MocapWarning."""
+    None for ``person_model``'s; ``focal``: the camera's focal length (None: scaled orthography).
+    Unwritable formats are refused before reading; a background holding the performer is a
+    MocapWarning."""
     for key, path in exports.items():
         require(key)
         check_ending(key, path)

@@ -45,9 +45,9 @@ def close_walk(tmp_path, view: str):
 def test_the_pinhole_rows_see_the_true_pose_where_it_was_filmed(tmp_path):
     t, clip = close_walk(tmp_path, "three-quarter")
     clip = ClipArrays(**{**clip.__dict__, "camera": Pinhole(FOCAL, 160.0, 120.0)})
-    view = Perspective.of(clip, np.arange(len(t.joints2d)))
     rel = (t.joints2d - t.joints2d[:, [3]]) / clip.px_per_unit[:, None, None]
-    view.seen, view.weight = np.stack([rel[..., 0], -rel[..., 1]], axis=-1), np.ones(rel.shape[:2])
+    seen = np.stack([rel[..., 0], -rel[..., 1]], axis=-1)
+    view = Perspective.of(clip, np.arange(len(t.joints2d)), seen, np.ones(rel.shape[:2]))
     residuals, _ = view.residuals(t.joints3d / UNIT_M)
     flat = np.abs(t.joints3d[..., :2] / UNIT_M - view.seen).max()
     assert np.abs(residuals).max() < 1e-6 < 1.0 < flat  # orthography is a unit and more off; the pinhole, not

@@ -67,7 +67,7 @@ class Problem:
         self.n_x = self.n_p + (len(CLASSES) if free_lengths else 0)
         self._rows, self._cols, self._vals, self._flat, self._b, self._robust = [], [], [], [], [], []
         self._row = 0
-        self.view = None if clip.camera is None or clip.depths is None else Perspective.of(clip, f)
+        self.view: Perspective | None = None  # the pinhole's rows, where _image_rows takes them
         self._image_rows(clip, f)
         self._motion_rows(clip.fps)
         target = self._depth_rows(clip, f)
@@ -84,7 +84,8 @@ class Problem:
             self.hinges.append((_J[a], _J[m], _J[d], _J[left], _J[right], bend, 1.0 / sigma, norm))
 
     def _image_rows(self, clip: ClipArrays, f: np.ndarray) -> None:
-        """The 2D reprojection (scaled orthography about the observed pelvis), by confidence."""
+        """The 2D reprojection (scaled orthography about the observed pelvis, or ``Perspective``'s rows where the
+        clip has a camera and the person model's depths), by confidence."""
         w, n = self.w, self.n
         j2 = clip.joints2d[f]
         rel = (j2 - j2[:, [PELVIS]]) / clip.px_per_unit[f, None, None]
@@ -93,8 +94,8 @@ class Problem:
         weight = np.sqrt(np.clip(conf, MIN_CONFIDENCE, 1.0)) / (w.sigma_2d * BODY_HEIGHT)
         if clip.placed is not None:
             weight = np.where(clip.placed[f], 1.0 / (w.sigma_placed * BODY_HEIGHT), weight)
-        if self.view is not None:
-            self.view.seen, self.view.weight = seen, weight
+        if clip.camera is not None and clip.depths is not None:
+            self.view = Perspective.of(clip, f, seen, weight)
             return
         for c in range(2):
             self._linear([(np.arange(n)[:, None], np.arange(N_JOINTS)[None], c, weight)], weight * seen[..., c], True)
@@ -288,17 +289,16 @@ class Perspective:
     pelvis is seen at depth / (depth - z) times its offset, less the pelvis's: the orthographic row's
     perspective. ``seen`` (n, 16, 2) and ``weight`` (n, 16) as the orthographic rows'."""
 
-    def __init__(self, depth: np.ndarray, offset: np.ndarray):
-        self.depth, self.offset = depth, offset
-        self.seen = self.weight = np.zeros(0)
+    def __init__(self, depth: np.ndarray, offset: np.ndarray, seen: np.ndarray, weight: np.ndarray):
+        self.depth, self.offset, self.seen, self.weight = depth, offset, seen, weight
 
     @classmethod
-    def of(cls, clip: ClipArrays, f: np.ndarray) -> "Perspective":
-        """The frames ``f`` of ``clip``, whose camera is known."""
+    def of(cls, clip: ClipArrays, f: np.ndarray, seen: np.ndarray, weight: np.ndarray) -> "Perspective":
+        """The frames ``f`` of ``clip``, whose camera is known, seen and weighted as the orthographic rows."""
         cam, ppu = clip.camera, clip.px_per_unit[f]
         pelvis = clip.joints2d[f, PELVIS]
         offset = np.stack([(pelvis[:, 0] - cam.cx) / ppu, (cam.cy - pelvis[:, 1]) / ppu], axis=-1)
-        return cls(cam.focal / ppu, offset)
+        return cls(cam.focal / ppu, offset, seen, weight)
 
     def residuals(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """((n, 16, 2) weighted reprojection residuals of poses ``p`` (n, 16, 3), (n, 16, 2, 3) their gradients

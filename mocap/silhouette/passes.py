@@ -99,7 +99,8 @@ def iter_silhouettes(
 ) -> Iterator[Silhouette | None]:
     """Pass one (section 3.2): each frame's Silhouette or None (background: ``plate.clip_background`` unless
     given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``), its sight steadied
-    (``person.steady.steadied``)."""
+    (``person.steady.steadied``), the landmarks' head top and ankles placed on the silhouette (``eyes.crowned``,
+    ``eyes.soled``)."""
     background = background or clip_background(info, scale)
     seen = watched(person, (frame for _, frame in iter_frames(info, scale=scale)))
     if person is not None:
@@ -109,8 +110,9 @@ def iter_silhouettes(
         fused = None if view is None else fused_mask(classical, view.mask, background.held)
         if fused is None:
             yield Silhouette.from_mask(classical, frame)
-        else:
-            yield Silhouette.from_mask(fused[0], frame, soled(crowned(view.landmarks, fused[0]), fused[0]), fused[1])
+            continue
+        mask, learned = fused
+        yield Silhouette.from_mask(mask, frame, soled(crowned(view.landmarks, mask), mask), learned)
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:
