@@ -92,16 +92,25 @@ class Edits:
 
     def _settle(self) -> None:
         """Settle the sessions a piece at a time, the lock let go between pieces (a frame change waits for one
-        piece at most), then show the page again."""
-        settled = False
+        piece at most), then their review queues (the page showed the last ones), then show the page again."""
+        changed = False
         while True:
             with self._lock:
-                pieces = [session.settle(most=1) for session in (self._fitted, self._tracked) if session is not None]
+                pieces = [session.settle(most=1) for session in self._sessions()]
             if not any(pieces):
                 break
-            settled = True
-        if settled:
+            changed = True
+        with self._lock:
+            shown = self._session
+            if shown is not None and shown.queue_stale:
+                shown.review_queue()
+                changed = True
+        if changed:
             self._changed()
+
+    def _sessions(self) -> list:
+        """Both methods' sessions that exist."""
+        return [session for session in (self._fitted, self._tracked) if session is not None]
 
     def undo(self) -> int | None:
         """Undo the last edit; returns its frame (now current), None if nothing to undo."""

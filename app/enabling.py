@@ -41,7 +41,7 @@ def control_states(c: Controls, state: AppState, view: FrameView) -> list[tuple[
             },
         ),
         (c.clear_override, {"disabled": not view.overrides or (joint != NO_JOINT and joint not in view.overrides)}),
-        (c.doubtful, {"disabled": not lifted or not state.review_stops()}),
+        (c.doubtful, {"disabled": not lifted or not state.review_stops(at_once=True)}),
         (c.foot_lock, {"disabled": not lifted}),
         (c.mark, {"disabled": not state.unmarked(state.marking_frame())}),
         (c.marks_from_fit, {"disabled": not state.silhouette_fitted}),

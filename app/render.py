@@ -208,7 +208,7 @@ class Rendering:
             text = (
                 f"{view.n_frames} frames {done}. Edits are saved to `{self.state.path.name}`.{eyes}"
                 + ("  \n" if eyes else " ")
-                + next_step(bool(self.state.review_stops()))
+                + next_step(bool(self.state.review_stops(at_once=True)))
             )
             if view.method != "track" and self.state.background_warning:
                 text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."

@@ -186,10 +186,11 @@ class AppState(Preprocessing, Edits):
         with self._lock:
             return [] if self._session is None else self._session.review_queue()
 
-    def review_stops(self) -> list[Doubt]:
-        """The frames the review visits, most doubtful first (Session.review_stops)."""
+    def review_stops(self, at_once: bool = False) -> list[Doubt]:
+        """The frames the review visits, most doubtful first (Session.review_stops; ``at_once``: what a page
+        shows the moment an edit is made, the settling showing the current ones)."""
         with self._lock:
-            return [] if self._session is None else self._session.review_stops()
+            return [] if self._session is None else self._session.review_stops(at_once)
 
     @property
     def made_from(self) -> tuple:
@@ -250,7 +251,7 @@ class AppState(Preprocessing, Edits):
 def lifted_view(base: FrameView, session: Session) -> FrameView:
     """``base`` with its session's 3D: anatomical 2D joints, pose, signs and sources, orientation, doubts."""
     i, inputs = base.index, session.inputs
-    doubt = next((d.reasons for d in session.review_queue() if d.frame == i), ())
+    doubt = next((d.reasons for d in session.review_queue(at_once=True) if d.frame == i), ())
     orientation, said = session.orientation_shown(i)
     return replace(
         base,

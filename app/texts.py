@@ -95,7 +95,7 @@ def orientation_text(view: FrameView) -> str:
 
 def review_text(state: AppState) -> str:
     """The review queue's head as markdown."""
-    queue = state.review_stops()
+    queue = state.review_stops(at_once=True)
     if not state.progress.ready:
         return "Ranked once every frame is fitted."
     if not queue:

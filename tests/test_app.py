@@ -145,6 +145,22 @@ def test_flip_changes_the_pose_and_is_saved_and_restored(app):
     assert reopened.annotations == state.annotations
 
 
+def test_an_edit_is_shown_before_the_review_is_ranked_again(app, monkeypatch):
+    """A click's page does not wait for the clip's review queue: it shows the last one at once, and the settling
+    ranks the edited clip and shows the page again."""
+    state = app.state
+    before = state.review_stops(at_once=True)
+    monkeypatch.setattr(AppState, "_settle_soon", lambda self: None)  # the settling held, then run below
+    shown = []
+    state.on_change(lambda: shown.append(state.view().doubts))
+    assert state.flip_sign(4, deepest_segment(state, 4))
+    session = state._session
+    assert session.queue_stale and state.review_stops(at_once=True) == before and len(shown) == 1
+    state._settle()
+    assert not session.queue_stale and len(shown) == 2
+    assert state.review_stops(at_once=True) == session.review_stops() == state.review_stops()
+
+
 def test_edits_undo_redo_and_the_file_follows(app):
     state = app.state
     opened = state.annotations  # the keyframes the fit proposed

@@ -23,7 +23,7 @@ from mocap.lift.clipdata import (
     to_contract,
     with_signs,
 )
-from mocap.lift.levmar import levenberg_marquardt
+from mocap.lift.levmar import MAX_ITERATIONS, levenberg_marquardt
 from mocap.lift.problem import Problem
 from mocap.lift.signpath import sign_paths
 from mocap.lift.taylor import runs, signs_of
@@ -33,6 +33,8 @@ from mocap.lift.taylor import runs, signs_of
 WINDOW_S = 0.2
 # frames either side of a window held in its problem: the acceleration reaches two frames
 CONTEXT = 2
+FOCUS_ITERATIONS = 20  # Levenberg-Marquardt iterations an edit's own window is given at once (a page's answer
+# within the app's 100 ms); the window is solved on to convergence with the windows left for later
 LATER_FRAMES = 30  # frames of the windows left for later solved at a time: about 60 ms, which the app
 # holds its lock for (a frame change waits no longer)
 
@@ -95,10 +97,12 @@ def lift_clip(clip: ClipArrays, weights: Weights = Weights()) -> Solution:
     return solve_signs(clip, solve_clip(clip, weights), weights)
 
 
-def solve_window(clip: ClipArrays, solution: Solution, window: slice, weights: Weights = Weights()) -> Solution:
+def solve_window(
+    clip: ClipArrays, solution: Solution, window: slice, weights: Weights = Weights(), max_iter: int = MAX_ITERATIONS
+) -> Solution:
     """``solution`` with frames ``window`` solved again for ``clip`` (edited there), every other frame
     and the lengths held: the window's sign paths first (``sign_paths``, the held frames around it
-    keeping theirs), then its problem with CONTEXT held frames either side."""
+    keeping theirs), then its problem with CONTEXT held frames either side (``max_iter`` iterations at most)."""
     t0 = time.perf_counter()
     model = solution.model.copy()
     for r in runs(clip.person):
@@ -113,7 +117,7 @@ def solve_window(clip: ClipArrays, solution: Solution, window: slice, weights: W
         paths = sign_paths(part, base, solution.lengths, weights, walls)
         base = with_signs(base, paths)
         problem = Problem(replace(part, signs=paths), slice(0, len(free)), base, free, solution.lengths, False, weights)
-        model[around] = problem.positions(levenberg_marquardt(problem, problem.x0(base)))
+        model[around] = problem.positions(levenberg_marquardt(problem, problem.x0(base), max_iter))
     return Solution(to_contract(model), model, solution.lengths, time.perf_counter() - t0)
 
 
@@ -142,8 +146,9 @@ def resolve_edit(
     of ``solved`` that asks the fewest frames to solve again (``frames_to_solve``; the first of equals):
     windows of WINDOW_S either side of those frames (``solve_window``), none when one already holds (an
     undo, a sign set back), the whole clip (``lift_clip``) when none has the same person frames. With
-    ``focus`` (the frame the user looks at) only WINDOW_S either side of it is solved now, the rest left
-    (``solve_windows`` finishes them): a sign held from a frame on may ask for the rest of the clip."""
+    ``focus`` (the frame the user looks at) only WINDOW_S either side of it is solved now, in FOCUS_ITERATIONS,
+    the rest left (``solve_windows`` finishes them, that window first): a sign held from a frame on may ask for
+    the rest of the clip."""
     best = None
     for before, solution in solved:
         frames = frames_to_solve(clip, before, solution, weights)
@@ -165,11 +170,17 @@ def resolve_edit(
         now.append(near)
         later += [slice(w.start, near.start), slice(near.stop, w.stop)]
     pieces = [slice(a, min(a + LATER_FRAMES, w.stop)) for w in later for a in range(w.start, w.stop, LATER_FRAMES)]
-    return solve_windows(clip, solution, now, weights), pieces
+    return solve_windows(clip, solution, now, weights, FOCUS_ITERATIONS), now + pieces
 
 
-def solve_windows(clip: ClipArrays, solution: Solution, windows: list[slice], weights: Weights = Weights()) -> Solution:
+def solve_windows(
+    clip: ClipArrays,
+    solution: Solution,
+    windows: list[slice],
+    weights: Weights = Weights(),
+    max_iter: int = MAX_ITERATIONS,
+) -> Solution:
     """``solution`` with each of ``windows`` solved again in turn (``solve_window``)."""
     for window in windows:
-        solution = solve_window(clip, solution, window, weights)
+        solution = solve_window(clip, solution, window, weights, max_iter)
     return solution

@@ -36,7 +36,8 @@ class Session(ABC):
     def __init__(self, info: VideoInfo, annotations: Annotations | None = None, smooth: float = 0.0):
         self.info, self.smooth = info, smooth
         self._annotations = annotations or Annotations()
-        self._queue: list[Doubt] | None = None
+        self._queue: list[Doubt] | None = None  # for the current annotations, once computed
+        self._queue_before: list[Doubt] | None = None  # the last one computed
         self._focus: int | None = None  # the frame the last edit was made on (annotate)
 
     @property
@@ -132,18 +133,24 @@ class Session(ABC):
         """joint -> frame of an override on another frame that moves it on ``frame`` (tracking's pins)."""
         return {}
 
-    def review_queue(self) -> list[Doubt]:
-        """Doubtful frames, most doubtful first, and why (mocap.session.review)."""
-        if self._queue is None:
-            self._queue = review_queue(self)
-        return self._queue
+    def review_queue(self, at_once: bool = False) -> list[Doubt]:
+        """Doubtful frames, most doubtful first, and why (mocap.session.review). ``at_once``: the last queue
+        computed, where one was and the current annotations' is not yet: what a page shows the moment an edit
+        is made, the current queue (``queue_stale`` until then) following off the click's path."""
+        if self._queue is None and not (at_once and self._queue_before is not None):
+            self._queue = self._queue_before = review_queue(self)
+        return self._queue_before if self._queue is None else self._queue
 
-    def review_stops(self) -> list[Doubt]:
-        """The frames a review visits, most doubtful first; where edits reach around a frame
-        (``review_spacing``), one frame per stretch they cover (review.covering)."""
-        if not self.review_spacing:
-            return self.review_queue()
-        return covering(self.review_queue(), self.n_frames, self.review_spacing)
+    @property
+    def queue_stale(self) -> bool:
+        """Whether ``review_queue`` has yet to be computed for the current annotations."""
+        return self._queue is None
+
+    def review_stops(self, at_once: bool = False) -> list[Doubt]:
+        """The frames a review visits, most doubtful first (``review_queue``'s ``at_once``); where edits reach
+        around a frame (``review_spacing``), one frame per stretch they cover (review.covering)."""
+        queue = self.review_queue(at_once)
+        return covering(queue, self.n_frames, self.review_spacing) if self.review_spacing else queue
 
     def keyframes(self) -> list[int]:
         """The annotations' keyframes (default every frame) where a person was found."""
