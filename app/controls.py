@@ -16,6 +16,7 @@ from mocap.person import DEFAULT_MODEL, available, install_hint
 
 AUTO = "auto"  # the orientation dropdown's "no entry on this frame"
 NO_JOINT = "none"  # the joint dropdown's "clicks place nothing"
+LIMBS = ("arm", "leg")  # the pairs the Joints tab swaps (mocap.body.LIMB_JOINTS)
 FRAME_STEPS = ("◀ frame", "frame ▶")
 KEY_STEPS = ("◀ keyframe", "keyframe ▶")
 EDITS = ("↶ undo", "redo ↷")
@@ -83,6 +84,7 @@ class Controls:
     segments: dict
     joint: object
     clear_override: object
+    swaps: dict
     overrides: object
     edits: object
     doubtful: object
@@ -163,6 +165,12 @@ def build_controls(gui, n_frames: int) -> Controls:
         clear_override = gui.add_button(
             "Clear override", icon="eraser", hint="the chosen joint's, or every one on this frame"
         )
+        swaps = {
+            limb: gui.add_button(
+                f"Swap {limb}s", icon="arrows-exchange", hint=f"left and right {limb}s exchanged on this frame"
+            )
+            for limb in LIMBS
+        }
         overrides = gui.add_markdown("")
     with tabs.add_tab("Tracking"):
         mark, marks_from_fit, track, track_info = _tracking_tab(gui)
@@ -190,6 +198,7 @@ def build_controls(gui, n_frames: int) -> Controls:
         segments,
         joint,
         clear_override,
+        swaps,
         overrides,
         edits,
         doubtful,

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from app import saving
-from mocap.body import JOINTS, SEGMENT_INDEX
+from mocap.body import JOINT_INDEX, JOINTS, LIMB_JOINTS, SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.session import marks_from_fit, propose_keyframes
@@ -37,6 +37,11 @@ def with_marks(notes: Annotations, marks: dict[str, tuple[float, float]]) -> Ann
     for name, xy in marks.items():
         notes = notes.with_joint(0, name, xy)
     return notes
+
+
+def pixel(xy) -> tuple[float, float]:
+    """A point as the annotations keep a placed joint: (x, y) to 0.1 px."""
+    return round(float(xy[0]), 1), round(float(xy[1]), 1)
 
 
 def placed(notes: Annotations, frame: int) -> dict[str, tuple[float, float]]:
@@ -151,6 +156,22 @@ class Edits:
     def set_override(self, frame: int, joint: str, xy: tuple[float, float] | None) -> bool:
         """Fix (or with None release) a joint's 2D position on ``frame``."""
         return self.edit(frame, lambda n: n.with_joint(frame, joint, xy), key=xy is not None)
+
+    def swap_sides(self, frame: int, limb: str) -> bool:
+        """Exchange the performer's left and right ``limb`` ("arm" or "leg") on ``frame`` in one edit: each of its
+        joints placed where the other side's is shown, the frame a keyframe. The fix for a pair named the wrong
+        way round (the review's "hands / feet may have swapped sides"), in one click instead of six."""
+
+        def change(notes: Annotations) -> Annotations:
+            view = self.view(frame)
+            if not view.sides_known:
+                raise MocapError(f"swapping sides needs the 3D pose of frame {frame} (not fitted yet, or nobody found)")
+            for name in LIMB_JOINTS[limb]:
+                left, right = (view.joints2d[JOINT_INDEX[f"{name}_{side}"]] for side in "lr")
+                notes = notes.with_joint(frame, f"{name}_l", pixel(right)).with_joint(frame, f"{name}_r", pixel(left))
+            return notes
+
+        return self.edit(frame, change, key=True)
 
     def clear_overrides(self, frame: int, joint: str | None = None) -> bool:
         """Release ``joint`` on ``frame``, or with None every joint placed there (one edit)."""

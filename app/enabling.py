@@ -41,6 +41,7 @@ def control_states(c: Controls, state: AppState, view: FrameView) -> list[tuple[
             },
         ),
         (c.clear_override, {"disabled": not view.overrides or (joint != NO_JOINT and joint not in view.overrides)}),
+        *((button, {"disabled": not view.sides_known}) for button in c.swaps.values()),
         (c.doubtful, {"disabled": not lifted or not state.review_stops(at_once=True)}),
         (c.foot_lock, {"disabled": not lifted}),
         (c.mark, {"disabled": not state.unmarked(state.marking_frame())}),

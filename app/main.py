@@ -154,6 +154,8 @@ class App(Rendering):
         c.learned_eyes.on_update(self._from_client(lambda: self._learned_eyes(c.learned_eyes.value)))
         c.show_landmarks.on_update(lambda _e: self.refresh())
         c.clear_override.on_click(self._on(self._clear_override, placing=True))
+        for limb, button in c.swaps.items():
+            button.on_click(self._on(lambda limb=limb: state.swap_sides(state.frame, limb)))
         for label, button in c.downloads.items():
             button.on_click(lambda e, key=DOWNLOADS[label]: self._run(e.client, lambda: self._download(e, key)))
         for segment, button in c.segments.items():

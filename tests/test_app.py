@@ -22,7 +22,7 @@ from app.scene import segment_transforms
 from app.state import AppState
 from app.texts import REVIEW_LINES, review_text
 from app.views import DISPLAY_HEIGHT, video_image
-from mocap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
+from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations, load_annotations
@@ -159,6 +159,23 @@ def test_an_edit_is_shown_before_the_review_is_ranked_again(app, monkeypatch):
     state._settle()
     assert not session.queue_stale and len(shown) == 2
     assert state.review_stops(at_once=True) == session.review_stops() == state.review_stops()
+
+
+def test_a_limb_pair_is_swapped_in_one_edit(app):
+    """Swap legs pins each leg joint on the frame where the other side's was shown (a pair named the wrong way
+    round): the 2D and the 3D exchange the legs, the frame is keyed, and one undo takes it all back."""
+    state = app.state
+    frame, opened = 4, state.annotations
+    before = state.view(frame)
+    assert state.swap_sides(frame, "leg")
+    after = state.view(frame)
+    legs = {side: [JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle")] for side in "lr"}
+    for a, b in (("l", "r"), ("r", "l")):
+        np.testing.assert_allclose(after.joints2d[legs[a]], before.joints2d[legs[b]], atol=0.06)
+        assert np.abs(after.pose3d[legs[a], :2] - before.pose3d[legs[b], :2]).max() < 0.03  # metres
+    assert set(saved(state).frames[frame].joints2d) == {JOINTS[k] for k in legs["l"] + legs["r"]}
+    assert after.keyframe
+    assert state.undo() == frame and saved(state) == opened
 
 
 def test_edits_undo_redo_and_the_file_follows(app):

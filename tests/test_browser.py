@@ -154,6 +154,22 @@ def test_override_by_clicking_the_frame_then_undo(browser, app):
     shot(page, "override_undone")
 
 
+def test_swap_legs_pins_each_leg_where_the_other_was_then_undo(browser, app):
+    app.state.go_to(4)
+    opened, before = app.state.annotations, app.state.view(4).joints2d
+    page = open_page(browser, app.server.get_port())
+    page.get_by_role("tab", name="Joints").click()
+    page.get_by_role("button", name="Swap legs").click()
+    page.get_by_text(re.compile(r"left ankle at \(")).wait_for()
+    legs = {side: [JOINT_INDEX[f"{j}_{side}"] for j in ("hip", "knee", "ankle")] for side in "lr"}
+    np.testing.assert_allclose(app.state.view(4).joints2d[legs["l"]], before[legs["r"]], atol=0.06)
+    assert len(load_annotations(app.state.path).frames[4].joints2d) == 6
+    shot(page, "legs_swapped")
+    page.get_by_role("button", name="↶ undo").click()
+    page.get_by_text("No override on this frame.").wait_for()
+    assert load_annotations(app.state.path) == opened
+
+
 def test_download_bvh_that_parses(browser, app, tmp_path):
     page = open_page(browser, app.server.get_port())
     path = download_export(page, "BVH", tmp_path)
