@@ -23,12 +23,22 @@ def frame_text(view: FrameView) -> str:
         body = "Nobody found on this frame."
     else:
         score = "Tracking reliability" if view.method == "track" else "Similarity S ="
-        body = f"{score} **{view.score:.2f}**" + "".join(f"  \n⚠ {d}" for d in view.doubts)
+        body = f"{score} **{view.score:.2f}**" + "".join(f"  \n⚠ {with_fix(d)}" for d in view.doubts)
         body += "".join(
             f"  \n↔ {', '.join(map(joint_label, joints))} moved by the pin on frame {source}"
             for source, joints in pins_by_frame(view.carried).items()
         )
     return f"{head}  \n{body}"
+
+
+# a doubt's words -> the page's control that answers it
+FIXES = {"hands may have swapped sides": "Joints: Swap arms", "feet may have swapped sides": "Joints: Swap legs"}
+
+
+def with_fix(doubt: str) -> str:
+    """A doubt, with the control that fixes it where one does at a click."""
+    fix = next((f for words, f in FIXES.items() if doubt.startswith(words)), None)
+    return doubt if fix is None else f"{doubt} ({fix})"
 
 
 def pins_by_frame(carried: dict[str, int]) -> dict[int, list[str]]:

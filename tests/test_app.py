@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from app.layout import Layout
 from app.saving import annotations_path
 from app.scene import segment_transforms
 from app.state import AppState
-from app.texts import REVIEW_LINES, review_text
+from app.texts import REVIEW_LINES, frame_text, review_text
 from app.views import DISPLAY_HEIGHT, video_image
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.cli import main
@@ -176,6 +177,14 @@ def test_a_limb_pair_is_swapped_in_one_edit(app):
     assert set(saved(state).frames[frame].joints2d) == {JOINTS[k] for k in legs["l"] + legs["r"]}
     assert after.keyframe
     assert state.undo() == frame and saved(state) == opened
+
+
+def test_a_swap_doubt_names_its_fix(app):
+    """The frame's text points a doubt that one click answers at its control."""
+    view = replace(app.state.view(4), doubts=("feet may have swapped sides", "left lower leg seen end-on"))
+    text = frame_text(view)
+    assert "⚠ feet may have swapped sides (Joints: Swap legs)" in text
+    assert "⚠ left lower leg seen end-on  \n" in text or text.endswith("⚠ left lower leg seen end-on")
 
 
 def test_edits_undo_redo_and_the_file_follows(app):
