@@ -150,6 +150,10 @@ def test_landmarks_smoothed_both_ways_keep_a_steady_motion_and_halve_jitter():
     jitter = path + np.random.default_rng(1).normal(0.0, 2.0, path.shape)
     before = np.abs(jitter - path).mean()
     assert np.abs(smoothed(jitter, fps=25.0) - path).mean() < 0.7 * before
+    slipped = path.copy()
+    slipped[25] += 60.0  # a wrist put on the other hand for one frame
+    # dropped, not spread over its neighbours: off by less than a frame's step (3.4 px), not 40 % of the slip
+    assert np.abs(smoothed(slipped, fps=25.0) - path).max() < 3.4
 
 
 @pytest.mark.skipif(not CMU_WALK.exists(), reason="needs ../shared/data/bvh (real motion capture)")

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+from scipy.ndimage import gaussian_filter1d, median_filter
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, MIRROR_JOINTS, SEGMENT_JOINTS
 from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, runs, yaw_of
@@ -15,6 +15,7 @@ from mocap.smoothest import smoothest_states, two_state_path
 SWITCH = 2.0  # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05  # limb lengths: evidence below this per frame says nothing
 SMOOTH_S = 0.04  # seconds: the spread of the landmarks' smoothing over time, about a frame of 25 fps
+MEDIAN_S = 0.1  # seconds: the running median before it (three frames of 25 fps): a slip of a frame dropped
 DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from the fit's
 # joints (median) is one the person model got wrong
 MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror image costs, in the units of
@@ -110,17 +111,20 @@ class Cues:
 
 
 def smoothed(points: np.ndarray, fps: float) -> np.ndarray:
-    """(F, ...) per-frame points, NaN where unseen, smoothed over time within each run of seen frames by a
-    Gaussian of SMOOTH_S seconds, both ways: the person model's per-frame jitter averaged out without the lag of
-    its own one-way filter (mocap.person reads each frame alone). A run's ends are extended point-symmetrically,
-    so a steady motion keeps its ends."""
+    """(F, ...) per-frame points, NaN where unseen, smoothed over time within each run of seen frames: a running
+    median over MEDIAN_S (a joint the person model misplaces on one frame is dropped, not spread), then a
+    Gaussian of SMOOTH_S seconds, both ways: its per-frame jitter averaged out without the lag of its own one-way
+    filter (mocap.person reads each frame alone). A run's ends are extended point-symmetrically, so a steady
+    motion keeps its ends."""
     sigma = SMOOTH_S * fps
+    width = 2 * int(round(MEDIAN_S * fps / 2)) + 1
     seen = np.isfinite(points).reshape(len(points), -1).all(axis=1)
     out = points.copy()
     for r in runs(seen):
         run = points[r]
-        pad = min(len(run) - 1, int(np.ceil(4 * sigma)))
+        pad = min(len(run) - 1, max(int(np.ceil(4 * sigma)), width // 2))
         ext = np.concatenate([2 * run[0] - run[pad:0:-1], run, 2 * run[-1] - run[-2 : -pad - 2 : -1]])
+        ext = median_filter(ext, size=(width,) + (1,) * (points.ndim - 1), mode="nearest")
         out[r] = gaussian_filter1d(ext, sigma, axis=0, mode="nearest")[pad : pad + len(run)]
     return out
 
