@@ -114,24 +114,29 @@ def test_lifting_real_motion_capture_from_true_2d_within_30_mm(view):
     assert pa_mpjpe(lift_truth(truth, lengths), truth.joints3d) < 0.030
 
 
-def test_a_wrist_that_slips_on_one_frame_is_steadied_and_a_swing_is_kept():
-    from mocap.lift.inputs import steadied_arms
+def test_a_wrist_or_ankle_that_slips_on_one_frame_is_steadied_and_a_swing_is_kept():
+    from mocap.lift.inputs import steadied_limbs
 
     n, fps = 30, 30.0
     joints = np.zeros((n, 16, 2))
-    joints[:, JOINT_INDEX["wrist_l"], 0] = np.linspace(100.0, 160.0, n)  # a steady swing
-    joints[12, JOINT_INDEX["wrist_l"]] = (40.0, 300.0)  # one frame's slip
-    joints[20:, JOINT_INDEX["knee_l"], 1] = 50.0  # legs are left alone
+    swing = np.linspace(100.0, 160.0, n)
+    for joint in ("wrist_l", "ankle_r"):
+        joints[:, JOINT_INDEX[joint], 0] = swing  # a steady swing
+        joints[12, JOINT_INDEX[joint]] = (40.0, 300.0)  # one frame's slip
+    joints[20:, JOINT_INDEX["knee_l"], 1] = 50.0  # a step is kept
+    joints[:, JOINT_INDEX["neck"], 0] = np.where(np.arange(n) == 12, 90.0, 0.0)  # the trunk is left alone
     person = np.ones(n, bool)
     person[25] = False  # nobody on one frame
     joints[25] = np.nan
-    out = steadied_arms(joints, person, fps)
-    wrist = out[:, JOINT_INDEX["wrist_l"]]
-    swing = np.linspace(100.0, 160.0, n)
-    assert np.abs(wrist[12] - [swing[12], 0.0]).max() < 5.0
+    out = steadied_limbs(joints, person, fps)
     keep = np.r_[3:9, 16:22]  # windows clear of the slip, the gap and the ends
-    assert np.abs(wrist[keep, 0] - swing[keep]).max() < 1e-9
-    assert np.array_equal(out[:, JOINT_INDEX["knee_l"]], joints[:, JOINT_INDEX["knee_l"]], equal_nan=True)
+    for joint in ("wrist_l", "ankle_r"):
+        steadied = out[:, JOINT_INDEX[joint]]
+        assert np.abs(steadied[12] - [swing[12], 0.0]).max() < 5.0
+        assert np.abs(steadied[keep, 0] - swing[keep]).max() < 1e-9
+    knee = out[:, JOINT_INDEX["knee_l"], 1]
+    assert np.array_equal(knee[:25], joints[:25, JOINT_INDEX["knee_l"], 1])
+    assert np.array_equal(out[:, JOINT_INDEX["neck"]], joints[:, JOINT_INDEX["neck"]], equal_nan=True)
     assert np.isnan(out[25]).all()
 
 

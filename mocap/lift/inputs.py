@@ -35,9 +35,10 @@ from mocap.lift.taylor import (
 # percentile would measure the fit's scatter); the torso and head, mostly upright, where
 # Eq. 5 turns a length read long into a lean: the 25th percentile.
 FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0, 50.0)
-# The fit's arms slip on single frames (an arm in front of the trunk fits anywhere
-# inside it); the lifting reads their elbows and wrists through a running median.
-ARM_MEDIAN_S = 0.2
+# The fit's limbs slip on single frames (an arm in front of the trunk fits anywhere
+# inside it, a leg behind the other); the lifting reads their elbows, wrists, knees and
+# ankles through a running median.
+LIMB_MEDIAN_S = 0.2
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,7 +161,7 @@ def resolve_inputs(
         crossed = np.zeros(n, bool)
         crossed[person] = legs_crossed(joints[person], held[person], yaw[person], ppu[person], seen, placed[person])
         joints = exchange_legs(joints, crossed)
-    joints = steadied_arms(joints, person, fps)
+    joints = steadied_limbs(joints, person, fps)
     if cues is not None:
         joints = with_landmarks(joints, cues)
     for i, points in overrides.items():
@@ -187,14 +188,14 @@ def resolve_inputs(
     return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths, fixed, depths)
 
 
-def steadied_arms(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 16, 2) with elbows and wrists a running median over ARM_MEDIAN_S within each person stretch
-    (anatomical sides: in a profile the image sides change as arms pass the trunk)."""
+def steadied_limbs(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 16, 2) with elbows, wrists, knees and ankles a running median over LIMB_MEDIAN_S within each person
+    stretch (anatomical sides: in a profile the image sides change as limbs pass the trunk)."""
     out = joints.copy()
-    width = 2 * int(round(ARM_MEDIAN_S * fps / 2)) + 1
-    arms = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS["arm"][1:] for s in SIDES]
+    width = 2 * int(round(LIMB_MEDIAN_S * fps / 2)) + 1
+    limbs = [JOINT_INDEX[f"{n}_{s}"] for joints_of in LIMB_JOINTS.values() for n in joints_of[1:] for s in SIDES]
     for r in runs(person):
-        out[r, arms] = median_filter(joints[r, arms], size=(width, 1, 1), mode="nearest")
+        out[r, limbs] = median_filter(joints[r, limbs], size=(width, 1, 1), mode="nearest")
     return out
 
 
