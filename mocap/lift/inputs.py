@@ -37,8 +37,10 @@ from mocap.lift.taylor import (
 FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0, 50.0)
 # The fit's limbs slip on single frames (an arm in front of the trunk fits anywhere
 # inside it, a leg behind the other); the lifting reads their elbows, wrists, knees and
-# ankles through a running median.
-LIMB_MEDIAN_S = 0.2
+# ankles through a running median, the legs' shorter: a foot's strike and lift-off are
+# sharper than an arm's swing, and the contacts are timed by them.
+ARM_MEDIAN_S = 0.2
+LEG_MEDIAN_S = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,13 +191,14 @@ def resolve_inputs(
 
 
 def steadied_limbs(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 16, 2) with elbows, wrists, knees and ankles a running median over LIMB_MEDIAN_S within each person
-    stretch (anatomical sides: in a profile the image sides change as limbs pass the trunk)."""
+    """(F, 16, 2) with elbows and wrists a running median over ARM_MEDIAN_S, knees and ankles over LEG_MEDIAN_S,
+    within each person stretch (anatomical sides: in a profile the image sides change as limbs pass the trunk)."""
     out = joints.copy()
-    width = 2 * int(round(LIMB_MEDIAN_S * fps / 2)) + 1
-    limbs = [JOINT_INDEX[f"{n}_{s}"] for joints_of in LIMB_JOINTS.values() for n in joints_of[1:] for s in SIDES]
-    for r in runs(person):
-        out[r, limbs] = median_filter(joints[r, limbs], size=(width, 1, 1), mode="nearest")
+    for kind, seconds in (("arm", ARM_MEDIAN_S), ("leg", LEG_MEDIAN_S)):
+        width = 2 * int(round(seconds * fps / 2)) + 1
+        limbs = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS[kind][1:] for s in SIDES]
+        for r in runs(person):
+            out[r, limbs] = median_filter(joints[r, limbs], size=(width, 1, 1), mode="nearest")
     return out
 
 
