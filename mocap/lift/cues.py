@@ -9,13 +9,13 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, MIRROR_JOINTS, SEGMENT_JOINTS
-from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, odd_frames, runs, yaw_of
+from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, runs, yaw_of
 from mocap.smoothest import smoothest_states, two_state_path
 
 SWITCH = 2.0  # limb lengths of evidence that renaming a limb pair between frames costs
 SIDE_MARGIN = 0.05  # limb lengths: evidence below this per frame says nothing
 SMOOTH_S = 0.04  # seconds: the spread of the landmarks' smoothing over time, about a frame of 25 fps
-MEDIAN_S = 0.1  # seconds: the running median before it (three frames at 25 or 30 fps): a frame's slip dropped
+MEDIAN_S = 0.1  # seconds: the running median before it (three frames of 25 fps): a slip of a frame dropped
 DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from the fit's
 # joints (median) is one the person model got wrong
 MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror image costs, in the units of
@@ -117,7 +117,7 @@ def smoothed(points: np.ndarray, fps: float) -> np.ndarray:
     filter (mocap.person reads each frame alone). A run's ends are extended point-symmetrically, so a steady
     motion keeps its ends."""
     sigma = SMOOTH_S * fps
-    width = odd_frames(MEDIAN_S, fps)
+    width = 2 * int(round(MEDIAN_S * fps / 2)) + 1
     seen = np.isfinite(points).reshape(len(points), -1).all(axis=1)
     out = points.copy()
     for r in runs(seen):

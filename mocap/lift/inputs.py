@@ -27,7 +27,6 @@ from mocap.lift.taylor import (
     anatomical_joints,
     clip_lengths,
     exchange_legs,
-    odd_frames,
     orientation_of_yaw,
     runs,
 )
@@ -196,7 +195,7 @@ def steadied_limbs(joints: np.ndarray, person: np.ndarray, fps: float) -> np.nda
     within each person stretch (anatomical sides: in a profile the image sides change as limbs pass the trunk)."""
     out = joints.copy()
     for kind, seconds in (("arm", ARM_MEDIAN_S), ("leg", LEG_MEDIAN_S)):
-        width = odd_frames(seconds, fps)
+        width = 2 * int(round(seconds * fps / 2)) + 1
         limbs = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS[kind][1:] for s in SIDES]
         for r in runs(person):
             out[r, limbs] = median_filter(joints[r, limbs], size=(width, 1, 1), mode="nearest")

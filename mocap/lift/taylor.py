@@ -87,12 +87,6 @@ def runs(mask: np.ndarray) -> list[slice]:
     return [slice(a, b) for a, b in zip(edges[::2], edges[1::2])]
 
 
-def odd_frames(seconds: float, fps: float) -> int:
-    """A running window's width: the odd number of frames ``seconds`` span at ``fps``, rounded down, 1 at least
-    (0.1 s: three frames at 25 and at 30 fps)."""
-    return max(1, int(seconds * fps + 1e-9)) | 1
-
-
 def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
     """(F, 16, 2) image-side joints with arms and legs swapped on the frames ``swap`` (F, 2) marks."""
     out = _exchanged(joints_image, swap[:, 0], LIMB_JOINTS["arm"])
