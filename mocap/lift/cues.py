@@ -9,7 +9,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
 from mocap.body import JOINT_INDEX, LIMB_JOINTS, MIRROR_JOINTS, SEGMENT_JOINTS
-from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, runs, yaw_of
+from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, median_width, runs, yaw_of
 from mocap.smoothest import smoothest_states, two_state_path
 
 SWITCH = 2.0  # limb lengths of evidence that renaming a limb pair between frames costs
@@ -117,7 +117,7 @@ def smoothed(points: np.ndarray, fps: float) -> np.ndarray:
     filter (mocap.person reads each frame alone). A run's ends are extended point-symmetrically, so a steady
     motion keeps its ends."""
     sigma = SMOOTH_S * fps
-    width = 2 * int(round(MEDIAN_S * fps / 2)) + 1
+    width = median_width(MEDIAN_S, fps)
     seen = np.isfinite(points).reshape(len(points), -1).all(axis=1)
     out = points.copy()
     for r in runs(seen):

@@ -27,6 +27,7 @@ from mocap.lift.taylor import (
     anatomical_joints,
     clip_lengths,
     exchange_legs,
+    median_width,
     orientation_of_yaw,
     runs,
 )
@@ -193,12 +194,12 @@ def resolve_inputs(
 def steadied_limbs(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:
     """(F, 16, 2) with elbows and wrists a running median over ARM_MEDIAN_S, knees and ankles over LEG_MEDIAN_S,
     within each person stretch (anatomical sides: in a profile the image sides change as limbs pass the trunk)."""
-    out = joints.copy()
+    out, stretches = joints.copy(), runs(person)
     for kind, seconds in (("arm", ARM_MEDIAN_S), ("leg", LEG_MEDIAN_S)):
-        width = 2 * int(round(seconds * fps / 2)) + 1
+        size = (median_width(seconds, fps), 1, 1)
         limbs = [JOINT_INDEX[f"{n}_{s}"] for n in LIMB_JOINTS[kind][1:] for s in SIDES]
-        for r in runs(person):
-            out[r, limbs] = median_filter(joints[r, limbs], size=(width, 1, 1), mode="nearest")
+        for r in stretches:
+            out[r, limbs] = median_filter(joints[r, limbs], size=size, mode="nearest")
     return out
 
 

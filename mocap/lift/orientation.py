@@ -29,6 +29,7 @@ from mocap.lift.taylor import (
     facing_yaw,
     image_left_is_right,
     lateral_axis,
+    median_width,
     relative_depths,
     runs,
 )
@@ -195,7 +196,7 @@ def guess_signs(
     acceleration of |dZ| (median over DEPTH_FILTER_S) between; ``fixed`` (F, 10) user signs, 0: none."""
     fixed = np.zeros((len(joints2d), 10), int) if fixed is None else fixed
     vec, depth = segment_vectors(joints2d, px_per_unit, lengths)
-    width = 2 * int(round(DEPTH_FILTER_S * fps / 2)) + 1
+    width = median_width(DEPTH_FILTER_S, fps)
     depth = median_filter(depth, size=(width, 1), mode="nearest")
     yaw = np.asarray(yaw, float)
     facing, left = _frame_axes(yaw)

@@ -87,6 +87,12 @@ def runs(mask: np.ndarray) -> list[slice]:
     return [slice(a, b) for a, b in zip(edges[::2], edges[1::2])]
 
 
+def median_width(seconds: float, fps: float) -> int:
+    """A running window's width in frames, odd: 2 round(seconds fps / 2) + 1 (0.1 s: three frames at 25 fps,
+    five at 30; 0.2 s: five at 25)."""
+    return 2 * int(round(seconds * fps / 2)) + 1
+
+
 def anatomical_joints(joints_image: np.ndarray, swap: np.ndarray) -> np.ndarray:
     """(F, 16, 2) image-side joints with arms and legs swapped on the frames ``swap`` (F, 2) marks."""
     out = _exchanged(joints_image, swap[:, 0], LIMB_JOINTS["arm"])
