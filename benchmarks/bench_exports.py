@@ -10,7 +10,9 @@ slide: the largest distance between two places of an ankle in one contact, in th
 motion as exported and foot-locked (``Motion.foot_locked``, ``--foot-lock``), with how
 far the lock moved the body. ``--dev`` prints the slides on the static-camera
 development clips of ../shared/data/clips instead (no user input, the person model as
-`mocap fit` has it).
+`mocap fit` has it), with how often the contacts agree with the truth's: the same rule on
+the clip's motion capture (its BVH window, the speed in depth counted too: the capture
+knows it), none for a treadmill render, whose feet the video shows gliding.
 
     python benchmarks/bench_exports.py [--focal 500] [--dev]
 """
@@ -27,8 +29,9 @@ import numpy as np
 
 from mocap.body import JOINT_INDEX
 from mocap.cli import main as mocap
+from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.lift.contacts import FEET, foot_contacts
-from mocap.pipeline import open_session
+from mocap.pipeline import open_session, person_model
 from mocap.synth.truth import load_truth
 
 CMU_WALK = Path(__file__).resolve().parents[2] / "shared" / "data" / "bvh" / "cmu_walk.bvh"
@@ -74,16 +77,32 @@ def slides(motion, contacts: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def slide_row(video: Path) -> str:
-    """Contacts, the exported and the locked motion's largest and median slide (cm), the body's shift."""
-    motion = open_session(video).motion()
+def capture_contacts(folder: Path) -> np.ndarray | None:
+    """(F, 2) a development clip's true contacts: ``foot_contacts`` with depth on its BVH window (truth.json's
+    source) at the clip's frame rate; None for a treadmill render or where the BVH is absent."""
+    truth = json.loads((folder / "truth.json").read_text())
+    source, video = truth["source"], truth["video"]
+    bvh = CMU_WALK.parent / source["bvh"]
+    if truth["camera"].get("treadmill") or not bvh.is_file():
+        return None
+    capture = read_bvh(bvh)
+    frames = np.round((source["start_s"] + np.arange(video["frame_count"]) / video["fps"]) * source["bvh_fps"])
+    world = contract_joints(capture)[np.clip(frames.astype(int), 0, capture.n_frames - 1)]
+    return foot_contacts(world, video["fps"], depth=True)
+
+
+def slide_row(video: Path, truth: np.ndarray | None = None) -> str:
+    """Contacts (with ``truth`` (F, 2): the truth's share and the agreement), the exported and the locked
+    motion's largest and median slide (cm), the body's shift."""
+    motion = open_session(video, person=person_model(None)).motion()
     locked = motion.foot_locked()
     free, held = slides(motion, motion.contacts), slides(locked, locked.contacts)
     shift = np.linalg.norm(locked.root - motion.root, axis=-1)
+    known = "" if truth is None else f"{truth.mean():>6.2f} {(motion.contacts == truth).mean():>6.2f} "
     if not len(free):
-        return f"{motion.contacts.mean():>8.2f} {0:>5}"
+        return f"{known}{motion.contacts.mean():>8.2f} {0:>5}"
     return (
-        f"{motion.contacts.mean():>8.2f} {len(free):>5} {100 * free.max():>7.1f} {100 * np.median(free):>6.1f} "
+        f"{known}{motion.contacts.mean():>8.2f} {len(free):>5} {100 * free.max():>7.1f} {100 * np.median(free):>6.1f} "
         f"{100 * held.max():>7.1f} {100 * np.median(held):>6.1f} {100 * shift.max():>9.1f}"
     )
 
@@ -91,6 +110,7 @@ def slide_row(video: Path) -> str:
 SLIDE_HEAD = (
     f"{'planted':>8} {'runs':>5} {'slide max':>9} {'median':>6} {'locked max':>10} {'median':>6} {'shift max':>9}"
 )
+TRUTH_HEAD = f"{'true':>6} {'agree':>6} "
 
 
 def main() -> int:
@@ -99,10 +119,12 @@ def main() -> int:
     parser.add_argument("--dev", action="store_true", help="the slides on the development clips")
     args = parser.parse_args()
     if args.dev:
-        print(f"{'clip':18} {SLIDE_HEAD}   (cm)")
+        print(f"{'clip':18} {TRUTH_HEAD}{SLIDE_HEAD}   (cm)")
         for folder in sorted(DEV_CLIPS.iterdir()):
             if (folder / "truth.json").is_file() and not folder.name.startswith("track_"):
-                print(f"{folder.name:18} {slide_row(folder / 'video.mp4')}", flush=True)
+                truth = capture_contacts(folder)
+                known = f"{'-':>6} {'-':>6} " if truth is None else ""
+                print(f"{folder.name:18} {known}{slide_row(folder / 'video.mp4', truth)}", flush=True)
         return 0
     if not CMU_WALK.exists():
         print(f"{CMU_WALK} absent", file=sys.stderr)

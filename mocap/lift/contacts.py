@@ -27,13 +27,14 @@ REACH_SHARE = 0.999
 REACH_ROUNDS = 4
 
 
-def foot_contacts(world: np.ndarray, fps: float) -> np.ndarray:
-    """(F, 2) bool: left and right foot planted on each frame of world joints (F, 16, 3; metres, y up)."""
+def foot_contacts(world: np.ndarray, fps: float, depth: bool = False) -> np.ndarray:
+    """(F, 2) bool: left and right foot planted on each frame of world joints (F, 16, 3; metres, y up);
+    ``depth``: the speed along z counts too (a motion whose depth is known, such as motion capture's)."""
     ankles = gaussian_filter1d(world[:, _ANKLES], max(SMOOTH_S * fps, 1e-6), axis=0, mode="nearest")
     floor = percentile_filter(
         ankles[..., 1].min(axis=1), FLOOR_PERCENTILE, size=int(round(FLOOR_WINDOW_S * fps)) | 1, mode="nearest"
     )
-    speed = np.linalg.norm(np.gradient(ankles[..., :2], axis=0), axis=-1) * fps
+    speed = np.linalg.norm(np.gradient(ankles[..., : 3 if depth else 2], axis=0), axis=-1) * fps
     planted = (ankles[..., 1] - floor[:, None] < CONTACT_HEIGHT_M) & (speed < CONTACT_SPEED_M_S)
     width = max(1, int(round(MIN_RUN_S * fps)))
     structure = np.ones((width, 1), bool)
