@@ -23,7 +23,7 @@ from mocap.io.video import iter_frames, write_video
 from mocap.person import Landmarks, PersonView, available
 from mocap.track.landmarks import facing_yaw, released, seed_marks, side_of
 from mocap.track.reseed import NOBODY, merged, seed_row, track_seeded
-from mocap.track.tracking import track_clip
+from mocap.track.tracking import AGREE_BODY, AGREE_SHARE, track_clip, with_landmarks
 
 SALSA = SHARED_DATA / "bvh" / "cmu_60_05_salsa.bvh"
 GONE = slice(15, 30)  # frames the performer is out of the picture
@@ -86,6 +86,29 @@ def test_sure_landmarks_guide_the_limbs_without_harm(walk):
     guided = track_clip(video, truth.joints2d[0], person=FakeModel(truth, range(30)))
     assert not guided.lost.any()
     assert errors(guided.joints2d, truth).mean() <= alone.mean() + 0.1
+
+
+def test_tracked_joints_meet_the_landmarks_that_read_the_same_body(walk):
+    """A joint and its landmark within AGREE_SHARE of the body's height are averaged: two reads of the joint with
+    errors of their own. A landmark farther off, a frame whose landmarks read another body, a missing landmark and
+    the head top (which the person model extrapolates) leave the tracked joint alone."""
+    _, truth = walk
+    tracked = truth.joints2d.astype(float).copy()
+    height = truth.body_height_px
+    landmarks = tracked + [0.0, 0.4 * AGREE_BODY * height]  # every landmark a little low
+    knee = JOINTS.index("knee_l")
+    landmarks[3, knee] += [2 * AGREE_SHARE * height, 0.0]  # one landmark elsewhere
+    landmarks[4] += [0.0, 2 * AGREE_BODY * height]  # a frame read on another body
+    landmarks[5, knee] = np.nan
+    fused = with_landmarks(tracked, landmarks, 25.0)
+    moved = np.linalg.norm(fused - tracked, axis=-1) / height
+    head = JOINTS.index("head_top")
+    others = [j for j in range(len(JOINTS)) if j != head]
+    np.testing.assert_allclose(moved[0, others], 0.2 * AGREE_BODY)  # halfway to the landmark
+    assert moved[3, knee] == 0 and moved[3, others].sum() > 0
+    assert not moved[4].any()
+    assert moved[5, knee] == 0
+    assert not moved[:, head].any()
 
 
 def test_seed_marks_need_the_trunk_sure_and_inside_the_frame():

@@ -7,17 +7,18 @@ from __future__ import annotations
 
 import itertools
 import os
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+from scipy.ndimage import gaussian_filter1d, percentile_filter
 
-from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, knee_facing, limb
+from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, STANDING_PERCENTILE, knee_facing, limb
 from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale, rescaled
-from mocap.person import Landmarks, PersonModel, watched
+from mocap.person import SURE, Landmarks, PersonModel, watched
 from mocap.track.keydepths import Turns
 from mocap.track.loss import GAP_S, bridged, joint_confidence
 from mocap.track.marks import check_marks
@@ -30,6 +31,10 @@ LOW_RELIABILITY = 0.5  # a part matched this much worse than usual is taken as h
 # seconds (Gaussian sigma) the 2D joints are smoothed over for the 3D alone: depth sqrt(l^2 - d^2) is steep
 # near the image plane, so jitter moves joints along rays
 SMOOTH_S = 0.05
+# of the body's standing height: a landmark this near a tracked joint reads the same joint (with_landmarks)
+AGREE_SHARE = 0.1
+AGREE_BODY = 0.05  # ... and a frame's landmarks this near (median) read the tracked body
+STANDING_S = 1.0  # seconds of head-to-ankle heights whose STANDING_PERCENTILE is a frame's standing height
 TURN_CUE_S = 1.0  # seconds from frame 0 whose knee bends tell an unsaid turn
 # seconds over which a user's correction fades out on the frames around it (spread_corrections)
 SPREAD_S = 0.2
@@ -205,14 +210,15 @@ def track_clip(
     turn = turn_of(orientation)
     step = (lambda done: progress(done, info.frame_count)) if progress else None
     frames, views = _looked_at(person, (frame for _, frame in iter_frames(info, scale=scale)))
+    seen: list[Landmarks | None] = []
     camera = default_camera(info.width, info.height, focal_px)
     joints, similarity, parts, lost, facing = track_frames(
-        frames, marks, step, camera.scaled(scale), turn, info.fps, seeds, views
+        frames, marks, step, camera.scaled(scale), turn, info.fps, seeds, _kept(views, seen)
     )
     joints = rescaled(joints, 1.0 / scale)
     reliability = joint_reliability(similarity)
     joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
-    joints2d = fill_unreliable(joints, reliability)
+    joints2d = with_landmarks(fill_unreliable(joints, reliability), landmark_array(seen, len(joints), scale), info.fps)
     turn = turn or guessed_turn(joints2d, info.fps)
     try:
         joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps, ~lost))
@@ -230,6 +236,53 @@ def _looked_at(person: PersonModel | None, frames: Iterator[np.ndarray]) -> tupl
         return frames, None
     a, b = itertools.tee(watched(person, frames))
     return (frame for frame, _ in a), (None if view is None else view.landmarks for _, view in b)
+
+
+def _kept(views: Iterator | None, seen: list) -> Iterator | None:
+    """``views`` as they come, each also appended to ``seen``."""
+    if views is None:
+        return None
+    return (seen.append(view) or view for view in views)
+
+
+def landmark_array(seen: list[Landmarks | None], n_frames: int, scale: float) -> np.ndarray:
+    """(n_frames, 16, 2) the sure landmarks (person.SURE) of ``seen`` (frames at processing ``scale``) in the
+    original frame's pixels, NaN where the model saw nobody, was unsure or was not asked."""
+    out = np.full((n_frames, len(JOINTS), 2), np.nan)
+    for f, view in enumerate(seen[:n_frames]):
+        if view is not None:
+            sure = view.confidence >= SURE
+            out[f, sure] = view.scaled(1.0 / scale).joints2d[sure]
+    return out
+
+
+def standing_heights(joints2d: np.ndarray, fps: float) -> np.ndarray:
+    """(F,) pixels: each frame's standing height, the STANDING_PERCENTILE of the head-top-to-ankles distances over
+    STANDING_S around it (a bend is shorter; a walk toward the camera grows)."""
+    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
+    heights = np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
+    known = np.isfinite(heights)
+    if not known.any():
+        return heights
+    heights = np.interp(np.arange(len(heights)), np.flatnonzero(known), heights[known])
+    size = max(1, int(round(STANDING_S * fps))) | 1
+    return percentile_filter(heights, STANDING_PERCENTILE, size=size, mode="nearest")
+
+
+def with_landmarks(joints2d: np.ndarray, landmarks: np.ndarray, fps: float) -> np.ndarray:
+    """(F, 16, 2) each tracked joint averaged with the person model's landmark (F, 16, 2; NaN: none) where the
+    two lie within AGREE_SHARE of the standing height (``standing_heights``) on a frame whose landmarks lie
+    within AGREE_BODY of the tracked joints (median): the colours' blocks and the learned model read one joint
+    with errors of their own, which the mean halves; farther apart, one of them has lost the joint or the body,
+    and the tracking keeps its own. Not the head top, which the person model does not see
+    (mediapipe_pose.HEAD_TOP_ALONG extends the shoulders -> ears line beyond the ears)."""
+    apart = np.linalg.norm(landmarks - joints2d, axis=-1) / standing_heights(joints2d, fps)[:, None]
+    apart[:, JOINT_INDEX["head_top"]] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a frame without landmarks: its median is NaN
+        same_body = np.nanmedian(apart, axis=1) <= AGREE_BODY
+    near = (apart < AGREE_SHARE) & same_body[:, None]
+    return np.where(near[..., None], (joints2d + landmarks) / 2, joints2d)
 
 
 def guessed_turn(joints2d: np.ndarray, fps: float) -> str:
