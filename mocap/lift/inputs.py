@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import median_filter
 
-from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES
+from mocap.body import BODY_HEIGHT, BODY_HEIGHT_M, JOINT_INDEX, LIMB_JOINTS, SEGMENT_NAMES, SIDES, segment_kind
 from mocap.camera import default_camera
 from mocap.lift.cues import Cues, side_evidence, with_landmarks, world_depths, world_signs, world_yaws
 from mocap.lift.orientation import (
@@ -36,6 +36,11 @@ from mocap.lift.taylor import (
 # percentile would measure the fit's scatter); the torso and head, mostly upright, where
 # Eq. 5 turns a length read long into a lean: the 25th percentile.
 FIT_LENGTH_PERCENTILE = np.where(np.isin(SEGMENT_NAMES, ("torso", "head")), 25.0, 50.0)
+# ... and where the person model's landmarks give most frames' 2D: a standing leg lies in the
+# image plane, and the landmarks do not scatter as the fit's cylinders do, so a high percentile
+# of their image lengths measures the legs (taylor.clip_lengths' for clean 2D)
+LEGS = np.isin([segment_kind(s) for s in SEGMENT_NAMES], ("upper_leg", "lower_leg"))
+LANDMARK_LENGTH_PERCENTILE = np.where(LEGS, 90.0, FIT_LENGTH_PERCENTILE)
 # The fit's limbs slip on single frames (an arm in front of the trunk fits anywhere
 # inside it, a leg behind the other); the lifting reads their elbows, wrists, knees and
 # ankles through a running median, the legs' shorter: a foot's strike and lift-off are
@@ -171,11 +176,7 @@ def resolve_inputs(
         for joint, xy in points.items():
             joints[i, JOINT_INDEX[joint]] = xy
     if lengths is None:
-        lengths = (
-            clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
-            if person.any()
-            else LENGTH.copy()
-        )
+        lengths = segment_lengths(joints, ppu, person, None if cues is None else cues.seen)
     # signs are judged on the longer 90th-percentile lengths: where the fit's noise
     # makes a segment look unforeshortened they still keep the two depths apart
     judged = clip_lengths(joints[person], ppu[person]) if person.any() else lengths
@@ -189,6 +190,19 @@ def resolve_inputs(
         signs = np.where((fixed == 0) & (seen != 0), seen, signs)
         depths = world_depths(cues, lengths)
     return Inputs(orientation, yaw, swap, joints, ppu, signs, lengths, fixed, depths)
+
+
+def segment_lengths(joints: np.ndarray, ppu: np.ndarray, person: np.ndarray, seen: np.ndarray | None) -> np.ndarray:
+    """(10,) model units: the clip's segment lengths for Eq. 5, pairs pooled, from 2D ``joints`` (F, 16, 2) on the
+    ``person`` frames (F,) at ``ppu`` (F,) pixels per unit: FIT_LENGTH_PERCENTILE of the image lengths, or
+    LANDMARK_LENGTH_PERCENTILE's on the frames the person model's landmarks give (``seen`` (F,); None: none)
+    where they are most of them; the model's where nobody is."""
+    if not person.any():
+        return LENGTH.copy()
+    landmarks = person & (np.zeros_like(person) if seen is None else seen)
+    if 2 * landmarks.sum() > person.sum():
+        return clip_lengths(joints[landmarks], ppu[landmarks], LANDMARK_LENGTH_PERCENTILE, pool=True)
+    return clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
 
 
 def steadied_limbs(joints: np.ndarray, person: np.ndarray, fps: float) -> np.ndarray:

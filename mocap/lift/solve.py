@@ -63,15 +63,17 @@ def solve_clip(
     bones: np.ndarray | None = None,
 ) -> Solution:
     """Every person stretch of ``clip`` solved at once from ``start`` ((F, 16, 3) model units;
-    None: ``start_pose``) and first lengths ``bones`` (None: ``clip_bone_lengths``). The lengths
-    are solved too where the person model gives depths on most frames (without an independent
-    depth, 2D noise only ever lengthens a free bone); shared by the stretches, they are solved on
-    the longest and held on the others."""
+    None: ``start_pose``) and first lengths ``bones`` (None: ``clip_bone_lengths``). Under scaled
+    orthography the lengths are held: a bone in the image plane shows its length, which the 2D
+    measures. Through a known camera's pinhole, where a limb near the camera reads long, they are
+    solved too where the person model gives depths on most frames (without an independent depth,
+    2D noise only ever lengthens a free bone); shared by the stretches, they are solved on the
+    longest and held on the others."""
     t0 = time.perf_counter()
     bones = clip_bone_lengths(clip) if bones is None else np.asarray(bones, float)
     start = start_pose(clip, bones) if start is None else start
     seen = np.zeros(0, bool) if clip.depths is None else np.isfinite(clip.depths[clip.person]).all(axis=1)
-    free_lengths = bool(seen.size) and seen.mean() > 0.5
+    free_lengths = clip.camera is not None and bool(seen.size) and seen.mean() > 0.5
     model = np.full_like(start, np.nan)
     for k, r in enumerate(sorted(runs(clip.person), key=lambda r: r.start - r.stop)):
         free = np.ones(r.stop - r.start, bool)
