@@ -199,8 +199,8 @@ def segment_lengths(joints: np.ndarray, ppu: np.ndarray, person: np.ndarray, see
     where they are most of them; the model's where nobody is."""
     if not person.any():
         return LENGTH.copy()
-    landmarks = person & (np.zeros_like(person) if seen is None else seen)
-    if 2 * landmarks.sum() > person.sum():
+    landmarks = person if seen is None else person & seen
+    if seen is not None and 2 * landmarks.sum() > person.sum():
         return clip_lengths(joints[landmarks], ppu[landmarks], LANDMARK_LENGTH_PERCENTILE, pool=True)
     return clip_lengths(joints[person], ppu[person], FIT_LENGTH_PERCENTILE, pool=True)
 

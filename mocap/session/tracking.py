@@ -28,6 +28,7 @@ from mocap.track.tracking import (
     TrackResult,
     carried_pins,
     guessed_turn,
+    head_to_ankles,
     spread_corrections,
     spread_frames,
     steady_joints,
@@ -247,6 +248,4 @@ class TrackSession(Session):
 
 def body_px(joints2d: np.ndarray) -> float:
     """Standing height in pixels over a clip: the STANDING_PERCENTILE of head-top-to-ankles distances."""
-    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
-    heights = np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
-    return float(np.percentile(heights, STANDING_PERCENTILE))
+    return float(np.percentile(head_to_ankles(joints2d), STANDING_PERCENTILE))

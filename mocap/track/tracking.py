@@ -256,11 +256,16 @@ def landmark_array(seen: list[Landmarks | None], n_frames: int, scale: float) ->
     return out
 
 
+def head_to_ankles(joints2d: np.ndarray) -> np.ndarray:
+    """(F,) pixels from the head's top to the ankles' middle of 2D joints (F, 16, 2)."""
+    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
+    return np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
+
+
 def standing_heights(joints2d: np.ndarray, fps: float) -> np.ndarray:
     """(F,) pixels: each frame's standing height, the STANDING_PERCENTILE of the head-top-to-ankles distances over
     STANDING_S around it (a bend is shorter; a walk toward the camera grows)."""
-    ankles = joints2d[:, [JOINT_INDEX["ankle_l"], JOINT_INDEX["ankle_r"]]].mean(axis=1)
-    heights = np.linalg.norm(joints2d[:, JOINT_INDEX["head_top"]] - ankles, axis=-1)
+    heights = head_to_ankles(joints2d)
     known = np.isfinite(heights)
     if not known.any():
         return heights
