@@ -21,9 +21,13 @@ releases a held orientation) from the truth's 2D joints on every frame: what the
 costs alone, the rest of "PA-MPJPE mm" is what the 2D
 tracking's errors cost. ``--joints`` adds each joint's PA-MPJPE from the tracked and
 from the exact 2D: which joints carry the 3D step's error and which the tracking's.
+``--mark-noise PCT`` moves each of frame 0's marks by Gaussian noise of PCT % of the body's
+height per coordinate, as a user's clicks place them (1 % is 2.5 px on the shared clips), over
+``--seeds`` draws per clip, each a row, then their mean: the truth's exact marks are a user's best
+case.
 
     python benchmarks/bench_track_clips.py [--clips track_salsa laugh_arms_up] [--keep DIR] [--joints]
-        [--person-model none] [--proposed]
+        [--person-model none] [--proposed | --mark-noise PCT [--seeds N]]
 """
 
 from __future__ import annotations
@@ -157,12 +161,28 @@ def unmarked(marks: Path, folder: Path) -> Path:
     return out
 
 
-def run(name: str, folder: Path, person: str, proposed: bool) -> dict:
-    """Track and score one clip looking through the ``person`` model, frame 0 marked by it if ``proposed``."""
+def noisy(marks: Path, folder: Path, body_px: float, percent: float, seed: int) -> Path:
+    """A copy of the marks file in ``folder`` with frame 0's joints moved by Gaussian noise of ``percent`` % of
+    ``body_px`` per coordinate (draw ``seed``)."""
+    notes = json.loads(marks.read_text())
+    rng = np.random.default_rng(seed)
+    joints = notes["frames"]["0"]["joints2d"]
+    for joint in JOINTS:
+        joints[joint] = (np.asarray(joints[joint], float) + rng.normal(0.0, percent / 100 * body_px, 2)).tolist()
+    out = folder / f"{marks.parent.name}.{marks.stem}.noisy{seed}.json"
+    out.write_text(json.dumps(notes))
+    return out
+
+
+def run(name: str, folder: Path, person: str, proposed: bool, noise: tuple[float, int] | None = None) -> dict:
+    """Track and score one clip looking through the ``person`` model, frame 0 marked by it if ``proposed``, or
+    the truth's marks moved by ``noise`` (percent of the body's height, seed: ``noisy``)."""
     video, truth, marks = clip_files(name, folder)
     out = folder / f"{name}.track.json"
     start = time.perf_counter()
     notes = unmarked(marks, folder) if proposed else marks
+    if noise is not None:
+        notes = noisy(marks, folder, json.loads(truth.read_text())["body_height_px"], *noise)
     fit_video_to_file(video, {"json": out}, annotations=notes, method="track", person=person)
     seconds = time.perf_counter() - start
     result = score(out, truth)
@@ -192,7 +212,10 @@ def main() -> None:
     parser.add_argument(
         "--proposed", action="store_true", help="frame 0 marked by the person model instead of the truth"
     )
+    parser.add_argument("--mark-noise", type=float, metavar="PCT", help="the truth's marks moved by this noise")
+    parser.add_argument("--seeds", type=int, default=4, help="draws of --mark-noise per clip (default 4)")
     args = parser.parse_args()
+    draws = [None] if args.mark_noise is None else [(args.mark_noise, seed) for seed in range(args.seeds)]
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.keep or Path(tmp)
         folder.mkdir(parents=True, exist_ok=True)
@@ -201,18 +224,32 @@ def main() -> None:
             f"{'PA-MPJPE mm':>11} {'exact 2D':>8} {'s':>5}"
         )
         for name in args.clips:
-            try:
-                r = run(name, folder, args.person_model, args.proposed)
-            except MocapError as error:
-                print(f"{name:<15} failed: {error}", flush=True)
-                continue
-            print(
-                f"{name:<15} {r['frames']:>6} {r['failed']:>6} {r['lost']:>5} {r['err2d_median_pct']:>8.2f} "
-                f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {r['exact'].mean():>8.1f} {r['seconds']:>5.0f}",
-                flush=True,
-            )
-            if args.joints:
-                print_joints(r)
+            rows = []
+            for noise in draws:
+                label = name if noise is None else f"{name}#{noise[1]}"
+                try:
+                    r = run(name, folder, args.person_model, args.proposed, noise)
+                except MocapError as error:
+                    print(f"{label:<15} failed: {error}", flush=True)
+                    continue
+                rows.append(r)
+                print_row(label, r)
+                if args.joints:
+                    print_joints(r)
+            if len(draws) > 1 and rows:
+                print_row(f"{name} mean", {key: np.mean([r[key] for r in rows], axis=0) for key in ROW_KEYS})
+
+
+ROW_KEYS = ("frames", "failed", "lost", "err2d_median_pct", "err2d_mean_pct", "pampjpe_mm", "exact", "seconds")
+
+
+def print_row(label: str, r: dict) -> None:
+    """One clip's (or its draws' mean) row of the table."""
+    print(
+        f"{label:<15} {r['frames']:>6.0f} {r['failed']:>6.0f} {r['lost']:>5.0f} {r['err2d_median_pct']:>8.2f} "
+        f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {np.mean(r['exact']):>8.1f} {r['seconds']:>5.0f}",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":
