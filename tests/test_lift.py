@@ -12,6 +12,7 @@ from mocap import synth
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.lift import taylor as lift
+from mocap.lift.inputs import segment_lengths
 from mocap.synth.metrics import facing_error, pa_mpjpe
 from mocap.synth.walk import walk_cycle
 
@@ -95,6 +96,22 @@ def test_clip_lengths_are_what_the_clip_shows():
     truth = seen(walk_cycle(2.0, 15.0), "side")
     lengths = lift.clip_lengths(truth.joints2d, np.full(len(truth.joints2d), truth.body_height_px / BODY_HEIGHT))
     assert lengths == pytest.approx(LENGTH, rel=0.03)
+
+
+def test_the_landmarks_legs_are_as_long_as_a_leg_in_the_image_plane_shows_them():
+    """Where the person model's landmarks give most frames, a leg's length is the 90th percentile of its image
+    lengths (a walk seen from the front foreshortens the legs on most frames); the fit's 2D keeps the median,
+    which its scatter would otherwise lengthen."""
+    truth = seen(walk_cycle(2.0, 15.0), "front")
+    ppu = np.full(len(truth.joints2d), truth.body_height_px / BODY_HEIGHT)
+    person = np.ones(len(ppu), bool)
+    legs = [SEGMENT_INDEX[s] for s in ("upper_leg_l", "lower_leg_l")]
+    landmarks = segment_lengths(truth.joints2d, ppu, person, person)[legs]
+    fit = segment_lengths(truth.joints2d, ppu, person, None)[legs]
+    assert landmarks == pytest.approx(LENGTH[legs], rel=0.03)
+    assert (fit < landmarks).all()
+    few = segment_lengths(truth.joints2d, ppu, person, np.arange(len(ppu)) < len(ppu) // 3)[legs]
+    np.testing.assert_array_equal(few, fit)
 
 
 def test_signs_and_depths_read_back_from_a_pose():
