@@ -201,6 +201,18 @@ def print_joints(result: dict) -> None:
         print("  " + " ".join(f"{v:>5.0f}" for v in values) + f"  {label}")
 
 
+ROW_KEYS = ("frames", "failed", "lost", "err2d_median_pct", "err2d_mean_pct", "pampjpe_mm", "exact", "seconds")
+
+
+def print_row(label: str, r: dict) -> None:
+    """One clip's (or its draws' mean) row of the table."""
+    print(
+        f"{label:<15} {r['frames']:>6.0f} {r['failed']:>6.0f} {r['lost']:>5.0f} {r['err2d_median_pct']:>8.2f} "
+        f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {np.mean(r['exact']):>8.1f} {r['seconds']:>5.0f}",
+        flush=True,
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", nargs="+", default=[*SHARED, *RENDERED])
@@ -238,18 +250,6 @@ def main() -> None:
                     print_joints(r)
             if len(draws) > 1 and rows:
                 print_row(f"{name} mean", {key: np.mean([r[key] for r in rows], axis=0) for key in ROW_KEYS})
-
-
-ROW_KEYS = ("frames", "failed", "lost", "err2d_median_pct", "err2d_mean_pct", "pampjpe_mm", "exact", "seconds")
-
-
-def print_row(label: str, r: dict) -> None:
-    """One clip's (or its draws' mean) row of the table."""
-    print(
-        f"{label:<15} {r['frames']:>6.0f} {r['failed']:>6.0f} {r['lost']:>5.0f} {r['err2d_median_pct']:>8.2f} "
-        f"{r['err2d_mean_pct']:>9.2f} {r['pampjpe_mm']:>11.1f} {np.mean(r['exact']):>8.1f} {r['seconds']:>5.0f}",
-        flush=True,
-    )
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ from mocap.io.video import iter_frames, write_video
 from mocap.person import Landmarks, PersonView, available
 from mocap.track.landmarks import facing_yaw, released, seed_marks, side_of
 from mocap.track.reseed import NOBODY, merged, seed_row, track_seeded
-from mocap.track.tracking import AGREE_BODY, AGREE_SHARE, track_clip, with_landmarks
+from mocap.track.tracking import AGREE_BODY, AGREE_SHARE, averaged_with_landmarks, track_clip
 
 SALSA = SHARED_DATA / "bvh" / "cmu_60_05_salsa.bvh"
 GONE = slice(15, 30)  # frames the performer is out of the picture
@@ -100,7 +100,7 @@ def test_tracked_joints_meet_the_landmarks_that_read_the_same_body(walk):
     landmarks[3, knee] += [2 * AGREE_SHARE * height, 0.0]  # one landmark elsewhere
     landmarks[4] += [0.0, 2 * AGREE_BODY * height]  # a frame read on another body
     landmarks[5, knee] = np.nan
-    fused = with_landmarks(tracked, landmarks, 25.0)
+    fused = averaged_with_landmarks(tracked, landmarks, 25.0)
     moved = np.linalg.norm(fused - tracked, axis=-1) / height
     head = JOINTS.index("head_top")
     others = [j for j in range(len(JOINTS)) if j != head]

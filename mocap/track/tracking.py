@@ -31,7 +31,7 @@ LOW_RELIABILITY = 0.5  # a part matched this much worse than usual is taken as h
 # seconds (Gaussian sigma) the 2D joints are smoothed over for the 3D alone: depth sqrt(l^2 - d^2) is steep
 # near the image plane, so jitter moves joints along rays
 SMOOTH_S = 0.05
-# of the body's standing height: a landmark this near a tracked joint reads the same joint (with_landmarks)
+# of the body's standing height: a landmark this near a tracked joint reads the same joint (averaged_with_landmarks)
 AGREE_SHARE = 0.1
 AGREE_BODY = 0.05  # ... and a frame's landmarks this near (median) read the tracked body
 STANDING_S = 1.0  # seconds of head-to-ankle heights whose STANDING_PERCENTILE is a frame's standing height
@@ -218,7 +218,9 @@ def track_clip(
     joints = rescaled(joints, 1.0 / scale)
     reliability = joint_reliability(similarity)
     joints, lost = bridged(joints, lost, int(round(GAP_S * info.fps)))
-    joints2d = with_landmarks(fill_unreliable(joints, reliability), landmark_array(seen, len(joints), scale), info.fps)
+    joints2d = averaged_with_landmarks(
+        fill_unreliable(joints, reliability), landmark_array(seen, len(joints), scale), info.fps
+    )
     turn = turn or guessed_turn(joints2d, info.fps)
     try:
         joints3d = to_contract(steady_reconstruction(joints2d, camera, turn, info.fps, ~lost))
@@ -274,7 +276,7 @@ def standing_heights(joints2d: np.ndarray, fps: float) -> np.ndarray:
     return percentile_filter(heights, STANDING_PERCENTILE, size=size, mode="nearest")
 
 
-def with_landmarks(joints2d: np.ndarray, landmarks: np.ndarray, fps: float) -> np.ndarray:
+def averaged_with_landmarks(joints2d: np.ndarray, landmarks: np.ndarray, fps: float) -> np.ndarray:
     """(F, 16, 2) each tracked joint averaged with the person model's landmark (F, 16, 2; NaN: none) where the
     two lie within AGREE_SHARE of the standing height (``standing_heights``) on a frame whose landmarks lie
     within AGREE_BODY of the tracked joints (median): the colours' blocks and the learned model read one joint
