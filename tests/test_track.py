@@ -15,6 +15,7 @@ from mocap.body import JOINT_INDEX, JOINTS, unit
 from mocap.camera import Pinhole
 from mocap.errors import MocapError
 from mocap.image.edges import Edges
+from mocap.io.video import iter_frames
 from mocap.synth.walk import walk_cycle
 from mocap.track import blocks
 from mocap.track.calibration import FACING_CAMERA, KEY, Calibration
@@ -39,7 +40,7 @@ from mocap.track.limbs import (
 )
 from mocap.track.marks import check_marks
 from mocap.track.parts import PARTS, beside, far_arm, far_forearm, mirrored_model, own_colour, told_apart
-from mocap.track.tracker import FAR_UPPER_SCALES, FAR_UPPER_WEIGHT
+from mocap.track.tracker import FAR_UPPER_SCALES, FAR_UPPER_WEIGHT, BodyTracker
 from mocap.track.tracking import (
     LOW_RELIABILITY,
     carried_pins,
@@ -320,6 +321,20 @@ def test_a_forearm_s_own_colour_leaves_out_the_sleeve_at_its_elbow():
     assert own[(y > 38) & (y < 78)][:, 1:-1].all()
     told = told_apart(image, block, grid, own=True)
     assert told.weights[(y > 22) & (y < 33)].sum() == 0.0
+
+
+def test_a_body_in_other_clothes_is_told_from_the_marked_one(walk):
+    """BodyTracker.dressed_alike: the marked body ten frames on wears its clothes, in shade too; the same marks on
+    that frame with red and blue swapped (other clothes) or moved beside the body (the background) do not."""
+    video, truth = walk
+    frames = [frame for _, frame in iter_frames(video)]
+    tracker = BodyTracker(frames[0], truth.joints2d[0])
+    later, frame = truth.joints2d[10], frames[10]
+    assert tracker.dressed_alike(frame, later)
+    assert tracker.dressed_alike((frame * 0.6).astype(np.uint8), later)
+    assert not tracker.dressed_alike(np.ascontiguousarray(frame[..., ::-1]), later)
+    assert not tracker.dressed_alike(frame, later + (60.0, 0.0))
+    assert not tracker.dressed_alike(frame, later - (60.0, 0.0))
 
 
 LIMB_POSES = {  # limb -> (directions of its upper and lower bone: allowed poses, poses out of range)

@@ -177,12 +177,27 @@ def told_apart(frame: np.ndarray, block: np.ndarray, grid: blocks.Grid, own: boo
     return blocks.Grid(grid.along, grid.across, (weights / weights.sum()).astype(np.float32))
 
 
-def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.ndarray:
-    """(R, C) whether each sub-pixel of ``model`` (R, C, 3) is the part's own colour: past the joints always, else
-    nearer the middle columns' median than the colours a width out in ``around`` (2, R, C, 3)."""
+def core_colour(samples: np.ndarray, grid: blocks.Grid) -> np.ndarray:
+    """(3,) the median colour of a block's ``samples`` (R, C, 3) on ``grid`` between its joints in its middle third
+    of columns: the part's own colour, whatever a mark a little off its outline took in beside it."""
     inside = (grid.along >= 0) & (grid.along <= 1)
     middle = np.argsort(np.abs(grid.across))[: max(1, len(grid.across) // 3)]
-    own = np.median(model[inside][:, middle].reshape(-1, 3), axis=0)
+    return np.median(samples[inside][:, middle].reshape(-1, 3), axis=0)
+
+
+def chroma_apart(a: np.ndarray, b: np.ndarray) -> float:
+    """How far apart two BGR colours' chroma (CIELAB a*, b*) lie, their lightness aside: light and shade change a
+    garment's lightness far more than its hue."""
+    pair = np.clip(np.stack([a, b]), 0, 255).astype(np.uint8)[None]
+    lab = cv2.cvtColor(pair, cv2.COLOR_BGR2LAB)[0].astype(float)
+    return float(np.hypot(*(lab[0, 1:] - lab[1, 1:])))
+
+
+def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.ndarray:
+    """(R, C) whether each sub-pixel of ``model`` (R, C, 3) is the part's own colour: past the joints always, else
+    nearer the middle columns' median (``core_colour``) than the colours a width out in ``around`` (2, R, C, 3)."""
+    inside = (grid.along >= 0) & (grid.along <= 1)
+    own = core_colour(model, grid)
     outside = np.stack([around[0, :, 0], around[1, :, -1]], axis=1)  # (R, 2, 3)
     to_own = np.abs(model - own) @ blocks.CHANNEL_WEIGHTS
     to_outside = (np.abs(model[:, :, None] - outside[:, None]) @ blocks.CHANNEL_WEIGHTS).min(axis=-1)

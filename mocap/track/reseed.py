@@ -19,6 +19,7 @@ from mocap.track.landmarks import facing_yaw, seed_marks
 from mocap.track.parts import PARTS
 from mocap.track.tracker import BodyTracker
 
+STRANGER_S = 0.5  # seconds on end the person model is sure of a body in clothes the tracker never saw, to seed it
 NOBODY = "the person model sees nobody to track in the video: mark the 16 joints on a frame that shows the body"
 
 
@@ -64,21 +65,21 @@ class _Run:
         self.facing: list[float] = []
         self.kept: list[tuple[int, np.ndarray, Landmarks | None]] = []
         self.tracker: BodyTracker | None = None
-        self.sure_before = False  # the person model sure of the body on the frame before (seed_marks)
+        self.sure_for = 0  # frames on end up to the one before that the person model was sure of a body (seed_marks)
 
     def add(self, i: int, frame: np.ndarray, seen: Landmarks | None) -> None:
         """Track frame ``i`` as seen by the person model (``seen``, None: unseen): from a user's seed there, else
         on from the frame before, seeded anew by the landmarks where that lost the body (or none held it yet) and
-        the model is sure of it here and on the frame before (its first sight after a gap is a rough one)."""
+        the model has seen it long enough (``_seen_enough``)."""
         self.facing.append(facing_yaw(seen))
         row = None
         if i not in self.seeds and self.tracker is not None:
             found, s = self.tracker.step(frame, seen)
             row = (found, s, self.tracker.confidence, self.tracker.lost)
         seed, turn, sure = self.seeds.get(i), self.turn, seed_marks(seen, frame.shape)
-        if seed is None and self.sure_before and (row is None or row[3]):
+        if seed is None and (row is None or row[3]) and self._seen_enough(frame, sure):
             seed, turn = sure, side_of(self.facing[-1])
-        self.sure_before = sure is not None
+        self.sure_for = self.sure_for + 1 if sure is not None else 0
         tracker = None if seed is None else self._seeded(frame, seed, turn, i in self.seeds)
         if tracker is not None:
             self._backward(copy.deepcopy(tracker), seed)
@@ -90,6 +91,15 @@ class _Run:
         self.kept.append((i, frame, seen))
         if row is not None and not row[3] and not any(f > i for f in self.seeds):
             self.kept = self.kept[-1:]  # the body held: a later seed's backward pass stops here
+
+    def _seen_enough(self, frame: np.ndarray, sure: np.ndarray | None) -> bool:
+        """Whether landmarks' marks ``sure`` on ``frame`` may seed the body anew: the model sure of a body on the frame
+        before too (its first sight after a gap is a rough one), for STRANGER_S where the body does not wear the
+        clothes of the one the tracker lost (BodyTracker.dressed_alike): a person model can make a body of the
+        background for a moment, while a performer back in other clothes stays."""
+        if sure is None or self.sure_for == 0:
+            return False
+        return self.tracker is None or self.sure_for >= STRANGER_S * self.fps or self.tracker.dressed_alike(frame, sure)
 
     def _seeded(self, frame: np.ndarray, seed: np.ndarray, turn: str | None, marked: bool) -> BodyTracker | None:
         """A tracker seeded on ``frame``; None for landmarks no trunk fits (a user's ``marked`` seed raises)."""
