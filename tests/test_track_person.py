@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import cv2
 import numpy as np
 import pytest
 from browser_helpers import SKIP_WITHOUT_CHROMIUM, browser  # noqa: F401 (the browser fixture)
@@ -21,7 +22,7 @@ from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.io.export.motion_json import read_motion
 from mocap.io.video import iter_frames, write_video
 from mocap.person import Landmarks, PersonView, available
-from mocap.track.landmarks import facing_yaw, released, seed_marks, side_of
+from mocap.track.landmarks import facing_yaw, proposed, released, seed_marks, side_of
 from mocap.track.reseed import NOBODY, STRANGER_S, merged, seed_row, track_seeded
 from mocap.track.tracking import AGREE_BODY, AGREE_SHARE, averaged_with_landmarks, track_clip
 
@@ -126,6 +127,21 @@ def test_seed_marks_need_the_trunk_sure_and_inside_the_frame():
     hand_unsure[JOINTS.index("wrist_l")] = 0.2  # a limb joint at the model's guess
     assert seed_marks(Landmarks(marks, hand_unsure, np.zeros((16, 3))), (240, 320, 3)) is not None
     assert seed_marks(seen, (150, 320, 3)) is None  # the ankles below the frame
+
+
+def test_proposed_marks_take_the_head_top_off_the_models_mask():
+    """landmarks.proposed: the model's head top, 10 px past the crown of the head its mask shows, moved onto the
+    crown along the neck -> head top line; left where the mask shows nobody there."""
+    mask = np.zeros((240, 320), np.float32)
+    cv2.circle(mask, (120, 50), 15, 1.0, -1)  # the head, its crown at y = 35
+    mask[65:200, 100:140] = 1.0  # the trunk and legs
+    joints = np.column_stack([np.full(16, 120.0), np.linspace(25, 200, 16)])
+    joints[JOINTS.index("neck")] = (120, 65)
+    seen = Landmarks(joints, np.ones(16), np.zeros((16, 3)))
+    top = proposed(PersonView(mask, seen)).joints2d[JOINTS.index("head_top")]
+    assert abs(top[0] - 120) < 1 and abs(top[1] - 35) <= 1
+    kept = proposed(PersonView(np.zeros_like(mask), seen)).joints2d
+    assert np.array_equal(kept, joints) and proposed(None) is None
 
 
 def test_the_facing_of_a_turned_body_and_its_side():

@@ -9,7 +9,8 @@ import numpy as np
 from mocap.body import JOINT_INDEX
 from mocap.camera import FLIP_YZ
 from mocap.errors import MocapError
-from mocap.person import SURE, Landmarks
+from mocap.person import SURE, Landmarks, PersonView
+from mocap.silhouette.eyes import PERSON_LEVEL, crowned
 from mocap.track.calibration import KEY
 from mocap.track.keydepths import side_of, triangle_yaw
 from mocap.track.marks import check_key_triangle
@@ -34,6 +35,16 @@ def seed_marks(seen: Landmarks | None, shape: tuple) -> np.ndarray | None:
     except MocapError:
         return None
     return marks.copy()
+
+
+def proposed(view: PersonView | None) -> Landmarks | None:
+    """The landmarks of ``view`` as the marks a person model proposes take them (seed_marks, where no seed holds
+    the body yet): the head's top on its own mask's crown (silhouette.eyes.crowned), as the app's proposal from the
+    silhouette fit has it. The model's head top is the ears' line extended, and a block from it to the neck takes
+    in background above the hair."""
+    if view is None:
+        return None
+    return crowned(view.landmarks, np.where(view.mask >= PERSON_LEVEL, 255, 0).astype(np.uint8))
 
 
 def facing_yaw(seen: Landmarks | None) -> float:

@@ -13,9 +13,9 @@ import numpy as np
 
 from mocap.camera import Pinhole
 from mocap.errors import MocapError
-from mocap.person import Landmarks
+from mocap.person import Landmarks, PersonView
 from mocap.track.keydepths import side_of
-from mocap.track.landmarks import facing_yaw, seed_marks
+from mocap.track.landmarks import facing_yaw, proposed, seed_marks
 from mocap.track.parts import PARTS
 from mocap.track.tracker import BodyTracker
 
@@ -67,16 +67,18 @@ class _Run:
         self.tracker: BodyTracker | None = None
         self.sure_for = 0  # frames on end up to the one before that the person model was sure of a body (seed_marks)
 
-    def add(self, i: int, frame: np.ndarray, seen: Landmarks | None) -> None:
-        """Track frame ``i`` as seen by the person model (``seen``, None: unseen): from a user's seed there, else
-        on from the frame before, seeded anew by the landmarks where that lost the body (or none held it yet) and
-        the model has seen it long enough (``_seen_enough``)."""
+    def add(self, i: int, frame: np.ndarray, view: PersonView | None) -> None:
+        """Track frame ``i`` as the person model sees it (``view``, None: unseen): from a user's seed there, else
+        on from the frame before, seeded anew by the landmarks where that lost the body (or by their ``proposed``
+        marks where none held it yet) and the model has seen it long enough (``_seen_enough``)."""
+        seen = None if view is None else view.landmarks
         self.facing.append(facing_yaw(seen))
         row = None
         if i not in self.seeds and self.tracker is not None:
             found, s = self.tracker.step(frame, seen)
             row = (found, s, self.tracker.confidence, self.tracker.lost)
-        seed, turn, sure = self.seeds.get(i), self.turn, seed_marks(seen, frame.shape)
+        seed, turn = self.seeds.get(i), self.turn
+        sure = seed_marks(seen if self.tracker is not None else proposed(view), frame.shape)
         if seed is None and (row is None or row[3]) and self._seen_enough(frame, sure):
             seed, turn = sure, side_of(self.facing[-1])
         self.sure_for = self.sure_for + 1 if sure is not None else 0
@@ -141,14 +143,14 @@ def track_seeded(
     camera: Pinhole | None,
     turn: str | None,
     fps: float,
-    views: Iterable[Landmarks | None] | None = None,
+    views: Iterable[PersonView | None] | None = None,
 ) -> Track:
     """Track ``frames`` from every seed (frame -> (16, 2) marks) and where the person model's ``views`` (each
-    frame's landmarks, None: nobody; None: no model) seed a body none holds, forward and backward between seeds,
-    ``merged``; ``progress(done)`` after every frame."""
+    frame's mask and landmarks, None: nobody; None: no model) seed a body none holds, forward and backward between
+    seeds, ``merged``; ``progress(done)`` after every frame."""
     run = _Run(seeds, camera, turn, fps, views is not None)
-    for i, (frame, seen) in enumerate(zip(frames, repeat(None) if views is None else views)):
-        run.add(i, frame, seen)
+    for i, (frame, view) in enumerate(zip(frames, repeat(None) if views is None else views)):
+        run.add(i, frame, view)
         if progress:
             progress(i + 1)
     return run.track()

@@ -18,7 +18,7 @@ from mocap.body import JOINT_INDEX, JOINT_PARENT, JOINTS, SIDES, STANDING_PERCEN
 from mocap.camera import Pinhole, default_camera
 from mocap.errors import MocapError
 from mocap.io.video import VideoInfo, iter_frames, open_video, processing_scale, rescaled
-from mocap.person import SURE, Landmarks, PersonModel, watched
+from mocap.person import SURE, Landmarks, PersonModel, PersonView, watched
 from mocap.track.keydepths import Turns
 from mocap.track.loss import GAP_S, bridged, joint_confidence
 from mocap.track.marks import check_marks
@@ -82,7 +82,7 @@ def track_frames(
     turn: str | None = None,
     fps: float = 25.0,
     remarks: dict[int, np.ndarray] | None = None,
-    views: Iterable[Landmarks | None] | None = None,
+    views: Iterable[PersonView | None] | None = None,
 ) -> Track:
     """Track ``marks`` (16, 2) of frame 0 (None: the person model's ``views``) and ``remarks`` (frame -> marks)
     through BGR ``frames`` (reseed.track_seeded)."""
@@ -232,19 +232,19 @@ def track_clip(
 
 
 def _looked_at(person: PersonModel | None, frames: Iterator[np.ndarray]) -> tuple[Iterator, Iterator | None]:
-    """``frames`` and, in step with them, the ``person`` model's landmarks on each (None: nobody), the model
-    looking ahead where it can (person.watched); no landmarks without a model."""
+    """``frames`` and, in step with them, the ``person`` model's view of each (None: nobody), the model looking
+    ahead where it can (person.watched); no views without a model."""
     if person is None:
         return frames, None
     a, b = itertools.tee(watched(person, frames))
-    return (frame for frame, _ in a), (None if view is None else view.landmarks for _, view in b)
+    return (frame for frame, _ in a), (view for _, view in b)
 
 
 def _kept(views: Iterator | None, seen: list) -> Iterator | None:
-    """``views`` as they come, each also appended to ``seen``."""
+    """``views`` as they come, each one's landmarks (None: nobody) also appended to ``seen``."""
     if views is None:
         return None
-    return (seen.append(view) or view for view in views)
+    return (seen.append(None if view is None else view.landmarks) or view for view in views)
 
 
 def landmark_array(seen: list[Landmarks | None], n_frames: int, scale: float) -> np.ndarray:
