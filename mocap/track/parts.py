@@ -19,6 +19,7 @@ LENGTHEN_TOLERANCE = 0.03  # relative loss of S a lengthening may cost
 FAR_MARGIN_M = 0.1  # metres one shoulder of the marks lies deeper than the other: the far arm
 TOLD_APART = 40.0  # grey levels from what lies beside an arm at which its sub-pixel weighs fully
 LEAST_WEIGHT = 0.05  # ... the share of its weight a sub-pixel like what lies beside keeps
+SAME_CLOTHES = 30.0  # CIELAB a*b* units: a trunk's core this far in chroma from the marked one's is another's clothes
 
 
 @dataclass(frozen=True)
@@ -185,12 +186,13 @@ def core_colour(samples: np.ndarray, grid: blocks.Grid) -> np.ndarray:
     return np.median(samples[inside][:, middle].reshape(-1, 3), axis=0)
 
 
-def chroma_apart(a: np.ndarray, b: np.ndarray) -> float:
-    """How far apart two BGR colours' chroma (CIELAB a*, b*) lie, their lightness aside: light and shade change a
-    garment's lightness far more than its hue."""
-    pair = np.clip(np.stack([a, b]), 0, 255).astype(np.uint8)[None]
-    lab = cv2.cvtColor(pair, cv2.COLOR_BGR2LAB)[0].astype(float)
-    return float(np.hypot(*(lab[0, 1:] - lab[1, 1:])))
+def same_clothes(model: np.ndarray, samples: np.ndarray, grid: blocks.Grid) -> bool:
+    """Whether a block's ``samples`` (R, C, 3) on ``grid`` show the clothes of its colour ``model``: their core
+    colours (``core_colour``) within SAME_CLOTHES of each other in chroma (CIELAB a*, b*), lightness aside: light
+    and shade change a garment's lightness far more than its hue."""
+    pair = np.clip(np.stack([core_colour(model, grid), core_colour(samples, grid)]), 0, 255).astype(np.uint8)
+    lab = cv2.cvtColor(pair[None], cv2.COLOR_BGR2LAB)[0].astype(float)
+    return float(np.hypot(*(lab[0, 1:] - lab[1, 1:]))) <= SAME_CLOTHES
 
 
 def own_colour(model: np.ndarray, around: np.ndarray, grid: blocks.Grid) -> np.ndarray:

@@ -45,12 +45,11 @@ from mocap.track.parts import (
     TWIN_PART,
     TWINS,
     arm_grids,
-    chroma_apart,
-    core_colour,
     far_forearm,
     mirrored_model,
     part_lengths,
     part_widths,
+    same_clothes,
     search_part,
     skeleton,
 )
@@ -67,7 +66,6 @@ ZOOM_RANGE = (0.5, 2.0)  # of the marked head's length: the head's (the body's) 
 HEAD_RETRY = 0.3  # of the head's median S: a worse match is searched again (_track_head)
 FAR_UPPER_WEIGHT = 0.3  # of its 1/S: what the far arm's upper arm's match weighs around its root
 FAR_UPPER_SCALES = (1.0, 0.9)  # of its usual length: the far arm's upper arm's lengths tried there
-SAME_CLOTHES = 30.0  # CIELAB a*b* units: a trunk's core this far in chroma from the marked one's is another's clothes
 ELSEWHERE = 2.0  # trunk radii (opinion.trunk_apart): landmarks this far off see the body elsewhere
 
 
@@ -173,13 +171,12 @@ class BodyTracker:
         return trunk_apart(seen, skeleton(new, self.chest), new[TORSO]) > ELSEWHERE
 
     def dressed_alike(self, frame: np.ndarray, marks: np.ndarray) -> bool:
-        """Whether the body ``marks`` (16, 2) place on ``frame`` wears the marked body's clothes: its trunk's core
-        colour (parts.core_colour) within SAME_CLOTHES in chroma of frame 0's. A person model sure of a body can be
-        sure of one it makes of the background, which no colour of the performer's lies under."""
+        """Whether the body ``marks`` (16, 2) place on ``frame`` wears the marked body's clothes (parts.same_clothes
+        of the trunk). A person model sure of a body can be sure of one it makes of the background."""
         width = part_widths(marks, body_scale(marks))[TORSO]
-        trunk = blocks.between(marks[PART_JOINTS[TORSO, 0]][None], marks[PART_JOINTS[TORSO, 1]][None], width)
-        seen = core_colour(blocks.sample_blocks(frame, trunk, self.grids[TORSO])[0], self.grids[TORSO])
-        return chroma_apart(seen, core_colour(self.marked[TORSO], self.grids[TORSO])) <= SAME_CLOTHES
+        trunk = blocks.between(marks[PART_JOINTS[[TORSO], 0]], marks[PART_JOINTS[[TORSO], 1]], width)
+        seen = blocks.sample_blocks(frame, trunk, self.grids[TORSO])[0]
+        return same_clothes(self.marked[TORSO], seen, self.grids[TORSO])
 
     def _held(self, frame: np.ndarray, new: np.ndarray) -> bool:
         """Whether head and trunk of ``new`` each match DISTINCT times better where they lie than anywhere else."""
