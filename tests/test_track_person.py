@@ -208,12 +208,13 @@ def render_comeback(path, regraded=True, gone=GONE, frames=(600, 720)):
 
 @pytest.mark.skipif(not SALSA.exists(), reason=f"{SALSA} is absent")
 @pytest.mark.skipif(not available("mediapipe"), reason="mediapipe is not installed")
-def test_a_performer_who_leaves_and_comes_back_regraded_is_found_again_without_a_remark(tmp_path):
-    """MediaPipe looks on: the frames without the performer are reported lost, and once they are back (in colours
-    the marks never saw, so seen for STRANGER_S first) its landmarks seed the tracker anew, forward and backward;
-    the colours alone lose the turning performer for good."""
+@pytest.mark.parametrize("regraded", [False, True])
+def test_a_performer_who_leaves_and_comes_back_is_found_again_without_a_remark(tmp_path, regraded):
+    """MediaPipe looks on: the frames without the performer are reported lost, and once they are back its
+    landmarks seed the tracker anew, forward and backward: at once in the marked clothes, after STRANGER_S in
+    colours the marks never saw (``regraded``); the colours alone lose the turning performer for good."""
     video = tmp_path / "comeback.avi"
-    truth = render_comeback(video)
+    truth = render_comeback(video, regraded)
     notes = tmp_path / "marks.json"
     marks = {"0": {"joints2d": dict(zip(JOINTS, truth.joints2d[0].tolist()))}}
     notes.write_text(json.dumps({"format": "mocap-annotations", "version": 1, "frames": marks}))
@@ -222,7 +223,7 @@ def test_a_performer_who_leaves_and_comes_back_regraded_is_found_again_without_a
     assert main([*args, "--person-model", "mediapipe"]) == 0
     frames = read_motion(out)["frames"]
     lost = np.array([bool(f.get("lost")) for f in frames])
-    back = GONE.stop + int(np.ceil(STRANGER_S * 25.0))
+    back = GONE.stop + (int(np.ceil(STRANGER_S * 25.0)) if regraded else 0)
     assert lost[GONE].all() and not lost[: GONE.start].any() and not lost[back:].any()
     tracked = np.array([f["joints2d"] if "joints2d" in f else np.full((16, 2), np.nan) for f in frames])
     err = errors(tracked, truth)[~lost]
