@@ -26,7 +26,9 @@ METHOD_CHOICES = {"silhouette": "silhouette", "tracking": "track"}  # shown -> a
 MARKING_HELP = (
     "The tracking method follows the 16 joints marked on frame 0, over any "
     "background. With the learned eyes on, choosing it places them where the person "
-    "model sees the body: check each, and move a wrong one with Joints: Place. Or "
+    "model (else the silhouette fit) sees the body: check each, and move a wrong one "
+    "with Joints: Place; with nobody on frame 0, **Track** alone lets the person model "
+    "mark the body where it first is sure of it. Or "
     "**Mark joints**: it goes to frame 0 and asks for each joint in turn; click where "
     "it is on the video frame. Then press **Track**. Where the review says the body "
     "was lost, go to a frame that shows it and press **Mark joints** again: the 16 "

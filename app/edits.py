@@ -11,6 +11,7 @@ from app import saving
 from mocap.body import JOINT_INDEX, JOINTS, LIMB_JOINTS, SEGMENT_INDEX
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
+from mocap.person import NONE
 from mocap.session import marks_from_fit, propose_keyframes
 from mocap.session.tracking import proposed_marks
 
@@ -188,10 +189,11 @@ class Edits:
 
     def set_method(self, method: str) -> bool:
         """Choose the silhouette ("silhouette") or the tracking ("track") method; tracking chosen with frame 0
-        unmarked places the marks the person model proposes there (proposed_marks), to correct and confirm."""
+        unmarked places the marks the person model proposes there (proposed_marks; where it is unsure there, the
+        silhouette fit's), to correct and confirm."""
         with self._lock:
             fresh = method == "track" and self._fitted is not None and not placed(self._annotations, 0)
-            marks = (proposed_marks(self._fitted) if fresh else None) or {}
+            marks = (proposed_marks(self._fitted, self._person != NONE) if fresh else None) or {}
 
         def change(notes: Annotations) -> Annotations:
             return with_marks(notes.with_method(method), marks)
@@ -216,6 +218,13 @@ class Edits:
         """The joints not yet marked on ``frame`` (frame 0's: the tracking's marks), in JOINTS order."""
         there = placed(self._annotations, frame)
         return [j for j in JOINTS if j not in there]
+
+    @property
+    def tracks_unmarked(self) -> bool:
+        """Whether Track starts with frame 0 unmarked: a person model looks on, and its landmarks mark the body
+        where it is first sure of it, tracked back to frame 0 from there (mocap.session.tracking.tracked_video),
+        as `mocap fit --method track` without marks does; frame 0 partly marked asks for the rest."""
+        return self._person != NONE and not placed(self._annotations, 0)
 
     def marking_frame(self) -> int:
         """The frame the tracking's joints are marked on: 0 until all 16 are marked there, then the

@@ -46,7 +46,7 @@ def control_states(c: Controls, state: AppState, view: FrameView) -> list[tuple[
         (c.foot_lock, {"disabled": not lifted}),
         (c.mark, {"disabled": not state.unmarked(state.marking_frame())}),
         (c.marks_from_fit, {"disabled": not state.silhouette_fitted}),
-        (c.track, {"disabled": state.tracking or bool(state.unmarked())}),
+        (c.track, {"disabled": state.tracking or bool(state.unmarked()) and not state.tracks_unmarked}),
         # switched as a new empty stage is set: once the fit is done, refitting
         (c.learned_eyes, {"disabled": not state.ready.is_set() or not person_model_installed()}),
     ]

@@ -12,11 +12,12 @@ import traceback
 from collections.abc import Callable
 from dataclasses import replace
 
+from app.edits import placed
 from mocap.errors import MocapError
 from mocap.io.annotations import Annotations
 from mocap.person import NONE, available, check_name, install_hint
 from mocap.pipeline import FITTING, SILHOUETTES, TRACKING, Progress, open_session
-from mocap.session import check_tracking_marks, marks_of, remarks_of
+from mocap.session import check_tracking_marks, remarks_of
 
 
 class Throttle:
@@ -180,13 +181,14 @@ class Preprocessing:
         self._changed()
 
     def start_tracking(self) -> threading.Thread:
-        """Track from frame 0's marks in a daemon thread; a MocapError naming the joint at once if a mark
-        is missing or outside the frame, or the trunk fits no view."""
+        """Track from frame 0's marks (none: the person model's, ``tracks_unmarked``) in a daemon thread; a
+        MocapError naming the joint at once if a mark is missing or outside the frame, or the trunk fits no view."""
         with self._lock:
             if self._tracking:
                 raise MocapError("already tracking; wait for it to finish")
             notes = self._annotations
-            check_tracking_marks(self.info, notes)
+            if not self.tracks_unmarked:
+                check_tracking_marks(self.info, notes)
             self._tracking = True
             self._track_progress = Progress(0, self.n_frames, TRACKING)
         thread = threading.Thread(target=self._track, args=(notes,), daemon=True, name="mocap-track")
@@ -204,7 +206,7 @@ class Preprocessing:
             with self._lock:
                 if self._annotations != notes:  # edits made while tracking
                     session.annotate(self._annotations)
-                self._tracked, self._tracked_from = session, (marks_of(notes), remarks_of(notes))
+                self._tracked, self._tracked_from = session, (placed(notes, 0), remarks_of(notes))
                 self._track_progress = Progress(self.n_frames, self.n_frames, "tracked")
         except Exception as exc:  # the page must say so; the terminal gets the traceback
             if not isinstance(exc, MocapError):

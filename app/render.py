@@ -13,7 +13,7 @@ from app.controls import AUTO, METHOD_CHOICES
 from app.enabling import control_states
 from app.reel import LEAD_S
 from app.state import FrameView
-from app.texts import eyes_text, frame_text, orientation_text, review_text, stage_text, tracking_text
+from app.texts import eyes_text, frame_text, orientation_text, review_text, stage_text, track_prompt, tracking_text
 from app.views import caption_image, silhouette_image, tracked_image, video_image
 from app.words import joint_label, orientation_label
 from mocap.body import JOINT_INDEX
@@ -213,12 +213,7 @@ class Rendering:
             if view.method != "track" and self.state.background_warning:
                 text += f"  \n**Warning:** {self.state.background_warning} (Stage tab)."
         elif view.method == "track" and not self.state.tracking:
-            missing = len(self.state.unmarked())
-            text = (
-                "Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."
-                if not missing
-                else f"Tracking: mark the 16 joints on frame 0 ({missing} to go; Tracking tab), then press Track."
-            )
+            text = track_prompt(self.state)
         else:
             work = "Tracking" if view.method == "track" else "Preprocessing"
             text = f"{work}: {p.stage}… {100 * p.done // max(p.total, 1)}%{eyes}"

@@ -131,10 +131,25 @@ def far_arm_text(state: AppState) -> str:
     )
 
 
+UNMARKED_TRACK = "the person model marks the body where it is first sure of it, and the tracking goes back to frame 0"
+
+
+def track_prompt(state: AppState) -> str:
+    """The status line's next step of a tracking not started: mark frame 0, or Track (``tracks_unmarked``)."""
+    missing = len(state.unmarked())
+    if not missing:
+        return "Tracking: all 16 joints are marked on frame 0; press Track (Tracking tab)."
+    if state.tracks_unmarked:
+        return f"Tracking: press Track ({UNMARKED_TRACK}), or mark the 16 joints on frame 0 first (Tracking tab)."
+    return f"Tracking: mark the 16 joints on frame 0 ({missing} to go; Tracking tab), then press Track."
+
+
 def tracking_text(state: AppState) -> str:
     """The Tracking tab's state: the marks, whether they were tracked, the tracking."""
     missing = state.unmarked()
-    if missing:
+    if state.tracks_unmarked:
+        marks = f"No joints marked on frame 0: with **Track** {UNMARKED_TRACK}; or **Mark joints** first."
+    elif missing:
         marks = (
             f"**{16 - len(missing)} of 16** joints marked on frame 0; next: {', '.join(map(joint_label, missing[:4]))}"
             + ("…" if len(missing) > 4 else "")
@@ -158,6 +173,8 @@ def tracking_text(state: AppState) -> str:
         return marks + (
             f"  \nTracking… {100 * p.done // max(p.total, 1)}%"
             if state.tracking
+            else ""
+            if state.tracks_unmarked
             else "  \nPress **Track** when the marks are right."
         )
     return (

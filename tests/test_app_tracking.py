@@ -11,12 +11,15 @@ import numpy as np
 import pytest
 from app_helpers import TINY_FRAMES, fresh_copy, panning_clip, tiny_video  # noqa: F401
 from helpers import DOG_WALKER, dog_walker_marks
+from test_track_person import SALSA, render_comeback
 
+from app.serve import SAMPLE
 from app.state import AppState
-from app.texts import frame_text, review_text
+from app.texts import frame_text, review_text, track_prompt
 from mocap.body import JOINTS, SEGMENT_INDEX, SEGMENT_NAMES
 from mocap.errors import MocapError
 from mocap.io.annotations import load_annotations
+from mocap.person import available
 from mocap.synth.metrics import labelled_body_height, labelled_errors
 from mocap.track.marks import shoulders_as_hips
 
@@ -230,3 +233,42 @@ def test_the_body_marked_again_on_a_later_frame_asks_for_a_tracking_that_starts_
     seeded = state._tracked.tracked
     assert np.allclose(seeded.joints2d[frame], truth.joints2d[frame] + 2.0, atol=0.01)
     assert np.all(seeded.confidence[frame] == 1.0)
+
+
+@pytest.mark.skipif(not SALSA.exists(), reason=f"{SALSA} is absent")
+@pytest.mark.skipif(not available("mediapipe"), reason="mediapipe is not installed")
+def test_with_the_person_model_track_starts_unmarked_where_the_performer_walks_in(tmp_path):
+    """The performer steps into the picture on frame 8, so nothing is proposed on frame 0: Track is offered without
+    marks, the person model marks the body where it is first sure of it, the frames before are lost (the review
+    says so, none made up) and the rest are tracked."""
+    video = tmp_path / "walkin.avi"
+    truth = render_comeback(video, regraded=False, gone=slice(0, 8), frames=(600, 672))
+    state = AppState(video, person="mediapipe")
+    state.start().join()
+    state.set_method("track")
+    assert state.unmarked() == list(JOINTS) and state.tracks_unmarked
+    assert track_prompt(state).startswith("Tracking: press Track")
+    state.start_tracking().join()
+    assert state.progress.ready, state.progress.error
+    assert "body lost on frames 0-7" in " ".join(state.view(0).doubts)
+    tracked = np.array([state.view(f).joints2d for f in range(8, len(truth.joints2d))])
+    off = np.linalg.norm(tracked - truth.joints2d[8:], axis=-1).mean(axis=-1) / truth.body_height_px * 100
+    assert np.median(off) < 4.0 and not state.marks_changed
+
+
+@pytest.mark.skipif(not available("mediapipe"), reason="mediapipe is not installed")
+def test_where_the_person_model_is_unsure_on_frame_0_the_fit_proposes_the_marks(tmp_path):
+    """The bundled sample's cylinder figure, which MediaPipe does not see on frame 0: choosing tracking proposes
+    the silhouette fit's frame 0 there (its S as good as the clip's), and the walk is tracked from them."""
+    state = AppState(fresh_copy(SAMPLE, tmp_path), person="mediapipe")
+    state.start().join()
+    state.set_method("track")
+    assert not state.unmarked() and not state.tracks_unmarked
+    truth = json.loads(SAMPLE.with_suffix(".truth.json").read_text())
+    body_px, joints2d = truth["body_height_px"], np.array([f["joints2d"] for f in truth["frames"]])
+    marks = np.array([state.annotations.frames[0].joints2d[j] for j in JOINTS])
+    assert np.linalg.norm(marks - joints2d[0], axis=-1).mean() / body_px < 0.05
+    state.start_tracking().join()
+    assert state.progress.ready, state.progress.error
+    tracked = np.array([state.view(f).joints2d for f in range(len(joints2d))])
+    assert np.median(np.linalg.norm(tracked - joints2d, axis=-1).mean(axis=-1)) / body_px < 0.05

@@ -136,14 +136,14 @@ def test_a_block_stands_out_where_the_frame_shows_its_colours_once():
 def test_short_losses_are_bridged_long_ones_stay_lost():
     joints = np.zeros((12, 16, 2))
     joints[:, :, 0] = np.arange(12)[:, None] * 10.0
-    joints[3:5] = 999.0
+    joints[0] = joints[3:5] = 999.0
     joints[7:] = -999.0
     lost = np.zeros(12, bool)
-    lost[3:5] = lost[7:] = True
+    lost[0] = lost[3:5] = lost[7:] = True
     out, left = bridged(joints, lost, gap=2)
     assert np.allclose(out[3:5, :, 0], [[30.0], [40.0]])  # between frames 2 and 5
-    assert left.tolist() == [False] * 7 + [True] * 5  # the end is not made up
-    assert stretches(left) == [(7, 12)]
+    assert left.tolist() == [True] + [False] * 6 + [True] * 5  # neither end is made up
+    assert stretches(left) == [(0, 1), (7, 12)]
 
 
 def test_ramp_is_full_then_none():

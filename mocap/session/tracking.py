@@ -36,6 +36,7 @@ from mocap.track.tracking import (
     turn_of,
 )
 
+USUAL_FIT = 0.75  # of the clip's median S: a fit of a frame this good shows the body (fit_shows_body)
 MARKS_NEEDED = (
     "the tracking method needs the 16 joints marked on frame 0 (--annotations "
     'with frames["0"].joints2d, or mark them in the app) or a person model to propose them (--person-model)'
@@ -88,14 +89,23 @@ def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:
     return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
 
 
-def proposed_marks(fitted: SilhouetteSession) -> dict[str, tuple[float, float]] | None:
-    """Frame 0's 16 joints as the person model the silhouette fit looked through saw them, as tracking marks to
-    0.1 px where it is sure of the trunk (mocap.track.landmarks.seed_marks), to correct; None otherwise."""
+def proposed_marks(fitted: SilhouetteSession, fit_too: bool = False) -> dict[str, tuple[float, float]] | None:
+    """Frame 0's 16 joints as tracking marks to 0.1 px, to correct: as the person model the silhouette fit looked
+    through saw them where it is sure of the trunk (mocap.track.landmarks.seed_marks); else, with ``fit_too``, the
+    fit's own (``marks_from_fit``) where it shows the body (``fit_shows_body``: a figure the model does not read);
+    None otherwise."""
     seen = fitted.fits[0].landmarks if fitted.fits else None
     marks = seed_marks(seen, (fitted.info.height, fitted.info.width))
     if marks is None:
-        return None
+        return marks_from_fit(fitted) if fit_too and fit_shows_body(fitted, 0) else None
     return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, marks)}
+
+
+def fit_shows_body(fitted: SilhouetteSession, frame: int) -> bool:
+    """Whether the silhouette fit of ``frame`` explains its silhouette (S, Eq. 3) at least USUAL_FIT as well as the
+    clip's median fit: one fitted to what background subtraction makes of an empty scene explains far less."""
+    scores = np.array([np.nan if f.score is None else f.score for f in fitted.fits])
+    return bool(fitted.person[frame] and scores[frame] >= USUAL_FIT * np.nanmedian(scores))
 
 
 def check_tracking_marks(info: VideoInfo, notes: Annotations) -> None:

@@ -89,7 +89,8 @@ def stretches(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def bridged(joints2d: np.ndarray, lost: np.ndarray, gap: int) -> tuple[np.ndarray, np.ndarray]:
     """Joints (F, 16, 2) with ``lost`` frames interpolated (held past the ends), and (F,) bool the frames left lost:
-    stretches over ``gap`` frames or touching the clip's end."""
+    stretches over ``gap`` frames or touching either end of the clip, where nothing on one side says where the
+    body was (a performer who walks in after the recording starts)."""
     out, found = joints2d.copy(), np.flatnonzero(~lost)
     if not len(found):
         return out, np.ones(len(lost), bool)
@@ -99,5 +100,5 @@ def bridged(joints2d: np.ndarray, lost: np.ndarray, gap: int) -> tuple[np.ndarra
             out[idx, j, c] = np.interp(idx, found, joints2d[found, j, c])
     left = np.zeros(len(lost), bool)
     for first, stop in stretches(lost):
-        left[first:stop] = stop - first > gap or stop == len(lost)
+        left[first:stop] = stop - first > gap or first == 0 or stop == len(lost)
     return out, left
