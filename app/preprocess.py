@@ -54,7 +54,8 @@ class Preprocessing:
 
     def start(self, progress: Callable[[int, int], None] | None = None) -> threading.Thread:
         """Preprocess in a daemon thread; ``progress(done, total)`` reports each step.
-        With the tracking method chosen and frame 0 marked, tracking starts too."""
+        With the tracking method chosen and frame 0 marked (or unmarked with a person model: ``tracks_unmarked``),
+        tracking starts too."""
         thread = threading.Thread(target=self._preprocess, args=(progress,), daemon=True, name="mocap-preprocess")
         thread.start()
         if self.method == "track":
