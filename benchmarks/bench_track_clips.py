@@ -11,7 +11,8 @@ Each clip runs `mocap fit --method track VIDEO --annotations MARKS` in-process
 (mocap.pipeline.fit_video_to_file), looking through the person model (--person-model,
 default mediapipe; none: the colours alone), and is scored with ../shared/bench/score.py.
 ``--proposed`` leaves frame 0's joints out of the marks (its orientation kept): the person
-model proposes them (`mocap fit --method track VIDEO` without marks). A
+model proposes them (`mocap fit --method track VIDEO` without marks), each row followed by its
+2D mean error and PA-MPJPE over those from the truth's marks, run too. A
 frame the tracker marks as lost carries no joints and counts there as a failure
 (the "failed" column); the 2D errors (% of body height) and PA-MPJPE (mm) are over
 the frames answered. "lost" counts the frames the motion file marks lost. "exact 2D"
@@ -213,6 +214,16 @@ def print_row(label: str, r: dict) -> None:
     )
 
 
+def print_over_exact(proposed: dict, exact: dict) -> None:
+    """A clip's 2D mean error and PA-MPJPE from the person model's marks over those from the truth's."""
+    print(
+        f"  over the truth's marks ({exact['err2d_mean_pct']:.2f} %, {exact['pampjpe_mm']:.1f} mm): "
+        f"2D mean x{proposed['err2d_mean_pct'] / exact['err2d_mean_pct']:.2f}, "
+        f"PA-MPJPE x{proposed['pampjpe_mm'] / exact['pampjpe_mm']:.2f}",
+        flush=True,
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", nargs="+", default=[*SHARED, *RENDERED])
@@ -246,6 +257,8 @@ def main() -> None:
                     continue
                 rows.append(r)
                 print_row(label, r)
+                if args.proposed:
+                    print_over_exact(r, run(name, folder, args.person_model, False))
                 if args.joints:
                     print_joints(r)
             if len(draws) > 1 and rows:
