@@ -85,8 +85,7 @@ def marks_from_fit(fitted: Session) -> dict[str, tuple[float, float]]:
     a start for the user to correct."""
     if not fitted.person[0]:
         raise MocapError("frame 0 has no silhouette fit to take the marks from")
-    joints = shoulders_as_hips(fitted.inputs.joints2d[0])
-    return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
+    return as_marks(shoulders_as_hips(fitted.inputs.joints2d[0]))
 
 
 def proposed_marks(fitted: SilhouetteSession, fit_too: bool = False) -> dict[str, tuple[float, float]] | None:
@@ -98,13 +97,18 @@ def proposed_marks(fitted: SilhouetteSession, fit_too: bool = False) -> dict[str
     marks = seed_marks(seen, (fitted.info.height, fitted.info.width))
     if marks is None:
         return marks_from_fit(fitted) if fit_too and fit_shows_body(fitted, 0) else None
-    return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, marks)}
+    return as_marks(marks)
+
+
+def as_marks(joints: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Joints (16, 2) as marks, joint -> (x, y) to 0.1 px (as the annotations keep them)."""
+    return {name: (round(float(x), 1), round(float(y), 1)) for name, (x, y) in zip(JOINTS, joints)}
 
 
 def fit_shows_body(fitted: SilhouetteSession, frame: int) -> bool:
     """Whether the silhouette fit of ``frame`` explains its silhouette (S, Eq. 3) at least USUAL_FIT as well as the
     clip's median fit: one fitted to what background subtraction makes of an empty scene explains far less."""
-    scores = np.array([np.nan if f.score is None else f.score for f in fitted.fits])
+    scores = fitted.scores
     return bool(fitted.person[frame] and scores[frame] >= USUAL_FIT * np.nanmedian(scores))
 
 
