@@ -232,10 +232,11 @@ def main() -> None:
         "--joints", action="store_true", help="each joint's PA-MPJPE from the tracked and from the exact 2D"
     )
     parser.add_argument("--person-model", default="mediapipe", help="the person model looked through (none: colours)")
-    parser.add_argument(
+    marks = parser.add_mutually_exclusive_group()
+    marks.add_argument(
         "--proposed", action="store_true", help="frame 0 marked by the person model instead of the truth"
     )
-    parser.add_argument("--mark-noise", type=float, metavar="PCT", help="the truth's marks moved by this noise")
+    marks.add_argument("--mark-noise", type=float, metavar="PCT", help="the truth's marks moved by this noise")
     parser.add_argument("--seeds", type=int, default=4, help="draws of --mark-noise per clip (default 4)")
     args = parser.parse_args()
     draws = [None] if args.mark_noise is None else [(args.mark_noise, seed) for seed in range(args.seeds)]
