@@ -38,18 +38,20 @@ class Landmarks:
 
 @dataclass(frozen=True)
 class PersonView:
-    """What a person model sees on a frame: ``mask`` (H, W) float32 performer probabilities, ``landmarks``."""
+    """What a person model sees on a frame: ``mask`` (H, W) float32 performer probabilities (None from a model
+    opened unmasked), ``landmarks``."""
 
-    mask: np.ndarray
+    mask: np.ndarray | None
     landmarks: Landmarks
 
 
 class PersonModel(Protocol):
     """A person model over one video: ``observe`` each BGR uint8 frame in order (None: nobody seen); ``filtered``
-    as opened (``open_person_model``)."""
+    and ``with_mirror`` as opened (``open_person_model``)."""
 
     name: str
     filtered: bool
+    with_mirror: bool
 
     def observe(self, frame: np.ndarray) -> PersonView | None: ...
 
@@ -78,28 +80,53 @@ def check_name(name: str, where: str = "") -> str:
     return name
 
 
-def open_person_model(name: str = DEFAULT_MODEL, filtered: bool = True, apart: bool = False) -> PersonModel | None:
+def open_person_model(
+    name: str = DEFAULT_MODEL, filtered: bool = True, apart: bool = False, with_mirror: bool = False
+) -> PersonModel | None:
     """A fresh person model by name (None for "none"); a one-line MocapError if unknown or absent. ``filtered``:
     its landmarks smoothed by the model's own one-way filter, for a reader of one frame at a time (the tracker);
     off, each frame read alone, for one who smooths the clip's both ways (lift.cues). ``apart``: in a process of
-    its own (person.worker) where there is a core to spare and this process may start one."""
+    its own (person.worker) where there is a core to spare and this process may start one. ``with_mirror``: a
+    second instance looking at the frames' mirror images, the two answering as one (person.mirrored)."""
     if check_name(name) == NONE:
         return None
     if not available(name):
         raise MocapError(install_hint(name))
+    if with_mirror:
+        from mocap.person.mirrored import WithMirror
+
+        return WithMirror(_instance(name, filtered, apart, False), _instance(name, filtered, apart, True))
+    return _instance(name, filtered, apart, False)
+
+
+def _instance(name: str, filtered: bool, apart: bool, mirror: bool) -> PersonModel:
+    """One instance of the named model, in this process or ``apart``; ``mirror``: looking at mirror images."""
     if apart and (os.cpu_count() or 1) > 1 and not multiprocessing.current_process().daemon:
         from mocap.person.worker import Apart
 
-        return Apart(name, MODELS[name].module, filtered)
+        return Apart(name, MODELS[name].module, filtered, mirror)
+    return instance(MODELS[name].module, filtered, mirror)
+
+
+def instance(module: str, filtered: bool, mirror: bool) -> PersonModel:
+    """The ``Model`` of ``module`` opened ``filtered`` here; ``mirror``: unmasked (the frame's own view gives the
+    mask) and fed mirror images (person.mirrored.MirrorImage)."""
     import importlib
 
-    return importlib.import_module(MODELS[name].module).Model(filtered)
+    model = importlib.import_module(module).Model(filtered, masked=not mirror)
+    if not mirror:
+        return model
+    from mocap.person.mirrored import MirrorImage
+
+    return MirrorImage(model)
 
 
 @contextlib.contextmanager
-def opened_model(name: str, filtered: bool = True, apart: bool = False) -> Iterator[PersonModel | None]:
-    """``open_person_model(name, filtered, apart)`` for a ``with`` block, closed after it."""
-    model = open_person_model(name, filtered, apart)
+def opened_model(
+    name: str, filtered: bool = True, apart: bool = False, with_mirror: bool = False
+) -> Iterator[PersonModel | None]:
+    """``open_person_model(name, filtered, apart, with_mirror)`` for a ``with`` block, closed after it."""
+    model = open_person_model(name, filtered, apart, with_mirror)
     try:
         yield model
     finally:

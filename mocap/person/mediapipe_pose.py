@@ -41,12 +41,13 @@ _EARS, _SHOULDERS, _HIPS = (7, 8), (11, 12), (23, 24)
 
 class Model:
     """MediaPipe Pose over one video's frames in order (``PersonModel``); ``filtered``: its landmarks smoothed
-    by its own one-way filter (mocap.person.open_person_model)."""
+    by its own one-way filter, ``masked``: with its segmentation mask (mocap.person.open_person_model)."""
 
     name = "mediapipe"
+    with_mirror = False
 
-    def __init__(self, filtered: bool = True):
-        self.filtered = filtered
+    def __init__(self, filtered: bool = True, masked: bool = True):
+        self.filtered, self.masked = filtered, masked
         NativeLogFilter.hold()
         try:
             with warnings.catch_warnings():
@@ -57,8 +58,8 @@ class Model:
                     static_image_mode=False,
                     model_complexity=1,
                     smooth_landmarks=filtered,
-                    enable_segmentation=True,
-                    smooth_segmentation=True,
+                    enable_segmentation=masked,
+                    smooth_segmentation=masked,
                 )
         except ImportError as error:  # installed, but a package it needs is not
             NativeLogFilter.release()
@@ -72,7 +73,7 @@ class Model:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # protobuf's, on every call of mediapipe's graph
             result = self._pose.process(np.ascontiguousarray(frame[:, :, ::-1]))
-        if result.pose_landmarks is None or result.segmentation_mask is None:
+        if result.pose_landmarks is None or (self.masked and result.segmentation_mask is None):
             return None
         h, w = frame.shape[:2]
         image = np.array([(p.x * w - 0.5, p.y * h - 0.5, p.visibility) for p in result.pose_landmarks.landmark])
@@ -80,7 +81,7 @@ class Model:
         joints2d, confidence = to_joints(image[:, :2], image[:, 2])
         world16, _ = to_joints(world, image[:, 2])
         return PersonView(
-            np.asarray(result.segmentation_mask, np.float32),
+            np.asarray(result.segmentation_mask, np.float32) if self.masked else None,
             Landmarks(joints2d, confidence, world16 - world16[JOINT_INDEX["pelvis"]]),
         )
 

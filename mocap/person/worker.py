@@ -15,24 +15,29 @@ import sys
 import threading
 from collections import deque
 from collections.abc import Iterable, Iterator
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from mocap.errors import MocapError
+from mocap.person import PersonView, instance
 
 AHEAD = 2  # frames sent before the first view is awaited: enough to keep the model busy
 PIPE_BYTES = 1 << 20  # Linux's default most for a pipe's buffer: a 640x480 frame, or its answer
 
 
 class Apart:
-    """The person model ``name``, the ``Model`` class of ``module`` opened with ``filtered`` in a child process
-    (mocap.person.PersonModel; its views are mocap.person.PersonView)."""
+    """The person model ``name``, the ``Model`` class of ``module`` opened with ``filtered`` (looking at mirror
+    images: ``mirror``, mocap.person.instance) in a child process (mocap.person.PersonModel; its views are
+    mocap.person.PersonView)."""
 
-    def __init__(self, name: str, module: str, filtered: bool):
+    with_mirror = False
+
+    def __init__(self, name: str, module: str, filtered: bool, mirror: bool = False):
         self.name, self.filtered = name, filtered
         self._child = subprocess.Popen(
-            [sys.executable, "-m", __name__, name, module, str(int(filtered))],
+            [sys.executable, "-m", __name__, name, module, str(int(filtered)), str(int(mirror))],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)},  # the modules seen here
@@ -96,7 +101,7 @@ class Apart:
             raise self._stopped() from None
         if isinstance(answer, MocapError):
             raise answer
-        return answer
+        return unpacked(answer)
 
     def _stopped(self) -> MocapError:
         return MocapError(f"the person model {self.name!r} stopped (its process ended)")
@@ -111,23 +116,36 @@ def _widen(pipe) -> None:
         fcntl.fcntl(pipe.fileno(), fcntl.F_SETPIPE_SZ, PIPE_BYTES)
 
 
-def serve(name: str, module: str, filtered: bool) -> None:
+def packed(view: PersonView | None) -> PersonView | None:
+    """A view with its mask's probabilities in bytes (levels of 1/255) for the pipe: a quarter of its float32."""
+    if view is None or view.mask is None:
+        return view
+    return replace(view, mask=np.round(view.mask * 255).astype(np.uint8))
+
+
+def unpacked(view: PersonView | None) -> PersonView | None:
+    """A ``packed`` view with its mask in float32 probabilities again."""
+    if view is None or view.mask is None:
+        return view
+    return replace(view, mask=view.mask.astype(np.float32) / 255)
+
+
+def serve(name: str, module: str, filtered: bool, mirror: bool) -> None:
     """The child: open the model, then answer every frame read from standard input with its view on standard
     output, until the input ends; a failure is answered with a MocapError."""
-    import importlib
 
     inbox, outbox = sys.stdin.buffer, os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)  # what else writes to standard output, Python or native, goes to standard error, not the answers
     sys.stdout = sys.stderr
     try:
-        model = importlib.import_module(module).Model(filtered)
+        model = instance(module, filtered, mirror)
     except Exception as error:
         said = f"the person model {name!r} does not load: {error}"
         _answer(outbox, error if isinstance(error, MocapError) else MocapError(said))
         return
     try:
         while True:
-            _answer(outbox, model.observe(pickle.load(inbox)))
+            _answer(outbox, packed(model.observe(pickle.load(inbox))))
     except (EOFError, BrokenPipeError):
         pass
     except Exception as error:  # the parent says it in one line
@@ -143,4 +161,4 @@ def _answer(outbox, answer) -> None:
 
 if __name__ == "__main__":
     with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C reaches the whole process group: the parent says it
-        serve(sys.argv[1], sys.argv[2], bool(int(sys.argv[3])))
+        serve(sys.argv[1], sys.argv[2], *(bool(int(flag)) for flag in sys.argv[3:5]))

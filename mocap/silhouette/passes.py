@@ -104,7 +104,9 @@ def iter_silhouettes(
     background = background or clip_background(info, scale)
     seen = watched(person, (frame for _, frame in iter_frames(info, scale=scale)))
     if person is not None:
-        seen = steadied(seen, info.fps, lambda: open_person_model(person.name, person.filtered))
+        seen = steadied(
+            seen, info.fps, lambda: open_person_model(person.name, person.filtered, with_mirror=person.with_mirror)
+        )
     for frame, view in seen:
         classical = extract_silhouette(frame, background)
         fused = None if view is None else fused_mask(classical, view.mask, background.held)

@@ -1,0 +1,116 @@
+"""A person model that looks at each frame twice, as it comes and mirrored left to right, and answers the mean of
+the two views (test-time flip augmentation, as pose estimators are commonly evaluated): a learned model's errors
+are partly those of the side it faces, and the two views' errors partly cancel. The frame's own view decides
+whether anybody is there and how the limbs are named: a body found only in the mirror image is one the model
+is unsure of (seen in profile it names the sides either way from frame to frame)."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterable, Iterator
+
+import numpy as np
+
+from mocap.body import JOINTS
+from mocap.person import Landmarks, PersonModel, PersonView, watched
+
+# each joint's index in the mirror image's naming: left and right swapped
+SIDES_SWAPPED = [
+    JOINTS.index(j[:-1] + {"l": "r", "r": "l"}[j[-1]]) if j[-2:] in ("_l", "_r") else i for i, j in enumerate(JOINTS)
+]
+
+LIMB_PAIRS = [
+    [JOINTS.index(f"{part}_{side}") for part in parts for side in "lr"]
+    for parts in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle"))
+]
+
+EVEN = 1e-3  # added to both confidences of a joint: two that are both about 0 weigh alike
+
+
+class WithMirror:
+    """``straight`` fed the frames as they come, ``mirror`` (a MirrorImage of a second instance of the same model)
+    fed them too; one PersonModel whose view is the two's mean (``merged``)."""
+
+    with_mirror = True
+
+    def __init__(self, straight: PersonModel, mirror: PersonModel):
+        self.straight, self.mirror = straight, mirror
+        self.name, self.filtered = straight.name, straight.filtered
+
+    def observe(self, frame: np.ndarray) -> PersonView | None:
+        """The mean view of the frame and of its mirror image, None where the frame's own shows nobody."""
+        return merged(self.straight.observe(frame), self.mirror.observe(frame))
+
+    def watch(self, frames: Iterable[np.ndarray]) -> Iterator[tuple[np.ndarray, PersonView | None]]:
+        """Each frame with its merged view, both models sent frames ahead (``watched``): in processes of their own,
+        they look at the same frame at once."""
+        as_come, again = itertools.tee(frames)
+        for (frame, view), (_, mirrored) in zip(watched(self.straight, as_come), watched(self.mirror, again)):
+            yield frame, merged(view, mirrored)
+
+    def close(self) -> None:
+        self.straight.close()
+        self.mirror.close()
+
+
+class MirrorImage:
+    """A person model fed each frame's mirror image, its views turned back to the frame's (``unmirrored``)."""
+
+    with_mirror = False
+
+    def __init__(self, model: PersonModel):
+        self.model = model
+        self.name, self.filtered = model.name, model.filtered
+
+    def observe(self, frame: np.ndarray) -> PersonView | None:
+        return unmirrored(self.model.observe(frame[:, ::-1]), frame.shape[1])
+
+    def close(self) -> None:
+        self.model.close()
+
+
+def unmirrored(view: PersonView | None, width: int) -> PersonView | None:
+    """A view of a mirrored frame ``width`` pixels wide turned back: mask and x mirrored, sides renamed."""
+    if view is None:
+        return None
+    marks = view.landmarks
+    joints2d = marks.joints2d[SIDES_SWAPPED].copy()
+    joints2d[:, 0] = width - 1 - joints2d[:, 0]
+    world = marks.world[SIDES_SWAPPED] * np.array([-1.0, 1.0, 1.0])
+    return PersonView(
+        None if view.mask is None else view.mask[:, ::-1], Landmarks(joints2d, marks.confidence[SIDES_SWAPPED], world)
+    )
+
+
+def merged(one: PersonView | None, other: PersonView | None) -> PersonView | None:
+    """The mean of the frame's own view (``one``) and its mirror image's (``other``): each joint's 2D and world
+    weighted by the two's confidences, the confidences averaged, the mask ``one``'s; ``one`` as it is where
+    ``other`` is None, None where it is. Where the two name a limb pair's sides the other way round
+    (``crossed_joints``), ``one``'s naming holds: the 2D means are taken with ``other``'s sides swapped to it,
+    and that limb pair's world and confidences are ``one``'s (a depth read as from the other side is no mean's
+    part)."""
+    if one is None or other is None:
+        return one
+    a, b = one.landmarks, other.landmarks
+    crossed = crossed_joints(a.joints2d, b.joints2d)
+    order = np.where(crossed, SIDES_SWAPPED, np.arange(len(JOINTS)))
+    b_conf = b.confidence[order]
+    share = (b_conf + EVEN) / (a.confidence + b_conf + 2 * EVEN)  # the mirror image's, by confidence
+    depth_share = np.where(crossed, 0.0, share)
+    marks = Landmarks(
+        a.joints2d + share[:, None] * (b.joints2d[order] - a.joints2d),
+        np.where(crossed, a.confidence, (a.confidence + b_conf) / 2),
+        a.world + depth_share[:, None] * (b.world[order] - a.world),
+    )
+    return PersonView(one.mask, marks)
+
+
+def crossed_joints(one: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """(16,) bool: the joints of each limb pair (arms, legs) that two 2D readings (16, 2) place with the sides
+    swapped: the pair lies nearer the other reading's with left and right exchanged than as named."""
+    crossed = np.zeros(len(JOINTS), bool)
+    for limbs in LIMB_PAIRS:
+        as_named = np.linalg.norm(one[limbs] - other[limbs], axis=1).sum()
+        exchanged = np.linalg.norm(one[limbs] - other[[SIDES_SWAPPED[j] for j in limbs]], axis=1).sum()
+        crossed[limbs] = exchanged < as_named
+    return crossed
