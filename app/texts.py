@@ -58,7 +58,8 @@ STAGE_HELP = (
 
 
 EYES_HELP = (
-    "**Learned eyes**: a person model (MediaPipe Pose) looks at each frame too. Where "
+    "**Learned eyes**: a person model (MediaPipe Pose) looks at each frame too, and at "
+    "its mirror image (its joints are the mean of the two). Where "
     "it sees the performer, its mask is the silhouette, edged by the difference from the "
     "empty stage (teal on the silhouette panel: where only it saw the body, e.g. a part "
     "that never moved), and its joints (magenta dots) guide the fit. Off: the difference "

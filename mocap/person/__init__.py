@@ -7,55 +7,19 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Protocol
-
-import numpy as np
 
 from mocap.errors import MocapError
-from mocap.io.video import rescaled
+from mocap.person.opening import instance
+from mocap.person.views import Landmarks as Landmarks
+from mocap.person.views import PersonModel
+from mocap.person.views import PersonView as PersonView
+from mocap.person.views import watched as watched
 
 DEFAULT_MODEL = "mediapipe"
 NONE = "none"  # the paper's classical path: no person model
 SURE = 0.5  # a landmark confidence from which it is taken as seen
-
-
-@dataclass(frozen=True)
-class Landmarks:
-    """A person model's 16 contract joints on one frame, sides anatomical: ``joints2d`` (16, 2) pixels of the
-    frame given; ``confidence`` (16,) in [0, 1], that the joint is where it says (visible or not); ``world`` (16,
-    3) metres, pelvis at the origin, x image-right, y up, z toward the camera (CONTRACT.md's 3D)."""
-
-    joints2d: np.ndarray
-    confidence: np.ndarray
-    world: np.ndarray
-
-    def scaled(self, factor: float) -> "Landmarks":
-        """The same landmarks with the 2D in pixels of a frame ``factor`` times as large."""
-        return Landmarks(rescaled(self.joints2d, factor), self.confidence, self.world)
-
-
-@dataclass(frozen=True)
-class PersonView:
-    """What a person model sees on a frame: ``mask`` (H, W) float32 performer probabilities (None from a model
-    opened unmasked), ``landmarks``."""
-
-    mask: np.ndarray | None
-    landmarks: Landmarks
-
-
-class PersonModel(Protocol):
-    """A person model over one video: ``observe`` each BGR uint8 frame in order (None: nobody seen); ``filtered``
-    and ``with_mirror`` as opened (``open_person_model``)."""
-
-    name: str
-    filtered: bool
-    with_mirror: bool
-
-    def observe(self, frame: np.ndarray) -> PersonView | None: ...
-
-    def close(self) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -108,19 +72,6 @@ def _instance(name: str, filtered: bool, apart: bool, mirror: bool) -> PersonMod
     return instance(MODELS[name].module, filtered, mirror)
 
 
-def instance(module: str, filtered: bool, mirror: bool) -> PersonModel:
-    """The ``Model`` of ``module`` opened ``filtered`` here; ``mirror``: unmasked (the frame's own view gives the
-    mask) and fed mirror images (person.mirrored.MirrorImage)."""
-    import importlib
-
-    model = importlib.import_module(module).Model(filtered, masked=not mirror)
-    if not mirror:
-        return model
-    from mocap.person.mirrored import MirrorImage
-
-    return MirrorImage(model)
-
-
 @contextlib.contextmanager
 def opened_model(
     name: str, filtered: bool = True, apart: bool = False, with_mirror: bool = False
@@ -132,17 +83,6 @@ def opened_model(
     finally:
         if model is not None:
             model.close()
-
-
-def watched(model: PersonModel | None, frames: Iterable[np.ndarray]) -> Iterator[tuple[np.ndarray, PersonView | None]]:
-    """Each frame with the ``model``'s view of it (None: nobody, or no model); a model that can look ahead
-    (``watch``) is sent frames before their views are awaited."""
-    if model is None:
-        yield from ((frame, None) for frame in frames)
-    elif hasattr(model, "watch"):
-        yield from model.watch(frames)
-    else:
-        yield from ((frame, model.observe(frame)) for frame in frames)
 
 
 def available(name: str = DEFAULT_MODEL) -> bool:

@@ -12,7 +12,7 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from mocap.body import JOINTS
-from mocap.person import Landmarks, PersonModel, PersonView, watched
+from mocap.person.views import Landmarks, PersonModel, PersonView, watched
 
 # each joint's index in the mirror image's naming: left and right swapped
 SIDES_SWAPPED = [

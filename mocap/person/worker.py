@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 
 from mocap.errors import MocapError
-from mocap.person import PersonView, instance
+from mocap.person.opening import instance
+from mocap.person.views import PersonView
 
 AHEAD = 2  # frames sent before the first view is awaited: enough to keep the model busy
 PIPE_BYTES = 1 << 20  # Linux's default most for a pipe's buffer: a 640x480 frame, or its answer
