@@ -121,7 +121,8 @@ def open_session(
     notes = notes or Annotations()
     if takes_tracking(method, notes):
         return TrackSession(info, tracked(info, notes, progress, person), notes, smooth)
-    # the model in its own process, loading while the background is read; unfiltered: the lift smooths both ways
+    # the model (two instances: the frame's and its mirror image's) in processes of their own, loading while the
+    # background is read; unfiltered: the lift smooths both ways
     with opened_model(person, filtered=False, apart=True, with_mirror=True) as model:
         scene = clip_background(info, processing_scale(info), background)
         silhouettes, fits = silhouette_passes(info, progress, scene, model)

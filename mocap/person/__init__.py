@@ -1,6 +1,7 @@
 """Learned eyes: a person model that sees the performer's mask, 2D joints and 3D joints on each frame, for the
 silhouette method's fit and lift. ``PersonModel`` is the interface, ``MODELS`` the registry by name
-(``open_person_model``); another model is a module with a ``Model`` class and a line in ``MODELS``."""
+(``open_person_model``); another model is a module with a ``Model(filtered, masked)`` class and a line in
+``MODELS``."""
 
 from __future__ import annotations
 

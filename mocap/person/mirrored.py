@@ -63,6 +63,7 @@ class MirrorImage:
         self.name, self.filtered = model.name, model.filtered
 
     def observe(self, frame: np.ndarray) -> PersonView | None:
+        """The model's view of the frame's mirror image, in the frame's pixels and anatomical sides."""
         return unmirrored(self.model.observe(frame[:, ::-1]), frame.shape[1])
 
     def close(self) -> None:
@@ -85,7 +86,7 @@ def unmirrored(view: PersonView | None, width: int) -> PersonView | None:
 def merged(one: PersonView | None, other: PersonView | None) -> PersonView | None:
     """The mean of the frame's own view (``one``) and its mirror image's (``other``): each joint's 2D and world
     weighted by the two's confidences, the confidences averaged, the mask ``one``'s; ``one`` as it is where
-    ``other`` is None, None where it is. Where the two name a limb pair's sides the other way round
+    ``other`` is None, None where ``one`` is. Where the two name a limb pair's sides the other way round
     (``crossed_joints``), ``one``'s naming holds: the 2D means are taken with ``other``'s sides swapped to it,
     and that limb pair's world and confidences are ``one``'s (a depth read as from the other side is no mean's
     part)."""

@@ -30,7 +30,7 @@ PIPE_BYTES = 1 << 20  # Linux's default most for a pipe's buffer: a 640x480 fram
 
 class Apart:
     """The person model ``name``, the ``Model`` class of ``module`` opened with ``filtered`` (looking at mirror
-    images: ``mirror``, mocap.person.instance) in a child process (mocap.person.PersonModel; its views are
+    images: ``mirror``, mocap.person.opening.instance) in a child process (mocap.person.PersonModel; its views are
     mocap.person.PersonView)."""
 
     with_mirror = False
@@ -134,7 +134,6 @@ def unpacked(view: PersonView | None) -> PersonView | None:
 def serve(name: str, module: str, filtered: bool, mirror: bool) -> None:
     """The child: open the model, then answer every frame read from standard input with its view on standard
     output, until the input ends; a failure is answered with a MocapError."""
-
     inbox, outbox = sys.stdin.buffer, os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)  # what else writes to standard output, Python or native, goes to standard error, not the answers
     sys.stdout = sys.stderr
