@@ -14,11 +14,12 @@ from helpers import SHARED_DATA
 from mocap.body import JOINT_INDEX, JOINTS, SEGMENT_INDEX
 from mocap.io.video import open_video
 from mocap.pipeline import silhouette_passes
-from mocap.silhouette.arms import elbow_bends_back, two_link_angles
+from mocap.silhouette.arms import ARM_GRID, arm_candidates, elbow_bends_back, two_link_angles
 from mocap.silhouette.contour import find_angle, find_elbow_corner, lower_legs_cross
+from mocap.silhouette.eyes import Targets
 from mocap.silhouette.fit2d import FIT_SCALE, Fit2D, fit_frame
 from mocap.silhouette.legchain import LegChain
-from mocap.silhouette.legs import ends_in_foot, raised_leg
+from mocap.silhouette.legs import ends_in_foot, legs_marked, raised_leg
 from mocap.silhouette.model2d import Pose2D, default_angles, forward_kinematics_2d
 from mocap.silhouette.raster import Canvas, draw_model, similarity, similarity_from_counts, sweep_scorer
 from mocap.silhouette.search import coarse_to_fine
@@ -103,6 +104,31 @@ def test_fit_recovers_the_model_from_its_own_mask():
     err = np.linalg.norm(fit.joints - forward_kinematics_2d(truth), axis=1) / (175 * FIT_SCALE)
     assert np.median(err) < 0.02, dict(zip(JOINTS, err.round(3)))
     assert fit.score > 0.8
+
+
+def test_sure_landmarks_stand_in_for_the_arm_grid_and_the_leg_refits():
+    """Where a person model marks an arm surely, its landmarks' arm is a first guess and the grid of arms all
+    around the shoulder is not tried, nor each leg refitted beside the other where both legs are marked; the
+    model's own mask with its joints as landmarks is then fitted as closely as without them. An arm marked
+    unsurely keeps the grid."""
+    angle = default_angles()
+    for name, a in (("torso", 95), ("upper_arm_l", 240), ("lower_arm_l", 200), ("upper_arm_r", 300)):
+        angle[SEGMENT_INDEX[name]] = a
+    truth = Pose2D(pelvis=np.array([100.0, 80.0]), scale=FIT_SCALE, angle=angle, spread=0.8)
+    joints, sil = forward_kinematics_2d(truth), draw_model(truth, (160, 200)) * 255
+    marked = Canvas(sil, targets=Targets(joints, np.ones(16)))
+    marked.by_edges = True
+    guesses = arm_candidates(marked, truth, "l", None)
+    assert len(guesses) < len(ARM_GRID)
+    upper, lower = guesses[-1][:2]
+    assert (upper % 360, lower % 360) == (pytest.approx(240, abs=0.5), pytest.approx(200, abs=0.5))
+    assert legs_marked(marked)
+    unsure = Canvas(sil, targets=Targets(joints, np.where(np.arange(16) == JOINT_INDEX["wrist_l"], 0.3, 1.0)))
+    unsure.by_edges = True
+    assert len(arm_candidates(unsure, truth, "l", None)) > len(ARM_GRID)
+    fit = fit_frame(sil, FIT_SCALE, targets=Targets(joints, np.ones(16)))
+    err = np.linalg.norm(fit.joints - joints, axis=1) / (175 * FIT_SCALE)
+    assert np.median(err) < 0.02 and err.max() < 0.05, dict(zip(JOINTS, err.round(3)))
 
 
 def kicking_pose(thigh: float, shin: float, spread: float) -> Pose2D:

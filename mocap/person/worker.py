@@ -68,16 +68,14 @@ class Apart:
             yield sent.popleft(), self._receive()
 
     def close(self) -> None:
-        """Its pipes closed (it reads the end of its input, or cannot write an answer left unread) and it ended."""
+        """Its pipes closed (it reads the end of its input, or cannot write an answer left unread), and it is
+        awaited by a thread of its own: the model's ending takes its process a sixth of a second that the caller
+        need not wait."""
         self._outbox.put(None)
         with contextlib.suppress(OSError):
             self._child.stdout.close()
         self._writer.join(timeout=5.0)
-        try:
-            self._child.wait(timeout=5.0)
-        except subprocess.TimeoutExpired:
-            self._child.kill()
-            self._child.wait()
+        threading.Thread(target=_ended, args=(self._child,), name=f"person-{self.name}-end", daemon=True).start()
 
     def _send(self, frame: np.ndarray) -> None:
         self._outbox.put(np.ascontiguousarray(frame))
@@ -106,6 +104,15 @@ class Apart:
 
     def _stopped(self) -> MocapError:
         return MocapError(f"the person model {self.name!r} stopped (its process ended)")
+
+
+def _ended(child: subprocess.Popen) -> None:
+    """The child awaited, and killed if it has not ended within 5 seconds of its input's end."""
+    try:
+        child.wait(timeout=5.0)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        child.wait()
 
 
 def _widen(pipe) -> None:

@@ -10,10 +10,11 @@ from dataclasses import replace
 import numpy as np
 
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, WIDTH, knee_bend, limb
+from mocap.person import SURE
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
 from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d, image_angle
 from mocap.silhouette.raster import HAND_LENGTH, Canvas, draw_model, pose_quads, posed_quads, sweep_scorer
-from mocap.silhouette.search import Knob, refine_limb, search_angle, span
+from mocap.silhouette.search import RATIO_RANGE, Knob, refine_limb, search_angle, span
 
 ARM = {side: limb("arm", side).segments for side in SIDES}
 GUESS_RATIOS = (1.0, 0.8)
@@ -74,8 +75,26 @@ def arm_candidates(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None,
             angles += more
             guesses.append(straight)
     guesses += [(a, (r, r)) for a in angles for r in GUESS_RATIOS]
+    marked = landmark_guess(canvas, side, pose.scale)
+    if marked is not None:
+        guesses.append(marked)
     guesses = np.array([(*a, *r) for a, r in guesses])
-    return np.concatenate([guesses, _GRID_GUESSES]) if canvas.by_edges else guesses
+    return np.concatenate([guesses, _GRID_GUESSES]) if canvas.by_edges and marked is None else guesses
+
+
+def landmark_guess(canvas: Canvas, side: str, scale: float):
+    """The arm as a person model's sure landmarks draw it, ((upper, lower) angles, ratios), or None: the image-side
+    shoulder, elbow and wrist targets each at least SURE."""
+    targets = canvas.targets
+    if targets is None:
+        return None
+    shoulder, elbow, wrist = (JOINT_INDEX[f"{j}_{side}"] for j in ("shoulder", "elbow", "wrist"))
+    if targets.weight[[shoulder, elbow, wrist]].min() < SURE:
+        return None
+    upper, lower = (targets.points[b] - targets.points[a] for a, b in ((shoulder, elbow), (elbow, wrist)))
+    lengths = (LENGTH[SEGMENT_INDEX[s]] * scale for s in ARM[side])
+    ratios = tuple(min(float(np.hypot(*v)) / n, RATIO_RANGE[1]) for v, n in zip((upper, lower), lengths))
+    return (image_angle(upper), image_angle(lower)), ratios
 
 
 def _curve_guesses(points: np.ndarray, shoulder: np.ndarray, default: tuple[float, float], reach: tuple[float, float]):

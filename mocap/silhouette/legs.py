@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from mocap.body import FOOT_LENGTH, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, limb
+from mocap.person import SURE
 from mocap.silhouette.contour import find_angle, lower_leg_band, lower_leg_curves, lower_legs_cross
 from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d, image_angle
 from mocap.silhouette.raster import Canvas, pose_quads, poses_quads, sweep_scorer
@@ -115,12 +116,23 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
     reading = lower_leg_curves(canvas.sil, joints, pose.scale)
     raised = raised_knee_row(canvas.sil, joints, pose.scale, reading[1])
     first = fit_legs(canvas, pose, prev, reading, raised)
-    poses = [first] + [refit_leg_beside(canvas, first, side, prev, raised) for side in SIDES]
+    poses = [first]
+    if not legs_marked(canvas):
+        poses += [refit_leg_beside(canvas, first, side, prev, raised) for side in SIDES]
     if pose.spread < UNCROSS_SPREAD:
         poses += [_exchange_legs(p) for p in poses]
     poses = _distinct(poses)
     order = np.argsort(-leg_scores(canvas, poses), kind="stable")
     return [poses[i] for i in order]
+
+
+def legs_marked(canvas: Canvas) -> bool:
+    """Whether a person model's landmarks mark both legs (hips, knees and ankles each at least SURE)."""
+    marks = canvas.targets
+    return (
+        marks is not None
+        and marks.weight[[JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]].min() >= SURE
+    )
 
 
 def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, raised: float) -> Pose2D:
