@@ -12,6 +12,7 @@ from mocap import synth
 from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SEGMENT_JOINTS
 from mocap.io.bvh_reader import contract_joints, read_bvh
 from mocap.lift import taylor as lift
+from mocap.lift.cues import Cues, with_landmarks
 from mocap.lift.inputs import segment_lengths
 from mocap.synth.metrics import facing_error, pa_mpjpe
 from mocap.synth.walk import walk_cycle
@@ -221,3 +222,15 @@ def test_a_walk_seen_whole_as_its_mirror_image_is_put_right_by_the_heads_look(vi
     put_right = mirrored.unmirrored(fps, np.full(n, -1.0))
     assert np.allclose(put_right.joints2d, truth.joints2d)
     assert np.allclose(put_right.world, truth.joints3d)
+
+
+def test_a_leg_joint_the_person_models_two_looks_place_apart_is_the_fits():
+    """Where the person model's two looks (the frame's and its mirror image's) place a leg joint apart, the 2D is
+    the silhouette fit's joint there; a doubtful wrist keeps its landmark, and so does every joint not doubted."""
+    fit, marks = np.zeros((2, 16, 2)), np.ones((2, 16, 2))
+    doubtful = np.zeros((2, 16), bool)
+    doubtful[1, [JOINT_INDEX["knee_l"], JOINT_INDEX["wrist_r"]]] = True
+    cues = Cues(marks, np.ones((2, 16)), np.zeros((2, 16, 3)), doubtful)
+    joints = with_landmarks(fit, cues)
+    from_fit = np.all(joints == 0.0, axis=-1)
+    assert np.argwhere(from_fit).tolist() == [[1, JOINT_INDEX["knee_l"]]]

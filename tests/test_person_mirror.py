@@ -13,7 +13,7 @@ from helpers import DEV_CLIPS
 
 from mocap.body import JOINT_INDEX
 from mocap.person import Landmarks, PersonView, open_person_model, watched
-from mocap.person.mirrored import SIDES_SWAPPED, merged, unmirrored
+from mocap.person.mirrored import DOUBT, SIDES_SWAPPED, merged, unmirrored
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"
 RNG = np.random.default_rng(3)
@@ -59,6 +59,19 @@ def test_two_views_are_averaged_with_the_frames_own_naming():
         both.landmarks.world[arms], (own.landmarks.world[arms] + other.landmarks.world[arms]) / 2
     )
     assert both.mask is own.mask
+
+
+def test_joints_the_two_views_place_apart_are_doubtful():
+    """A joint the mirror image's view places more than DOUBT trunks (neck to pelvis) from the frame's own is
+    doubtful; joints the two place alike are not; a view looked at once doubts nothing."""
+    joints, sure = RNG.uniform(0, 64, (16, 2)), np.full(16, 0.8)
+    joints[JOINT_INDEX["pelvis"]] = joints[JOINT_INDEX["neck"]] + [0.0, 40.0]  # a 40-pixel trunk
+    other = joints.copy()
+    other[JOINT_INDEX["ankle_l"]] += [0.0, 1.5 * DOUBT * 40]
+    other[JOINT_INDEX["wrist_r"]] += [0.5 * DOUBT * 40, 0.0]
+    both = merged(view(joints, sure), view(other, sure)).landmarks
+    assert np.flatnonzero(both.doubtful).tolist() == [JOINT_INDEX["ankle_l"]]
+    assert view(joints).landmarks.doubtful is None
 
 
 def test_the_surer_view_weighs_more():

@@ -3,7 +3,7 @@ sides, yaw, signs, depths and 2D joints; the user's annotations still override t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
@@ -23,17 +23,20 @@ MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror imag
 LOOK_COST_S = 2 * MIRRORED_COST_S  # what a second of frames costs whose facing the head's look, sure, denies
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
+_LEG_JOINTS = [_J[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in "lr"]
 _LIMB_JOINTS = np.array([_J[n] for pairs in _LIMBS.values() for pair in pairs for n in pair])  # elbows to ankles
 
 
 @dataclass(frozen=True)
 class Cues:
     """A clip's landmarks: ``joints2d`` (F, 16, 2) pixels, anatomical sides, NaN where nobody was seen;
-    ``confidence`` (F, 16); ``world`` (F, 16, 3) metres, pelvis-centred, contract axes."""
+    ``confidence`` (F, 16); ``world`` (F, 16, 3) metres, pelvis-centred, contract axes; ``doubtful`` (F, 16)
+    joints the model's two looks placed apart (mocap.person.Landmarks; None: none)."""
 
     joints2d: np.ndarray
     confidence: np.ndarray
     world: np.ndarray
+    doubtful: np.ndarray | None = None
 
     @classmethod
     def of(cls, landmarks: list, fps: float, away: np.ndarray | None = None) -> "Cues | None":
@@ -44,11 +47,13 @@ class Cues:
             return None
         n = len(landmarks)
         joints, conf, world = np.full((n, 16, 2), np.nan), np.zeros((n, 16)), np.full((n, 16, 3), np.nan)
+        doubtful = np.zeros((n, 16), bool)
         for i, m in enumerate(landmarks):
             if m is not None:
                 joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
-        raw = cls(joints, conf, world).unmirrored(fps, away)
-        return cls(smoothed(raw.joints2d, fps), raw.confidence, smoothed(raw.world, fps))
+                doubtful[i] = False if m.doubtful is None else m.doubtful
+        raw = cls(joints, conf, world, doubtful).unmirrored(fps, away)
+        return replace(raw, joints2d=smoothed(raw.joints2d, fps), world=smoothed(raw.world, fps))
 
     def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
         """These cues less frames whose landmarks lie DISAGREE body heights (median, pairs either way)
@@ -58,10 +63,11 @@ class Cues:
         both = np.isfinite(distances).all(axis=1)
         off[both] = np.median(distances[both], axis=1) / body_px[both]
         wrong = ~(off <= DISAGREE)
-        return Cues(
-            np.where(wrong[:, None, None], np.nan, self.joints2d),
-            np.where(wrong[:, None], 0.0, self.confidence),
-            np.where(wrong[:, None, None], np.nan, self.world),
+        return replace(
+            self,
+            joints2d=np.where(wrong[:, None, None], np.nan, self.joints2d),
+            confidence=np.where(wrong[:, None], 0.0, self.confidence),
+            world=np.where(wrong[:, None, None], np.nan, self.world),
         )
 
     def unmirrored(self, fps: float, away: np.ndarray | None = None) -> "Cues":
@@ -100,9 +106,10 @@ class Cues:
         world = self.world.copy()
         world[mirrored] = world[mirrored][:, MIRROR_JOINTS] * np.array([1.0, 1.0, -1.0])
         joints, confidence = self.joints2d.copy(), self.confidence.copy()
-        joints[mirrored] = joints[mirrored][:, MIRROR_JOINTS]
-        confidence[mirrored] = confidence[mirrored][:, MIRROR_JOINTS]
-        return Cues(joints, confidence, world)
+        doubtful = np.zeros(confidence.shape, bool) if self.doubtful is None else self.doubtful.copy()
+        for named in (joints, confidence, doubtful):
+            named[mirrored] = named[mirrored][:, MIRROR_JOINTS]
+        return Cues(joints, confidence, world, doubtful)
 
     @property
     def seen(self) -> np.ndarray:
@@ -197,5 +204,10 @@ def world_depths(cues: Cues, lengths: np.ndarray) -> np.ndarray:
 
 def with_landmarks(joints: np.ndarray, cues: Cues) -> np.ndarray:
     """(F, 16, 2) anatomical joints: the landmarks where the model saw the body (a learned joint lies
-    nearer the truth than a cylinder's end), the fit's elsewhere."""
-    return np.where(np.isfinite(cues.joints2d) & np.isfinite(joints), cues.joints2d, joints)
+    nearer the truth than a cylinder's end) but leg joints its two looks placed apart (``doubtful``), the fit's
+    elsewhere: a leg ends the silhouette on the floor, and the fit's is the surer where the model hesitates (a
+    hand lost against the trunk is not, and its landmark stays)."""
+    taken = np.isfinite(cues.joints2d) & np.isfinite(joints)
+    if cues.doubtful is not None:
+        taken[:, _LEG_JOINTS] &= ~cues.doubtful[:, _LEG_JOINTS, None]
+    return np.where(taken, cues.joints2d, joints)

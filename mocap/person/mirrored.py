@@ -25,6 +25,8 @@ LIMB_PAIRS = [
 ]
 
 EVEN = 1e-3  # added to both confidences of a joint: two that are both about 0 weigh alike
+DOUBT = 0.2  # trunk lengths (neck to pelvis) the two views may place a joint apart before it is doubtful
+_NECK, _PELVIS = JOINTS.index("neck"), JOINTS.index("pelvis")
 
 
 class WithMirror:
@@ -102,8 +104,15 @@ def merged(one: PersonView | None, other: PersonView | None) -> PersonView | Non
         a.joints2d + share[:, None] * (b.joints2d[order] - a.joints2d),
         np.where(crossed, a.confidence, (a.confidence + b_conf) / 2),
         a.world + depth_share[:, None] * (b.world[order] - a.world),
+        apart(a.joints2d, b.joints2d[order]),
     )
     return PersonView(one.mask, marks)
+
+
+def apart(one: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """(16,) bool: the joints two 2D readings (16, 2, the same naming) place more than DOUBT trunks apart."""
+    trunk = max(float(np.hypot(*(one[_NECK] - one[_PELVIS]))), 1e-9)
+    return np.hypot(*(one - other).T) > DOUBT * trunk
 
 
 def crossed_joints(one: np.ndarray, other: np.ndarray) -> np.ndarray:
