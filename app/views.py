@@ -111,8 +111,7 @@ def silhouette_image(
     seen = silhouette is not None and silhouette.landmarks is not None
     if landmarks and seen:
         marks = silhouette.landmarks.scaled(factor)
-        sure = marks.confidence if marks.doubtful is None else np.where(marks.doubtful, 0.0, marks.confidence)
-        draw_landmarks(view, marks.joints2d, sure, max(2.0, view.shape[0] / 160))  # a doubtful joint: a ring
+        draw_landmarks(view, marks.joints2d, marks.confidence, max(2.0, view.shape[0] / 160))
     if joints2d is not None:
         mark_joints(view, overrides, scale)
     if eyes and silhouette is not None:
