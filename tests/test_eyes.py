@@ -9,7 +9,7 @@ import pytest
 
 from mocap.body import FOOT_LENGTH, JOINT_INDEX, LENGTH, SEGMENT_INDEX
 from mocap.person import Landmarks
-from mocap.silhouette.eyes import crowned, soled
+from mocap.silhouette.eyes import crowned, fit_targets, soled
 
 _HEAD_TOP, _NECK = JOINT_INDEX["head_top"], JOINT_INDEX["neck"]
 
@@ -82,3 +82,18 @@ def test_an_ankle_is_kept_where_the_silhouette_runs_on_below_it():
     mask[95:260, 80:121] = 255  # the legs go on out of the frame
     landmarks = standing_landmarks(190.0, 1.0)
     assert np.array_equal(soled(landmarks, mask).joints2d, landmarks.joints2d)
+
+
+def test_a_joint_the_two_looks_place_apart_does_not_draw_the_fit():
+    """The fit's searches are drawn to each landmark by its confidence, but not to one the person model's two
+    looks (the frame's and its mirror image's) place apart: the silhouette answers there."""
+    joints = np.column_stack([np.linspace(10, 160, 16), np.linspace(20, 180, 16)])
+    doubtful = np.zeros(16, bool)
+    doubtful[JOINT_INDEX["ankle_l"]] = True
+    marks = Landmarks(joints, np.full(16, 0.9), np.zeros((16, 3)), doubtful)
+    weight = fit_targets(marks, np.zeros(2), 1.0, 1.0, None).weight
+    assert weight[JOINT_INDEX["ankle_l"]] == 0.0 and weight[JOINT_INDEX["ankle_r"]] == pytest.approx(0.9)
+    assert (
+        fit_targets(Landmarks(joints, np.full(16, 0.9), np.zeros((16, 3))), np.zeros(2), 1.0, 1.0, None).weight.min()
+        > 0
+    )

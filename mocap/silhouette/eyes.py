@@ -118,11 +118,15 @@ class Targets:
 def fit_targets(
     landmarks: Landmarks | None, origin: np.ndarray, step: float, px_per_unit: float, prev: Pose2D | None
 ) -> Targets | None:
-    """A frame's landmarks in its normalised crop's pixels (``origin``, ``step``), image-sided, or None."""
+    """A frame's landmarks in its normalised crop's pixels (``origin``, ``step``), image-sided, or None; a joint
+    the model's two looks place apart (``Landmarks.doubtful``) weighs nothing: the fit answers there."""
     if landmarks is None:
         return None
     points = (landmarks.joints2d + 0.5 - origin) / step - 0.5
-    points, weight = image_sided(points, landmarks.confidence, prev, px_per_unit)
+    weight = (
+        landmarks.confidence if landmarks.doubtful is None else np.where(landmarks.doubtful, 0.0, landmarks.confidence)
+    )
+    points, weight = image_sided(points, weight, prev, px_per_unit)
     return Targets(model_joints(points, px_per_unit), weight)
 
 
