@@ -292,23 +292,6 @@ def test_doubts_name_segments_as_the_body_tab_does():
     )
 
 
-def test_a_frame_whose_joints_the_person_model_places_apart_is_worth_a_look(every_fit_doubtful, app, monkeypatch):
-    """Joints the person model's two looks (the frame and its mirror image) place apart are a reason to review
-    the frame, named as people say them."""
-    doubted = np.zeros(16, bool)
-    doubted[[JOINT_INDEX["knee_l"], JOINT_INDEX["wrist_r"]]] = True
-    assert review.looks_apart(doubted) == (
-        "the person model sees the right wrist, left knee apart in the frame and in its mirror image"
-    )
-    session = app.state._session
-    flagged = np.zeros((session.n_frames, 16), bool)
-    flagged[3, JOINT_INDEX["ankle_r"]] = True
-    monkeypatch.setattr(type(session), "doubted_joints", property(lambda _: flagged))
-    reasons = {d.frame: d.reasons for d in review_queue(session)}
-    assert review.looks_apart(flagged[3]) in reasons[3]
-    assert not any(review.looks_apart(flagged[3]) in r for f, r in reasons.items() if f != 3)
-
-
 def test_a_covering_review_stops_in_the_middle_of_every_stretch_worst_first():
     """Stretches of 6 frames (pins carry 3 to either side) over 20 frames: stops on
     3, 9, 15 and 19 (the short last stretch's last frame), the stretch of the most

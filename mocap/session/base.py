@@ -172,11 +172,6 @@ class Session(ABC):
         """(F,) each frame's silhouette confidence (the silhouette method's), or None."""
         return None
 
-    @property
-    def doubted_joints(self) -> np.ndarray | None:
-        """(F, 16) bool: joints the person model's two looks placed apart (the silhouette method's), or None."""
-        return None
-
     def sign_margins(self) -> np.ndarray | None:
         """(F, 10) how much the clip solve's cost rises with each sign the other way (the silhouette
         method's, mocap.lift.signpath.sign_margins), or None."""

@@ -4,8 +4,7 @@ Signs of doubt over a session's resolved 2D joints: a low score (S of Eq. 3, or 
 reliability), a segment seen end-on (its direction and Eq. 5 depth least sure), a foreshortening
 sign the clip solve found a close call (toward and away cost nearly alike, on a segment whose depth
 is at stake), a Table 1 joint limit broken, a likely left/right swap of hands or feet, a
-silhouette partly from a guessed background, joints the person model places apart in the frame and in its
-mirror image; the closer a frame's closest call, the higher it
+silhouette partly from a guessed background; the closer a frame's closest call, the higher it
 ranks. Lost tracking stretches come first (``lost_stretches``); the tracking method otherwise stops
 evenly (``covering``).
 """
@@ -20,13 +19,11 @@ from mocap.body import (
     ANGLE_LIMITS,
     BODY_HEIGHT,
     JOINT_INDEX,
-    JOINTS,
     LIMB_JOINTS,
     SEGMENT_INDEX,
     SEGMENT_JOINTS,
     SEGMENT_NAMES,
     segment_label,
-    sided_label,
 )
 from mocap.silhouette.masks import DOUBTFUL
 from mocap.track.loss import stretches
@@ -119,15 +116,11 @@ def review_queue(session) -> list[Doubt]:
     )
     guessed = session.silhouette_confidence
     guessed = np.zeros(len(scores), bool) if guessed is None else guessed < DOUBTFUL
-    doubted = session.doubted_joints
-    doubted = np.zeros((len(scores), len(JOINTS)), bool) if doubted is None else doubted
     queue = []
     for i in np.flatnonzero(np.isfinite(scores)):
-        reasons = (
-            _reasons(f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE, *(sign[i] for sign in signs))
-            + (GUESSED,) * bool(guessed[i])
-            + (looks_apart(doubted[i]),) * bool(doubted[i].any())
-        )
+        reasons = _reasons(
+            f"{session.score_name} {scores[i]:.2f}", scores[i] < LOW_SCORE, *(sign[i] for sign in signs)
+        ) + (GUESSED,) * bool(guessed[i])
         closest = 1.0 - margins[i][close[i]].min() / CLOSE_CALL if close[i].any() else 0.0
         if reasons:
             value = 1.0 - scores[i] + REASON_WEIGHT * (len(reasons) + closest)
@@ -136,13 +129,6 @@ def review_queue(session) -> list[Doubt]:
 
 
 GUESSED = "silhouette partly guessed (the performer never leaves those pixels: a clean plate helps)"
-
-
-def looks_apart(doubted: np.ndarray) -> str:
-    """The doubt of a frame whose ``doubted`` (16,) joints the person model placed apart in the frame and in its
-    mirror image (mocap.person.mirrored)."""
-    names = ", ".join(sided_label(JOINTS[j]) for j in np.flatnonzero(doubted))
-    return f"the person model sees the {names} apart in the frame and in its mirror image"
 
 
 def covering(queue: list[Doubt], n_frames: int, spacing: int) -> list[Doubt]:

@@ -116,12 +116,6 @@ class SilhouetteSession(Session):
         return silhouette_confidence(self.silhouettes, self.background)
 
     @property
-    def doubted_joints(self) -> np.ndarray | None:
-        """(F, 16) bool: joints the person model's two looks placed apart (lift.cues.Cues.doubtful), anatomical
-        sides; None without a person model's mirror image."""
-        return None if self.cues is None else self.cues.doubtful
-
-    @property
     def background_warning(self) -> str | None:
         """The clip's warning when the performer never leaves much of their silhouette."""
         confidence = self.silhouette_confidence
