@@ -19,6 +19,7 @@ SIDES_SWAPPED = [
     JOINTS.index(j[:-1] + {"l": "r", "r": "l"}[j[-1]]) if j[-2:] in ("_l", "_r") else i for i, j in enumerate(JOINTS)
 ]
 
+# the joints of each limb pair, the arms' then the legs', left and right in turn
 LIMB_PAIRS = [
     [JOINTS.index(f"{part}_{side}") for part in parts for side in "lr"]
     for parts in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle"))
@@ -91,7 +92,7 @@ def merged(one: PersonView | None, other: PersonView | None) -> PersonView | Non
     ``other`` is None, None where ``one`` is. Where the two name a limb pair's sides the other way round
     (``crossed_joints``), ``one``'s naming holds: the 2D means are taken with ``other``'s sides swapped to it,
     and that limb pair's world and confidences are ``one``'s (a depth read as from the other side is no mean's
-    part)."""
+    part). Joints the two place ``apart`` are ``doubtful``."""
     if one is None or other is None:
         return one
     a, b = one.landmarks, other.landmarks
