@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from helpers import DEV_CLIPS
 
-from mocap.body import JOINT_INDEX
+from mocap.body import JOINT_INDEX, MIRROR_JOINTS
 from mocap.person import Landmarks, PersonView, open_person_model, watched
-from mocap.person.mirrored import DOUBT, SIDES_SWAPPED, merged, unmirrored
+from mocap.person.mirrored import DOUBT, merged, unmirrored
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"
 RNG = np.random.default_rng(3)
@@ -48,7 +48,7 @@ def test_two_views_are_averaged_with_the_frames_own_naming():
     shifted = joints + 1.0
     legs = [JOINT_INDEX[f"{p}_{s}"] for p in ("hip", "knee", "ankle") for s in "lr"]
     crossed = shifted.copy()
-    crossed[legs] = shifted[[SIDES_SWAPPED[j] for j in legs]]
+    crossed[legs] = shifted[[MIRROR_JOINTS[j] for j in legs]]
     other = view(crossed, sure)
     both = merged(own, other)
     np.testing.assert_allclose(both.landmarks.joints2d, joints + 0.5)

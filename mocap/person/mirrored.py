@@ -11,23 +11,15 @@ from collections.abc import Iterable, Iterator
 
 import numpy as np
 
-from mocap.body import JOINTS
+from mocap.body import JOINT_INDEX, JOINTS, LIMB_JOINTS, MIRROR_JOINTS
 from mocap.person.views import Landmarks, PersonModel, PersonView, watched
 
-# each joint's index in the mirror image's naming: left and right swapped
-SIDES_SWAPPED = [
-    JOINTS.index(j[:-1] + {"l": "r", "r": "l"}[j[-1]]) if j[-2:] in ("_l", "_r") else i for i, j in enumerate(JOINTS)
-]
-
 # the joints of each limb pair, the arms' then the legs', left and right in turn
-LIMB_PAIRS = [
-    [JOINTS.index(f"{part}_{side}") for part in parts for side in "lr"]
-    for parts in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle"))
-]
+LIMB_PAIRS = [[JOINT_INDEX[f"{part}_{side}"] for part in parts for side in "lr"] for parts in LIMB_JOINTS.values()]
 
 EVEN = 1e-3  # added to both confidences of a joint: two that are both about 0 weigh alike
 DOUBT = 0.2  # trunk lengths (neck to pelvis) the two views may place a joint apart before it is doubtful
-_NECK, _PELVIS = JOINTS.index("neck"), JOINTS.index("pelvis")
+_NECK, _PELVIS = JOINT_INDEX["neck"], JOINT_INDEX["pelvis"]
 
 
 class WithMirror:
@@ -78,11 +70,11 @@ def unmirrored(view: PersonView | None, width: int) -> PersonView | None:
     if view is None:
         return None
     marks = view.landmarks
-    joints2d = marks.joints2d[SIDES_SWAPPED].copy()
+    joints2d = marks.joints2d[MIRROR_JOINTS].copy()
     joints2d[:, 0] = width - 1 - joints2d[:, 0]
-    world = marks.world[SIDES_SWAPPED] * np.array([-1.0, 1.0, 1.0])
+    world = marks.world[MIRROR_JOINTS] * np.array([-1.0, 1.0, 1.0])
     return PersonView(
-        None if view.mask is None else view.mask[:, ::-1], Landmarks(joints2d, marks.confidence[SIDES_SWAPPED], world)
+        None if view.mask is None else view.mask[:, ::-1], Landmarks(joints2d, marks.confidence[MIRROR_JOINTS], world)
     )
 
 
@@ -97,7 +89,7 @@ def merged(one: PersonView | None, other: PersonView | None) -> PersonView | Non
         return one
     a, b = one.landmarks, other.landmarks
     crossed = crossed_joints(a.joints2d, b.joints2d)
-    order = np.where(crossed, SIDES_SWAPPED, np.arange(len(JOINTS)))
+    order = np.where(crossed, MIRROR_JOINTS, np.arange(len(JOINTS)))
     b_conf = b.confidence[order]
     share = (b_conf + EVEN) / (a.confidence + b_conf + 2 * EVEN)  # the mirror image's, by confidence
     depth_share = np.where(crossed, 0.0, share)
@@ -122,6 +114,6 @@ def crossed_joints(one: np.ndarray, other: np.ndarray) -> np.ndarray:
     crossed = np.zeros(len(JOINTS), bool)
     for limbs in LIMB_PAIRS:
         as_named = np.linalg.norm(one[limbs] - other[limbs], axis=1).sum()
-        exchanged = np.linalg.norm(one[limbs] - other[[SIDES_SWAPPED[j] for j in limbs]], axis=1).sum()
+        exchanged = np.linalg.norm(one[limbs] - other[MIRROR_JOINTS[limbs]], axis=1).sum()
         crossed[limbs] = exchanged < as_named
     return crossed

@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, SEGMENT_INDEX, SIDES, WIDTH, knee_bend, limb
+from mocap.body import BODY_HEIGHT, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, WIDTH, knee_bend, limb
 from mocap.person import SURE
 from mocap.silhouette.contour import arm_curve, find_angle, find_elbow_corner
 from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d, image_angle
@@ -88,7 +88,7 @@ def landmark_guess(canvas: Canvas, side: str, scale: float):
     targets = canvas.targets
     if targets is None:
         return None
-    shoulder, elbow, wrist = (JOINT_INDEX[f"{j}_{side}"] for j in ("shoulder", "elbow", "wrist"))
+    shoulder, elbow, wrist = (JOINT_INDEX[f"{j}_{side}"] for j in LIMB_JOINTS["arm"])
     if targets.weight[[shoulder, elbow, wrist]].min() < SURE:
         return None
     upper, lower = (targets.points[b] - targets.points[a] for a, b in ((shoulder, elbow), (elbow, wrist)))

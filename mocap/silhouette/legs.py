@@ -33,6 +33,7 @@ ONE_LEG_SHARE = 0.5  # of Algorithm 2's rows with two runs or more, below which 
 FOOT_REACH = 1.5  # feet's lengths (FOOT_LENGTH) of silhouette past a raised ankle at most
 THIGH_MATCH = 0.75  # of the other thigh's length in the image, below which a raised "thigh" is not one
 DISTINCT_PX = 1.0  # leg hypotheses whose joints all lie this close are one
+LEG_JOINTS = [JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]  # hips, knees, ankles
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised: float) -> Pose2D:
@@ -129,10 +130,7 @@ def leg_hypotheses(canvas: Canvas, pose: Pose2D, prev: Pose2D | None) -> list[Po
 def legs_marked(canvas: Canvas) -> bool:
     """Whether a person model's landmarks mark both legs (hips, knees and ankles each at least SURE)."""
     marks = canvas.targets
-    return (
-        marks is not None
-        and marks.weight[[JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]].min() >= SURE
-    )
+    return marks is not None and marks.weight[LEG_JOINTS].min() >= SURE
 
 
 def refit_leg_beside(canvas: Canvas, pose: Pose2D, side: str, prev: Pose2D | None, raised: float) -> Pose2D:
@@ -155,10 +153,9 @@ def leg_scores(canvas: Canvas, poses: list[Pose2D]) -> np.ndarray:
 
 def _distinct(poses: list[Pose2D]) -> list[Pose2D]:
     """The poses less those whose leg joints all lie within DISTINCT_PX of an earlier one's."""
-    legs = [JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]
     out, seen = [], []
     for pose in poses:
-        joints = forward_kinematics_2d(pose)[legs]
+        joints = forward_kinematics_2d(pose)[LEG_JOINTS]
         if all(np.abs(joints - other).max() > DISTINCT_PX for other in seen):
             out.append(pose)
             seen.append(joints)
