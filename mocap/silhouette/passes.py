@@ -13,7 +13,8 @@ import numpy as np
 from mocap.body import BODY_HEIGHT, JOINTS, STANDING_PERCENTILE, reported_joints
 from mocap.image.percentile import nanpercentile, percentile
 from mocap.io.video import VideoInfo, iter_frames
-from mocap.person import Landmarks, PersonModel, open_person_model, watched
+from mocap.person import Landmarks, PersonModel, PersonView, open_person_model, watched
+from mocap.person.isolated import IsolatedLook
 from mocap.person.steady import steadied
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.eyes import centred_on, crowned, fit_targets, fused_mask, soled
@@ -103,18 +104,35 @@ def iter_silhouettes(
     ``eyes.soled``)."""
     background = background or clip_background(info, scale)
     seen = watched(person, (frame for _, frame in iter_frames(info, scale=scale)))
-    if person is not None:
-        seen = steadied(
-            seen, info.fps, lambda: open_person_model(person.name, person.filtered, with_mirror=person.with_mirror)
-        )
-    for frame, view in seen:
-        classical = extract_silhouette(frame, background)
-        fused = None if view is None else fused_mask(classical, view.mask, background.held)
-        if fused is None:
-            yield Silhouette.from_mask(classical, frame)
-            continue
+    fresh = (
+        None
+        if person is None
+        else lambda: open_person_model(person.name, person.filtered, with_mirror=person.with_mirror)
+    )
+    if fresh is not None:
+        seen = steadied(seen, info.fps, fresh)
+    second = IsolatedLook(fresh)
+    try:
+        for frame, view in seen:
+            yield silhouette_seen(frame, view, background, second)
+    finally:
+        second.close()
+
+
+def silhouette_seen(
+    frame: np.ndarray, view: PersonView | None, background: Background, second: IsolatedLook
+) -> Silhouette | None:
+    """A frame's Silhouette: background subtraction's, fused with the person model's ``view`` of the frame, or
+    where it saw nobody with its ``second`` look at the figure background subtraction found (person.isolated)."""
+    classical = extract_silhouette(frame, background)
+    fused = None if view is None else fused_mask(classical, view.mask, background.held)
+    if fused is not None:
         mask, learned = fused
-        yield Silhouette.from_mask(mask, frame, soled(crowned(view.landmarks, mask), mask), learned)
+        return Silhouette.from_mask(mask, frame, soled(crowned(view.landmarks, mask), mask), learned)
+    named = second.landmarks(frame, classical) if second.able and holds_person(classical) else None
+    if named is None:
+        return Silhouette.from_mask(classical, frame)
+    return Silhouette.from_mask(classical, frame, soled(crowned(named, classical), classical))
 
 
 def body_heights(silhouettes: list[Silhouette | None], fps: float) -> np.ndarray:

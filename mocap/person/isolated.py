@@ -1,0 +1,71 @@
+"""A second look at a performer the person model does not find on the whole frame: the silhouette's box cut out
+and the scene around the silhouette greyed, so that the model sees one figure on a plain ground. A
+learned model misses a small figure or one over a busy scene (a body bent over among a photo's shapes); the
+silhouette method's background subtraction finds it there, and the model then names its joints."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from mocap.person.views import Landmarks, PersonModel
+
+SIDE = 256  # pixels of the square the figure is shown in
+REACH = 2.0  # the square's side in the silhouette box's longer sides: the figure with room around it
+GREY = 128  # the level the scene is greyed to
+
+
+class IsolatedLook:
+    """A person model (opened by ``opening`` when first needed; None: no model, no look) that is shown isolated
+    figures (``view``)."""
+
+    def __init__(self, opening: Callable[[], PersonModel] | None):
+        self._opening = opening
+        self._model: PersonModel | None = None
+
+    @property
+    def able(self) -> bool:
+        return self._opening is not None
+
+    def landmarks(self, frame: np.ndarray, silhouette: np.ndarray) -> Landmarks | None:
+        """The model's landmarks of the figure the ``silhouette`` (uint8, nonzero inside) outlines in the BGR
+        ``frame``, in the frame's pixels; None where it finds nobody there or the silhouette is empty. (Its mask
+        of the figure is not asked for: the silhouette is the figure's outline.)"""
+        placing = placed(silhouette)
+        if placing is None:
+            return None
+        if self._model is None:
+            self._model = self._opening()
+        seen = self._model.observe(isolated(frame, silhouette, placing))
+        return None if seen is None else in_frame(seen.landmarks, placing)
+
+    def close(self) -> None:
+        if self._model is not None:
+            self._model.close()
+
+
+def placed(silhouette: np.ndarray) -> np.ndarray | None:
+    """(2, 3) the affine map of frame pixels onto the SIDE square centred on the silhouette's box, REACH times
+    its longer side; None for an empty silhouette."""
+    x, y, w, h = cv2.boundingRect((silhouette > 0).astype(np.uint8))
+    if w == 0 or h == 0:
+        return None
+    scale = SIDE / (REACH * max(w, h))
+    centre = np.array([x + (w - 1) / 2, y + (h - 1) / 2])
+    return np.array([[scale, 0.0, SIDE / 2 - scale * centre[0]], [0.0, scale, SIDE / 2 - scale * centre[1]]])
+
+
+def isolated(frame: np.ndarray, silhouette: np.ndarray, placing: np.ndarray) -> np.ndarray:
+    """The SIDE square ``placing`` maps the frame onto, the scene outside the silhouette greyed. (Not even a band
+    of the scene around it: the model takes a rim of it for limbs.)"""
+    shown = np.where(silhouette[..., None] > 0, frame, np.uint8(GREY))
+    return cv2.warpAffine(shown, placing, (SIDE, SIDE), flags=cv2.INTER_LINEAR, borderValue=(GREY,) * 3)
+
+
+def in_frame(landmarks: Landmarks, placing: np.ndarray) -> Landmarks:
+    """Landmarks seen on the square ``placing`` made, in the frame's pixels."""
+    back = cv2.invertAffineTransform(placing)
+    return replace(landmarks, joints2d=landmarks.joints2d @ back[:, :2].T + back[:, 2])
