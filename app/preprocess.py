@@ -159,11 +159,13 @@ class Preprocessing:
         """The person model the silhouette method looks through ("none": the silhouettes alone)."""
         return self._person
 
-    def eyes_seen(self) -> tuple[int, int]:
-        """(frames where the person model saw somebody, frames whose silhouette is in)."""
+    def eyes_seen(self) -> tuple[int, int, int]:
+        """(frames where the person model saw somebody, those of them where only the figure cut out from the
+        scene, frames whose silhouette is in)."""
         with self._lock:
             done = self._silhouettes_done
-            return sum(s is not None and s.landmarks is not None for s in self._silhouettes[:done]), done
+            seen = [s for s in self._silhouettes[:done] if s is not None and s.landmarks is not None]
+            return len(seen), sum(s.cut_out for s in seen), done
 
     @property
     def background_warning(self) -> str | None:

@@ -62,8 +62,10 @@ EYES_HELP = (
     "its mirror image (its joints are the mean of the two). Where "
     "it sees the performer, its mask is the silhouette, edged by the difference from the "
     "empty stage (teal on the silhouette panel: where only it saw the body, e.g. a part "
-    "that never moved), and its joints (magenta dots) guide the fit. Off: the difference "
-    "from the empty stage alone, the paper's classical path."
+    "that never moved), and its joints (magenta dots) guide the fit. Where it sees nobody, "
+    "it is shown the figure the difference from the empty stage found, cut out on a plain "
+    "ground, and names its joints there. Off: the difference from the empty stage alone, "
+    "the paper's classical path."
 )
 PERSON_MODEL_NAMES = {"mediapipe": "MediaPipe"}  # a person model's name as the page says it
 
@@ -74,10 +76,12 @@ def eyes_text(state) -> str:
     name = state.person_model
     if name == NONE:
         return "Eyes: silhouettes only (the difference from the empty stage)."
-    seen, done = state.eyes_seen()
+    seen, cut_out, done = state.eyes_seen()
     text = f"Eyes: person model ({PERSON_MODEL_NAMES.get(name, name)}) + silhouettes"
     if done:
         text += f"; it saw the performer on {seen} of {done} frames"
+        if cut_out:
+            text += f" ({cut_out} of them only when shown the silhouette cut out)"
         if seen < done:
             text += f", the silhouettes alone answer the other {done - seen}"
     return text + "."

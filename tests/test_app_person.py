@@ -50,7 +50,7 @@ def app(tiny_video, tmp_path, monkeypatch):  # noqa: F811
 def seen_frame(state) -> int:
     """A frame whose silhouette the person model saw, with pixels only it gave."""
     for k, sil in enumerate(state._silhouettes):
-        if sil is not None and sil.landmarks is not None and sil.learned_mask().sum() > 40:
+        if sil is not None and sil.learned is not None and sil.learned_mask().sum() > 40:
             return k
     raise AssertionError("the person model added no pixels on any frame")
 
@@ -67,8 +67,9 @@ def test_the_switch_refits_with_and_without_the_person_model(app, monkeypatch):
     # by default: the person model, where it is installed
     assert state.person_model == state._fitted.person_model == "mediapipe"
     assert any(s is not None and s.landmarks is not None for s in state._silhouettes)
-    seen, done = state.eyes_seen()
+    seen, cut_out, done = state.eyes_seen()
     said = f"Eyes: person model (MediaPipe) + silhouettes; it saw the performer on {seen} of {done} frames"
+    assert (f"({cut_out} of them only when shown the silhouette cut out)" in c.status.content) == (cut_out > 0)
     assert said in c.status.content
     assert (f"the silhouettes alone answer the other {done - seen}." in c.status.content) == (seen < done)
     assert c.learned_eyes.value is True and c.learned_eyes.disabled is False

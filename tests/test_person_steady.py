@@ -1,5 +1,5 @@
 """A person model's sight over a clip, steadied (mocap.person.steady): short-lived bodies dropped, kept ones
-looked for backward; and on a real capture seen from behind (../shared/data/clips, skipped when absent), the
+looked for backward, and short runs of a look at a cut-out figure dropped; and on a real capture seen from behind (../shared/data/clips, skipped when absent), the
 frames MediaPipe finds nobody on until the performer turns are answered by its look back."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 from helpers import SHARED_DATA
 
 from mocap.person import available
-from mocap.person.steady import steadied
+from mocap.person.steady import short_runs_dropped, steadied
 
 FPS = 10.0  # MIN_RUN_S of 0.5 s: runs of 5 frames count
 
@@ -120,3 +120,11 @@ def test_a_performer_seen_from_behind_is_answered_before_they_turn(tmp_path):
     fitted = np.array([np.array(f["joints2d"])[order] for f in motion["frames"][:29]])
     true = np.array([f["joints2d"] for f in truth["frames"][:29]])
     assert np.linalg.norm(fitted - true, axis=-1).mean() / truth["body_height_px"] * 100 < 7.0
+
+
+def test_a_cut_out_figure_found_and_lost_from_frame_to_frame_is_dropped():
+    """Runs of seen items shorter than MIN_RUN_S are given as dropped, at the clip's ends too; long ones, and every
+    item not seen, go out as they came, in order."""
+    clip = "xx.xxxxx..xxxx.xxxxxxx.x"
+    out = short_runs_dropped(list(clip), FPS, lambda c: c == "x", lambda c: "-")
+    assert "".join(out) == "--.xxxxx..----.xxxxxxx.-"

@@ -55,7 +55,8 @@ def placed(silhouette: np.ndarray) -> np.ndarray | None:
         return None
     scale = SIDE / (REACH * max(w, h))
     centre = np.array([x + (w - 1) / 2, y + (h - 1) / 2])
-    return np.array([[scale, 0.0, SIDE / 2 - scale * centre[0]], [0.0, scale, SIDE / 2 - scale * centre[1]]])
+    middle = (SIDE - 1) / 2  # pixel centres
+    return np.array([[scale, 0.0, middle - scale * centre[0]], [0.0, scale, middle - scale * centre[1]]])
 
 
 def isolated(frame: np.ndarray, silhouette: np.ndarray, placing: np.ndarray) -> np.ndarray:

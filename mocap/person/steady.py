@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterable, Iterator
+from typing import TypeVar
 
 import numpy as np
 
@@ -18,6 +19,7 @@ LOOK_BACK_S = 10.0  # seconds of frames without a body kept for a backward look
 LOOK_BACK_BYTES = 300 << 20  # ... and at most this much memory of them (3.6 s of 1280x720 frames at 30/s)
 
 Seen = tuple[np.ndarray, PersonView | None]
+T = TypeVar("T")
 
 
 def steadied(seen: Iterable[Seen], fps: float, fresh: Callable[[], PersonModel]) -> Iterator[Seen]:
@@ -75,3 +77,27 @@ def looked_back(held: list[list], run: int, fresh: Callable[[], PersonModel]) ->
                 return
     finally:
         model.close()
+
+
+def short_runs_dropped(
+    items: Iterable[T], fps: float, seen: Callable[[T], bool], dropped: Callable[[T], T]
+) -> Iterator[T]:
+    """Each of ``items`` in order, later than it came (by at most MIN_RUN_S): those ``seen`` in a run shorter than
+    MIN_RUN_S given as ``dropped`` makes them. For a model's sight of a figure already cut out from the scene
+    (person.isolated): a body it finds and loses from frame to frame is one it is not sure is a body."""
+    least = max(1, round(MIN_RUN_S * fps))
+    run: list[T] = []  # the seen items of a run not yet long enough
+    kept = False  # whether the run going on is long enough (its items go out as they come)
+    for item in items:
+        if not seen(item):
+            yield from map(dropped, run)
+            run, kept = [], False
+            yield item
+        elif kept:
+            yield item
+        else:
+            run.append(item)
+            if len(run) >= least:
+                yield from run
+                run, kept = [], True
+    yield from map(dropped, run)

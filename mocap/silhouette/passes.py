@@ -5,7 +5,7 @@ silhouettes around each frame (so a performer walking toward the camera keeps a 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -15,7 +15,7 @@ from mocap.image.percentile import nanpercentile, percentile
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.person import Landmarks, PersonModel, PersonView, open_person_model, watched
 from mocap.person.isolated import IsolatedLook
-from mocap.person.steady import steadied
+from mocap.person.steady import short_runs_dropped, steadied
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.eyes import centred_on, crowned, fit_targets, fused_mask, soled
 from mocap.silhouette.fit2d import FIT_BODY_PX, FIT_SCALE, Fit2D, fit_frame
@@ -67,6 +67,12 @@ class Silhouette:
     def mask(self) -> np.ndarray:
         return self._unpacked(self.bits)
 
+    @property
+    def cut_out(self) -> bool:
+        """Whether the person model named the joints only when shown the figure cut out (person.isolated): its
+        landmarks without its mask's pixels."""
+        return self.landmarks is not None and self.learned is None
+
     def learned_mask(self) -> np.ndarray | None:
         """(h, w) 0/1 in the box: the pixels the person model's mask gave; None without it."""
         return None if self.learned is None else self._unpacked(self.learned)
@@ -113,10 +119,19 @@ def iter_silhouettes(
         seen = steadied(seen, info.fps, fresh)
     second = IsolatedLook(fresh)
     try:
-        for frame, view in seen:
-            yield silhouette_seen(frame, view, background, second)
+        silhouettes = (silhouette_seen(frame, view, background, second) for frame, view in seen)
+        yield from short_runs_dropped(silhouettes, info.fps, _named, _without_cut_out)
     finally:
         second.close()
+
+
+def _named(silhouette: Silhouette | None) -> bool:
+    return silhouette is not None and silhouette.landmarks is not None
+
+
+def _without_cut_out(silhouette: Silhouette) -> Silhouette:
+    """The silhouette without the landmarks of a look at it cut out (Silhouette.cut_out)."""
+    return replace(silhouette, landmarks=None) if silhouette.cut_out else silhouette
 
 
 def silhouette_seen(
