@@ -1,5 +1,6 @@
 """The person model's second look at a figure it misses on the whole frame (mocap.person.isolated): the figure
-shown on a plain ground, its landmarks put back in the frame's pixels, and on a development clip whose performer
+shown on a plain ground, its landmarks put back in the frame's pixels, a second opinion for a look that followed
+the body backward, and on a development clip whose performer
 the model does not find (bent over a cup, on a photo) the joints named within a few percent of the body."""
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 from helpers import DEV_CLIPS
 
+from mocap.body import JOINT_INDEX
 from mocap.person import Landmarks, PersonView, open_person_model
 from mocap.person.isolated import GREY, SIDE, IsolatedLook, in_frame, isolated, placed
 
@@ -76,6 +78,37 @@ def test_the_models_view_is_put_in_the_frame():
     marks = look.landmarks(np.zeros((120, 160, 3), np.uint8), silhouette_box())
     look.close()
     np.testing.assert_allclose(marks.joints2d, np.tile([54.5, 59.5], (16, 1)), atol=1e-6)
+
+
+def test_a_look_that_followed_the_body_back_is_averaged_with_the_cut_out_look():
+    """Equally sure, a backward look's joints and the cut-out look's come out halfway, the joints the backward
+    look doubted still doubted; where the cut-out look finds nobody, or there is no model, they stay as given."""
+
+    mask = silhouette_box()
+    placing = placed(mask)
+    joints = np.random.default_rng(2).uniform([40, 20], [70, 100], (16, 2))  # the cut-out look's, in the frame
+    joints[JOINT_INDEX["neck"]], joints[JOINT_INDEX["pelvis"]] = (55, 30), (55, 70)
+
+    class Seeing:
+        def __init__(self, seen: bool):
+            self.seen = seen
+
+        def observe(self, square):
+            on_square = joints @ placing[:, :2].T + placing[:, 2]
+            return PersonView(None, Landmarks(on_square, np.ones(16), np.zeros((16, 3)))) if self.seen else None
+
+        def close(self):
+            pass
+
+    doubted = np.zeros(16, bool)
+    doubted[JOINT_INDEX["knee_l"]] = True
+    back = Landmarks(joints + [2.0, 0.0], np.ones(16), np.zeros((16, 3)), doubted)
+    frame = np.zeros((120, 160, 3), np.uint8)
+    both = IsolatedLook(lambda: Seeing(True)).joined(back, frame, mask)
+    np.testing.assert_allclose(both.joints2d, joints + [1.0, 0.0], atol=1e-6)
+    assert np.flatnonzero(both.doubtful).tolist() == [JOINT_INDEX["knee_l"]]
+    assert IsolatedLook(lambda: Seeing(False)).joined(back, frame, mask) is back
+    assert IsolatedLook(None).joined(back, frame, mask) is back
 
 
 @pytest.mark.filterwarnings("ignore:SymbolDatabase.GetPrototype:UserWarning")  # mediapipe on protobuf 4.25

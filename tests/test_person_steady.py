@@ -5,6 +5,7 @@ frames MediaPipe finds nobody on until the performer turns are answered by its l
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -14,6 +15,14 @@ from mocap.person import available
 from mocap.person.steady import short_runs_dropped, steadied
 
 FPS = 10.0  # MIN_RUN_S of 0.5 s: runs of 5 frames count
+
+
+@dataclass(frozen=True)
+class Back:
+    """A fresh model's view of frame ``number``, marked as the look back marks it."""
+
+    number: int
+    looked_back: bool = False
 
 
 class Fresh:
@@ -26,7 +35,7 @@ class Fresh:
     def observe(self, frame):
         number = int(np.ravel(frame)[0])  # a frame is its number, or an image filled with it
         self.fed.append(number)
-        return f"back {number}" if number in self.seen else None
+        return Back(number) if number in self.seen else None
 
     def close(self):
         self.closed = True
@@ -61,11 +70,11 @@ def test_a_short_body_at_the_clips_start_or_end_is_kept_its_length_cut_by_the_cl
 
 
 def test_a_kept_body_is_followed_backward_until_the_fresh_model_loses_it():
-    """Frames 3-7 are seen backward by the fresh model (fed 8, then 7 down to 2, where it sees nobody), frame 2
-    and those before stay unseen; the short run on 1 is dropped all the same."""
+    """Frames 3-7 are seen backward by the fresh model (fed 8, then 7 down to 2, where it sees nobody), its views
+    marked as looked back; frame 2 and those before stay unseen; the short run on 1 is dropped all the same."""
     views, opened = steady(".x......xxxxxx", back=range(3, 9))
     assert views[:3] == [None] * 3
-    assert views[3:8] == [f"back {i}" for i in range(3, 8)]
+    assert views[3:8] == [Back(i, looked_back=True) for i in range(3, 8)]
     assert opened[0].fed == [8, 7, 6, 5, 4, 3, 2]
 
 
@@ -77,7 +86,7 @@ def test_a_fresh_model_that_does_not_find_the_body_looks_no_further():
 def test_the_look_back_reaches_look_back_s_at_most(monkeypatch):
     monkeypatch.setattr("mocap.person.steady.LOOK_BACK_S", 0.3)
     views, opened = steady("........xxxxx", back=range(0, 9))
-    assert views[:5] == [None] * 5 and views[5:8] == ["back 5", "back 6", "back 7"]
+    assert views[:5] == [None] * 5 and views[5:8] == [Back(i, looked_back=True) for i in (5, 6, 7)]
 
 
 def test_the_look_back_holds_no_more_than_look_back_bytes_of_frames(monkeypatch):

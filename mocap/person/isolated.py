@@ -11,6 +11,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from mocap.person.mirrored import mean_landmarks
 from mocap.person.views import Landmarks, PersonModel
 
 SIDE = 256  # pixels of the square the figure is shown in
@@ -41,6 +42,14 @@ class IsolatedLook:
             self._model = self._opening()
         seen = self._model.observe(isolated(frame, silhouette, placing))
         return None if seen is None else in_frame(seen.landmarks, placing)
+
+    def joined(self, landmarks: Landmarks, frame: np.ndarray, silhouette: np.ndarray) -> Landmarks:
+        """``landmarks`` of a look that followed the body backward (person.steady), with this look at the figure
+        the ``silhouette`` outlines as a second opinion: their mean (person.mirrored.mean_landmarks), the first's
+        naming kept; as given without a model or where this look finds nobody. A model following a body backward
+        follows one it could not have found, and errs apart from what it sees of the figure alone."""
+        cut_out = self.landmarks(frame, silhouette) if self.able else None
+        return landmarks if cut_out is None else mean_landmarks(landmarks, cut_out)
 
     def close(self) -> None:
         if self._model is not None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterable, Iterator
+from dataclasses import replace
 
 import numpy as np
 
@@ -79,27 +80,34 @@ def unmirrored(view: PersonView | None, width: int) -> PersonView | None:
 
 
 def merged(one: PersonView | None, other: PersonView | None) -> PersonView | None:
-    """The mean of the frame's own view (``one``) and its mirror image's (``other``): each joint's 2D and world
-    weighted by the two's confidences, the confidences averaged, the mask ``one``'s; ``one`` as it is where
-    ``other`` is None, None where ``one`` is. Where the two name a limb pair's sides the other way round
-    (``crossed_joints``), ``one``'s naming holds: the 2D means are taken with ``other``'s sides swapped to it,
-    and that limb pair's world and confidences are ``one``'s (a depth read as from the other side is no mean's
-    part). Joints the two place ``apart`` are ``doubtful``."""
+    """The mean of the frame's own view (``one``) and its mirror image's (``other``) (``mean_landmarks``), the mask
+    ``one``'s; ``one`` as it is where ``other`` is None, None where ``one`` is."""
     if one is None or other is None:
         return one
-    a, b = one.landmarks, other.landmarks
+    return replace(one, landmarks=mean_landmarks(one.landmarks, other.landmarks))
+
+
+def mean_landmarks(a: Landmarks, b: Landmarks) -> Landmarks:
+    """The mean of two looks at one body, ``a`` the one whose naming holds: each joint's 2D and world weighted by
+    the two's confidences, the confidences averaged. Where the two name a limb pair's sides the other way round
+    (``crossed_joints``), ``a``'s naming holds: the 2D means are taken with ``b``'s sides swapped to it, and that
+    limb pair's world and confidences are ``a``'s (a depth read as from the other side is no mean's part). Joints
+    the two place ``apart`` are ``doubtful``, and those either look doubted."""
     crossed = crossed_joints(a.joints2d, b.joints2d)
     order = np.where(crossed, MIRROR_JOINTS, np.arange(len(JOINTS)))
     b_conf = b.confidence[order]
-    share = (b_conf + EVEN) / (a.confidence + b_conf + 2 * EVEN)  # the mirror image's, by confidence
+    share = (b_conf + EVEN) / (a.confidence + b_conf + 2 * EVEN)  # b's, by confidence
     depth_share = np.where(crossed, 0.0, share)
-    marks = Landmarks(
+    doubtful = apart(a.joints2d, b.joints2d[order])
+    for look, named in ((a, np.arange(len(JOINTS))), (b, order)):
+        if look.doubtful is not None:
+            doubtful |= look.doubtful[named]
+    return Landmarks(
         a.joints2d + share[:, None] * (b.joints2d[order] - a.joints2d),
         np.where(crossed, a.confidence, (a.confidence + b_conf) / 2),
         a.world + depth_share[:, None] * (b.world[order] - a.world),
-        apart(a.joints2d, b.joints2d[order]),
+        doubtful,
     )
-    return PersonView(one.mask, marks)
 
 
 def apart(one: np.ndarray, other: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterable, Iterator
+from dataclasses import replace
 from typing import TypeVar
 
 import numpy as np
@@ -75,6 +76,7 @@ def looked_back(held: list[list], run: int, fresh: Callable[[], PersonModel]) ->
             item[1] = model.observe(item[0])
             if item[1] is None:
                 return
+            item[1] = replace(item[1], looked_back=True)
     finally:
         model.close()
 

@@ -32,10 +32,12 @@ class Landmarks:
 @dataclass(frozen=True)
 class PersonView:
     """What a person model sees on a frame: ``mask`` (H, W) float32 performer probabilities (None from a model
-    opened unmasked), ``landmarks``."""
+    opened unmasked), ``landmarks``; ``looked_back``: seen by a model following the body backward from where it
+    was found (person.steady)."""
 
     mask: np.ndarray | None
     landmarks: Landmarks
+    looked_back: bool = False
 
 
 class PersonModel(Protocol):

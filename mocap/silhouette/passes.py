@@ -143,7 +143,8 @@ def silhouette_seen(
     fused = None if view is None else fused_mask(classical, view.mask, background.held)
     if fused is not None:
         mask, learned = fused
-        return Silhouette.from_mask(mask, frame, soled(crowned(view.landmarks, mask), mask), learned)
+        marks = second.joined(view.landmarks, frame, mask) if view.looked_back else view.landmarks
+        return Silhouette.from_mask(mask, frame, soled(crowned(marks, mask), mask), learned)
     named = second.landmarks(frame, classical) if second.able and holds_person(classical) else None
     if named is None:
         return Silhouette.from_mask(classical, frame)
