@@ -6,15 +6,18 @@ the model does not find (bent over a cup, on a photo) the joints named within a 
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import cv2
 import numpy as np
 import pytest
 from helpers import DEV_CLIPS
 
-from mocap.body import JOINT_INDEX
+from mocap.body import JOINT_INDEX, MIRROR_JOINTS
 from mocap.person import Landmarks, PersonView, open_person_model
 from mocap.person.isolated import GREY, SIDE, IsolatedLook, in_frame, isolated, placed
+from mocap.person.mirrored import disputed
+from mocap.silhouette.legs import LEG_JOINTS
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"
 
@@ -57,7 +60,7 @@ def test_landmarks_seen_on_the_square_come_back_to_the_frame():
 def test_no_look_at_an_empty_silhouette():
     """An empty silhouette is nobody, and the model is not even opened for it."""
     opened = []
-    look = IsolatedLook(lambda: opened.append(1))
+    look = IsolatedLook(lambda mirror: opened.append(mirror))
     assert look.landmarks(np.zeros((120, 160, 3), np.uint8), np.zeros((120, 160), np.uint8)) is None
     assert not opened
 
@@ -74,7 +77,7 @@ def test_the_models_view_is_put_in_the_frame():
         def close(self):
             pass
 
-    look = IsolatedLook(Centre)
+    look = IsolatedLook(lambda mirror: Centre())
     marks = look.landmarks(np.zeros((120, 160, 3), np.uint8), silhouette_box())
     look.close()
     np.testing.assert_allclose(marks.joints2d, np.tile([54.5, 59.5], (16, 1)), atol=1e-6)
@@ -104,11 +107,36 @@ def test_a_look_that_followed_the_body_back_is_averaged_with_the_cut_out_look():
     doubted[JOINT_INDEX["knee_l"]] = True
     back = Landmarks(joints + [2.0, 0.0], np.ones(16), np.zeros((16, 3)), doubted)
     frame = np.zeros((120, 160, 3), np.uint8)
-    both = IsolatedLook(lambda: Seeing(True)).joined(back, frame, mask)
+    both = IsolatedLook(lambda mirror: Seeing(True)).second_opinion(back, frame, mask)
     np.testing.assert_allclose(both.joints2d, joints + [1.0, 0.0], atol=1e-6)
     assert np.flatnonzero(both.doubtful).tolist() == [JOINT_INDEX["knee_l"]]
-    assert IsolatedLook(lambda: Seeing(False)).joined(back, frame, mask) is back
-    assert IsolatedLook(None).joined(back, frame, mask) is back
+    assert IsolatedLook(lambda mirror: Seeing(False)).second_opinion(back, frame, mask) is back
+    assert IsolatedLook(None).second_opinion(back, frame, mask) is back
+
+
+def test_a_limb_pair_the_two_looks_dispute_is_named_as_the_cut_out_look_names_it():
+    """The whole frame's two looks named the legs the other way round and the frame's own naming held (``crossed``);
+    the cut-out look, shown the figure alone, names them as the mirror image did: the legs are renamed, then
+    averaged with it. The arms, which no look disputed, keep their names."""
+    mask = silhouette_box()
+    placing = placed(mask)
+    truth = np.random.default_rng(4).uniform([40, 20], [70, 100], (16, 2))
+    truth[JOINT_INDEX["neck"]], truth[JOINT_INDEX["pelvis"]] = (55, 30), (55, 70)
+    truth[JOINT_INDEX["ankle_l"]], truth[JOINT_INDEX["ankle_r"]] = (45, 98), (66, 98)
+
+    class Seeing:
+        def observe(self, square):
+            on_square = truth @ placing[:, :2].T + placing[:, 2]
+            return PersonView(None, Landmarks(on_square, np.ones(16), np.zeros((16, 3))))
+
+        def close(self):
+            pass
+
+    legs = np.array([j in LEG_JOINTS for j in range(16)])
+    held = Landmarks(truth[np.where(legs, MIRROR_JOINTS, np.arange(16))], np.ones(16), np.zeros((16, 3)), None, legs)
+    assert disputed(held) and not disputed(replace(held, crossed=None))
+    named = IsolatedLook(lambda mirror: Seeing()).second_opinion(held, np.zeros((120, 160, 3), np.uint8), mask)
+    np.testing.assert_allclose(named.joints2d, truth, atol=1e-6)
 
 
 @pytest.mark.filterwarnings("ignore:SymbolDatabase.GetPrototype:UserWarning")  # mediapipe on protobuf 4.25
@@ -130,7 +158,7 @@ def test_a_figure_missed_on_the_whole_frame_is_named_on_its_own():
         assert all(whole.observe(frame) is None for frame in frames)
     finally:
         whole.close()
-    look = IsolatedLook(lambda: open_person_model("mediapipe", filtered=False, with_mirror=True))
+    look = IsolatedLook(lambda mirror: open_person_model("mediapipe", filtered=False, with_mirror=mirror))
     errors = []
     try:
         for i, frame in enumerate(frames):

@@ -11,7 +11,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-from mocap.person.mirrored import mean_landmarks
+from mocap.person.mirrored import crossed_joints, mean_landmarks, renamed
 from mocap.person.views import Landmarks, PersonModel
 
 SIDE = 256  # pixels of the square the figure is shown in
@@ -20,40 +20,46 @@ GREY = 128  # the level the scene is greyed to
 
 
 class IsolatedLook:
-    """A person model (opened by ``opening`` when first needed; None: no model, no look) that is shown isolated
-    figures (``view``)."""
+    """A person model shown isolated figures (``landmarks``): opened by ``opening(with_mirror)`` when first needed
+    each way, looking at them once or also at their mirror images (person.mirrored); None: no model, no look."""
 
-    def __init__(self, opening: Callable[[], PersonModel] | None):
+    def __init__(self, opening: Callable[[bool], PersonModel] | None):
         self._opening = opening
-        self._model: PersonModel | None = None
+        self._models: dict[bool, PersonModel] = {}
 
     @property
     def able(self) -> bool:
         return self._opening is not None
 
-    def landmarks(self, frame: np.ndarray, silhouette: np.ndarray) -> Landmarks | None:
+    def landmarks(self, frame: np.ndarray, silhouette: np.ndarray, with_mirror: bool = True) -> Landmarks | None:
         """The model's landmarks of the figure the ``silhouette`` (uint8, nonzero inside) outlines in the BGR
         ``frame``, in the frame's pixels; None where it finds nobody there or the silhouette is empty. (Its mask
         of the figure is not asked for: the silhouette is the figure's outline.)"""
         placing = placed(silhouette)
         if placing is None:
             return None
-        if self._model is None:
-            self._model = self._opening()
-        seen = self._model.observe(isolated(frame, silhouette, placing))
+        if with_mirror not in self._models:
+            self._models[with_mirror] = self._opening(with_mirror)
+        seen = self._models[with_mirror].observe(isolated(frame, silhouette, placing))
         return None if seen is None else in_frame(seen.landmarks, placing)
 
-    def joined(self, landmarks: Landmarks, frame: np.ndarray, silhouette: np.ndarray) -> Landmarks:
-        """``landmarks`` of a look that followed the body backward (person.steady), with this look at the figure
-        the ``silhouette`` outlines as a second opinion: their mean (person.mirrored.mean_landmarks), the first's
-        naming kept; as given without a model or where this look finds nobody. A model following a body backward
-        follows one it could not have found, and errs apart from what it sees of the figure alone."""
-        cut_out = self.landmarks(frame, silhouette) if self.able else None
-        return landmarks if cut_out is None else mean_landmarks(landmarks, cut_out)
+    def second_opinion(self, landmarks: Landmarks, frame: np.ndarray, silhouette: np.ndarray) -> Landmarks:
+        """``landmarks`` with this look at the figure the ``silhouette`` outlines as a third opinion: each limb pair
+        the model's two looks (person.mirrored) named the other way round (``crossed``) named as this look names
+        it, the majority's, then the two averaged (person.mirrored.mean_landmarks); as given without a model or
+        where this look finds nobody. For a look that followed the body backward (person.steady), which follows
+        one it could not have found, and for the limb pairs whose sides the frame's own look and its mirror
+        image's dispute."""
+        cut_out = self.landmarks(frame, silhouette, with_mirror=False) if self.able else None
+        if cut_out is None:
+            return landmarks
+        if landmarks.crossed is not None:
+            landmarks = renamed(landmarks, landmarks.crossed & crossed_joints(landmarks.joints2d, cut_out.joints2d))
+        return mean_landmarks(landmarks, cut_out)
 
     def close(self) -> None:
-        if self._model is not None:
-            self._model.close()
+        for model in self._models.values():
+            model.close()
 
 
 def placed(silhouette: np.ndarray) -> np.ndarray | None:

@@ -91,8 +91,8 @@ def mean_landmarks(a: Landmarks, b: Landmarks) -> Landmarks:
     """The mean of two looks at one body, ``a`` the one whose naming holds: each joint's 2D and world weighted by
     the two's confidences, the confidences averaged. Where the two name a limb pair's sides the other way round
     (``crossed_joints``), ``a``'s naming holds: the 2D means are taken with ``b``'s sides swapped to it, and that
-    limb pair's world and confidences are ``a``'s (a depth read as from the other side is no mean's part). Joints
-    the two place ``apart`` are ``doubtful``, and those either look doubted."""
+    limb pair's world and confidences are ``a``'s (a depth read as from the other side is no mean's part), and
+    its joints ``crossed``. Joints the two place ``apart`` are ``doubtful``, and those either look doubted."""
     crossed = crossed_joints(a.joints2d, b.joints2d)
     order = np.where(crossed, MIRROR_JOINTS, np.arange(len(JOINTS)))
     b_conf = b.confidence[order]
@@ -107,6 +107,7 @@ def mean_landmarks(a: Landmarks, b: Landmarks) -> Landmarks:
         np.where(crossed, a.confidence, (a.confidence + b_conf) / 2),
         a.world + depth_share[:, None] * (b.world[order] - a.world),
         doubtful,
+        crossed,
     )
 
 
@@ -125,3 +126,27 @@ def crossed_joints(one: np.ndarray, other: np.ndarray) -> np.ndarray:
         exchanged = np.linalg.norm(one[limbs] - other[MIRROR_JOINTS[limbs]], axis=1).sum()
         crossed[limbs] = exchanged < as_named
     return crossed
+
+
+def renamed(landmarks: Landmarks, swap: np.ndarray) -> Landmarks:
+    """``landmarks`` with the joints ``swap`` (16,) bool named by the other side (their 2D, confidence, world and
+    doubt exchanged with their mirror joints'; a limb pair's joints are swapped together)."""
+    order = np.where(swap, MIRROR_JOINTS, np.arange(len(JOINTS)))
+    doubtful = None if landmarks.doubtful is None else landmarks.doubtful[order]
+    return replace(
+        landmarks,
+        joints2d=landmarks.joints2d[order],
+        confidence=landmarks.confidence[order],
+        world=landmarks.world[order],
+        doubtful=doubtful,
+    )
+
+
+def disputed(landmarks: Landmarks) -> bool:
+    """Whether the two looks named a limb pair the other way round (``crossed``) whose two limbs lie more than DOUBT
+    trunk lengths apart: a naming that moves a joint by more than the looks' doubt."""
+    if landmarks.crossed is None or not landmarks.crossed.any():
+        return False
+    joints = landmarks.joints2d
+    trunk = float(np.hypot(*(joints[_NECK] - joints[_PELVIS])))
+    return bool((landmarks.crossed & (np.hypot(*(joints - joints[MIRROR_JOINTS]).T) > DOUBT * trunk)).any())

@@ -17,12 +17,14 @@ class Landmarks:
     """A person model's 16 contract joints on one frame, sides anatomical: ``joints2d`` (16, 2) pixels of the
     frame given; ``confidence`` (16,) in [0, 1], that the joint is where it says (visible or not); ``world`` (16,
     3) metres, pelvis at the origin, x image-right, y up, z toward the camera (CONTRACT.md's 3D); ``doubtful``
-    (16,) bool, joints the model's two looks place apart (person.mirrored; None: looked at once)."""
+    (16,) bool, joints the model's two looks place apart, ``crossed`` (16,) bool, those of the limb pairs the two
+    name the other way round (person.mirrored; None: looked at once)."""
 
     joints2d: np.ndarray
     confidence: np.ndarray
     world: np.ndarray
     doubtful: np.ndarray | None = None
+    crossed: np.ndarray | None = None
 
     def scaled(self, factor: float) -> "Landmarks":
         """The same landmarks with the 2D in pixels of a frame ``factor`` times as large."""

@@ -24,7 +24,7 @@ from mocap.errors import MocapError
 from mocap.person.opening import instance
 from mocap.person.views import PersonView
 
-AHEAD = 2  # frames sent before the first view is awaited: enough to keep the model busy
+AHEAD = 6  # frames sent before the first view is awaited: the model keeps busy while the fit looks again itself
 PIPE_BYTES = 1 << 20  # Linux's default most for a pipe's buffer: a 640x480 frame, or its answer
 
 

@@ -15,6 +15,7 @@ from mocap.image.percentile import nanpercentile, percentile
 from mocap.io.video import VideoInfo, iter_frames
 from mocap.person import Landmarks, PersonModel, PersonView, open_person_model, watched
 from mocap.person.isolated import IsolatedLook
+from mocap.person.mirrored import disputed
 from mocap.person.steady import short_runs_dropped, steadied
 from mocap.silhouette.background import Background, extract_silhouette
 from mocap.silhouette.eyes import centred_on, crowned, fit_targets, fused_mask, soled
@@ -117,7 +118,9 @@ def iter_silhouettes(
     )
     if fresh is not None:
         seen = steadied(seen, info.fps, fresh)
-    second = IsolatedLook(fresh)
+    second = IsolatedLook(
+        None if person is None else lambda mirror: open_person_model(person.name, person.filtered, with_mirror=mirror)
+    )
     try:
         silhouettes = (silhouette_seen(frame, view, background, second) for frame, view in seen)
         yield from short_runs_dropped(silhouettes, info.fps, _named, _without_cut_out)
@@ -143,7 +146,9 @@ def silhouette_seen(
     fused = None if view is None else fused_mask(classical, view.mask, background.held)
     if fused is not None:
         mask, learned = fused
-        marks = second.joined(view.landmarks, frame, mask) if view.looked_back else view.landmarks
+        marks = view.landmarks
+        if view.looked_back or disputed(marks):
+            marks = second.second_opinion(marks, frame, mask)
         return Silhouette.from_mask(mask, frame, soled(crowned(marks, mask), mask), learned)
     named = second.landmarks(frame, classical) if second.able and holds_person(classical) else None
     if named is None:
