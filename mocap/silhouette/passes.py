@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from functools import partial
 
 import cv2
 import numpy as np
@@ -107,25 +108,24 @@ def iter_silhouettes(
 ) -> Iterator[Silhouette | None]:
     """Pass one (section 3.2): each frame's Silhouette or None (background: ``plate.clip_background`` unless
     given); with a ``person`` model, fused with its mask and landmarks (``eyes.fused_mask``), its sight steadied
-    (``person.steady.steadied``), the landmarks' head top and ankles placed on the silhouette (``eyes.crowned``,
-    ``eyes.soled``)."""
+    (``person.steady.steadied``), a look at the figure cut out where it sees nobody or wavers (``silhouette_seen``;
+    runs of such looks shorter than ``steady.MIN_RUN_S`` dropped), the landmarks' head top and ankles placed on the
+    silhouette (``eyes.crowned``, ``eyes.soled``)."""
     background = background or clip_background(info, scale)
     seen = watched(person, (frame for _, frame in iter_frames(info, scale=scale)))
-    fresh = (
-        None
-        if person is None
-        else lambda: open_person_model(person.name, person.filtered, with_mirror=person.with_mirror)
-    )
-    if fresh is not None:
-        seen = steadied(seen, info.fps, fresh)
-    second = IsolatedLook(
-        None if person is None else lambda mirror: open_person_model(person.name, person.filtered, with_mirror=mirror)
-    )
+    if person is not None:
+        seen = steadied(seen, info.fps, partial(fresh_model, person, person.with_mirror))
+    second = IsolatedLook(None if person is None else partial(fresh_model, person))
     try:
         silhouettes = (silhouette_seen(frame, view, background, second) for frame, view in seen)
         yield from short_runs_dropped(silhouettes, info.fps, _named, _without_cut_out)
     finally:
         second.close()
+
+
+def fresh_model(person: PersonModel, with_mirror: bool) -> PersonModel:
+    """A fresh instance of the ``person`` model, looking also at mirror images ``with_mirror``."""
+    return open_person_model(person.name, person.filtered, with_mirror=with_mirror)
 
 
 def _named(silhouette: Silhouette | None) -> bool:
@@ -140,8 +140,10 @@ def _without_cut_out(silhouette: Silhouette) -> Silhouette:
 def silhouette_seen(
     frame: np.ndarray, view: PersonView | None, background: Background, second: IsolatedLook
 ) -> Silhouette | None:
-    """A frame's Silhouette: background subtraction's, fused with the person model's ``view`` of the frame, or
-    where it saw nobody with its ``second`` look at the figure background subtraction found (person.isolated)."""
+    """A frame's Silhouette: background subtraction's, fused with the person model's ``view`` of the frame, its
+    ``second`` look at the figure cut out (person.isolated) a further opinion where the view is a look back's or its
+    two looks dispute a limb pair's naming (person.mirrored.disputed); where it saw nobody, that look at the figure
+    background subtraction found alone."""
     classical = extract_silhouette(frame, background)
     fused = None if view is None else fused_mask(classical, view.mask, background.held)
     if fused is not None:
