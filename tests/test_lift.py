@@ -202,6 +202,28 @@ def test_a_stretch_the_person_model_saw_as_its_mirror_image_is_put_right(view):
 
 
 @pytest.mark.skipif(not CMU_WALK.exists(), reason="needs ../shared/data/bvh (real motion capture)")
+@pytest.mark.parametrize("view", ["front", "three-quarter", "side"])
+def test_a_stretch_whose_legs_the_person_model_named_the_other_way_round_is_put_right(view):
+    """A person model that names a profile's legs the other way round for a stretch of frames, the rest of the body
+    right (lift.cues.Cues.limbs_unswapped): a real walk's landmarks with a third of a second of exchanged legs come
+    back as they were, and the walk as seen is left alone."""
+    from mocap.body import MIRROR_JOINTS
+    from mocap.lift.cues import Cues
+
+    fps = 30.0
+    truth = seen(contract_joints(read_bvh(CMU_WALK))[::4], view, fps)
+    given = Cues(truth.joints2d, np.ones(truth.joints2d.shape[:2]), truth.joints3d)
+    assert given.limbs_unswapped(fps) is given
+    legs = [JOINT_INDEX[f"{j}_{s}"] for j in ("knee", "ankle") for s in "lr"]
+    joints, world = truth.joints2d.copy(), truth.joints3d.copy()
+    for array in (joints, world):
+        array[40:50, legs] = array[40:50][:, MIRROR_JOINTS[legs]]
+    put_right = Cues(joints, given.confidence, world).limbs_unswapped(fps)
+    assert np.allclose(put_right.joints2d, truth.joints2d)
+    assert np.allclose(put_right.world, truth.joints3d)
+
+
+@pytest.mark.skipif(not CMU_WALK.exists(), reason="needs ../shared/data/bvh (real motion capture)")
 @pytest.mark.parametrize("view", ["front", "three-quarter"])
 def test_a_walk_seen_whole_as_its_mirror_image_is_put_right_by_the_heads_look(view):
     """Read as its mirror image from start to end, a walk is as smooth as it was: the head's look (a face toward

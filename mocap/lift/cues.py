@@ -20,10 +20,15 @@ DISAGREE = 0.2  # of the body height: a frame whose landmarks lie this far from 
 # joints (median) is one the person model got wrong
 MIRRORED_COST_S = 5.0  # what a second of frames read as the model's mirror image costs, in the units of
 # Cues.unmirrored's acceleration (radians of facing, limb lengths of limb joints, per frame squared)
+SWAPPED_COST_S = MIRRORED_COST_S / 2  # a second of frames whose one limb pair is read exchanged (Cues.limbs_unswapped):
+# less than a whole mirror reading, which a model makes more rarely than it names one pair the other way round
 LOOK_COST_S = 2 * MIRRORED_COST_S  # what a second of frames costs whose facing the head's look, sure, denies
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
 _LEG_JOINTS = [_J[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in "lr"]
+_PAIRS = [
+    np.array([_J[n] for lr in names for n in lr]) for names in _LIMBS.values()
+]  # elbows and wrists, knees and ankles
 _LIMB_JOINTS = np.array([_J[n] for pairs in _LIMBS.values() for pair in pairs for n in pair])  # elbows to ankles
 
 
@@ -52,7 +57,7 @@ class Cues:
             if m is not None:
                 joints[i], conf[i], world[i] = m.joints2d, m.confidence, m.world
                 doubtful[i] = False if m.doubtful is None else m.doubtful
-        raw = cls(joints, conf, world, doubtful).unmirrored(fps, away)
+        raw = cls(joints, conf, world, doubtful).unmirrored(fps, away).limbs_unswapped(fps)
         return replace(raw, joints2d=smoothed(raw.joints2d, fps), world=smoothed(raw.world, fps))
 
     def agreeing(self, joints_image: np.ndarray, body_px: np.ndarray) -> "Cues":
@@ -110,6 +115,36 @@ class Cues:
         for named in (joints, confidence, doubtful):
             named[mirrored] = named[mirrored][:, MIRROR_JOINTS]
         return Cues(joints, confidence, world, doubtful)
+
+    def limbs_unswapped(self, fps: float) -> "Cues":
+        """These cues with each limb pair's sides put right where the model named them the other way round for a
+        stretch of frames (a profile's far leg taken for the near one as the body turns), the rest of the body
+        named right: per pair (arms, legs) and run of seen frames, each frame read as named or with the pair's
+        sides exchanged, whichever path moves the pair's joints most smoothly (``smoothest_states``, limb lengths
+        per frame squared); a frame read exchanged costs SWAPPED_COST_S per second."""
+        seen = self.seen
+        if not seen.any():
+            return self
+        limb = 0.5 * float(np.median(np.ptp(self.joints2d[seen, :, 1], axis=1)))  # half the body's height
+        swap = np.zeros(self.confidence.shape, bool)
+        for pair in _PAIRS:
+            for r in runs(seen):
+                if r.stop - r.start < 3:
+                    continue
+                named = self.joints2d[r][:, [pair, MIRROR_JOINTS[pair]]] / max(limb, 1e-6)
+                cost = np.zeros((r.stop - r.start, 2))
+                cost[:, 1] = SWAPPED_COST_S / fps
+                swap[r][:, pair] = (smoothest_states(named.reshape(len(cost), 2, -1), cost) == 1)[:, None]
+        if not swap.any():
+            return self
+        order = np.where(swap, MIRROR_JOINTS, np.arange(len(MIRROR_JOINTS)))
+        doubtful = None if self.doubtful is None else np.take_along_axis(self.doubtful, order, axis=1)
+        return Cues(
+            np.take_along_axis(self.joints2d, order[..., None], axis=1),
+            np.take_along_axis(self.confidence, order, axis=1),
+            np.take_along_axis(self.world, order[..., None], axis=1),
+            doubtful,
+        )
 
     @property
     def seen(self) -> np.ndarray:
