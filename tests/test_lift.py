@@ -256,3 +256,19 @@ def test_a_leg_joint_the_person_models_two_looks_place_apart_is_the_fits():
     joints = with_landmarks(fit, cues)
     from_fit = np.all(joints == 0.0, axis=-1)
     assert np.argwhere(from_fit).tolist() == [[1, JOINT_INDEX["knee_l"]]]
+
+
+def test_the_world_landmarks_sign_every_segment_but_the_torso():
+    """The person model's depths give each segment's first sign (lift.cues.world_signs), toward where the far joint
+    is nearer the camera; the torso's lean they do not give (UNSIGNED: it leans the wrong way as often as not)."""
+    from mocap.body import SEGMENT_NAMES, SEGMENTS
+    from mocap.lift.cues import Cues, world_signs
+
+    world = np.zeros((1, 16, 3))
+    for name, (_, far) in SEGMENTS.items():
+        world[0, JOINT_INDEX[far], 2] += 0.1 if name.endswith("_l") else -0.1
+    world[0, JOINT_INDEX["neck"], 2] = 0.2  # the torso leans toward the camera
+    signs = world_signs(Cues(np.zeros((1, 16, 2)), np.ones((1, 16)), world))[0]
+    named = dict(zip(SEGMENT_NAMES, signs))
+    assert named["torso"] == 0
+    assert named["upper_arm_l"] == 1 and named["upper_arm_r"] == -1
