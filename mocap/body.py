@@ -171,6 +171,8 @@ LIMBS = _limbs()
 LIMB_JOINTS: dict[str, tuple[str, ...]] = {
     one.kind: tuple(j.removesuffix("_" + one.side) for j in one.joints) for one in LIMBS
 }
+# the legs' joints by index: hips, knees, ankles, left and right in turn
+LEG_JOINTS = [JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]
 
 
 def limb(kind: str, side: str) -> Limb:

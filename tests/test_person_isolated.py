@@ -13,11 +13,10 @@ import numpy as np
 import pytest
 from helpers import DEV_CLIPS
 
-from mocap.body import JOINT_INDEX, MIRROR_JOINTS
+from mocap.body import JOINT_INDEX, LEG_JOINTS, MIRROR_JOINTS
 from mocap.person import Landmarks, PersonView, open_person_model
 from mocap.person.isolated import GREY, SIDE, IsolatedLook, in_frame, isolated, placed
 from mocap.person.mirrored import disputed
-from mocap.silhouette.legs import LEG_JOINTS
 
 INSTALL = "pip install --no-deps mediapipe==0.10.14"
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
-from mocap.body import JOINT_INDEX, LIMB_JOINTS, MIRROR_JOINTS, SEGMENT_JOINTS, SEGMENT_NAMES
+from mocap.body import JOINT_INDEX, LEG_JOINTS, LIMB_JOINTS, MIRROR_JOINTS, SEGMENT_JOINTS, SEGMENT_NAMES
 from mocap.lift.taylor import AWAY, TOWARD, UNIT_M, median_width, runs, yaw_of
 from mocap.smoothest import smoothest_states, two_state_path
 
@@ -28,7 +28,6 @@ UNSIGNED = ("torso",)  # segments whose sign the world landmarks do not give (wo
 LOOK_COST_S = 2 * MIRRORED_COST_S  # what a second of frames costs whose facing the head's look, sure, denies
 _J = JOINT_INDEX
 _LIMBS = {p: [(f"{j}_l", f"{j}_r") for j in LIMB_JOINTS[k][1:]] for p, k in ((0, "arm"), (1, "leg"))}
-_LEG_JOINTS = [_J[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in "lr"]
 _PAIRS = [
     np.array([_J[n] for lr in names for n in lr]) for names in _LIMBS.values()
 ]  # elbows and wrists, knees and ankles
@@ -247,5 +246,5 @@ def with_landmarks(joints: np.ndarray, cues: Cues) -> np.ndarray:
     hand lost against the trunk is not, and its landmark stays)."""
     taken = np.isfinite(cues.joints2d) & np.isfinite(joints)
     if cues.doubtful is not None:
-        taken[:, _LEG_JOINTS] &= ~cues.doubtful[:, _LEG_JOINTS, None]
+        taken[:, LEG_JOINTS] &= ~cues.doubtful[:, LEG_JOINTS, None]
     return np.where(taken, cues.joints2d, joints)

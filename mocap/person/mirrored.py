@@ -147,6 +147,4 @@ def disputed(landmarks: Landmarks) -> bool:
     trunk lengths apart: a naming that moves a joint by more than the looks' doubt."""
     if landmarks.crossed is None or not landmarks.crossed.any():
         return False
-    joints = landmarks.joints2d
-    trunk = float(np.hypot(*(joints[_NECK] - joints[_PELVIS])))
-    return bool((landmarks.crossed & (np.hypot(*(joints - joints[MIRROR_JOINTS]).T) > DOUBT * trunk)).any())
+    return bool((landmarks.crossed & apart(landmarks.joints2d, landmarks.joints2d[MIRROR_JOINTS])).any())

@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from mocap.body import FOOT_LENGTH, JOINT_INDEX, LENGTH, LIMB_JOINTS, SEGMENT_INDEX, SIDES, limb
+from mocap.body import FOOT_LENGTH, JOINT_INDEX, LEG_JOINTS, LENGTH, SEGMENT_INDEX, SIDES, limb
 from mocap.person import SURE
 from mocap.silhouette.contour import find_angle, lower_leg_band, lower_leg_curves, lower_legs_cross
 from mocap.silhouette.model2d import Pose2D, forward_kinematics_2d, image_angle
@@ -33,7 +33,6 @@ ONE_LEG_SHARE = 0.5  # of Algorithm 2's rows with two runs or more, below which 
 FOOT_REACH = 1.5  # feet's lengths (FOOT_LENGTH) of silhouette past a raised ankle at most
 THIGH_MATCH = 0.75  # of the other thigh's length in the image, below which a raised "thigh" is not one
 DISTINCT_PX = 1.0  # leg hypotheses whose joints all lie this close are one
-LEG_JOINTS = [JOINT_INDEX[f"{j}_{s}"] for j in LIMB_JOINTS["leg"] for s in SIDES]  # hips, knees, ankles
 
 
 def fit_legs(canvas: Canvas, pose: Pose2D, prev: Pose2D | None, reading, raised: float) -> Pose2D:
